@@ -1,0 +1,373 @@
+//! Assembly: the sparsity pattern (built once per mesh), cell colouring for conflict-free
+//! parallel scatter, and the global residual and tangent.
+//!
+//! The system is reduced to the free equations; a prescribed dof's column is moved to the
+//! right-hand side with its increment ("lifting"), so symmetric tangents stay symmetric.
+#![allow(non_snake_case)]
+
+use crate::dofs::NONE;
+use crate::element::{Hex8, Quad4, RefElement, Tet4, Tri3};
+use crate::kernel::{CellState, KernelError, bulk};
+use crate::mesh::CellKind;
+use crate::model::Model;
+use rayon::prelude::*;
+
+/// CSC pattern of the free equations, rows sorted within each column.
+#[derive(Clone, Debug)]
+pub struct Pattern {
+    pub n: usize,
+    pub col_ptr: Vec<usize>,
+    pub row_idx: Vec<usize>,
+}
+
+impl Pattern {
+    /// Position of entry (row, col) in the value array.
+    #[inline]
+    pub fn slot(&self, row: usize, col: usize) -> usize {
+        let (a, b) = (self.col_ptr[col], self.col_ptr[col + 1]);
+        a + self.row_idx[a..b]
+            .binary_search(&row)
+            .expect("entry in pattern")
+    }
+    pub fn nnz(&self) -> usize {
+        self.row_idx.len()
+    }
+}
+
+/// Build the pattern from the node graph: every dof of a node couples with every dof of the
+/// nodes it shares a cell with.
+pub fn build_pattern(model: &Model) -> Pattern {
+    let mesh = &model.mesh;
+    let nn = mesh.coords.len();
+    let mut adj: Vec<Vec<u32>> = vec![Vec::new(); nn];
+    for b in &mesh.cells {
+        for c in 0..b.n_cells() {
+            let cell = b.cell(c);
+            for &a in cell {
+                adj[a].extend(cell.iter().map(|&x| x as u32));
+            }
+        }
+    }
+    adj.par_iter_mut().for_each(|v| {
+        v.sort_unstable();
+        v.dedup();
+    });
+    let eq = &model.cons.eq;
+    let mut node_eqs: Vec<Vec<usize>> = Vec::with_capacity(nn);
+    let mut buf = Vec::new();
+    for n in 0..nn {
+        model.dofs.node_dofs(n, &mut buf);
+        let mut e: Vec<usize> = buf
+            .iter()
+            .map(|&d| eq[d as usize])
+            .filter(|&e| e != NONE)
+            .map(|e| e as usize)
+            .collect();
+        e.sort_unstable();
+        node_eqs.push(e);
+    }
+    let n = model.cons.n_eq;
+    // column of equation e (of node a) = equations of all neighbours of a
+    let mut col_of_eq: Vec<(usize, usize)> = Vec::with_capacity(n); // (node, unused)
+    col_of_eq.resize(n, (usize::MAX, 0));
+    for (a, es) in node_eqs.iter().enumerate() {
+        for &e in es {
+            col_of_eq[e] = (a, 0);
+        }
+    }
+    let cols: Vec<Vec<usize>> = col_of_eq
+        .par_iter()
+        .map(|&(a, _)| {
+            let mut rows: Vec<usize> = adj[a]
+                .iter()
+                .flat_map(|&b| node_eqs[b as usize].iter().copied())
+                .collect();
+            rows.sort_unstable();
+            rows
+        })
+        .collect();
+    let mut col_ptr = Vec::with_capacity(n + 1);
+    col_ptr.push(0);
+    let mut row_idx = Vec::with_capacity(cols.iter().map(Vec::len).sum());
+    for c in cols {
+        row_idx.extend(c);
+        col_ptr.push(row_idx.len());
+    }
+    Pattern {
+        n,
+        col_ptr,
+        row_idx,
+    }
+}
+
+/// Greedy colouring of a block's cells so that no two cells of one colour share a node.
+pub fn colour_cells(conn: &[usize], n_nodes_per_cell: usize, n_nodes: usize) -> Vec<Vec<u32>> {
+    let mut used: Vec<u128> = vec![0; n_nodes];
+    let mut colours: Vec<Vec<u32>> = Vec::new();
+    for (c, cell) in conn.chunks(n_nodes_per_cell).enumerate() {
+        let mask = cell.iter().fold(0u128, |m, &n| m | used[n]);
+        let k = (!mask).trailing_zeros() as usize;
+        if k >= 128 {
+            // more than 128 colours: extremely unusual valence; give it a colour of its own
+            colours.push(vec![c as u32]);
+            continue;
+        }
+        if k >= colours.len() {
+            colours.resize(k + 1, Vec::new());
+        }
+        colours[k].push(c as u32);
+        for &n in cell {
+            used[n] |= 1u128 << k;
+        }
+    }
+    colours
+}
+
+/// Failure found while assembling.
+#[derive(Clone, Debug, PartialEq)]
+pub enum AssemblyError {
+    /// J ≤ 0 at a quadrature point of a cell of `region`.
+    Inverted { region: String, J: f64 },
+    /// A cell of the undeformed mesh is inverted or degenerate.
+    BadMesh { region: String, cell: usize },
+    /// NaN or infinity in the residual.
+    NotFinite,
+}
+
+impl std::fmt::Display for AssemblyError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            AssemblyError::Inverted { region, J } => {
+                write!(f, "J = {J:.3e} ≤ 0 in region \"{region}\"")
+            }
+            AssemblyError::BadMesh { region, cell } => {
+                write!(
+                    f,
+                    "cell {cell} of region \"{region}\" is inverted or degenerate in the undeformed mesh"
+                )
+            }
+            AssemblyError::NotFinite => write!(f, "the residual is not finite"),
+        }
+    }
+}
+
+/// Per-call results besides the arrays.
+#[derive(Clone, Copy, Debug)]
+pub struct AssemblyStats {
+    pub min_J_solid: f64,
+    pub min_J_medium: f64,
+    pub energy: f64,
+}
+
+/// Assembler state reused across calls: pattern, colours, value and vector storage.
+pub struct Assembler {
+    pub pattern: Pattern,
+    /// Colours per model block.
+    colours: Vec<Vec<Vec<u32>>>,
+    /// Tangent values (CSC, free equations).
+    pub values: Vec<f64>,
+    /// Internal-minus-external force on every dof (reactions on prescribed dofs).
+    pub r_full: Vec<f64>,
+    /// Lifted right-hand side contribution Σ K_fd Δx_d on the free equations.
+    pub lift: Vec<f64>,
+}
+
+#[derive(Clone, Copy)]
+struct Shared(*mut f64);
+unsafe impl Send for Shared {}
+unsafe impl Sync for Shared {}
+
+impl Shared {
+    /// Pointer to entry `i`. Callers guarantee exclusive access to that entry.
+    #[inline]
+    fn at(&self, i: usize) -> *mut f64 {
+        // SAFETY: in bounds by construction of the pattern and dof map
+        unsafe { self.0.add(i) }
+    }
+}
+
+impl Assembler {
+    pub fn new(model: &Model) -> Assembler {
+        let pattern = build_pattern(model);
+        let colours = model
+            .blocks
+            .iter()
+            .map(|b| {
+                let blk = &model.mesh.cells[b.block];
+                colour_cells(&blk.conn, blk.kind.n_nodes(), model.mesh.coords.len())
+            })
+            .collect();
+        let nnz = pattern.nnz();
+        Assembler {
+            values: vec![0.0; nnz],
+            r_full: vec![0.0; model.dofs.n_dofs],
+            lift: vec![0.0; pattern.n],
+            pattern,
+            colours,
+        }
+    }
+
+    /// Assemble at the state `x` (all dofs) and load factor `lambda`. With `tangent`, fills
+    /// `values`; with `dx_prescribed`, also the lifting of those prescribed increments.
+    pub fn assemble(
+        &mut self,
+        model: &Model,
+        x: &[f64],
+        lambda: f64,
+        tangent: bool,
+        dx_prescribed: Option<&[f64]>,
+    ) -> Result<AssemblyStats, AssemblyError> {
+        self.r_full.fill(0.0);
+        if tangent {
+            self.values.fill(0.0);
+        }
+        self.lift.fill(0.0);
+        let mut stats = AssemblyStats {
+            min_J_solid: f64::INFINITY,
+            min_J_medium: f64::INFINITY,
+            energy: 0.0,
+        };
+        for (bi, info) in model.blocks.iter().enumerate() {
+            let kind = model.mesh.cells[info.block].kind;
+            let res = match kind {
+                CellKind::Tri3 => self.block::<3, 2, Tri3>(model, bi, x, tangent, dx_prescribed),
+                CellKind::Quad4 => self.block::<4, 2, Quad4>(model, bi, x, tangent, dx_prescribed),
+                CellKind::Tet4 => self.block::<4, 3, Tet4>(model, bi, x, tangent, dx_prescribed),
+                CellKind::Hex8 => self.block::<8, 3, Hex8>(model, bi, x, tangent, dx_prescribed),
+                CellKind::Point1 | CellKind::Line2 => unreachable!("facets are not cells"),
+            };
+            let region = || model.regions[info.region].0.clone();
+            let (min_j, energy) = res.map_err(|(e, cell)| match e {
+                KernelError::Inverted { J } => AssemblyError::Inverted {
+                    region: region(),
+                    J,
+                },
+                KernelError::BadGeometry => AssemblyError::BadMesh {
+                    region: region(),
+                    cell,
+                },
+            })?;
+            if info.mat.medium {
+                stats.min_J_medium = stats.min_J_medium.min(min_j);
+            } else {
+                stats.min_J_solid = stats.min_J_solid.min(min_j);
+            }
+            stats.energy += energy;
+        }
+        let mut fe = vec![0.0; model.dofs.n_dofs];
+        model.f_ext(lambda, &mut fe);
+        for (r, f) in self.r_full.iter_mut().zip(&fe) {
+            *r -= f;
+        }
+        if !self.r_full.iter().all(|v| v.is_finite()) || !self.values.iter().all(|v| v.is_finite())
+        {
+            return Err(AssemblyError::NotFinite);
+        }
+        Ok(stats)
+    }
+
+    /// One block, colour by colour, cells of a colour in parallel. Returns (min J, energy).
+    fn block<const N: usize, const D: usize, E: RefElement<N, D>>(
+        &mut self,
+        model: &Model,
+        bi: usize,
+        x: &[f64],
+        tangent: bool,
+        dx_prescribed: Option<&[f64]>,
+    ) -> Result<(f64, f64), (KernelError, usize)> {
+        let info = &model.blocks[bi];
+        let blk = &model.mesh.cells[info.block];
+        let lay = info.layout;
+        let nd = lay.ndof();
+        let dofs = &model.dofs;
+        let eq = &model.cons.eq;
+        let pattern = &self.pattern;
+        let values = Shared(self.values.as_mut_ptr());
+        let r_full = Shared(self.r_full.as_mut_ptr());
+        let lift = Shared(self.lift.as_mut_ptr());
+        let mut min_j = f64::INFINITY;
+        let mut energy = 0.0;
+        for colour in &self.colours[bi] {
+            let (mj, en) = colour
+                .par_iter()
+                .try_fold(
+                    || {
+                        (
+                            vec![0.0; nd],
+                            vec![0.0; if tangent { nd * nd } else { 0 }],
+                            vec![0u32; nd],
+                            f64::INFINITY,
+                            0.0,
+                        )
+                    },
+                    |(mut r, mut k, mut ld, mj, en), &c| {
+                        let c = c as usize;
+                        let nodes = blk.cell(c);
+                        // local → global dofs and local state
+                        let mut s = CellState::<N> {
+                            X: [[0.0; 3]; N],
+                            u: [[0.0; 3]; N],
+                            theta: [0.0; N],
+                        };
+                        for (I, &n) in nodes.iter().enumerate() {
+                            s.X[I] = model.mesh.coords[n];
+                            if lay.has_u {
+                                for i in 0..D {
+                                    let d = dofs.u[n * D + i];
+                                    ld[lay.u(I, i)] = d;
+                                    s.u[I][i] = x[d as usize];
+                                }
+                            }
+                            if lay.has_theta {
+                                let d = dofs.theta[n];
+                                ld[lay.theta(I)] = d;
+                                s.theta[I] = x[d as usize];
+                            }
+                        }
+                        let out = bulk::<N, D, E>(
+                            &info.mat,
+                            &lay,
+                            &s,
+                            &mut r,
+                            if tangent { Some(&mut k) } else { None },
+                        )
+                        .map_err(|e| (e, c))?;
+                        // SAFETY: cells of one colour share no node, hence no dof: every write
+                        // below touches rows (and residual entries) owned by this cell alone.
+                        unsafe {
+                            for a in 0..nd {
+                                let ga = ld[a] as usize;
+                                *r_full.at(ga) += r[a];
+                                if !tangent {
+                                    continue;
+                                }
+                                let row = eq[ga];
+                                if row == NONE {
+                                    continue;
+                                }
+                                for b in 0..nd {
+                                    let gb = ld[b] as usize;
+                                    let kab = k[a * nd + b];
+                                    let col = eq[gb];
+                                    if col != NONE {
+                                        *values.at(pattern.slot(row as usize, col as usize)) += kab;
+                                    } else if let Some(dx) = dx_prescribed {
+                                        *lift.at(row as usize) += kab * dx[gb];
+                                    }
+                                }
+                            }
+                        }
+                        Ok((r, k, ld, mj.min(out.min_J), en + out.energy))
+                    },
+                )
+                .map(|res| res.map(|(_, _, _, mj, en)| (mj, en)))
+                .try_reduce(
+                    || (f64::INFINITY, 0.0),
+                    |a, b| Ok((a.0.min(b.0), a.1 + b.1)),
+                )?;
+            min_j = min_j.min(mj);
+            energy += en;
+        }
+        Ok((min_j, energy))
+    }
+}

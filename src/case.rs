@@ -1,0 +1,547 @@
+//! The case file (TOML): mesh, materials per physical group, boundary conditions, steps, probes.
+//!
+//! Parsing refuses unknown keys; [`Case::validate`] checks the case against its mesh before any
+//! work starts, and every error names the file, the key and its line.
+
+use crate::mesh::Mesh;
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+use toml::Spanned;
+
+#[derive(Debug, thiserror::Error)]
+pub enum CaseError {
+    #[error("cannot read case file {path}: {source}")]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{path}: {msg}")]
+    Syntax { path: PathBuf, msg: String },
+    #[error("{path}:{line}: {msg}")]
+    Invalid {
+        path: PathBuf,
+        line: usize,
+        msg: String,
+    },
+}
+
+/// Region kinds.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum RegionKind {
+    Solid,
+    Medium,
+}
+
+/// `[[region]]`: the material of one physical group of cells.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(non_snake_case)]
+pub struct Region {
+    pub group: Spanned<String>,
+    pub kind: RegionKind,
+    /// Bulk modulus (solid).
+    pub K: Option<Spanned<f64>>,
+    /// Shear modulus (solid).
+    pub mu: Option<Spanned<f64>>,
+    /// Conductivity k (solid) or gas conductivity k_TM (medium).
+    pub k: Option<Spanned<f64>>,
+    /// Thermal expansion coefficient α_t.
+    #[serde(default)]
+    pub alpha: f64,
+    /// Reference temperature θ0.
+    #[serde(default)]
+    pub theta0: f64,
+    /// Medium stiffness γ (K = μ = γ).
+    pub gamma: Option<Spanned<f64>>,
+    /// Cap of the medium's conductivity (default: largest solid k).
+    pub k_max: Option<Spanned<f64>>,
+    /// Regularization weights β1, β2 (eq. 20) and α_r (eq. 18).
+    pub beta1: Option<Spanned<f64>>,
+    pub beta2: Option<Spanned<f64>>,
+    pub alpha_r: Option<Spanned<f64>>,
+    /// Body force per reference volume (ramped).
+    pub body_force: Option<Vec<f64>>,
+    /// Heat source per reference volume (ramped).
+    pub heat_source: Option<f64>,
+}
+
+/// `[[bc]]`: conditions on one physical group of the boundary (or of points).
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Bc {
+    pub group: Spanned<String>,
+    pub ux: Option<f64>,
+    pub uy: Option<f64>,
+    pub uz: Option<f64>,
+    pub theta: Option<f64>,
+    /// Nominal traction (force per reference area).
+    pub traction: Option<Spanned<Vec<f64>>>,
+    /// Heat supplied per reference area (positive = into the body).
+    pub heat_flux: Option<f64>,
+    /// Scale by the load factor λ (true) or hold at full value from the start (false).
+    #[serde(default = "yes")]
+    pub ramp: bool,
+}
+
+fn yes() -> bool {
+    true
+}
+
+/// `[steps]`: load stepping and Newton controls.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Steps {
+    /// First load increment Δλ.
+    pub initial: f64,
+    /// Smallest Δλ before the run gives up.
+    pub min: f64,
+    /// Largest Δλ.
+    pub max: f64,
+    /// Relative tolerance of the per-field residual and update norms.
+    pub tol: f64,
+    /// Newton iterations per step before the step is cut.
+    pub max_iter: usize,
+    /// Steps converging in at most this many iterations grow Δλ.
+    pub easy_iter: usize,
+    /// Growth factor after an easy step.
+    pub grow: f64,
+    /// Cut factor after a failed step.
+    pub cut: f64,
+}
+
+impl Default for Steps {
+    fn default() -> Self {
+        Steps {
+            initial: 0.1,
+            min: 1e-5,
+            max: 1.0,
+            tol: 1e-9,
+            max_iter: 12,
+            easy_iter: 4,
+            grow: 1.5,
+            cut: 0.25,
+        }
+    }
+}
+
+/// `[solver]`: linear solver choice.
+#[derive(Clone, Debug, Deserialize, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct Solver {
+    /// "auto" (symmetric LDLᵀ when the tangent is symmetric, else LU), "lu", "ldlt".
+    pub linear: LinearChoice,
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, Default, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum LinearChoice {
+    #[default]
+    Auto,
+    Lu,
+    Ldlt,
+}
+
+/// `[[probe]]`: a named scalar output evaluated after every converged step.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Probe {
+    pub name: Spanned<String>,
+    /// "ux", "uy", "uz", "theta" (value at `at`) or "distance" (between `from` and `to`).
+    pub field: Spanned<String>,
+    pub at: Option<Vec<f64>>,
+    pub from: Option<Vec<f64>>,
+    pub to: Option<Vec<f64>>,
+    /// Axis of the distance: "x", "y" or "z".
+    pub axis: Option<String>,
+}
+
+/// `[mesh_options]`: how to mesh when `mesh` names a `.geo`.
+#[derive(Clone, Debug, Deserialize, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct MeshOpts {
+    pub order: Option<u8>,
+    pub incomplete: bool,
+    /// `.geo` parameters (DefineConstant names) and their values.
+    pub params: std::collections::BTreeMap<String, f64>,
+}
+
+/// A whole case file.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CaseFile {
+    pub mesh: Spanned<String>,
+    #[serde(default)]
+    pub mesh_options: MeshOpts,
+    #[serde(default)]
+    pub region: Vec<Region>,
+    #[serde(default)]
+    pub bc: Vec<Bc>,
+    #[serde(default)]
+    pub steps: Steps,
+    #[serde(default)]
+    pub solver: Solver,
+    #[serde(default)]
+    pub probe: Vec<Probe>,
+}
+
+/// A parsed case with its source, for error messages.
+#[derive(Clone, Debug)]
+pub struct Case {
+    pub path: PathBuf,
+    pub text: String,
+    pub file: CaseFile,
+}
+
+impl Case {
+    pub fn read(path: &Path) -> Result<Case, CaseError> {
+        let text = std::fs::read_to_string(path).map_err(|source| CaseError::Io {
+            path: path.to_owned(),
+            source,
+        })?;
+        Self::parse(path, text)
+    }
+
+    pub fn parse(path: &Path, text: String) -> Result<Case, CaseError> {
+        let file: CaseFile = toml::from_str(&text).map_err(|e| CaseError::Syntax {
+            path: path.to_owned(),
+            msg: e.to_string().trim_end().to_string(),
+        })?;
+        let case = Case {
+            path: path.to_owned(),
+            text,
+            file,
+        };
+        case.check_values()?;
+        Ok(case)
+    }
+
+    /// The mesh path, relative to the case file's folder.
+    pub fn mesh_path(&self) -> PathBuf {
+        let dir = self.path.parent().unwrap_or(Path::new("."));
+        dir.join(self.file.mesh.get_ref())
+    }
+
+    /// Case name: the file stem.
+    pub fn name(&self) -> String {
+        self.path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "case".into())
+    }
+
+    pub fn line_of(&self, span: std::ops::Range<usize>) -> usize {
+        self.text[..span.start.min(self.text.len())]
+            .matches('\n')
+            .count()
+            + 1
+    }
+
+    pub fn error<T>(
+        &self,
+        span: std::ops::Range<usize>,
+        msg: impl Into<String>,
+    ) -> Result<T, CaseError> {
+        Err(CaseError::Invalid {
+            path: self.path.clone(),
+            line: self.line_of(span),
+            msg: msg.into(),
+        })
+    }
+
+    /// Checks that need no mesh: moduli, steps, probes.
+    fn check_values(&self) -> Result<(), CaseError> {
+        let f = &self.file;
+        for (i, r) in f.region.iter().enumerate() {
+            let at = r.group.span();
+            let name = r.group.get_ref();
+            let need = |key: &str, v: &Option<Spanned<f64>>| -> Result<(), CaseError> {
+                match v {
+                    None => self.error(
+                        at.clone(),
+                        format!("region[{i}] (\"{name}\"): `{key}` is required"),
+                    ),
+                    Some(v) if !(*v.get_ref() > 0.0) => self.error(
+                        v.span(),
+                        format!(
+                            "region[{i}] (\"{name}\"): `{key}` must be positive, got {}",
+                            v.get_ref()
+                        ),
+                    ),
+                    _ => Ok(()),
+                }
+            };
+            let positive_if_given =
+                |key: &str, v: &Option<Spanned<f64>>| -> Result<(), CaseError> {
+                    match v {
+                        Some(v) if !(*v.get_ref() > 0.0) => self.error(
+                            v.span(),
+                            format!(
+                                "region[{i}] (\"{name}\"): `{key}` must be positive, got {}",
+                                v.get_ref()
+                            ),
+                        ),
+                        _ => Ok(()),
+                    }
+                };
+            match r.kind {
+                RegionKind::Solid => {
+                    need("K", &r.K)?;
+                    need("mu", &r.mu)?;
+                    positive_if_given("k", &r.k)?;
+                    for (key, v) in [
+                        ("gamma", &r.gamma),
+                        ("k_max", &r.k_max),
+                        ("beta1", &r.beta1),
+                        ("beta2", &r.beta2),
+                        ("alpha_r", &r.alpha_r),
+                    ] {
+                        if let Some(v) = v {
+                            return self.error(v.span(), format!("region[{i}] (\"{name}\"): `{key}` is a medium key; this region is a solid"));
+                        }
+                    }
+                }
+                RegionKind::Medium => {
+                    need("gamma", &r.gamma)?;
+                    positive_if_given("k", &r.k)?;
+                    positive_if_given("k_max", &r.k_max)?;
+                    positive_if_given("beta1", &r.beta1)?;
+                    positive_if_given("beta2", &r.beta2)?;
+                    positive_if_given("alpha_r", &r.alpha_r)?;
+                    for (key, v) in [("K", &r.K), ("mu", &r.mu)] {
+                        if let Some(v) = v {
+                            return self.error(v.span(), format!("region[{i}] (\"{name}\"): `{key}` is a solid key; the medium's moduli are `gamma`"));
+                        }
+                    }
+                }
+            }
+        }
+        let s = &f.steps;
+        let steps_at = self.text.find("[steps]").unwrap_or(0);
+        let bad = |msg: &str| self.error::<()>(steps_at..steps_at, format!("[steps]: {msg}"));
+        if !(s.min > 0.0 && s.min <= s.initial && s.initial <= s.max && s.max <= 1.0) {
+            bad("need 0 < min <= initial <= max <= 1")?;
+        }
+        if !(s.tol > 0.0 && s.tol < 1.0) {
+            bad("tol must be in (0, 1)")?;
+        }
+        if s.max_iter < 2 {
+            bad("max_iter must be at least 2")?;
+        }
+        if !(s.grow >= 1.0) || !(s.cut > 0.0 && s.cut < 1.0) {
+            bad("need grow >= 1 and 0 < cut < 1")?;
+        }
+        for p in &f.probe {
+            let field = p.field.get_ref().as_str();
+            match field {
+                "ux" | "uy" | "uz" | "theta" => {
+                    if p.at.is_none() {
+                        return self.error(
+                            p.field.span(),
+                            format!(
+                                "probe \"{}\": field \"{field}\" needs `at`",
+                                p.name.get_ref()
+                            ),
+                        );
+                    }
+                }
+                "distance" => {
+                    if p.from.is_none() || p.to.is_none() || p.axis.is_none() {
+                        return self.error(
+                            p.field.span(),
+                            format!(
+                                "probe \"{}\": a distance needs `from`, `to` and `axis`",
+                                p.name.get_ref()
+                            ),
+                        );
+                    }
+                    if !matches!(p.axis.as_deref(), Some("x" | "y" | "z")) {
+                        return self.error(
+                            p.field.span(),
+                            format!(
+                                "probe \"{}\": axis must be \"x\", \"y\" or \"z\"",
+                                p.name.get_ref()
+                            ),
+                        );
+                    }
+                }
+                other => {
+                    return self.error(
+                        p.field.span(),
+                        format!(
+                            "probe \"{}\": unknown field \"{other}\" (ux, uy, uz, theta, distance)",
+                            p.name.get_ref()
+                        ),
+                    );
+                }
+            }
+        }
+        let mut names: Vec<&str> = f.probe.iter().map(|p| p.name.get_ref().as_str()).collect();
+        names.sort_unstable();
+        if let Some(w) = names.windows(2).find(|w| w[0] == w[1]) {
+            let p = f
+                .probe
+                .iter()
+                .find(|p| p.name.get_ref() == w[0])
+                .expect("found");
+            return self.error(
+                p.name.span(),
+                format!("probe name \"{}\" is used twice", w[0]),
+            );
+        }
+        Ok(())
+    }
+
+    /// Checks against the mesh: groups exist and have the right dimension, every cell has a
+    /// material, prescribed components exist in this dimension.
+    pub fn validate(&self, mesh: &Mesh) -> Result<(), CaseError> {
+        let available = |dim_ok: &dyn Fn(usize) -> bool| -> String {
+            let names: Vec<String> = mesh
+                .groups
+                .iter()
+                .filter(|g| dim_ok(g.dim))
+                .map(|g| format!("\"{}\"", g.name))
+                .collect();
+            if names.is_empty() {
+                "none".into()
+            } else {
+                names.join(", ")
+            }
+        };
+        let mut region_groups = Vec::new();
+        for (i, r) in self.file.region.iter().enumerate() {
+            let name = r.group.get_ref();
+            let Some(g) = mesh.group(name) else {
+                return self.error(
+                    r.group.span(),
+                    format!(
+                        "region[{i}]: physical group \"{name}\" is not in the mesh {} (its {}D groups: {})",
+                        mesh.source.display(),
+                        mesh.dim,
+                        available(&|d| d == mesh.dim)
+                    ),
+                );
+            };
+            if mesh.groups[g].dim != mesh.dim {
+                return self.error(
+                    r.group.span(),
+                    format!(
+                        "region[{i}]: group \"{name}\" has dimension {}, a region needs a {}D group of cells",
+                        mesh.groups[g].dim, mesh.dim
+                    ),
+                );
+            }
+            if region_groups.contains(&g) {
+                return self.error(
+                    r.group.span(),
+                    format!("region[{i}]: group \"{name}\" is given twice"),
+                );
+            }
+            region_groups.push(g);
+        }
+        for b in &mesh.cells {
+            let n = b
+                .groups
+                .iter()
+                .filter(|g| region_groups.contains(g))
+                .count();
+            if n != 1 {
+                let names: Vec<&str> = b
+                    .groups
+                    .iter()
+                    .map(|&g| mesh.groups[g].name.as_str())
+                    .collect();
+                let at = self.text.find("[[region]]").unwrap_or(0);
+                return self.error(
+                    at..at,
+                    if n == 0 {
+                        format!(
+                            "{} cells of groups [{}] have no [[region]]; every cell needs exactly one material",
+                            b.n_cells(),
+                            names.join(", ")
+                        )
+                    } else {
+                        format!("cells belong to several regions [{}]", names.join(", "))
+                    },
+                );
+            }
+        }
+        for (i, bc) in self.file.bc.iter().enumerate() {
+            let name = bc.group.get_ref();
+            let Some(g) = mesh.group(name) else {
+                return self.error(
+                    bc.group.span(),
+                    format!(
+                        "bc[{i}]: physical group \"{name}\" is not in the mesh {} (boundary groups: {})",
+                        mesh.source.display(),
+                        available(&|d| d < mesh.dim)
+                    ),
+                );
+            };
+            let gdim = mesh.groups[g].dim;
+            if gdim >= mesh.dim {
+                return self.error(
+                    bc.group.span(),
+                    format!("bc[{i}]: group \"{name}\" is a {gdim}D group of cells; boundary conditions go on curves/surfaces/points"),
+                );
+            }
+            if mesh.dim == 2 && bc.uz.is_some() {
+                return self.error(
+                    bc.group.span(),
+                    format!("bc[{i}] (\"{name}\"): `uz` in a 2D mesh"),
+                );
+            }
+            let natural = bc.traction.is_some() || bc.heat_flux.is_some();
+            if natural && gdim + 1 != mesh.dim {
+                return self.error(
+                    bc.group.span(),
+                    format!("bc[{i}] (\"{name}\"): traction and heat_flux need a {}D boundary group, this one is {gdim}D", mesh.dim - 1),
+                );
+            }
+            if let Some(t) = &bc.traction {
+                if t.get_ref().len() != mesh.dim {
+                    return self.error(
+                        t.span(),
+                        format!("bc[{i}]: traction needs {} components", mesh.dim),
+                    );
+                }
+            }
+            let any = bc.ux.is_some()
+                || bc.uy.is_some()
+                || bc.uz.is_some()
+                || bc.theta.is_some()
+                || natural;
+            if !any {
+                return self.error(
+                    bc.group.span(),
+                    format!("bc[{i}] (\"{name}\"): prescribes nothing"),
+                );
+            }
+        }
+        for r in &self.file.region {
+            if let Some(b) = &r.body_force {
+                if b.len() != mesh.dim {
+                    return self.error(
+                        r.group.span(),
+                        format!("body_force needs {} components", mesh.dim),
+                    );
+                }
+            }
+        }
+        for p in &self.file.probe {
+            for pt in [&p.at, &p.from, &p.to].into_iter().flatten() {
+                if pt.len() != mesh.dim {
+                    return self.error(
+                        p.name.span(),
+                        format!(
+                            "probe \"{}\": points need {} coordinates",
+                            p.name.get_ref(),
+                            mesh.dim
+                        ),
+                    );
+                }
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,404 @@
+//! Reference elements: shape functions, their reference gradients and quadrature rules.
+//!
+//! Each element type is a zero-sized struct implementing [`RefElement<N, D>`] with `N` nodes in
+//! `D` reference dimensions, so kernels are monomorphic per element type. Node order is tmc's
+//! own, which for the linear elements equals gmsh's and VTK's.
+//!
+//! Quadrature rules are the standard Gauss rules that basix (FEniCSx) also uses, so a
+//! validation run can integrate with the very same points and weights.
+
+/// A reference element with `N` nodes in `D` reference dimensions.
+pub trait RefElement<const N: usize, const D: usize>: Sync + Send + 'static {
+    /// Shape function values N_I(ξ).
+    fn shape(xi: &[f64; D]) -> [f64; N];
+    /// Reference gradients ∂N_I/∂ξ_j.
+    fn grad(xi: &[f64; D]) -> [[f64; D]; N];
+    /// Quadrature points and weights on the reference element.
+    fn quadrature() -> &'static [([f64; D], f64)];
+    /// Reference coordinates of the nodes.
+    fn nodes() -> [[f64; D]; N];
+    /// Simplex (unit triangle/tetrahedron) or cube ([−1, 1]^D) reference domain.
+    const SIMPLEX: bool;
+    /// Whether ξ lies in the reference domain, up to `tol`.
+    fn contains(xi: &[f64; D], tol: f64) -> bool {
+        if Self::SIMPLEX {
+            xi.iter().all(|&v| v >= -tol) && xi.iter().sum::<f64>() <= 1.0 + tol
+        } else {
+            xi.iter().all(|&v| v.abs() <= 1.0 + tol)
+        }
+    }
+}
+
+/// 2-node line on [−1, 1] (boundary facet of T1/Q1).
+pub struct Line2;
+/// 3-node triangle on the unit simplex (T1).
+pub struct Tri3;
+/// 4-node quadrilateral on [−1, 1]² (Q1).
+pub struct Quad4;
+/// 4-node tetrahedron on the unit simplex (tet4).
+pub struct Tet4;
+/// 8-node hexahedron on [−1, 1]³ (H1).
+pub struct Hex8;
+
+const G2: f64 = 0.577_350_269_189_625_8; // 1/√3
+
+static LINE_GAUSS2: [([f64; 1], f64); 2] = [([-G2], 1.0), ([G2], 1.0)];
+
+impl RefElement<2, 1> for Line2 {
+    const SIMPLEX: bool = false;
+    fn shape(xi: &[f64; 1]) -> [f64; 2] {
+        [0.5 * (1.0 - xi[0]), 0.5 * (1.0 + xi[0])]
+    }
+    fn grad(_xi: &[f64; 1]) -> [[f64; 1]; 2] {
+        [[-0.5], [0.5]]
+    }
+    fn quadrature() -> &'static [([f64; 1], f64)] {
+        &LINE_GAUSS2
+    }
+    fn nodes() -> [[f64; 1]; 2] {
+        [[-1.0], [1.0]]
+    }
+}
+
+/// One-point rule: exact for T1, whose gradients are constant (basix degree 1).
+static TRI_CENTROID: [([f64; 2], f64); 1] = [([1.0 / 3.0, 1.0 / 3.0], 0.5)];
+
+impl RefElement<3, 2> for Tri3 {
+    const SIMPLEX: bool = true;
+    fn shape(xi: &[f64; 2]) -> [f64; 3] {
+        [1.0 - xi[0] - xi[1], xi[0], xi[1]]
+    }
+    fn grad(_xi: &[f64; 2]) -> [[f64; 2]; 3] {
+        [[-1.0, -1.0], [1.0, 0.0], [0.0, 1.0]]
+    }
+    fn quadrature() -> &'static [([f64; 2], f64)] {
+        &TRI_CENTROID
+    }
+    fn nodes() -> [[f64; 2]; 3] {
+        [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]
+    }
+}
+
+static QUAD_GAUSS2: [([f64; 2], f64); 4] = [
+    ([-G2, -G2], 1.0),
+    ([G2, -G2], 1.0),
+    ([-G2, G2], 1.0),
+    ([G2, G2], 1.0),
+];
+
+const QUAD_NODES: [[f64; 2]; 4] = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
+
+impl RefElement<4, 2> for Quad4 {
+    const SIMPLEX: bool = false;
+    fn shape(xi: &[f64; 2]) -> [f64; 4] {
+        QUAD_NODES.map(|a| 0.25 * (1.0 + a[0] * xi[0]) * (1.0 + a[1] * xi[1]))
+    }
+    fn grad(xi: &[f64; 2]) -> [[f64; 2]; 4] {
+        QUAD_NODES.map(|a| {
+            [
+                0.25 * a[0] * (1.0 + a[1] * xi[1]),
+                0.25 * a[1] * (1.0 + a[0] * xi[0]),
+            ]
+        })
+    }
+    fn quadrature() -> &'static [([f64; 2], f64)] {
+        &QUAD_GAUSS2
+    }
+    fn nodes() -> [[f64; 2]; 4] {
+        QUAD_NODES
+    }
+}
+
+static TET_CENTROID: [([f64; 3], f64); 1] = [([0.25, 0.25, 0.25], 1.0 / 6.0)];
+
+impl RefElement<4, 3> for Tet4 {
+    const SIMPLEX: bool = true;
+    fn shape(xi: &[f64; 3]) -> [f64; 4] {
+        [1.0 - xi[0] - xi[1] - xi[2], xi[0], xi[1], xi[2]]
+    }
+    fn grad(_xi: &[f64; 3]) -> [[f64; 3]; 4] {
+        [
+            [-1.0, -1.0, -1.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+        ]
+    }
+    fn quadrature() -> &'static [([f64; 3], f64)] {
+        &TET_CENTROID
+    }
+    fn nodes() -> [[f64; 3]; 4] {
+        [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+        ]
+    }
+}
+
+const HEX_NODES: [[f64; 3]; 8] = [
+    [-1.0, -1.0, -1.0],
+    [1.0, -1.0, -1.0],
+    [1.0, 1.0, -1.0],
+    [-1.0, 1.0, -1.0],
+    [-1.0, -1.0, 1.0],
+    [1.0, -1.0, 1.0],
+    [1.0, 1.0, 1.0],
+    [-1.0, 1.0, 1.0],
+];
+
+static HEX_GAUSS2: [([f64; 3], f64); 8] = [
+    ([-G2, -G2, -G2], 1.0),
+    ([G2, -G2, -G2], 1.0),
+    ([-G2, G2, -G2], 1.0),
+    ([G2, G2, -G2], 1.0),
+    ([-G2, -G2, G2], 1.0),
+    ([G2, -G2, G2], 1.0),
+    ([-G2, G2, G2], 1.0),
+    ([G2, G2, G2], 1.0),
+];
+
+impl RefElement<8, 3> for Hex8 {
+    const SIMPLEX: bool = false;
+    fn shape(xi: &[f64; 3]) -> [f64; 8] {
+        HEX_NODES
+            .map(|a| 0.125 * (1.0 + a[0] * xi[0]) * (1.0 + a[1] * xi[1]) * (1.0 + a[2] * xi[2]))
+    }
+    fn grad(xi: &[f64; 3]) -> [[f64; 3]; 8] {
+        HEX_NODES.map(|a| {
+            let (s, t, u) = (1.0 + a[0] * xi[0], 1.0 + a[1] * xi[1], 1.0 + a[2] * xi[2]);
+            [
+                0.125 * a[0] * t * u,
+                0.125 * a[1] * s * u,
+                0.125 * a[2] * s * t,
+            ]
+        })
+    }
+    fn quadrature() -> &'static [([f64; 3], f64)] {
+        &HEX_GAUSS2
+    }
+    fn nodes() -> [[f64; 3]; 8] {
+        HEX_NODES
+    }
+}
+
+/// Geometry of an element at one reference point: physical shape gradients and |det ∂X/∂ξ|.
+///
+/// `X` are the element's nodal coordinates (only the first `D` components are used). Returns
+/// `None` when the reference map is singular or inverted (det ≤ 0), which for an undeformed
+/// mesh means the mesh itself is broken.
+#[allow(non_snake_case)]
+pub fn physical_gradients<const N: usize, const D: usize>(
+    dN_dxi: &[[f64; D]; N],
+    X: &[[f64; 3]; N],
+) -> Option<([[f64; D]; N], f64)> {
+    // Jacobian J_ij = ∂X_i/∂ξ_j
+    let mut jac = [[0.0; D]; D];
+    for (g, x) in dN_dxi.iter().zip(X) {
+        for i in 0..D {
+            for j in 0..D {
+                jac[i][j] += x[i] * g[j];
+            }
+        }
+    }
+    let (det, inv) = invert_small(&jac)?;
+    if det <= 0.0 {
+        return None;
+    }
+    // ∂N/∂X_k = Σ_j ∂N/∂ξ_j (J⁻¹)_jk
+    let mut out = [[0.0; D]; N];
+    for (o, g) in out.iter_mut().zip(dN_dxi) {
+        for k in 0..D {
+            o[k] = (0..D).map(|j| g[j] * inv[j][k]).sum();
+        }
+    }
+    Some((out, det))
+}
+
+/// Determinant and inverse of a 1×1, 2×2 or 3×3 matrix; `None` if singular.
+pub fn invert_small<const D: usize>(a: &[[f64; D]; D]) -> Option<(f64, [[f64; D]; D])> {
+    let mut inv = [[0.0; D]; D];
+    let det = match D {
+        1 => {
+            let d = a[0][0];
+            if d == 0.0 {
+                return None;
+            }
+            inv[0][0] = 1.0 / d;
+            d
+        }
+        2 => {
+            let d = a[0][0] * a[1][1] - a[0][1] * a[1][0];
+            if d == 0.0 {
+                return None;
+            }
+            inv[0][0] = a[1][1] / d;
+            inv[0][1] = -a[0][1] / d;
+            inv[1][0] = -a[1][0] / d;
+            inv[1][1] = a[0][0] / d;
+            d
+        }
+        3 => {
+            let c00 = a[1][1] * a[2][2] - a[1][2] * a[2][1];
+            let c01 = a[1][2] * a[2][0] - a[1][0] * a[2][2];
+            let c02 = a[1][0] * a[2][1] - a[1][1] * a[2][0];
+            let d = a[0][0] * c00 + a[0][1] * c01 + a[0][2] * c02;
+            if d == 0.0 {
+                return None;
+            }
+            inv[0][0] = c00 / d;
+            inv[0][1] = (a[0][2] * a[2][1] - a[0][1] * a[2][2]) / d;
+            inv[0][2] = (a[0][1] * a[1][2] - a[0][2] * a[1][1]) / d;
+            inv[1][0] = c01 / d;
+            inv[1][1] = (a[0][0] * a[2][2] - a[0][2] * a[2][0]) / d;
+            inv[1][2] = (a[0][2] * a[1][0] - a[0][0] * a[1][2]) / d;
+            inv[2][0] = c02 / d;
+            inv[2][1] = (a[0][1] * a[2][0] - a[0][0] * a[2][1]) / d;
+            inv[2][2] = (a[0][0] * a[1][1] - a[0][1] * a[1][0]) / d;
+            d
+        }
+        _ => return None,
+    };
+    Some((det, inv))
+}
+
+/// Measure element of a facet or cell: |∂X/∂ξ| for a line, |∂X/∂ξ1 × ∂X/∂ξ2| for a surface
+/// (in 2D or 3D) and |det ∂X/∂ξ| for a volume.
+#[allow(non_snake_case)]
+pub fn facet_measure<const N: usize, const D: usize>(
+    dN_dxi: &[[f64; D]; N],
+    X: &[[f64; 3]; N],
+) -> f64 {
+    let mut t = [[0.0; 3]; D];
+    for (g, x) in dN_dxi.iter().zip(X) {
+        for j in 0..D {
+            for i in 0..3 {
+                t[j][i] += x[i] * g[j];
+            }
+        }
+    }
+    match D {
+        0 => 1.0,
+        1 => (t[0][0] * t[0][0] + t[0][1] * t[0][1] + t[0][2] * t[0][2]).sqrt(),
+        2 => {
+            let (a, b) = (t[0], t[1]);
+            let c = [
+                a[1] * b[2] - a[2] * b[1],
+                a[2] * b[0] - a[0] * b[2],
+                a[0] * b[1] - a[1] * b[0],
+            ];
+            (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt()
+        }
+        _ => {
+            let (a, b, c) = (t[0], t[1], t[2]);
+            (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
+                + a[2] * (b[0] * c[1] - b[1] * c[0]))
+                .abs()
+        }
+    }
+}
+
+/// 1-node point "element" for point groups.
+pub struct Point1;
+
+static POINT_RULE: [([f64; 0], f64); 1] = [([], 1.0)];
+
+impl RefElement<1, 0> for Point1 {
+    const SIMPLEX: bool = false;
+    fn shape(_xi: &[f64; 0]) -> [f64; 1] {
+        [1.0]
+    }
+    fn grad(_xi: &[f64; 0]) -> [[f64; 0]; 1] {
+        [[]]
+    }
+    fn quadrature() -> &'static [([f64; 0], f64)] {
+        &POINT_RULE
+    }
+    fn nodes() -> [[f64; 0]; 1] {
+        [[]]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn check_element<const N: usize, const D: usize, E: RefElement<N, D>>() {
+        let nodes = E::nodes();
+        // Kronecker property at the nodes
+        for (a, xa) in nodes.iter().enumerate() {
+            let n = E::shape(xa);
+            for (b, v) in n.iter().enumerate() {
+                let expect = if a == b { 1.0 } else { 0.0 };
+                assert!((v - expect).abs() < 1e-14, "N_{b}(node {a}) = {v}");
+            }
+        }
+        // partition of unity, linear reproduction and gradient vs finite differences
+        let pts: Vec<[f64; D]> = E::quadrature().iter().map(|q| q.0).collect();
+        for xi in pts {
+            let n = E::shape(&xi);
+            assert!((n.iter().sum::<f64>() - 1.0).abs() < 1e-14);
+            for d in 0..D {
+                let lin: f64 = n.iter().zip(&nodes).map(|(n, x)| n * x[d]).sum();
+                assert!((lin - xi[d]).abs() < 1e-14);
+            }
+            let g = E::grad(&xi);
+            for d in 0..D {
+                let h = 1e-6;
+                let (mut p, mut m) = (xi, xi);
+                p[d] += h;
+                m[d] -= h;
+                let (np, nm) = (E::shape(&p), E::shape(&m));
+                for i in 0..N {
+                    let fd = (np[i] - nm[i]) / (2.0 * h);
+                    assert!(
+                        (fd - g[i][d]).abs() < 1e-8,
+                        "dN{i}/dxi{d}: {fd} vs {}",
+                        g[i][d]
+                    );
+                }
+            }
+            for d in 0..D {
+                let s: f64 = g.iter().map(|gi| gi[d]).sum();
+                assert!(s.abs() < 1e-14);
+            }
+        }
+    }
+
+    #[test]
+    fn linear_elements_are_consistent() {
+        check_element::<2, 1, Line2>();
+        check_element::<3, 2, Tri3>();
+        check_element::<4, 2, Quad4>();
+        check_element::<4, 3, Tet4>();
+        check_element::<8, 3, Hex8>();
+    }
+
+    #[test]
+    fn quadrature_integrates_reference_volume() {
+        let s = |r: &[([f64; 2], f64)]| r.iter().map(|q| q.1).sum::<f64>();
+        assert!((s(Tri3::quadrature()) - 0.5).abs() < 1e-15);
+        assert!((s(Quad4::quadrature()) - 4.0).abs() < 1e-15);
+        let s3 = |r: &[([f64; 3], f64)]| r.iter().map(|q| q.1).sum::<f64>();
+        assert!((s3(Tet4::quadrature()) - 1.0 / 6.0).abs() < 1e-15);
+        assert!((s3(Hex8::quadrature()) - 8.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn physical_gradients_reproduce_linear_field_on_distorted_quad() {
+        let x = [
+            [0.0, 0.0, 0.0],
+            [2.0, 0.3, 0.0],
+            [2.4, 1.9, 0.0],
+            [-0.2, 1.1, 0.0],
+        ];
+        let f = |p: &[f64; 3]| 3.0 * p[0] - 2.0 * p[1] + 1.0;
+        for (xi, _) in Quad4::quadrature() {
+            let (g, det) = physical_gradients::<4, 2>(&Quad4::grad(xi), &x).unwrap();
+            assert!(det > 0.0);
+            let grad: [f64; 2] = [0, 1].map(|k| (0..4).map(|i| g[i][k] * f(&x[i])).sum());
+            assert!((grad[0] - 3.0).abs() < 1e-12 && (grad[1] + 2.0).abs() < 1e-12);
+        }
+    }
+}

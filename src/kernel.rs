@@ -1,0 +1,358 @@
+//! Element kernels: from a cell's reference data and local unknowns, the local residual and
+//! tangent. Only the assembler touches global arrays.
+//!
+//! Local dof order is field-blocked: u (node-major, `D` components), then θ, then p.
+#![allow(non_snake_case)]
+
+use crate::element::{RefElement, physical_gradients};
+use crate::material::{Conductivity, ThermoElastic, fourier};
+use nalgebra::{Matrix3, Vector3};
+
+/// Material of a cell block.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CellMaterial {
+    pub law: ThermoElastic,
+    pub cond: Conductivity,
+    pub medium: bool,
+}
+
+/// Which fields a cell carries locally.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Layout {
+    pub n: usize,
+    pub dim: usize,
+    pub has_u: bool,
+    pub has_theta: bool,
+    /// Regularization components on this cell's nodes (0 outside the medium).
+    pub np: usize,
+}
+
+impl Layout {
+    pub fn u(&self, node: usize, c: usize) -> usize {
+        node * self.dim + c
+    }
+    pub fn theta_off(&self) -> usize {
+        if self.has_u { self.n * self.dim } else { 0 }
+    }
+    pub fn theta(&self, node: usize) -> usize {
+        self.theta_off() + node
+    }
+    pub fn p_off(&self) -> usize {
+        self.theta_off() + if self.has_theta { self.n } else { 0 }
+    }
+    pub fn p(&self, node: usize, c: usize) -> usize {
+        self.p_off() + node * self.np + c
+    }
+    pub fn ndof(&self) -> usize {
+        self.p_off() + self.n * self.np
+    }
+}
+
+/// Nodal data of one cell.
+#[derive(Clone, Copy, Debug)]
+pub struct CellState<const N: usize> {
+    pub X: [[f64; 3]; N],
+    pub u: [[f64; 3]; N],
+    pub theta: [f64; N],
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum KernelError {
+    /// The undeformed cell has a non-positive Jacobian (broken mesh).
+    BadGeometry,
+    /// J ≤ 0 (or not finite) at a quadrature point.
+    Inverted { J: f64 },
+}
+
+/// What a kernel call reports besides r and K.
+#[derive(Clone, Copy, Debug)]
+pub struct CellSummary {
+    pub min_J: f64,
+    /// Stored mechanical energy ∫ Ψ dV.
+    pub energy: f64,
+}
+
+/// Deformation gradient (plane strain in 2D) and temperature gradient at a point.
+fn kinematics<const N: usize, const D: usize>(
+    g: &[[f64; D]; N],
+    s: &CellState<N>,
+    has_u: bool,
+) -> (Matrix3<f64>, Vector3<f64>) {
+    let mut F = Matrix3::identity();
+    let mut gt = Vector3::zeros();
+    for I in 0..N {
+        for J in 0..D {
+            if has_u {
+                for i in 0..D {
+                    F[(i, J)] += s.u[I][i] * g[I][J];
+                }
+            }
+            gt[J] += s.theta[I] * g[I][J];
+        }
+    }
+    (F, gt)
+}
+
+/// Residual and (optionally) tangent of one cell of the bulk (solid or medium):
+///
+/// r_u = ∫ P : ∇δu dV,  r_θ = ∫ −Q · ∇δθ dV  (eq. 5, 6, without external loads),
+/// K = ∂r/∂(u, θ) exactly (eq. 28–29), unsymmetric where both couplings act.
+///
+/// `r` and `k` (row-major, `ndof × ndof`) are overwritten.
+pub fn bulk<const N: usize, const D: usize, E: RefElement<N, D>>(
+    mat: &CellMaterial,
+    lay: &Layout,
+    s: &CellState<N>,
+    r: &mut [f64],
+    mut k: Option<&mut [f64]>,
+) -> Result<CellSummary, KernelError> {
+    let nd = lay.ndof();
+    r[..nd].fill(0.0);
+    if let Some(k) = k.as_deref_mut() {
+        k[..nd * nd].fill(0.0);
+    }
+    let mut summary = CellSummary {
+        min_J: f64::INFINITY,
+        energy: 0.0,
+    };
+    let theta_ref = mat.law.theta0;
+    for (xi, w) in E::quadrature() {
+        let (g, detJ) =
+            physical_gradients::<N, D>(&E::grad(xi), &s.X).ok_or(KernelError::BadGeometry)?;
+        let dV = w * detJ;
+        let Nv = E::shape(xi);
+        let (F, gt) = kinematics(&g, s, lay.has_u);
+        let theta = if lay.has_theta {
+            Nv.iter().zip(&s.theta).map(|(a, b)| a * b).sum()
+        } else {
+            theta_ref
+        };
+        if lay.has_u {
+            let m = mat
+                .law
+                .stress(&F, theta)
+                .ok_or(KernelError::Inverted { J: F.determinant() })?;
+            summary.min_J = summary.min_J.min(m.J);
+            summary.energy += m.psi * dV;
+            for I in 0..N {
+                for i in 0..D {
+                    let v: f64 = (0..D).map(|J| m.P[(i, J)] * g[I][J]).sum();
+                    r[lay.u(I, i)] += v * dV;
+                }
+            }
+            if let Some(k) = k.as_deref_mut() {
+                // B[(iJ), k] = Σ_L A_iJkL ∂N_K/∂X_L for each K
+                for K in 0..N {
+                    let mut B = [[0.0; 3]; 9];
+                    for i in 0..D {
+                        for J in 0..D {
+                            for kk in 0..D {
+                                B[3 * i + J][kk] = (0..D)
+                                    .map(|L| m.dP_dF[(3 * i + J, 3 * kk + L)] * g[K][L])
+                                    .sum();
+                            }
+                        }
+                    }
+                    for I in 0..N {
+                        for i in 0..D {
+                            let row = lay.u(I, i) * nd;
+                            for kk in 0..D {
+                                let v: f64 = (0..D).map(|J| g[I][J] * B[3 * i + J][kk]).sum();
+                                k[row + lay.u(K, kk)] += v * dV;
+                            }
+                        }
+                    }
+                }
+                if lay.has_theta {
+                    // K_uθ = ∫ ∂P/∂θ : ∇δu N_K
+                    for I in 0..N {
+                        for i in 0..D {
+                            let v: f64 = (0..D).map(|J| m.dP_dtheta[(i, J)] * g[I][J]).sum();
+                            if v != 0.0 {
+                                let row = lay.u(I, i) * nd;
+                                for K in 0..N {
+                                    k[row + lay.theta(K)] += v * Nv[K] * dV;
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        } else {
+            summary.min_J = summary.min_J.min(1.0);
+        }
+        if lay.has_theta {
+            let h =
+                fourier(&F, &gt, &mat.cond).ok_or(KernelError::Inverted { J: F.determinant() })?;
+            for I in 0..N {
+                let v: f64 = (0..D).map(|J| h.Q[J] * g[I][J]).sum();
+                r[lay.theta(I)] -= v * dV;
+            }
+            if let Some(k) = k.as_deref_mut() {
+                for I in 0..N {
+                    let row = lay.theta(I) * nd;
+                    for K in 0..N {
+                        let mut v = 0.0;
+                        for J in 0..D {
+                            for L in 0..D {
+                                v -= g[I][J] * h.dQ_dgrad[(J, L)] * g[K][L];
+                            }
+                        }
+                        k[row + lay.theta(K)] += v * dV;
+                    }
+                    if lay.has_u {
+                        for K in 0..N {
+                            for kk in 0..D {
+                                let mut v = 0.0;
+                                for J in 0..D {
+                                    for L in 0..D {
+                                        v -= g[I][J] * h.dQ_dF[(J, 3 * kk + L)] * g[K][L];
+                                    }
+                                }
+                                k[row + lay.u(K, kk)] += v * dV;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    Ok(summary)
+}
+
+/// Cell averages for output.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct CellFields {
+    pub J: f64,
+    /// Cauchy stress σ = P Fᵀ / J.
+    pub sigma: [[f64; 3]; 3],
+    /// Current heat flux q = F Q / J.
+    pub q: [f64; 3],
+    pub k: f64,
+}
+
+/// Volume averages of J, σ, q and k over a cell.
+pub fn cell_fields<const N: usize, const D: usize, E: RefElement<N, D>>(
+    mat: &CellMaterial,
+    lay: &Layout,
+    s: &CellState<N>,
+) -> Result<CellFields, KernelError> {
+    let mut out = CellFields::default();
+    let mut vol = 0.0;
+    let mut sigma = Matrix3::zeros();
+    let mut q = Vector3::zeros();
+    for (xi, w) in E::quadrature() {
+        let (g, detJ) =
+            physical_gradients::<N, D>(&E::grad(xi), &s.X).ok_or(KernelError::BadGeometry)?;
+        let dV = w * detJ;
+        let Nv = E::shape(xi);
+        let (F, gt) = kinematics(&g, s, lay.has_u);
+        let theta = if lay.has_theta {
+            Nv.iter().zip(&s.theta).map(|(a, b)| a * b).sum()
+        } else {
+            mat.law.theta0
+        };
+        let m = mat
+            .law
+            .stress(&F, theta)
+            .ok_or(KernelError::Inverted { J: F.determinant() })?;
+        let h = fourier(&F, &gt, &mat.cond).ok_or(KernelError::Inverted { J: m.J })?;
+        out.J += m.J * dV;
+        sigma += m.P * F.transpose() / m.J * dV;
+        if lay.has_theta {
+            q += F * h.Q / m.J * dV;
+        }
+        out.k += h.k * dV;
+        vol += dV;
+    }
+    out.J /= vol;
+    out.k /= vol;
+    sigma /= vol;
+    q /= vol;
+    for i in 0..3 {
+        out.q[i] = q[i];
+        for j in 0..3 {
+            out.sigma[i][j] = sigma[(i, j)];
+        }
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::element::{Hex8, Quad4, Tet4, Tri3};
+
+    const MAT: CellMaterial = CellMaterial {
+        law: ThermoElastic {
+            K: 20.0,
+            mu: 10.0,
+            alpha: 2e-3,
+            theta0: 10.0,
+        },
+        cond: Conductivity::Medium {
+            k_tm: 3.0,
+            k_max: 50.0,
+        },
+        medium: false,
+    };
+
+    fn check<const N: usize, const D: usize, E: RefElement<N, D>>() {
+        let mut s = CellState::<N> {
+            X: [[0.0; 3]; N],
+            u: [[0.0; 3]; N],
+            theta: [0.0; N],
+        };
+        for (I, xi) in E::nodes().iter().enumerate() {
+            for d in 0..D {
+                // distorted but valid geometry
+                s.X[I][d] = 0.5 * xi[d] + 0.07 * ((I * 7 + d * 3) % 5) as f64 / 5.0;
+                s.u[I][d] = 0.05 * (((I * 3 + d * 5) % 7) as f64 / 7.0 - 0.5);
+            }
+            s.theta[I] = 10.0 + 30.0 * ((I * 5) % 4) as f64;
+        }
+        let lay = Layout {
+            n: N,
+            dim: D,
+            has_u: true,
+            has_theta: true,
+            np: 0,
+        };
+        let nd = lay.ndof();
+        let mut r = vec![0.0; nd];
+        let mut k = vec![0.0; nd * nd];
+        bulk::<N, D, E>(&MAT, &lay, &s, &mut r, Some(&mut k)).unwrap();
+        let h = 1e-7;
+        let (mut rp, mut rm) = (vec![0.0; nd], vec![0.0; nd]);
+        for b in 0..nd {
+            let perturb = |s: &CellState<N>, e: f64| {
+                let mut t = *s;
+                if b < N * D {
+                    t.u[b / D][b % D] += e;
+                } else {
+                    t.theta[b - N * D] += e;
+                }
+                t
+            };
+            bulk::<N, D, E>(&MAT, &lay, &perturb(&s, h), &mut rp, None).unwrap();
+            bulk::<N, D, E>(&MAT, &lay, &perturb(&s, -h), &mut rm, None).unwrap();
+            let scale = k.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            for a in 0..nd {
+                let fd = (rp[a] - rm[a]) / (2.0 * h);
+                assert!(
+                    (fd - k[a * nd + b]).abs() < 1e-6 * scale,
+                    "K[{a},{b}] = {} vs FD {fd}",
+                    k[a * nd + b]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn bulk_tangent_matches_finite_differences() {
+        check::<3, 2, Tri3>();
+        check::<4, 2, Quad4>();
+        check::<4, 3, Tet4>();
+        check::<8, 3, Hex8>();
+    }
+}

@@ -1,0 +1,24 @@
+//! tmc: finite-strain thermo-mechanical contact with the third-medium method.
+//!
+//! Layers in pipeline order: [`mesh`] (gmsh → .msh → mesh) → [`dofs`] → [`element`] and
+//! [`material`] → [`kernel`] → [`assembly`] → [`linsolve`] → [`newton`] → [`stepping`] →
+//! [`output`]. [`case`] reads the case file, [`model`] builds the discrete problem from it,
+//! [`solve`] drives a run.
+
+#![allow(non_snake_case)] // maths names: F, P, J, X, dP_dF
+
+pub mod assembly;
+pub mod case;
+pub mod dofs;
+pub mod element;
+pub mod kernel;
+pub mod linsolve;
+pub mod material;
+pub mod mesh;
+pub mod model;
+pub mod newton;
+pub mod output;
+pub mod post;
+pub mod probe;
+pub mod solve;
+pub mod stepping;

@@ -1,0 +1,150 @@
+//! The `tmc` command: a thin layer over the library.
+
+use clap::{Parser, Subcommand};
+use std::path::PathBuf;
+use std::process::ExitCode;
+use tmc::mesh::gmsh::{MeshOptions, mesh_geo};
+use tmc::solve::{SolveOptions, run};
+
+#[derive(Parser)]
+#[command(
+    name = "tmc",
+    version,
+    about = "Thermo-mechanical contact with the third-medium method"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Mesh a gmsh .geo file into MSH 4.1.
+    Mesh {
+        /// The .geo file.
+        geo: PathBuf,
+        /// Output .msh (default: next to the .geo).
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        /// Element order.
+        #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u8).range(1..=2))]
+        order: u8,
+        /// Serendipity second-order elements (quad8, hex20).
+        #[arg(long)]
+        incomplete: bool,
+        /// Set a .geo parameter: --set NAME=VALUE (repeatable).
+        #[arg(long = "set", value_name = "NAME=VALUE", value_parser = parse_param)]
+        set: Vec<(String, f64)>,
+        /// Show gmsh's log.
+        #[arg(short, long)]
+        verbose: bool,
+    },
+    /// Solve a case file.
+    Solve {
+        /// The case (.toml).
+        case: PathBuf,
+        /// Output folder (default: results/NAME).
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        /// No progress bar, no summary line.
+        #[arg(short, long)]
+        quiet: bool,
+        /// One line per load step.
+        #[arg(short, long)]
+        verbose: bool,
+    },
+}
+
+fn parse_param(s: &str) -> Result<(String, f64), String> {
+    let (k, v) = s
+        .split_once('=')
+        .ok_or_else(|| format!("expected NAME=VALUE, got \"{s}\""))?;
+    let v: f64 = v
+        .trim()
+        .parse()
+        .map_err(|_| format!("\"{v}\" is not a number"))?;
+    Ok((k.trim().to_string(), v))
+}
+
+fn print_chain(e: &dyn std::error::Error) {
+    eprintln!("error: {e}");
+    let mut src = e.source();
+    while let Some(s) = src {
+        eprintln!("  caused by: {s}");
+        src = s.source();
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Mesh {
+            geo,
+            output,
+            order,
+            incomplete,
+            set,
+            verbose,
+        } => {
+            let out = output.unwrap_or_else(|| geo.with_extension("msh"));
+            let opts = MeshOptions {
+                order,
+                incomplete,
+                set_numbers: set,
+                verbose,
+            };
+            match mesh_geo(&geo, &out, &opts) {
+                Ok(r) => {
+                    for w in &r.warnings {
+                        eprintln!("gmsh: {w}");
+                    }
+                    println!("wrote {} ({}D)", r.output.display(), r.dim);
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    print_chain(&e);
+                    ExitCode::FAILURE
+                }
+            }
+        }
+        Command::Solve {
+            case,
+            output,
+            quiet,
+            verbose,
+        } => {
+            let opts = SolveOptions {
+                out_dir: output,
+                quiet,
+                verbose,
+            };
+            match run(&case, &opts) {
+                Ok(s) => {
+                    if !quiet {
+                        let probes: Vec<String> = s
+                            .probes
+                            .iter()
+                            .map(|(k, v)| format!("{k} = {v:.6e}"))
+                            .collect();
+                        println!(
+                            "{}: {} dofs, {} load steps, {} Newton iterations, {:.2} s{}{}",
+                            s.case,
+                            s.dofs["total"],
+                            s.load_steps,
+                            s.newton_iterations,
+                            s.wall_seconds,
+                            if probes.is_empty() { "" } else { "; " },
+                            probes.join(", ")
+                        );
+                        println!("results in {}", s.output);
+                    }
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    print_chain(&e);
+                    ExitCode::FAILURE
+                }
+            }
+        }
+    }
+}

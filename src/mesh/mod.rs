@@ -1,0 +1,185 @@
+//! Meshes: nodes, cell blocks per element type and physical group, boundary facets.
+//!
+//! Everything a user names is a gmsh physical group; raw numeric ids never leave this module.
+
+pub mod gmsh;
+pub mod msh;
+
+use std::path::PathBuf;
+
+/// Element types tmc reads from `.msh` files.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum CellKind {
+    Point1,
+    Line2,
+    Tri3,
+    Quad4,
+    Tet4,
+    Hex8,
+}
+
+impl CellKind {
+    /// Topological dimension.
+    pub fn dim(self) -> usize {
+        match self {
+            CellKind::Point1 => 0,
+            CellKind::Line2 => 1,
+            CellKind::Tri3 | CellKind::Quad4 => 2,
+            CellKind::Tet4 | CellKind::Hex8 => 3,
+        }
+    }
+
+    pub fn n_nodes(self) -> usize {
+        match self {
+            CellKind::Point1 => 1,
+            CellKind::Line2 => 2,
+            CellKind::Tri3 => 3,
+            CellKind::Quad4 | CellKind::Tet4 => 4,
+            CellKind::Hex8 => 8,
+        }
+    }
+
+    /// The element's name as the paper and the docs use it.
+    pub fn name(self) -> &'static str {
+        match self {
+            CellKind::Point1 => "point",
+            CellKind::Line2 => "line2",
+            CellKind::Tri3 => "T1 (tri3)",
+            CellKind::Quad4 => "Q1 (quad4)",
+            CellKind::Tet4 => "tet4",
+            CellKind::Hex8 => "H1 (hex8)",
+        }
+    }
+
+    /// VTK cell type id.
+    pub fn vtk_id(self) -> u8 {
+        match self {
+            CellKind::Point1 => 1,
+            CellKind::Line2 => 3,
+            CellKind::Tri3 => 5,
+            CellKind::Quad4 => 9,
+            CellKind::Tet4 => 10,
+            CellKind::Hex8 => 12,
+        }
+    }
+
+    /// From gmsh's element type number; `None` for types tmc does not support.
+    pub fn from_gmsh(t: u32) -> Option<CellKind> {
+        Some(match t {
+            15 => CellKind::Point1,
+            1 => CellKind::Line2,
+            2 => CellKind::Tri3,
+            3 => CellKind::Quad4,
+            4 => CellKind::Tet4,
+            5 => CellKind::Hex8,
+            _ => return None,
+        })
+    }
+}
+
+/// gmsh's name for an element type number, for error messages.
+pub fn gmsh_type_name(t: u32) -> String {
+    match t {
+        8 => "line3".into(),
+        9 => "tri6".into(),
+        10 => "quad9".into(),
+        11 => "tet10".into(),
+        12 => "hex27".into(),
+        16 => "quad8".into(),
+        17 => "hex20".into(),
+        6 => "prism6".into(),
+        7 => "pyramid5".into(),
+        _ => format!("gmsh element type {t}"),
+    }
+}
+
+/// A gmsh physical group.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PhysicalGroup {
+    pub name: String,
+    pub dim: usize,
+    pub tag: i32,
+}
+
+/// Cells of one element type from one gmsh entity, with the physical groups they belong to.
+#[derive(Clone, Debug)]
+pub struct Block {
+    pub kind: CellKind,
+    /// Indices into [`Mesh::groups`].
+    pub groups: Vec<usize>,
+    /// Flat connectivity, `kind.n_nodes()` node indices per cell.
+    pub conn: Vec<usize>,
+}
+
+impl Block {
+    pub fn n_cells(&self) -> usize {
+        self.conn.len() / self.kind.n_nodes()
+    }
+    pub fn cell(&self, c: usize) -> &[usize] {
+        let n = self.kind.n_nodes();
+        &self.conn[c * n..(c + 1) * n]
+    }
+}
+
+/// A finite-element mesh of dimension 2 or 3.
+#[derive(Clone, Debug)]
+pub struct Mesh {
+    pub dim: usize,
+    /// Node coordinates (z = 0 in 2D).
+    pub coords: Vec<[f64; 3]>,
+    /// Cells of the mesh's dimension.
+    pub cells: Vec<Block>,
+    /// Lower-dimensional elements (boundary facets, points) that carry physical groups.
+    pub facets: Vec<Block>,
+    pub groups: Vec<PhysicalGroup>,
+    /// File the mesh was read from.
+    pub source: PathBuf,
+}
+
+impl Mesh {
+    pub fn group(&self, name: &str) -> Option<usize> {
+        self.groups.iter().position(|g| g.name == name)
+    }
+
+    pub fn n_cells(&self) -> usize {
+        self.cells.iter().map(Block::n_cells).sum()
+    }
+
+    /// Sorted, unique node indices of all cells and facets in group `g`.
+    pub fn group_nodes(&self, g: usize) -> Vec<usize> {
+        let mut nodes: Vec<usize> = self
+            .cells
+            .iter()
+            .chain(&self.facets)
+            .filter(|b| b.groups.contains(&g))
+            .flat_map(|b| b.conn.iter().copied())
+            .collect();
+        nodes.sort_unstable();
+        nodes.dedup();
+        nodes
+    }
+
+    /// Largest extent of the undeformed mesh's bounding box (eq. 21).
+    pub fn extent(&self) -> f64 {
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for x in &self.coords {
+            for i in 0..3 {
+                lo[i] = lo[i].min(x[i]);
+                hi[i] = hi[i].max(x[i]);
+            }
+        }
+        (0..3).map(|i| hi[i] - lo[i]).fold(0.0, f64::max)
+    }
+
+    /// Element types present among the cells, in order of first appearance.
+    pub fn cell_kinds(&self) -> Vec<CellKind> {
+        let mut kinds = Vec::new();
+        for b in &self.cells {
+            if !kinds.contains(&b.kind) {
+                kinds.push(b.kind);
+            }
+        }
+        kinds
+    }
+}

@@ -1,0 +1,196 @@
+//! Output: one `.vtu` per converged step (vtkio), a `.pvd` collection, `history.csv` and
+//! `summary.json`. Every file is written to a temporary name and renamed, so a failure never
+//! leaves a half-written file.
+
+use crate::kernel::CellFields;
+use crate::mesh::Mesh;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use vtkio::model::{
+    Attribute, Attributes, ByteOrder, CellType, Cells, DataSet, Piece, UnstructuredGridPiece,
+    Version, VertexNumbers, Vtk,
+};
+
+#[derive(Debug, thiserror::Error)]
+pub enum OutputError {
+    #[error("cannot write {path}: {msg}")]
+    Write { path: PathBuf, msg: String },
+}
+
+fn werr(path: &Path, e: impl std::fmt::Display) -> OutputError {
+    OutputError::Write {
+        path: path.to_owned(),
+        msg: e.to_string(),
+    }
+}
+
+/// Write `bytes` to `path` atomically.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
+    let tmp = path.with_extension(format!(
+        "{}.part",
+        path.extension()
+            .map(|e| e.to_string_lossy().into_owned())
+            .unwrap_or_default()
+    ));
+    std::fs::write(&tmp, bytes).map_err(|e| werr(&tmp, e))?;
+    std::fs::rename(&tmp, path).map_err(|e| werr(path, e))
+}
+
+fn vtk_cell_type(id: u8) -> CellType {
+    match id {
+        3 => CellType::Line,
+        5 => CellType::Triangle,
+        9 => CellType::Quad,
+        10 => CellType::Tetra,
+        12 => CellType::Hexahedron,
+        _ => CellType::Vertex,
+    }
+}
+
+/// Nodal and cell data of one step.
+pub struct StepFields<'a> {
+    /// Displacement per node (zeros without mechanics).
+    pub u: &'a [[f64; 3]],
+    /// Temperature per node, if simulated.
+    pub theta: Option<&'a [f64]>,
+    /// Cell data in mesh block order.
+    pub cells: &'a [CellFields],
+    /// Region index and kind (0 solid, 1 medium) per cell.
+    pub region: &'a [i32],
+    pub kind: &'a [i32],
+}
+
+/// Write one step's `.vtu`.
+pub fn write_vtu(path: &Path, mesh: &Mesh, f: &StepFields) -> Result<(), OutputError> {
+    let points: Vec<f64> = mesh.coords.iter().flat_map(|x| x.iter().copied()).collect();
+    let mut connectivity = Vec::new();
+    let mut offsets = Vec::new();
+    let mut types = Vec::new();
+    for b in &mesh.cells {
+        for c in 0..b.n_cells() {
+            connectivity.extend(b.cell(c).iter().map(|&n| n as u64));
+            offsets.push(connectivity.len() as u64);
+            types.push(vtk_cell_type(b.kind.vtk_id()));
+        }
+    }
+    let u: Vec<f64> = f.u.iter().flat_map(|v| v.iter().copied()).collect();
+    let pos: Vec<f64> = mesh
+        .coords
+        .iter()
+        .zip(f.u)
+        .flat_map(|(x, u)| [x[0] + u[0], x[1] + u[1], x[2] + u[2]])
+        .collect();
+    let mut point = vec![
+        Attribute::vectors("u").with_data(u),
+        Attribute::vectors("position").with_data(pos),
+    ];
+    if let Some(t) = f.theta {
+        point.push(Attribute::scalars("theta", 1).with_data(t.to_vec()));
+    }
+    let c = f.cells;
+    let sigma: Vec<f64> = c
+        .iter()
+        .flat_map(|c| c.sigma.iter().flatten().copied().collect::<Vec<_>>())
+        .collect();
+    let pressure: Vec<f64> = c
+        .iter()
+        .map(|c| -(c.sigma[0][0] + c.sigma[1][1] + c.sigma[2][2]) / 3.0)
+        .collect();
+    let mut cell = vec![
+        Attribute::scalars("region", 1).with_data(f.region.to_vec()),
+        Attribute::scalars("region_kind", 1).with_data(f.kind.to_vec()),
+        Attribute::scalars("J", 1).with_data(c.iter().map(|c| c.J).collect::<Vec<_>>()),
+        Attribute::tensors("sigma").with_data(sigma),
+        Attribute::scalars("pressure", 1).with_data(pressure),
+    ];
+    if f.theta.is_some() {
+        cell.push(
+            Attribute::vectors("q").with_data(c.iter().flat_map(|c| c.q).collect::<Vec<_>>()),
+        );
+        cell.push(Attribute::scalars("k", 1).with_data(c.iter().map(|c| c.k).collect::<Vec<_>>()));
+    }
+    let vtk = Vtk {
+        version: Version::XML { major: 1, minor: 0 },
+        title: String::new(),
+        byte_order: ByteOrder::LittleEndian,
+        file_path: None,
+        data: DataSet::UnstructuredGrid {
+            meta: None,
+            pieces: vec![Piece::Inline(Box::new(UnstructuredGridPiece {
+                points: points.into(),
+                cells: Cells {
+                    cell_verts: VertexNumbers::XML {
+                        connectivity,
+                        offsets,
+                    },
+                    types,
+                },
+                data: Attributes { point, cell },
+            }))],
+        },
+    };
+    let tmp = path.with_extension("part.vtu");
+    vtk.export(&tmp).map_err(|e| werr(path, e))?;
+    std::fs::rename(&tmp, path).map_err(|e| werr(path, e))
+}
+
+/// Write the `.pvd` collection of (λ, file name) pairs.
+pub fn write_pvd(path: &Path, steps: &[(f64, String)]) -> Result<(), OutputError> {
+    let mut s = String::from(
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n",
+    );
+    for (t, file) in steps {
+        s.push_str(&format!(
+            "    <DataSet timestep=\"{t}\" part=\"0\" file=\"{file}\"/>\n"
+        ));
+    }
+    s.push_str("  </Collection>\n</VTKFile>\n");
+    write_atomic(path, s.as_bytes())
+}
+
+/// `history.csv`, one row per converged step, flushed after each row.
+pub struct History {
+    path: PathBuf,
+    text: String,
+}
+
+impl History {
+    pub fn new(path: &Path, columns: &[String]) -> History {
+        History {
+            path: path.to_owned(),
+            text: columns.join(",") + "\n",
+        }
+    }
+    pub fn row(&mut self, values: &[f64]) -> Result<(), OutputError> {
+        let row: Vec<String> = values.iter().map(|v| format!("{v:.12e}")).collect();
+        self.text.push_str(&row.join(","));
+        self.text.push('\n');
+        write_atomic(&self.path, self.text.as_bytes())
+    }
+    pub fn flush_header(&self) -> Result<(), OutputError> {
+        write_atomic(&self.path, self.text.as_bytes())
+    }
+}
+
+/// Remove stale step files of an earlier run in `dir`.
+pub fn clean_dir(dir: &Path) -> Result<(), OutputError> {
+    std::fs::create_dir_all(dir).map_err(|e| werr(dir, e))?;
+    for entry in std::fs::read_dir(dir).map_err(|e| werr(dir, e))?.flatten() {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        if (name.starts_with("step_") && name.ends_with(".vtu"))
+            || name == "history.csv"
+            || name == "summary.json"
+            || name.ends_with(".pvd")
+        {
+            std::fs::remove_file(entry.path()).map_err(|e| werr(&entry.path(), e))?;
+        }
+    }
+    Ok(())
+}
+
+/// Write a small text file (e.g. a log) atomically.
+pub fn write_text(path: &Path, text: &str) -> Result<(), OutputError> {
+    let mut buf = Vec::new();
+    buf.write_all(text.as_bytes()).map_err(|e| werr(path, e))?;
+    write_atomic(path, &buf)
+}

@@ -1,0 +1,206 @@
+//! Probes: named scalar outputs evaluated at material points of the undeformed body.
+
+use crate::case::{Case, CaseError};
+use crate::dofs::DofMap;
+use crate::element::{Hex8, Quad4, RefElement, Tet4, Tri3, invert_small};
+use crate::mesh::{CellKind, Mesh};
+
+/// A material point: the nodes of the cell that contains it and its shape-function weights.
+#[derive(Clone, Debug)]
+pub struct MaterialPoint {
+    pub nodes: Vec<usize>,
+    pub weights: Vec<f64>,
+}
+
+impl MaterialPoint {
+    /// Interpolate a nodal quantity.
+    pub fn eval(&self, f: impl Fn(usize) -> f64) -> f64 {
+        self.nodes
+            .iter()
+            .zip(&self.weights)
+            .map(|(&n, w)| w * f(n))
+            .sum()
+    }
+}
+
+/// What a probe measures.
+#[derive(Clone, Debug)]
+pub enum ProbeKind {
+    /// Displacement component `c` at a point.
+    U(usize, MaterialPoint),
+    Theta(MaterialPoint),
+    /// Current distance along axis `c` from `a` to `b`.
+    Distance(usize, MaterialPoint, MaterialPoint),
+}
+
+#[derive(Clone, Debug)]
+pub struct Probe {
+    pub name: String,
+    pub kind: ProbeKind,
+}
+
+impl Probe {
+    /// Evaluate on the solution `x`; `NaN` if the probe's field is not simulated.
+    pub fn eval(&self, mesh: &Mesh, dofs: &DofMap, x: &[f64]) -> f64 {
+        let d = mesh.dim;
+        let u = |n: usize, c: usize| {
+            if dofs.u.is_empty() || c >= d {
+                0.0
+            } else {
+                x[dofs.u[n * d + c] as usize]
+            }
+        };
+        match &self.kind {
+            ProbeKind::U(c, p) => p.eval(|n| u(n, *c)),
+            ProbeKind::Theta(p) => {
+                if dofs.theta.is_empty() {
+                    f64::NAN
+                } else {
+                    p.eval(|n| x[dofs.theta[n] as usize])
+                }
+            }
+            ProbeKind::Distance(c, a, b) => {
+                b.eval(|n| mesh.coords[n][*c] + u(n, *c))
+                    - a.eval(|n| mesh.coords[n][*c] + u(n, *c))
+            }
+        }
+    }
+}
+
+/// Find the cell containing `X` and its shape-function weights there.
+pub fn locate(mesh: &Mesh, X: &[f64]) -> Option<MaterialPoint> {
+    let mut p = [0.0; 3];
+    p[..X.len()].copy_from_slice(X);
+    let tol = 1e-9;
+    for b in &mesh.cells {
+        for c in 0..b.n_cells() {
+            let nodes = b.cell(c);
+            // bounding box first
+            let inside_box = (0..mesh.dim).all(|i| {
+                let lo = nodes
+                    .iter()
+                    .map(|&n| mesh.coords[n][i])
+                    .fold(f64::INFINITY, f64::min);
+                let hi = nodes
+                    .iter()
+                    .map(|&n| mesh.coords[n][i])
+                    .fold(f64::NEG_INFINITY, f64::max);
+                let pad = 1e-9 * (hi - lo).max(1e-300);
+                p[i] >= lo - pad && p[i] <= hi + pad
+            });
+            if !inside_box {
+                continue;
+            }
+            let w = match b.kind {
+                CellKind::Tri3 => inverse_map::<3, 2, Tri3>(mesh, nodes, &p, tol),
+                CellKind::Quad4 => inverse_map::<4, 2, Quad4>(mesh, nodes, &p, tol),
+                CellKind::Tet4 => inverse_map::<4, 3, Tet4>(mesh, nodes, &p, tol),
+                CellKind::Hex8 => inverse_map::<8, 3, Hex8>(mesh, nodes, &p, tol),
+                _ => None,
+            };
+            if let Some(weights) = w {
+                return Some(MaterialPoint {
+                    nodes: nodes.to_vec(),
+                    weights,
+                });
+            }
+        }
+    }
+    None
+}
+
+/// Newton inversion of the isoparametric map; shape-function weights if the point is inside.
+fn inverse_map<const N: usize, const D: usize, E: RefElement<N, D>>(
+    mesh: &Mesh,
+    nodes: &[usize],
+    p: &[f64; 3],
+    tol: f64,
+) -> Option<Vec<f64>> {
+    let X: [[f64; 3]; N] = std::array::from_fn(|i| mesh.coords[nodes[i]]);
+    let refn = E::nodes();
+    let mut xi = [0.0; D];
+    for r in &refn {
+        for d in 0..D {
+            xi[d] += r[d] / N as f64;
+        }
+    }
+    for _ in 0..30 {
+        let n = E::shape(&xi);
+        let g = E::grad(&xi);
+        let mut res = [0.0; D];
+        let mut jac = [[0.0; D]; D];
+        for I in 0..N {
+            for i in 0..D {
+                res[i] += n[I] * X[I][i];
+                for j in 0..D {
+                    jac[i][j] += X[I][i] * g[I][j];
+                }
+            }
+        }
+        for i in 0..D {
+            res[i] -= p[i];
+        }
+        let (_, inv) = invert_small(&jac)?;
+        let mut step = 0.0f64;
+        for i in 0..D {
+            let dxi: f64 = (0..D).map(|j| inv[i][j] * res[j]).sum();
+            xi[i] -= dxi;
+            step = step.max(dxi.abs());
+        }
+        if step < 1e-14 {
+            break;
+        }
+    }
+    if E::contains(&xi, tol) {
+        Some(E::shape(&xi).to_vec())
+    } else {
+        None
+    }
+}
+
+/// Build the case's probes, locating their points in the mesh.
+pub fn build(case: &Case, mesh: &Mesh) -> Result<Vec<Probe>, CaseError> {
+    let mut out = Vec::new();
+    for p in &case.file.probe {
+        let find = |pt: &Vec<f64>| locate(mesh, pt).ok_or(());
+        let name = p.name.get_ref().clone();
+        let not_found = |pt: &Vec<f64>| {
+            case.error::<Probe>(
+                p.name.span(),
+                format!("probe \"{name}\": point {pt:?} is not inside the mesh"),
+            )
+        };
+        let kind = match p.field.get_ref().as_str() {
+            f @ ("ux" | "uy" | "uz") => {
+                let at = p.at.as_ref().expect("checked");
+                let Ok(mp) = find(at) else {
+                    return not_found(at).map(|_| Vec::new());
+                };
+                ProbeKind::U((f.as_bytes()[1] - b'x') as usize, mp)
+            }
+            "theta" => {
+                let at = p.at.as_ref().expect("checked");
+                let Ok(mp) = find(at) else {
+                    return not_found(at).map(|_| Vec::new());
+                };
+                ProbeKind::Theta(mp)
+            }
+            _ => {
+                let (a, b) = (
+                    p.from.as_ref().expect("checked"),
+                    p.to.as_ref().expect("checked"),
+                );
+                let Ok(ma) = find(a) else {
+                    return not_found(a).map(|_| Vec::new());
+                };
+                let Ok(mb) = find(b) else {
+                    return not_found(b).map(|_| Vec::new());
+                };
+                let axis = (p.axis.as_deref().expect("checked").as_bytes()[0] - b'x') as usize;
+                ProbeKind::Distance(axis, ma, mb)
+            }
+        };
+        out.push(Probe { name, kind });
+    }
+    Ok(out)
+}

@@ -1,0 +1,519 @@
+//! `tmc solve`: case → mesh → model → load stepping with Newton → VTU series, history, summary.
+
+use crate::assembly::Assembler;
+use crate::case::{Case, CaseError, LinearChoice, RegionKind};
+use crate::dofs::Field;
+use crate::linsolve::{LinearError, LinearKind, LinearSolver};
+use crate::mesh::gmsh::{GmshError, MeshOptions, mesh_geo};
+use crate::mesh::msh::{MshError, read_msh};
+use crate::model::{Model, Physics, build};
+use crate::newton::Newton;
+use crate::output::{self, History, OutputError, StepFields};
+use crate::probe::{self, Probe};
+use crate::stepping::Controller;
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+#[derive(Debug, thiserror::Error)]
+pub enum SolveError {
+    #[error(transparent)]
+    Case(#[from] CaseError),
+    #[error(transparent)]
+    Msh(#[from] MshError),
+    #[error(transparent)]
+    Gmsh(#[from] GmshError),
+    #[error(transparent)]
+    Output(#[from] OutputError),
+    #[error("linear solver: {0}")]
+    Linear(#[from] LinearError),
+    #[error("{0}")]
+    Setup(String),
+    #[error(
+        "load step from λ = {lambda:.6} failed with Δλ = {dlambda:.3e}, below the minimum step ({reason}); \
+         the {steps} converged steps up to λ = {lambda:.6} are in {dir}"
+    )]
+    StepTooSmall {
+        lambda: f64,
+        dlambda: f64,
+        reason: String,
+        steps: usize,
+        dir: PathBuf,
+    },
+}
+
+/// Options of `tmc solve`.
+#[derive(Clone, Debug, Default)]
+pub struct SolveOptions {
+    /// Output folder (default `results/NAME`).
+    pub out_dir: Option<PathBuf>,
+    pub quiet: bool,
+    /// Print one line per step.
+    pub verbose: bool,
+}
+
+/// What `summary.json` holds (extend, never rename: users' scripts rely on it).
+#[derive(Clone, Debug, Serialize)]
+pub struct Summary {
+    pub case: String,
+    pub mesh: String,
+    pub dim: usize,
+    pub cells: BTreeMap<String, usize>,
+    pub dofs: BTreeMap<String, usize>,
+    pub physics: Physics,
+    pub linear_solver: LinearKind,
+    pub converged: bool,
+    pub message: String,
+    pub lambda: f64,
+    pub load_steps: usize,
+    pub rejected_steps: usize,
+    pub newton_iterations: usize,
+    pub wall_seconds: f64,
+    pub assembly_seconds: f64,
+    pub solver_seconds: f64,
+    pub probes: BTreeMap<String, f64>,
+    pub reactions: BTreeMap<String, BTreeMap<String, f64>>,
+    pub min_J: f64,
+    pub min_J_solid: f64,
+    pub min_J_medium: f64,
+    pub output: String,
+}
+
+/// Mesh the case's `.geo` into `out_dir/mesh.msh`, or return its `.msh` path.
+fn mesh_for(case: &Case, out_dir: &Path) -> Result<PathBuf, SolveError> {
+    let path = case.mesh_path();
+    match path.extension().and_then(|e| e.to_str()) {
+        Some("geo") => {
+            let out = out_dir.join("mesh.msh");
+            let m = &case.file.mesh_options;
+            let opts = MeshOptions {
+                order: m.order.unwrap_or(1),
+                incomplete: m.incomplete,
+                set_numbers: m.params.iter().map(|(k, v)| (k.clone(), *v)).collect(),
+                verbose: false,
+            };
+            mesh_geo(&path, &out, &opts)?;
+            Ok(out)
+        }
+        Some("msh") => Ok(path),
+        _ => {
+            let span = case.file.mesh.span();
+            Err(case
+                .error::<()>(
+                    span,
+                    format!("mesh \"{}\" must be a .msh or .geo file", path.display()),
+                )
+                .unwrap_err()
+                .into())
+        }
+    }
+}
+
+/// Reactions per Dirichlet group: force components on the body and heat supplied to it.
+pub fn reactions(model: &Model, r_full: &[f64]) -> BTreeMap<String, BTreeMap<String, f64>> {
+    let mut out: BTreeMap<String, BTreeMap<String, f64>> = BTreeMap::new();
+    let d = model.dofs.dim;
+    let comp = ["x", "y", "z"];
+    for (n, _) in model.mesh.coords.iter().enumerate() {
+        if model.dofs.has(Field::U) {
+            for c in 0..d {
+                let dof = model.dofs.u[n * d + c] as usize;
+                if let Some(p) = model.cons.prescribed[dof] {
+                    *out.entry(model.bc_groups[p.bc].name.clone())
+                        .or_default()
+                        .entry(comp[c].into())
+                        .or_default() += r_full[dof];
+                }
+            }
+        }
+        if model.dofs.has(Field::Theta) {
+            let dof = model.dofs.theta[n] as usize;
+            if let Some(p) = model.cons.prescribed[dof] {
+                *out.entry(model.bc_groups[p.bc].name.clone())
+                    .or_default()
+                    .entry("heat".into())
+                    .or_default() += r_full[dof];
+            }
+        }
+    }
+    out
+}
+
+/// Solve a case file end to end.
+pub fn run(case_path: &Path, opts: &SolveOptions) -> Result<Summary, SolveError> {
+    let start = Instant::now();
+    let case = Case::read(case_path)?;
+    let out_dir = opts
+        .out_dir
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("results").join(case.name()));
+    output::clean_dir(&out_dir)?;
+    let msh = mesh_for(&case, &out_dir)?;
+    let mesh = read_msh(&msh)?;
+    case.validate(&mesh)?;
+    let model = build(&case, mesh)?;
+    let probes = probe::build(&case, &model.mesh)?;
+    solve_model(&case, model, &probes, &out_dir, opts, start)
+}
+
+/// Choose the linear solver: LDLᵀ where the tangent is symmetric, LU where it is not.
+pub fn choose_linear(choice: LinearChoice, physics: &Physics) -> LinearKind {
+    let symmetric = !(physics.mechanics && physics.conduction);
+    match choice {
+        LinearChoice::Lu => LinearKind::Lu,
+        LinearChoice::Ldlt => LinearKind::Ldlt,
+        LinearChoice::Auto => {
+            if symmetric {
+                LinearKind::Ldlt
+            } else {
+                LinearKind::Lu
+            }
+        }
+    }
+}
+
+fn solve_model(
+    case: &Case,
+    model: Model,
+    probes: &[Probe],
+    out_dir: &Path,
+    opts: &SolveOptions,
+    start: Instant,
+) -> Result<Summary, SolveError> {
+    let kind = choose_linear(case.file.solver.linear, &model.physics);
+    if kind == LinearKind::Ldlt && model.physics.mechanics && model.physics.conduction {
+        let span = case.file.mesh.span();
+        return Err(case
+            .error::<()>(span, "[solver] linear = \"ldlt\" needs a symmetric tangent, but this scene couples mechanics and conduction")
+            .unwrap_err()
+            .into());
+    }
+    let mut asm = Assembler::new(&model);
+    let mut solver = LinearSolver::new(kind, &asm.pattern)?;
+    let steps = &case.file.steps;
+    let mut newton = Newton::new(&model, steps.tol, steps.max_iter);
+    let mut ctl = Controller::new(steps);
+    if !model.physics.mechanics {
+        // conduction on the undeformed body is linear: one step, one solve
+        ctl.dlambda = 1.0;
+    }
+    let mut x = model.initial_state();
+
+    // bookkeeping for output
+    let d = model.mesh.dim;
+    let region_of_cell: Vec<i32> = model
+        .blocks
+        .iter()
+        .flat_map(|b| std::iter::repeat_n(b.region as i32, model.mesh.cells[b.block].n_cells()))
+        .collect();
+    let kind_of_cell: Vec<i32> = region_of_cell
+        .iter()
+        .map(|&r| (model.regions[r as usize].1 == RegionKind::Medium) as i32)
+        .collect();
+    let mut reaction_cols: Vec<(String, String)> = Vec::new();
+    for g in &model.bc_groups {
+        for f in &g.fields {
+            let (has, key) = match *f {
+                "theta" => (model.dofs.has(Field::Theta), "heat"),
+                c => (model.dofs.has(Field::U), &c[1..]),
+            };
+            if has {
+                reaction_cols.push((g.name.clone(), key.to_string()));
+            }
+        }
+    }
+    let mut columns: Vec<String> = [
+        "step",
+        "lambda",
+        "dlambda",
+        "newton_iterations",
+        "res_u",
+        "res_theta",
+        "res_p",
+        "min_J_solid",
+        "min_J_medium",
+        "energy",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    columns.extend(probes.iter().map(|p| p.name.clone()));
+    columns.extend(reaction_cols.iter().map(|(g, k)| {
+        if k == "heat" {
+            format!("Q_{g}")
+        } else {
+            format!("R_{g}_{k}")
+        }
+    }));
+    let mut history = History::new(&out_dir.join("history.csv"), &columns);
+    let name = case.name();
+    let mut pvd: Vec<(f64, String)> = Vec::new();
+
+    let write_step = |step: usize,
+                      x: &[f64],
+                      pvd: &mut Vec<(f64, String)>,
+                      lambda: f64|
+     -> Result<(), SolveError> {
+        let cells = crate::post::all_cell_fields(&model, x)
+            .map_err(|e| SolveError::Setup(format!("post-processing failed: {e:?}")))?;
+        let u: Vec<[f64; 3]> = (0..model.mesh.coords.len())
+            .map(|n| {
+                let mut v = [0.0; 3];
+                if model.dofs.has(Field::U) {
+                    for c in 0..d {
+                        v[c] = x[model.dofs.u[n * d + c] as usize];
+                    }
+                }
+                v
+            })
+            .collect();
+        let theta: Option<Vec<f64>> = model
+            .dofs
+            .has(Field::Theta)
+            .then(|| model.dofs.theta.iter().map(|&t| x[t as usize]).collect());
+        let file = format!("step_{step:04}.vtu");
+        output::write_vtu(
+            &out_dir.join(&file),
+            &model.mesh,
+            &StepFields {
+                u: &u,
+                theta: theta.as_deref(),
+                cells: &cells,
+                region: &region_of_cell,
+                kind: &kind_of_cell,
+            },
+        )?;
+        pvd.push((lambda, file));
+        output::write_pvd(&out_dir.join(format!("{name}.pvd")), pvd)?;
+        Ok(())
+    };
+
+    // initial state
+    write_step(0, &x, &mut pvd, 0.0)?;
+    let stats0 = asm
+        .assemble(&model, &x, 0.0, false, None)
+        .map_err(|e| SolveError::Setup(format!("the initial state is invalid: {e}")))?;
+    let mut row0 = vec![
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        stats0.min_J_solid,
+        stats0.min_J_medium,
+        stats0.energy,
+    ];
+    row0.extend(probes.iter().map(|p| p.eval(&model.mesh, &model.dofs, &x)));
+    let r0 = reactions(&model, &asm.r_full);
+    row0.extend(
+        reaction_cols
+            .iter()
+            .map(|(g, k)| r0.get(g).and_then(|m| m.get(k)).copied().unwrap_or(0.0)),
+    );
+    history.row(&row0)?;
+
+    let pb = if opts.quiet {
+        indicatif::ProgressBar::hidden()
+    } else {
+        let pb = indicatif::ProgressBar::new(1000);
+        pb.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{spinner} λ {bar:30} {percent:>3}%  {msg}  [{elapsed_precise}]",
+            )
+            .expect("valid template"),
+        );
+        pb
+    };
+    let mut total_iterations = 0;
+    let (mut t_asm, mut t_sol) = (0.0, 0.0);
+    let mut min_j = (stats0.min_J_solid, stats0.min_J_medium);
+    let mut last_reactions = r0;
+    let mut last_failure = String::new();
+    let mut summary = Summary {
+        case: case.path.display().to_string(),
+        mesh: model.mesh.source.display().to_string(),
+        dim: d,
+        cells: {
+            let mut m = BTreeMap::new();
+            for b in &model.mesh.cells {
+                *m.entry(b.kind.name().to_string()).or_default() += b.n_cells();
+            }
+            m
+        },
+        dofs: {
+            let mut m = BTreeMap::new();
+            for f in Field::ALL {
+                m.insert(f.name().to_string(), model.dofs.count(f));
+            }
+            m.insert("total".into(), model.dofs.n_dofs);
+            m.insert("free".into(), model.cons.n_eq);
+            m
+        },
+        physics: model.physics,
+        linear_solver: kind,
+        converged: false,
+        message: String::new(),
+        lambda: 0.0,
+        load_steps: 0,
+        rejected_steps: 0,
+        newton_iterations: 0,
+        wall_seconds: 0.0,
+        assembly_seconds: 0.0,
+        solver_seconds: 0.0,
+        probes: BTreeMap::new(),
+        reactions: BTreeMap::new(),
+        min_J: 0.0,
+        min_J_solid: 0.0,
+        min_J_medium: 0.0,
+        output: out_dir.display().to_string(),
+    };
+    let finish = |s: &mut Summary,
+                  converged: bool,
+                  message: String,
+                  x: &[f64],
+                  r: &BTreeMap<String, BTreeMap<String, f64>>,
+                  ctl: &Controller,
+                  its: usize,
+                  mj: (f64, f64),
+                  ta: f64,
+                  ts: f64|
+     -> Result<(), SolveError> {
+        s.converged = converged;
+        s.message = message;
+        s.lambda = ctl.lambda;
+        s.load_steps = ctl.accepted;
+        s.rejected_steps = ctl.rejected;
+        s.newton_iterations = its;
+        s.wall_seconds = start.elapsed().as_secs_f64();
+        s.assembly_seconds = ta;
+        s.solver_seconds = ts;
+        s.probes = probes
+            .iter()
+            .map(|p| (p.name.clone(), p.eval(&model.mesh, &model.dofs, x)))
+            .collect();
+        s.reactions = r.clone();
+        let finite = |v: f64| if v.is_finite() { v } else { 1.0 };
+        s.min_J_solid = finite(mj.0);
+        s.min_J_medium = finite(mj.1);
+        s.min_J = s.min_J_solid.min(s.min_J_medium);
+        let json = serde_json::to_string_pretty(&*s).expect("serialisable");
+        output::write_atomic(&out_dir.join("summary.json"), json.as_bytes())?;
+        Ok(())
+    };
+
+    while !ctl.done() {
+        let target = ctl.target();
+        let mut trial = x.clone();
+        match newton.step(&model, &mut asm, &mut solver, &mut trial, target) {
+            Ok(rep) => {
+                let dl = target - ctl.lambda;
+                ctl.accept(target, rep.iterations);
+                x = trial;
+                total_iterations += rep.iterations;
+                t_asm += rep.t_assembly;
+                t_sol += rep.t_solve;
+                min_j = (
+                    min_j.0.min(rep.stats.min_J_solid),
+                    min_j.1.min(rep.stats.min_J_medium),
+                );
+                // reactions at the converged state (the residual of the last assembly)
+                asm.assemble(&model, &x, target, false, None)
+                    .map_err(|e| SolveError::Setup(format!("converged state is invalid: {e}")))?;
+                last_reactions = reactions(&model, &asm.r_full);
+                let last = rep.history.last().copied().unwrap_or([0.0; 3]);
+                let mut row = vec![
+                    ctl.accepted as f64,
+                    target,
+                    dl,
+                    rep.iterations as f64,
+                    last[0],
+                    last[1],
+                    last[2],
+                    rep.stats.min_J_solid,
+                    rep.stats.min_J_medium,
+                    rep.stats.energy,
+                ];
+                row.extend(probes.iter().map(|p| p.eval(&model.mesh, &model.dofs, &x)));
+                row.extend(reaction_cols.iter().map(|(g, k)| {
+                    last_reactions
+                        .get(g)
+                        .and_then(|m| m.get(k))
+                        .copied()
+                        .unwrap_or(0.0)
+                }));
+                history.row(&row)?;
+                write_step(ctl.accepted, &x, &mut pvd, target)?;
+                let line = format!(
+                    "step {:3}  λ {:.4}  Δλ {:.2e}  its {:2}  min J solid {:.3e} medium {:.3e}",
+                    ctl.accepted,
+                    target,
+                    dl,
+                    rep.iterations,
+                    rep.stats.min_J_solid,
+                    rep.stats.min_J_medium
+                );
+                if opts.verbose {
+                    pb.println(&line);
+                }
+                pb.set_position((target * 1000.0) as u64);
+                pb.set_message(format!("step {} its {}", ctl.accepted, total_iterations));
+            }
+            Err(f) => {
+                last_failure = f.to_string();
+                if opts.verbose {
+                    pb.println(format!(
+                        "  step to λ {target:.4} failed: {last_failure}; cutting Δλ"
+                    ));
+                }
+                if let Err(dl) = ctl.reject() {
+                    pb.finish_and_clear();
+                    let err = SolveError::StepTooSmall {
+                        lambda: ctl.lambda,
+                        dlambda: dl,
+                        reason: last_failure.clone(),
+                        steps: ctl.accepted,
+                        dir: out_dir.to_owned(),
+                    };
+                    finish(
+                        &mut summary,
+                        false,
+                        err.to_string(),
+                        &x,
+                        &last_reactions,
+                        &ctl,
+                        total_iterations,
+                        min_j,
+                        t_asm,
+                        t_sol,
+                    )?;
+                    return Err(err);
+                }
+            }
+        }
+    }
+    pb.finish_and_clear();
+    let msg = if ctl.rejected > 0 {
+        format!(
+            "converged ({} rejected attempts; last: {last_failure})",
+            ctl.rejected
+        )
+    } else {
+        "converged".into()
+    };
+    finish(
+        &mut summary,
+        true,
+        msg,
+        &x,
+        &last_reactions,
+        &ctl,
+        total_iterations,
+        min_j,
+        t_asm,
+        t_sol,
+    )?;
+    Ok(summary)
+}
