@@ -88,6 +88,17 @@ impl Newton {
         n.map(f64::sqrt)
     }
 
+    /// Norms of the free part of the state per field.
+    fn norms_of_state(&self, model: &Model, x: &[f64]) -> FieldNorms {
+        let mut n = [0.0; 3];
+        for (d, &e) in model.cons.eq.iter().enumerate() {
+            if e != NONE {
+                n[idx(self.eq_field[e as usize])] += x[d] * x[d];
+            }
+        }
+        n.map(f64::sqrt)
+    }
+
     fn reaction_norms(model: &Model, r_full: &[f64]) -> FieldNorms {
         let mut n = [0.0; 3];
         for (d, p) in model.cons.prescribed.iter().enumerate() {
@@ -163,14 +174,14 @@ impl Newton {
             });
             history.push(rel);
             let residual_ok = rel.iter().all(|&r| r <= self.tol);
+            if it >= self.max_iter {
+                return Err(StepFailure::NotConverged {
+                    iterations: it,
+                    last: rel,
+                });
+            }
             let t1 = std::time::Instant::now();
             if !(residual_ok && !first) {
-                if it >= self.max_iter {
-                    return Err(StepFailure::NotConverged {
-                        iterations: it,
-                        last: rel,
-                    });
-                }
                 solver.factor(&asm.values).map_err(StepFailure::Linear)?;
             }
             solver.solve(&mut rhs);
@@ -202,7 +213,13 @@ impl Newton {
                 du_ref[f] = du_ref[f].max(last_update[f]);
             }
             if residual_ok && !first {
-                let update_ok = (0..3).all(|f| last_update[f] <= self.tol.sqrt() * du_ref[f]);
+                // an update is small against the step's largest one, or negligible against the
+                // field itself (a field the step hardly changes has round-off updates only)
+                let size = self.norms_of_state(model, x);
+                let update_ok = (0..3).all(|f| {
+                    last_update[f] <= self.tol.sqrt() * du_ref[f]
+                        || last_update[f] <= 1e-10 * size[f]
+                });
                 if update_ok {
                     return Ok(StepReport {
                         iterations: it,

@@ -162,7 +162,18 @@ impl History {
         }
     }
     pub fn row(&mut self, values: &[f64]) -> Result<(), OutputError> {
-        let row: Vec<String> = values.iter().map(|v| format!("{v:.12e}")).collect();
+        let row: Vec<String> = values
+            .iter()
+            .map(|&v| {
+                if !v.is_finite() {
+                    "NaN".to_string() // a field the scene does not simulate
+                } else if v == v.trunc() && v.abs() < 1e15 {
+                    format!("{}", v as i64)
+                } else {
+                    format!("{v:.12e}")
+                }
+            })
+            .collect();
         self.text.push_str(&row.join(","));
         self.text.push('\n');
         write_atomic(&self.path, self.text.as_bytes())

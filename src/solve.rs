@@ -74,9 +74,11 @@ pub struct Summary {
     pub solver_seconds: f64,
     pub probes: BTreeMap<String, f64>,
     pub reactions: BTreeMap<String, BTreeMap<String, f64>>,
+    /// Smallest J at any quadrature point of any accepted step (solids and medium).
     pub min_J: f64,
-    pub min_J_solid: f64,
-    pub min_J_medium: f64,
+    pub min_J_solid: Option<f64>,
+    /// `null` without a medium.
+    pub min_J_medium: Option<f64>,
     pub output: String,
 }
 
@@ -329,7 +331,7 @@ fn solve_model(
     };
     let mut total_iterations = 0;
     let (mut t_asm, mut t_sol) = (0.0, 0.0);
-    let mut min_j = (stats0.min_J_solid, stats0.min_J_medium);
+    let mut min_j = (f64::INFINITY, f64::INFINITY);
     let mut last_reactions = r0;
     let mut last_failure = String::new();
     let mut summary = Summary {
@@ -365,9 +367,9 @@ fn solve_model(
         solver_seconds: 0.0,
         probes: BTreeMap::new(),
         reactions: BTreeMap::new(),
-        min_J: 0.0,
-        min_J_solid: 0.0,
-        min_J_medium: 0.0,
+        min_J: 1.0,
+        min_J_solid: None,
+        min_J_medium: None,
         output: out_dir.display().to_string(),
     };
     let finish = |s: &mut Summary,
@@ -395,10 +397,10 @@ fn solve_model(
             .map(|p| (p.name.clone(), p.eval(&model.mesh, &model.dofs, x)))
             .collect();
         s.reactions = r.clone();
-        let finite = |v: f64| if v.is_finite() { v } else { 1.0 };
+        let finite = |v: f64| v.is_finite().then_some(v);
         s.min_J_solid = finite(mj.0);
         s.min_J_medium = finite(mj.1);
-        s.min_J = s.min_J_solid.min(s.min_J_medium);
+        s.min_J = finite(mj.0.min(mj.1)).unwrap_or(1.0);
         let json = serde_json::to_string_pretty(&*s).expect("serialisable");
         output::write_atomic(&out_dir.join("summary.json"), json.as_bytes())?;
         Ok(())

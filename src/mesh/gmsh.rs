@@ -110,7 +110,8 @@ pub fn mesh_geo(geo: &Path, out: &Path, opts: &MeshOptions) -> Result<MeshReport
                 .call(|e| unsafe { gmsh_sys::gmshModelMeshSetOrder(2, e) })
                 .map_err(|m| fail(format!("second-order meshing failed: {m}")))?;
         }
-        let tmp = out.with_extension("msh.part");
+        // gmsh picks the format from the extension: the temporary name must end in .msh
+        let tmp = out.with_extension("part.msh");
         if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir).map_err(|source| GmshError::Write {
                 path: dir.to_owned(),
@@ -121,10 +122,7 @@ pub fn mesh_geo(geo: &Path, out: &Path, opts: &MeshOptions) -> Result<MeshReport
         let written = session.call(|e| unsafe { gmsh_sys::gmshWrite(ctmp.as_ptr(), e) });
         if written.is_err() || !tmp.is_file() {
             let _ = std::fs::remove_file(&tmp);
-            return Err(GmshError::Write {
-                path: out.to_owned(),
-                source: std::io::Error::other("gmsh could not write the file"),
-            });
+            return Err(fail(format!("could not write {}", out.display())));
         }
         std::fs::rename(&tmp, out).map_err(|source| GmshError::Write {
             path: out.to_owned(),

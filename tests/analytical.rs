@@ -1,0 +1,157 @@
+//! Analytical checks, each asserting a number: finite stretch, free thermal expansion, steady
+//! conduction, conduction in a compressed slab; Newton's quadratic convergence.
+
+mod common;
+use common::*;
+use nalgebra::Matrix3;
+use tmc::assembly::Assembler;
+use tmc::linsolve::{LinearKind, LinearSolver};
+use tmc::material::ThermoElastic;
+use tmc::newton::Newton;
+
+const LAW: ThermoElastic = ThermoElastic {
+    K: 20.0,
+    mu: 10.0,
+    alpha: 0.0,
+    theta0: 0.0,
+};
+
+/// Lateral stretch t that makes the lateral stress vanish under axial stretch `l`:
+/// F = diag(l, t, t) in 3D, diag(l, t, 1) in plane strain. Returns (t, P11).
+fn uniaxial(l: f64, plane: bool) -> (f64, f64) {
+    let f = |t: f64| {
+        let F = Matrix3::from_diagonal(&nalgebra::Vector3::new(l, t, if plane { 1.0 } else { t }));
+        LAW.stress(&F, 0.0).unwrap().P
+    };
+    let (mut a, mut b) = (0.3, 1.5);
+    for _ in 0..200 {
+        let m = 0.5 * (a + b);
+        if f(m)[(1, 1)] > 0.0 { b = m } else { a = m }
+    }
+    let t = 0.5 * (a + b);
+    (t, f(t)[(0, 0)])
+}
+
+#[test]
+fn bar3d_uniaxial_stretch_matches_neo_hooke_closed_form() {
+    let (s, _) = solve_case("bar3d-stretch");
+    assert!(s.converged);
+    let (t, p11) = uniaxial(1.5, false);
+    // corner (2, 0.5, 0.5): u_y = 0.5 (t − 1); force on x1 = P11 × B²
+    let uy = s.probes["uy_corner"];
+    assert!(
+        (uy - 0.5 * (t - 1.0)).abs() < 1e-9,
+        "uy {uy} vs {}",
+        0.5 * (t - 1.0)
+    );
+    let fx = s.reactions["x1"]["x"];
+    assert!(
+        (fx - p11 * 0.25).abs() < 1e-9 * p11,
+        "force {fx} vs {}",
+        p11 * 0.25
+    );
+    assert!((s.reactions["x0"]["x"] + fx).abs() < 1e-9);
+}
+
+#[test]
+fn plane_strain_slab_stretch_matches_closed_form() {
+    let (s, _) = solve_case("slab-stretch");
+    let (t, p11) = uniaxial(1.5, true);
+    assert!((s.probes["uy_top_right"] - (t - 1.0)).abs() < 1e-9);
+    assert!((s.reactions["right"]["x"] - p11 * 1.0).abs() < 1e-9 * p11);
+}
+
+#[test]
+fn free_thermal_expansion_is_stress_free_with_j_exp_3_alpha_dtheta() {
+    let (s, dir) = solve_case("box-expansion");
+    assert!(s.converged);
+    // J = exp(3 α Δθ) ⇒ every edge grows by exp(α Δθ)
+    let stretch = (1e-3f64 * 100.0).exp();
+    assert!((s.probes["ux_far"] - (stretch - 1.0)).abs() < 1e-10);
+    let (cols, rows) = history(&dir);
+    let last = rows.last().unwrap();
+    let j = (3.0 * 1e-3f64 * 100.0).exp();
+    let jc = cols.iter().position(|c| c == "min_J_solid").unwrap();
+    assert!((last[jc] - j).abs() < 1e-10, "J {} vs {j}", last[jc]);
+    for r in s.reactions.values() {
+        for v in r.values() {
+            assert!(v.abs() < 1e-10, "a stress-free body has no reactions: {v}");
+        }
+    }
+    let sigma = cell_array(&dir.join(format!("step_{:04}.vtu", s.load_steps)), "sigma");
+    let max = sigma.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    assert!(
+        !sigma.is_empty() && max < 1e-10,
+        "Cauchy stress must vanish, max |σ| = {max}"
+    );
+}
+
+#[test]
+fn steady_conduction_through_a_slab() {
+    let (s, _) = solve_case("slab-conduction");
+    assert!(!s.physics.mechanics && s.physics.conduction);
+    assert_eq!(s.newton_iterations, 1, "linear conduction takes one solve");
+    assert!((s.probes["theta_mid"] - 60.0).abs() < 1e-10);
+    // k Δθ H / L = 5 × 80 × 1 / 2
+    assert!((s.reactions["left"]["heat"] - 200.0).abs() < 1e-9);
+    assert!((s.reactions["right"]["heat"] + 200.0).abs() < 1e-9);
+}
+
+#[test]
+fn compressed_slab_conducts_through_its_current_geometry() {
+    let (s, _) = solve_case("slab-compressed-conduction");
+    assert!(s.physics.mechanics_to_heat && !s.physics.heat_to_mechanics);
+    let h = s.probes["height"];
+    assert!(h > 1.0, "compression bulges the slab laterally: {h}");
+    // pulled-back Fourier law: heat flow = k Δθ H' / L'
+    let expect = 5.0 * 80.0 * h / 1.6;
+    let q = s.reactions["left"]["heat"];
+    assert!((q - expect).abs() < 1e-9 * expect, "{q} vs {expect}");
+    // and not the reference-geometry value
+    assert!((q - 200.0).abs() > 50.0);
+}
+
+#[test]
+fn newton_converges_quadratically_on_a_stiff_step() {
+    // the whole 50 % stretch of the bar in one load step
+    let text = r#"
+[[region]]
+group = "solid"
+kind = "solid"
+K = 20.0
+mu = 10.0
+[[bc]]
+group = "x0"
+ux = 0.0
+[[bc]]
+group = "y0"
+uy = 0.0
+[[bc]]
+group = "z0"
+uz = 0.0
+[[bc]]
+group = "x1"
+ux = 1.0
+"#;
+    let (_, model) = model_from(text, "bar3d.geo", "newton-quadratic");
+    let mut asm = Assembler::new(&model);
+    let mut solver = LinearSolver::new(LinearKind::Ldlt, &asm.pattern).unwrap();
+    let mut newton = Newton::new(&model, 1e-12, 20);
+    let mut x = model.initial_state();
+    let rep = newton
+        .step(&model, &mut asm, &mut solver, &mut x, 1.0)
+        .unwrap();
+    assert!(rep.iterations <= 6, "took {} iterations", rep.iterations);
+    let r: Vec<f64> = rep.history.iter().map(|h| h[0]).collect();
+    // in the asymptotic range each residual is about the square of the previous one
+    let k = r
+        .iter()
+        .position(|&v| v < 1e-2)
+        .expect("reaches the asymptotic range");
+    assert!(k + 1 < r.len());
+    for w in r[k..].windows(2) {
+        if w[1] > 1e-13 {
+            assert!(w[1] < 10.0 * w[0] * w[0], "not quadratic: {r:?}");
+        }
+    }
+}

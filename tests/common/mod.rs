@@ -1,0 +1,88 @@
+//! Helpers shared by the integration tests.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use tmc::case::Case;
+use tmc::mesh::gmsh::{MeshOptions, mesh_geo};
+use tmc::mesh::msh::read_msh;
+use tmc::model::{Model, build};
+use tmc::solve::{SolveOptions, Summary, run};
+
+pub fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// A fresh scratch folder under target/.
+pub fn scratch(name: &str) -> PathBuf {
+    let d = root().join("target/test-scratch").join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Solve `cases/NAME.toml` into a scratch folder.
+pub fn solve_case(name: &str) -> (Summary, PathBuf) {
+    let out = scratch(name);
+    let s = run(
+        &root().join("cases").join(format!("{name}.toml")),
+        &SolveOptions {
+            out_dir: Some(out.clone()),
+            quiet: true,
+            verbose: false,
+        },
+    )
+    .unwrap_or_else(|e| panic!("{name}: {e}"));
+    (s, out)
+}
+
+/// Read a history.csv into (columns, rows).
+pub fn history(dir: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
+    let text = std::fs::read_to_string(dir.join("history.csv")).unwrap();
+    let mut lines = text.lines();
+    let cols = lines.next().unwrap().split(',').map(String::from).collect();
+    let rows = lines
+        .map(|l| l.split(',').map(|v| v.parse::<f64>().unwrap()).collect())
+        .collect();
+    (cols, rows)
+}
+
+/// Build a model from case text (paths relative to cases/) and a .geo meshed into scratch.
+pub fn model_from(case_text: &str, geo: &str, tag: &str) -> (Case, Model) {
+    let dir = scratch(tag);
+    let msh = dir.join("mesh.msh");
+    mesh_geo(
+        &root().join("geo").join(geo),
+        &msh,
+        &MeshOptions {
+            order: 1,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let text = format!("mesh = \"{}\"\n{case_text}", msh.display());
+    let case = Case::parse(&dir.join("case.toml"), text).unwrap();
+    let mesh = read_msh(&msh).unwrap();
+    case.validate(&mesh).unwrap();
+    let model = build(&case, mesh).unwrap();
+    (case, model)
+}
+
+/// A cell-data array of a written .vtu, flattened.
+pub fn cell_array(vtu: &Path, name: &str) -> Vec<f64> {
+    use vtkio::model::{Attribute, DataSet, Piece};
+    let vtk = vtkio::Vtk::import(vtu).unwrap_or_else(|e| panic!("{}: {e}", vtu.display()));
+    let DataSet::UnstructuredGrid { pieces, .. } = vtk.data else {
+        panic!("not a grid")
+    };
+    let Piece::Inline(p) = &pieces[0] else {
+        panic!("not inline")
+    };
+    for a in &p.data.cell {
+        if let Attribute::DataArray(d) = a {
+            if d.name == name {
+                return d.data.clone().cast_into::<f64>().unwrap();
+            }
+        }
+    }
+    panic!("no cell array {name} in {}", vtu.display())
+}
