@@ -328,7 +328,7 @@ impl Case {
         if s.max_iter < 2 {
             bad("max_iter must be at least 2")?;
         }
-        if !(s.grow >= 1.0) || !(s.cut > 0.0 && s.cut < 1.0) {
+        if !(s.grow >= 1.0 && s.cut > 0.0 && s.cut < 1.0) {
             bad("need grow >= 1 and 0 < cut < 1")?;
         }
         for p in &f.probe {
@@ -498,13 +498,13 @@ impl Case {
                     format!("bc[{i}] (\"{name}\"): traction and heat_flux need a {}D boundary group, this one is {gdim}D", mesh.dim - 1),
                 );
             }
-            if let Some(t) = &bc.traction {
-                if t.get_ref().len() != mesh.dim {
-                    return self.error(
-                        t.span(),
-                        format!("bc[{i}]: traction needs {} components", mesh.dim),
-                    );
-                }
+            if let Some(t) = &bc.traction
+                && t.get_ref().len() != mesh.dim
+            {
+                return self.error(
+                    t.span(),
+                    format!("bc[{i}]: traction needs {} components", mesh.dim),
+                );
             }
             let any = bc.ux.is_some()
                 || bc.uy.is_some()
@@ -519,13 +519,13 @@ impl Case {
             }
         }
         for r in &self.file.region {
-            if let Some(b) = &r.body_force {
-                if b.len() != mesh.dim {
-                    return self.error(
-                        r.group.span(),
-                        format!("body_force needs {} components", mesh.dim),
-                    );
-                }
+            if let Some(b) = &r.body_force
+                && b.len() != mesh.dim
+            {
+                return self.error(
+                    r.group.span(),
+                    format!("body_force needs {} components", mesh.dim),
+                );
             }
         }
         for p in &self.file.probe {

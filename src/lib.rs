@@ -5,7 +5,10 @@
 //! [`output`]. [`case`] reads the case file, [`model`] builds the discrete problem from it,
 //! [`solve`] drives a run.
 
-#![allow(non_snake_case)] // maths names: F, P, J, X, dP_dF
+#![allow(non_snake_case)]
+// maths names: F, P, J, X, dP_dF
+// index loops mirror the tensor formulas (Σ_J P_iJ ∂N_I/∂X_J); `!(x > 0.0)` rejects NaN on purpose
+#![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod assembly;
 pub mod case;

@@ -181,7 +181,7 @@ impl Newton {
                 });
             }
             let t1 = std::time::Instant::now();
-            if !(residual_ok && !first) {
+            if !residual_ok || first {
                 solver.factor(&asm.values).map_err(StepFailure::Linear)?;
             }
             solver.solve(&mut rhs);
@@ -205,9 +205,7 @@ impl Newton {
                     }
                     n.map(f64::sqrt)
                 };
-                for f in 0..3 {
-                    du_ref[f] = pres[f];
-                }
+                du_ref = pres;
             }
             for f in 0..3 {
                 du_ref[f] = du_ref[f].max(last_update[f]);

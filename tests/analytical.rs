@@ -1,6 +1,8 @@
 //! Analytical checks, each asserting a number: finite stretch, free thermal expansion, steady
 //! conduction, conduction in a compressed slab; Newton's quadratic convergence.
 
+#![allow(non_snake_case, clippy::needless_range_loop)]
+
 mod common;
 use common::*;
 use nalgebra::Matrix3;

@@ -2,6 +2,8 @@
 //! on distorted and mixed meshes) and the assembled tangent checked against finite differences
 //! of the assembled residual in random directions, for every element type in 2D and 3D.
 
+#![allow(non_snake_case, clippy::needless_range_loop)]
+
 mod common;
 use common::*;
 use tmc::assembly::Assembler;

@@ -208,15 +208,14 @@ pub fn read_msh(path: &Path) -> Result<Mesh, MshError> {
             *n = new_index[*n];
         }
     }
-    if dim == 2 {
-        if let Some(x) = coords
+    if dim == 2
+        && let Some(x) = coords
             .iter()
             .find(|x| x[2].abs() > 1e-12 * (1.0 + x[0].abs() + x[1].abs()))
-        {
-            return Err(invalid(format!(
-                "2D mesh must lie in the plane z = 0; node at {x:?}"
-            )));
-        }
+    {
+        return Err(invalid(format!(
+            "2D mesh must lie in the plane z = 0; node at {x:?}"
+        )));
     }
     let mut mesh = Mesh {
         dim: dim as usize,

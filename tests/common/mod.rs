@@ -78,10 +78,10 @@ pub fn cell_array(vtu: &Path, name: &str) -> Vec<f64> {
         panic!("not inline")
     };
     for a in &p.data.cell {
-        if let Attribute::DataArray(d) = a {
-            if d.name == name {
-                return d.data.clone().cast_into::<f64>().unwrap();
-            }
+        if let Attribute::DataArray(d) = a
+            && d.name == name
+        {
+            return d.data.clone().cast_into::<f64>().unwrap();
         }
     }
     panic!("no cell array {name} in {}", vtu.display())

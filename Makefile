@@ -1,0 +1,25 @@
+# tmc — two commands for a newcomer: `make demo` and `make test`.
+CARGO ?= cargo
+TMC := target/release/tmc
+
+.PHONY: deps build demo test clean
+
+deps:
+	@scripts/install-deps.sh
+
+build: deps
+	$(CARGO) build --release
+
+# Mesh and solve the default scene, then say where the results are.
+demo: build
+	$(TMC) mesh geo/plate-hole.geo
+	$(TMC) solve cases/plate-hole.toml --verbose
+	@echo "open results/plate-hole/plate-hole.pvd in ParaView"
+
+# Every test: unit, analytical, patch, tangent, end-to-end, bad input.
+test: deps
+	$(CARGO) test --release
+
+clean:
+	$(CARGO) clean
+	rm -rf results

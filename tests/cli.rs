@@ -1,0 +1,275 @@
+//! End-to-end runs of the `tmc` binary and its error messages for bad input.
+
+#![allow(non_snake_case, clippy::needless_range_loop)]
+
+mod common;
+use common::*;
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn tmc(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_tmc"))
+        .args(args)
+        .current_dir(root())
+        .output()
+        .unwrap()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn summary(dir: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
+}
+
+#[test]
+fn mesh_then_solve_2d_and_3d() {
+    let dir = scratch("cli-e2e");
+    for (geo, case) in [("plate-hole", "plate-hole"), ("bar3d", "bar3d-stretch")] {
+        let msh = dir.join(format!("{geo}.msh"));
+        let o = tmc(&[
+            "mesh",
+            &format!("geo/{geo}.geo"),
+            "-o",
+            msh.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(msh.is_file());
+        let out = dir.join(case);
+        let o = tmc(&[
+            "solve",
+            &format!("cases/{case}.toml"),
+            "-o",
+            out.to_str().unwrap(),
+            "--quiet",
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let s = summary(&out);
+        assert_eq!(s["converged"], true);
+        for key in [
+            "dofs",
+            "load_steps",
+            "newton_iterations",
+            "wall_seconds",
+            "probes",
+            "min_J",
+            "reactions",
+            "physics",
+        ] {
+            assert!(s.get(key).is_some(), "summary.json lacks {key}");
+        }
+        let steps = s["load_steps"].as_u64().unwrap() as usize;
+        assert!(out.join(format!("step_{steps:04}.vtu")).is_file());
+        let pvd = std::fs::read_to_string(out.join(format!("{case}.pvd"))).unwrap();
+        assert_eq!(pvd.matches("<DataSet").count(), steps + 1);
+        let (_, rows) = history(&out);
+        assert_eq!(
+            rows.len(),
+            steps + 1,
+            "one history row per converged step plus the initial state"
+        );
+    }
+}
+
+#[test]
+fn plate_hole_demo_is_in_equilibrium_and_conserves_heat() {
+    let (s, _) = solve_case("plate-hole");
+    assert!(s.physics.heat_to_mechanics && s.physics.mechanics_to_heat);
+    let (fl, fr) = (s.reactions["left"]["x"], s.reactions["right"]["x"]);
+    assert!(fr > 0.5, "pulling needs a force: {fr}");
+    assert!((fl + fr).abs() < 1e-9 * fr, "force balance {fl} + {fr}");
+    let (ql, qr) = (s.reactions["left"]["heat"], s.reactions["right"]["heat"]);
+    assert!(
+        qr > 0.0 && (ql + qr).abs() < 1e-9 * qr,
+        "heat balance {ql} + {qr}"
+    );
+    // the hole (diameter 0.5) is stretched along the pull and narrows across it
+    let h = s.probes["hole_height"];
+    assert!(h > 0.45 && h < 0.5 + 0.05, "{h}");
+}
+
+fn write_case(name: &str, text: &str) -> std::path::PathBuf {
+    let dir = scratch(&format!("bad-{name}"));
+    let p = dir.join(format!("{name}.toml"));
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+const GOOD: &str = r#"mesh = "MESH"
+
+[[region]]
+group = "solid"
+kind = "solid"
+K = 20.0
+mu = 10.0
+
+[[bc]]
+group = "left"
+ux = 0.0
+
+[[bc]]
+group = "origin"
+uy = 0.0
+
+[[bc]]
+group = "right"
+ux = 0.2
+"#;
+
+fn case_with(name: &str, edit: impl Fn(&str) -> String) -> (Output, std::path::PathBuf) {
+    let slab = root().join("geo/slab.geo");
+    let text = edit(&GOOD.replace("MESH", slab.to_str().unwrap()));
+    let p = write_case(name, &text);
+    let out = p.parent().unwrap().join("out");
+    (
+        tmc(&[
+            "solve",
+            p.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "-q",
+        ]),
+        p,
+    )
+}
+
+#[test]
+fn good_case_runs() {
+    let (o, _) = case_with("good", |t| t.to_string());
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
+#[test]
+fn unknown_key_is_named_with_file_and_line() {
+    let (o, p) = case_with("unknown", |t| t.replace("mu = 10.0", "mu = 10.0\nnu = 0.3"));
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(
+        e.contains(p.to_str().unwrap()) && e.contains("nu") && e.contains("line 8"),
+        "{e}"
+    );
+}
+
+#[test]
+fn missing_group_lists_the_available_ones() {
+    let (o, p) = case_with("missing", |t| {
+        t.replace("group = \"right\"", "group = \"rihgt\"")
+    });
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(
+        e.contains(&format!("{}:18", p.display()))
+            && e.contains("\"rihgt\" is not in the mesh")
+            && e.contains("\"right\""),
+        "{e}"
+    );
+}
+
+#[test]
+fn wrong_dimension_groups_are_refused() {
+    let (o, _) = case_with("dim-region", |t| {
+        t.replacen("group = \"solid\"", "group = \"left\"", 1)
+    });
+    let e = stderr(&o);
+    assert!(
+        !o.status.success() && e.contains("region[0]: group \"left\" has dimension 1"),
+        "{e}"
+    );
+    let (o, _) = case_with("dim-bc", |t| {
+        t.replace("group = \"right\"", "group = \"solid\"")
+    });
+    let e = stderr(&o);
+    assert!(
+        !o.status.success() && e.contains("is a 2D group of cells"),
+        "{e}"
+    );
+    let (o, _) = case_with("traction-on-point", |t| {
+        t.replace("uy = 0.0", "traction = [1.0, 0.0]")
+    });
+    let e = stderr(&o);
+    assert!(
+        !o.status.success() && e.contains("need a 1D boundary group"),
+        "{e}"
+    );
+}
+
+#[test]
+fn non_positive_moduli_are_refused() {
+    let (o, _) = case_with("negative-k", |t| t.replace("K = 20.0", "K = -1.0"));
+    let e = stderr(&o);
+    assert!(
+        !o.status.success() && e.contains("`K` must be positive") && e.contains(".toml:6:"),
+        "{e}"
+    );
+    let (o, _) = case_with("zero-mu", |t| t.replace("mu = 10.0", "mu = 0.0"));
+    assert!(!o.status.success() && stderr(&o).contains("`mu` must be positive"));
+}
+
+#[test]
+fn conflicting_dirichlet_values_on_a_shared_node_are_refused() {
+    // "bottom" and "left" share the origin; they disagree on ux there
+    let (o, _) = case_with("conflict", |t| {
+        t.to_string() + "\n[[bc]]\ngroup = \"bottom\"\nux = 0.1\n"
+    });
+    let e = stderr(&o);
+    assert!(
+        !o.status.success() && e.contains("share a node") && e.contains("different ux"),
+        "{e}"
+    );
+}
+
+#[test]
+fn bad_geo_files_give_clear_errors() {
+    let dir = scratch("bad-geo");
+    let broken = dir.join("broken.geo");
+    std::fs::write(&broken, "Point(1) = {0, 0, 0};\nLine(1) = {1, 2;\n").unwrap();
+    let o = tmc(&["mesh", broken.to_str().unwrap()]);
+    let e = stderr(&o);
+    assert!(
+        !o.status.success() && e.contains("gmsh failed on") && e.contains("broken.geo"),
+        "{e}"
+    );
+    let untagged = dir.join("untagged.geo");
+    std::fs::write(
+        &untagged,
+        "Point(1) = {0,0,0}; Point(2) = {1,0,0}; Point(3) = {1,1,0};\nLine(1) = {1,2}; Line(2) = {2,3}; Line(3) = {3,1};\nCurve Loop(1) = {1,2,3}; Plane Surface(1) = {1};\n",
+    )
+    .unwrap();
+    let o = tmc(&["mesh", untagged.to_str().unwrap()]);
+    let e = stderr(&o);
+    assert!(
+        !o.status.success() && e.contains("no physical groups"),
+        "{e}"
+    );
+    assert!(!dir.join("untagged.msh").exists(), "nothing half-written");
+    let o = tmc(&["mesh", "geo/no-such.geo"]);
+    assert!(!o.status.success() && stderr(&o).contains("no such .geo file"));
+}
+
+#[test]
+fn a_load_beyond_reach_fails_clearly_and_keeps_converged_steps() {
+    // squeeze the slab to nothing: J → 0 cannot be reached
+    let (o, p) = case_with("crush", |t| {
+        t.replace("ux = 0.2", "ux = -2.0") + "\n[steps]\ninitial = 0.25\nmin = 0.01\nmax = 0.5\n"
+    });
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(
+        e.contains("below the minimum step") && e.contains("converged steps up to"),
+        "{e}"
+    );
+    let out = p.parent().unwrap().join("out");
+    let s = summary(&out);
+    assert_eq!(s["converged"], false);
+    let steps = s["load_steps"].as_u64().unwrap() as usize;
+    assert!(steps >= 1);
+    let (cols, rows) = history(&out);
+    assert_eq!(rows.len(), steps + 1);
+    let j = cols.iter().position(|c| c == "min_J_solid").unwrap();
+    assert!(
+        rows.iter().all(|r| r[j] > 0.0),
+        "no accepted step has J ≤ 0"
+    );
+    assert!(out.join(format!("step_{steps:04}.vtu")).is_file());
+}
