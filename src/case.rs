@@ -255,22 +255,6 @@ impl Case {
         for (i, r) in f.region.iter().enumerate() {
             let at = r.group.span();
             let name = r.group.get_ref();
-            let need = |key: &str, v: &Option<Spanned<f64>>| -> Result<(), CaseError> {
-                match v {
-                    None => self.error(
-                        at.clone(),
-                        format!("region[{i}] (\"{name}\"): `{key}` is required"),
-                    ),
-                    Some(v) if !(*v.get_ref() > 0.0) => self.error(
-                        v.span(),
-                        format!(
-                            "region[{i}] (\"{name}\"): `{key}` must be positive, got {}",
-                            v.get_ref()
-                        ),
-                    ),
-                    _ => Ok(()),
-                }
-            };
             let positive_if_given =
                 |key: &str, v: &Option<Spanned<f64>>| -> Result<(), CaseError> {
                     match v {
@@ -284,6 +268,15 @@ impl Case {
                         _ => Ok(()),
                     }
                 };
+            let need = |key: &str, v: &Option<Spanned<f64>>| -> Result<(), CaseError> {
+                if v.is_none() {
+                    return self.error(
+                        at.clone(),
+                        format!("region[{i}] (\"{name}\"): `{key}` is required"),
+                    );
+                }
+                positive_if_given(key, v)
+            };
             match r.kind {
                 RegionKind::Solid => {
                     need("K", &r.K)?;

@@ -93,6 +93,44 @@ fn kinematics<const N: usize, const D: usize>(
     (F, gt)
 }
 
+/// Everything a law needs at one quadrature point.
+struct Point<const N: usize, const D: usize> {
+    /// Physical shape gradients ∂N_I/∂X.
+    g: [[f64; D]; N],
+    Nv: [f64; N],
+    dV: f64,
+    F: Matrix3<f64>,
+    grad_theta: Vector3<f64>,
+    theta: f64,
+}
+
+fn point<const N: usize, const D: usize, E: RefElement<N, D>>(
+    xi: &[f64; D],
+    w: f64,
+    lay: &Layout,
+    s: &CellState<N>,
+    theta_ref: f64,
+) -> Result<Point<N, D>, KernelError> {
+    let (g, detJ) =
+        physical_gradients::<N, D>(&E::grad(xi), &s.X).ok_or(KernelError::BadGeometry)?;
+    let Nv = E::shape(xi);
+    let (F, grad_theta) = kinematics(&g, s, lay.has_u);
+    // without temperature unknowns the body stays at θ0 (no expansion)
+    let theta = if lay.has_theta {
+        Nv.iter().zip(&s.theta).map(|(a, b)| a * b).sum()
+    } else {
+        theta_ref
+    };
+    Ok(Point {
+        g,
+        Nv,
+        dV: w * detJ,
+        F,
+        grad_theta,
+        theta,
+    })
+}
+
 /// Residual and (optionally) tangent of one cell of the bulk (solid or medium):
 ///
 /// r_u = ∫ P : ∇δu dV,  r_θ = ∫ −Q · ∇δθ dV  (eq. 5, 6, without external loads),
@@ -117,16 +155,14 @@ pub fn bulk<const N: usize, const D: usize, E: RefElement<N, D>>(
     };
     let theta_ref = mat.law.theta0;
     for (xi, w) in E::quadrature() {
-        let (g, detJ) =
-            physical_gradients::<N, D>(&E::grad(xi), &s.X).ok_or(KernelError::BadGeometry)?;
-        let dV = w * detJ;
-        let Nv = E::shape(xi);
-        let (F, gt) = kinematics(&g, s, lay.has_u);
-        let theta = if lay.has_theta {
-            Nv.iter().zip(&s.theta).map(|(a, b)| a * b).sum()
-        } else {
-            theta_ref
-        };
+        let Point {
+            g,
+            Nv,
+            dV,
+            F,
+            grad_theta: gt,
+            theta,
+        } = point::<N, D, E>(xi, *w, lay, s, theta_ref)?;
         if lay.has_u {
             let m = mat
                 .law
@@ -242,16 +278,13 @@ pub fn cell_fields<const N: usize, const D: usize, E: RefElement<N, D>>(
     let mut sigma = Matrix3::zeros();
     let mut q = Vector3::zeros();
     for (xi, w) in E::quadrature() {
-        let (g, detJ) =
-            physical_gradients::<N, D>(&E::grad(xi), &s.X).ok_or(KernelError::BadGeometry)?;
-        let dV = w * detJ;
-        let Nv = E::shape(xi);
-        let (F, gt) = kinematics(&g, s, lay.has_u);
-        let theta = if lay.has_theta {
-            Nv.iter().zip(&s.theta).map(|(a, b)| a * b).sum()
-        } else {
-            mat.law.theta0
-        };
+        let Point {
+            dV,
+            F,
+            grad_theta: gt,
+            theta,
+            ..
+        } = point::<N, D, E>(xi, *w, lay, s, mat.law.theta0)?;
         let m = mat
             .law
             .stress(&F, theta)

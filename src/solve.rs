@@ -142,6 +142,15 @@ pub fn reactions(model: &Model, r_full: &[f64]) -> BTreeMap<String, BTreeMap<Str
     out
 }
 
+/// A line above the progress bar, or on stderr when the bar is hidden (not a terminal).
+fn say(pb: &indicatif::ProgressBar, line: &str) {
+    if pb.is_hidden() {
+        eprintln!("{line}");
+    } else {
+        pb.println(line);
+    }
+}
+
 /// Solve a case file end to end.
 pub fn run(case_path: &Path, opts: &SolveOptions) -> Result<Summary, SolveError> {
     let start = Instant::now();
@@ -448,17 +457,24 @@ fn solve_model(
                 }));
                 history.row(&row)?;
                 write_step(ctl.accepted, &x, &mut pvd, target)?;
+                let fmt_j = |j: f64| {
+                    if j.is_finite() {
+                        format!("{j:.3e}")
+                    } else {
+                        "-".into()
+                    }
+                };
                 let line = format!(
-                    "step {:3}  λ {:.4}  Δλ {:.2e}  its {:2}  min J solid {:.3e} medium {:.3e}",
+                    "step {:3}  λ {:.4}  Δλ {:.2e}  its {:2}  min J solid {} medium {}",
                     ctl.accepted,
                     target,
                     dl,
                     rep.iterations,
-                    rep.stats.min_J_solid,
-                    rep.stats.min_J_medium
+                    fmt_j(rep.stats.min_J_solid),
+                    fmt_j(rep.stats.min_J_medium)
                 );
                 if opts.verbose {
-                    pb.println(&line);
+                    say(&pb, &line);
                 }
                 pb.set_position((target * 1000.0) as u64);
                 pb.set_message(format!("step {} its {}", ctl.accepted, total_iterations));

@@ -273,3 +273,20 @@ fn a_load_beyond_reach_fails_clearly_and_keeps_converged_steps() {
     );
     assert!(out.join(format!("step_{steps:04}.vtu")).is_file());
 }
+
+#[test]
+fn meshio_reads_the_vtu_files() {
+    let (s, dir) = solve_case("slab-stretch");
+    let vtu = dir.join(format!("step_{:04}.vtu", s.load_steps));
+    let o = Command::new("/usr/bin/python3")
+        .args(["-c", "import sys, meshio; m = meshio.read(sys.argv[1]); print(len(m.points), m.cells[0].type, sorted(m.point_data), sorted(m.cell_data))"])
+        .arg(&vtu)
+        .output()
+        .expect("python3-meshio is installed by make test");
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        out.starts_with("45 quad") && out.contains("'u'") && out.contains("'sigma'"),
+        "{out}"
+    );
+}
