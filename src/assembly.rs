@@ -7,7 +7,7 @@
 
 use crate::dofs::NONE;
 use crate::element::{Hex8, Quad4, RefElement, Tet4, Tri3};
-use crate::kernel::{CellState, KernelError, bulk};
+use crate::kernel::{KernelError, bulk};
 use crate::mesh::CellKind;
 use crate::model::Model;
 use rayon::prelude::*;
@@ -303,25 +303,16 @@ impl Assembler {
                     |(mut r, mut k, mut ld, mj, en), &c| {
                         let c = c as usize;
                         let nodes = blk.cell(c);
-                        // local → global dofs and local state
-                        let mut s = CellState::<N> {
-                            X: [[0.0; 3]; N],
-                            u: [[0.0; 3]; N],
-                            theta: [0.0; N],
-                        };
+                        let s = crate::post::gather::<N>(model, nodes, x);
+                        // local → global dofs
                         for (I, &n) in nodes.iter().enumerate() {
-                            s.X[I] = model.mesh.coords[n];
                             if lay.has_u {
                                 for i in 0..D {
-                                    let d = dofs.u[n * D + i];
-                                    ld[lay.u(I, i)] = d;
-                                    s.u[I][i] = x[d as usize];
+                                    ld[lay.u(I, i)] = dofs.u[n * D + i];
                                 }
                             }
                             if lay.has_theta {
-                                let d = dofs.theta[n];
-                                ld[lay.theta(I)] = d;
-                                s.theta[I] = x[d as usize];
+                                ld[lay.theta(I)] = dofs.theta[n];
                             }
                         }
                         let out = bulk::<N, D, E>(
