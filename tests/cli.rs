@@ -290,3 +290,30 @@ fn meshio_reads_the_vtu_files() {
         "{out}"
     );
 }
+
+/// Regression: `.geo` parameters set for one meshing run leaked into the next one in the same
+/// process (gmsh keeps its parser symbols across sessions, and `DefineConstant` keeps a
+/// symbol that exists), so a later mesh of another scene came out with the wrong density.
+#[test]
+fn geo_parameters_do_not_leak_into_the_next_mesh() {
+    use tmc::mesh::gmsh::{MeshOptions, mesh_geo};
+    use tmc::mesh::msh::read_msh;
+    let dir = scratch("geo-param-leak");
+    let geo = root().join("geo/slab.geo");
+    let cells = |params: &[(&str, f64)], name: &str| {
+        let out = dir.join(name);
+        mesh_geo(
+            &geo,
+            &out,
+            &MeshOptions {
+                order: 1,
+                set_numbers: params.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        read_msh(&out).unwrap().n_cells()
+    };
+    assert_eq!(cells(&[("n", 2.0), ("m", 1.0)], "a.msh"), 2);
+    assert_eq!(cells(&[], "b.msh"), 8 * 4, "defaults of slab.geo");
+}

@@ -58,7 +58,16 @@ pub fn mesh_geo(geo: &Path, out: &Path, opts: &MeshOptions) -> Result<MeshReport
         });
     }
     let _guard = GMSH.lock().unwrap_or_else(|e| e.into_inner());
-    let session = Session::start(opts)?;
+    // .geo parameters: not gmsh's `-setnumber`, whose values stay in a process-wide table that
+    // every later `open` re-applies (so a parameter set for one mesh would leak into the
+    // next); instead a wrapper defines them before including the file, and `DefineConstant`
+    // keeps an existing definition.
+    let wrapper = ParamWrapper::new(geo, &opts.set_numbers).map_err(|source| GmshError::Write {
+        path: std::env::temp_dir(),
+        source,
+    })?;
+    let open_path = wrapper.path.as_deref().unwrap_or(geo);
+    let session = Session::start()?;
     let fail = |msg: String| GmshError::Failed {
         path: geo.to_owned(),
         msg,
@@ -68,7 +77,7 @@ pub fn mesh_geo(geo: &Path, out: &Path, opts: &MeshOptions) -> Result<MeshReport
         session
             .call(|e| unsafe { gmsh_sys::gmshLoggerStart(e) })
             .map_err(&fail)?;
-        let cgeo = cstring(&geo.to_string_lossy());
+        let cgeo = cstring(&open_path.to_string_lossy());
         let opened = session.call(|e| unsafe { gmsh_sys::gmshOpen(cgeo.as_ptr(), e) });
         let errors = session.errors();
         if opened.is_err() || !errors.is_empty() {
@@ -137,6 +146,44 @@ pub fn mesh_geo(geo: &Path, out: &Path, opts: &MeshOptions) -> Result<MeshReport
     run()
 }
 
+/// A temporary `.geo` that sets parameters and includes the user's file; removed on drop.
+struct ParamWrapper {
+    path: Option<PathBuf>,
+}
+
+impl ParamWrapper {
+    fn new(geo: &Path, params: &[(String, f64)]) -> std::io::Result<ParamWrapper> {
+        if params.is_empty() {
+            return Ok(ParamWrapper { path: None });
+        }
+        static COUNT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+        let k = COUNT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let path = std::env::temp_dir().join(format!(
+            "tmc-{}-{k}-{}",
+            std::process::id(),
+            geo.file_name()
+                .map(|f| f.to_string_lossy())
+                .unwrap_or_default()
+        ));
+        let abs = std::fs::canonicalize(geo)?;
+        let mut text = String::new();
+        for (name, value) in params {
+            text.push_str(&format!("{name} = {value:?};\n"));
+        }
+        text.push_str(&format!("Include \"{}\";\n", abs.display()));
+        std::fs::write(&path, text)?;
+        Ok(ParamWrapper { path: Some(path) })
+    }
+}
+
+impl Drop for ParamWrapper {
+    fn drop(&mut self) {
+        if let Some(p) = &self.path {
+            let _ = std::fs::remove_file(p);
+        }
+    }
+}
+
 fn cstring(s: &str) -> CString {
     CString::new(s.replace('\0', "")).expect("no interior NUL")
 }
@@ -147,14 +194,8 @@ struct Session {
 }
 
 impl Session {
-    fn start(opts: &MeshOptions) -> Result<Session, GmshError> {
-        // command-line style options: `-setnumber NAME VALUE` for .geo parameters
-        let mut args = vec![cstring("tmc")];
-        for (name, value) in &opts.set_numbers {
-            args.push(cstring("-setnumber"));
-            args.push(cstring(name));
-            args.push(cstring(&format!("{value}")));
-        }
+    fn start() -> Result<Session, GmshError> {
+        let args = [cstring("tmc")];
         let mut argv: Vec<*mut c_char> = args.iter().map(|a| a.as_ptr() as *mut c_char).collect();
         let mut ierr: c_int = 0;
         unsafe { gmsh_sys::gmshInitialize(argv.len() as c_int, argv.as_mut_ptr(), 0, &mut ierr) };
