@@ -130,6 +130,8 @@ pub enum AssemblyError {
     Inverted { region: String, J: f64 },
     /// A cell of the undeformed mesh is inverted or degenerate.
     BadMesh { region: String, cell: usize },
+    /// A regularization rotation measure is unbounded (a medium cell rotated by 90°).
+    Singular { region: String },
     /// NaN or infinity in the residual.
     NotFinite,
 }
@@ -146,8 +148,20 @@ impl std::fmt::Display for AssemblyError {
                     "cell {cell} of region \"{region}\" is inverted or degenerate in the undeformed mesh"
                 )
             }
+            AssemblyError::Singular { region } => write!(
+                f,
+                "a cell of region \"{region}\" is rotated by 90° (regularization unbounded)"
+            ),
             AssemblyError::NotFinite => write!(f, "the residual is not finite"),
         }
+    }
+}
+
+impl AssemblyError {
+    /// The state is outside the admissible set (a shorter update may be fine), as opposed to a
+    /// broken mesh.
+    pub fn is_inadmissible(&self) -> bool {
+        !matches!(self, AssemblyError::BadMesh { .. })
     }
 }
 
@@ -246,6 +260,7 @@ impl Assembler {
                     region: region(),
                     cell,
                 },
+                KernelError::Singular => AssemblyError::Singular { region: region() },
             })?;
             if info.mat.medium {
                 stats.min_J_medium = stats.min_J_medium.min(min_j);
@@ -313,6 +328,9 @@ impl Assembler {
                             }
                             if lay.has_theta {
                                 ld[lay.theta(I)] = dofs.theta[n];
+                            }
+                            for c in 0..lay.np {
+                                ld[lay.p(I, c)] = dofs.p[n * lay.np + c];
                             }
                         }
                         let out = bulk::<N, D, E>(

@@ -140,6 +140,7 @@ pub enum LinearChoice {
     Auto,
     Lu,
     Ldlt,
+    Gmres,
 }
 
 /// `[[probe]]`: a named scalar output evaluated after every converged step.

@@ -106,6 +106,19 @@ impl DofMap {
         self.field.iter().filter(|&&g| g == f).count()
     }
 
+    /// The mesh node of every dof.
+    pub fn node_of_dof(&self) -> Vec<u32> {
+        let mut out = vec![0u32; self.n_dofs];
+        let mut buf = Vec::new();
+        for n in 0..self.n_nodes {
+            self.node_dofs(n, &mut buf);
+            for &d in &buf {
+                out[d as usize] = n as u32;
+            }
+        }
+        out
+    }
+
     /// All dofs of a node, in numbering order.
     pub fn node_dofs(&self, node: usize, out: &mut Vec<u32>) {
         out.clear();

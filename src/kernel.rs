@@ -5,7 +5,7 @@
 #![allow(non_snake_case)]
 
 use crate::element::{RefElement, physical_gradients};
-use crate::material::{Conductivity, ThermoElastic, fourier};
+use crate::material::{Conductivity, Regularization, ThermoElastic, fourier, rotation_measure};
 use nalgebra::{Matrix3, Vector3};
 
 /// Material of a cell block.
@@ -14,6 +14,8 @@ pub struct CellMaterial {
     pub law: ThermoElastic,
     pub cond: Conductivity,
     pub medium: bool,
+    /// Regularization of a linear medium cell (eq. 20); used when the layout carries p.
+    pub reg: Option<Regularization>,
 }
 
 /// Which fields a cell carries locally.
@@ -54,6 +56,8 @@ pub struct CellState<const N: usize> {
     pub X: [[f64; 3]; N],
     pub u: [[f64; 3]; N],
     pub theta: [f64; N],
+    /// Regularization unknowns p_i per node (components beyond `Layout::np` unused).
+    pub p: [[f64; 3]; N],
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -62,6 +66,8 @@ pub enum KernelError {
     BadGeometry,
     /// J ≤ 0 (or not finite) at a quadrature point.
     Inverted { J: f64 },
+    /// A rotation measure of the regularization is unbounded (F_aa + F_bb = 0).
+    Singular,
 }
 
 /// What a kernel call reports besides r and K.
@@ -214,6 +220,11 @@ pub fn bulk<const N: usize, const D: usize, E: RefElement<N, D>>(
                     }
                 }
             }
+            if lay.np > 0 {
+                let reg = mat.reg.expect("a cell with p fields has a regularization");
+                summary.energy +=
+                    regularization::<N, D>(&reg, lay, s, &F, &g, &Nv, dV, r, k.as_deref_mut())?;
+            }
         } else {
             summary.min_J = summary.min_J.min(1.0);
         }
@@ -254,6 +265,88 @@ pub fn bulk<const N: usize, const D: usize, E: RefElement<N, D>>(
         }
     }
     Ok(summary)
+}
+
+/// Regularization of a linear medium cell at one quadrature point, eq. (20): adds
+/// ∂Ψ_Rf/∂(u, p) dV to `r` and its exact derivative (symmetric) to `k`; returns Ψ_Rf dV.
+#[allow(clippy::too_many_arguments)]
+fn regularization<const N: usize, const D: usize>(
+    reg: &Regularization,
+    lay: &Layout,
+    s: &CellState<N>,
+    F: &Matrix3<f64>,
+    g: &[[f64; D]; N],
+    Nv: &[f64; N],
+    dV: f64,
+    r: &mut [f64],
+    mut k: Option<&mut [f64]>,
+) -> Result<f64, KernelError> {
+    let nd = lay.ndof();
+    let mut energy = 0.0;
+    for c in 0..lay.np {
+        let rm = rotation_measure(F, c).ok_or(KernelError::Singular)?;
+        let mut p = 0.0;
+        let mut gp = [0.0; D];
+        for I in 0..N {
+            p += Nv[I] * s.p[I][c];
+            for J in 0..D {
+                gp[J] += g[I][J] * s.p[I][c];
+            }
+        }
+        let (psi, d1, d2) = reg.penalty(rm.f, p);
+        let gp2: f64 = gp.iter().map(|v| v * v).sum();
+        energy += (psi + 0.5 * reg.beta2 * gp2) * dV;
+        // Bf[I][a] = ∂f/∂F_aJ ∂N_I/∂X_J = ∂f/∂u_Ia
+        let mut Bf = [[0.0; D]; N];
+        for (q, &(a, J)) in rm.entries.iter().enumerate() {
+            for I in 0..N {
+                Bf[I][a] += rm.grad[q] * g[I][J];
+            }
+        }
+        for I in 0..N {
+            for a in 0..D {
+                r[lay.u(I, a)] += d1[0] * Bf[I][a] * dV;
+            }
+            let gg: f64 = (0..D).map(|J| gp[J] * g[I][J]).sum();
+            r[lay.p(I, c)] += (d1[1] * Nv[I] + reg.beta2 * gg) * dV;
+        }
+        let Some(k) = k.as_deref_mut() else { continue };
+        for I in 0..N {
+            for a in 0..D {
+                let row = lay.u(I, a) * nd;
+                let w = d2[0][0] * Bf[I][a] * dV;
+                for K in 0..N {
+                    for b in 0..D {
+                        k[row + lay.u(K, b)] += w * Bf[K][b];
+                    }
+                    // K_up and its transpose K_pu
+                    let v = d2[0][1] * Bf[I][a] * Nv[K] * dV;
+                    k[row + lay.p(K, c)] += v;
+                    k[lay.p(K, c) * nd + lay.u(I, a)] += v;
+                }
+            }
+            // second derivative of f: Σ_qs ∂²f/∂F_q∂F_s (∇N_I)_Jq (∇N_K)_Js
+            for (q, &(a, Jq)) in rm.entries.iter().enumerate() {
+                for (t, &(b, Js)) in rm.entries.iter().enumerate() {
+                    let h = rm.hess[q][t];
+                    if h == 0.0 {
+                        continue;
+                    }
+                    let w = d1[0] * h * g[I][Jq] * dV;
+                    let row = lay.u(I, a) * nd;
+                    for K in 0..N {
+                        k[row + lay.u(K, b)] += w * g[K][Js];
+                    }
+                }
+            }
+            let row = lay.p(I, c) * nd;
+            for K in 0..N {
+                let gg: f64 = (0..D).map(|J| g[I][J] * g[K][J]).sum();
+                k[row + lay.p(K, c)] += (d2[1][1] * Nv[I] * Nv[K] + reg.beta2 * gg) * dV;
+            }
+        }
+    }
+    Ok(energy)
 }
 
 /// Cell averages for output.
@@ -316,7 +409,7 @@ mod tests {
     use super::*;
     use crate::element::{Hex8, Quad4, Tet4, Tri3};
 
-    const MAT: CellMaterial = CellMaterial {
+    const SOLID: CellMaterial = CellMaterial {
         law: ThermoElastic {
             K: 20.0,
             mu: 10.0,
@@ -328,13 +421,41 @@ mod tests {
             k_max: 50.0,
         },
         medium: false,
+        reg: None,
     };
 
-    fn check<const N: usize, const D: usize, E: RefElement<N, D>>() {
+    /// A soft medium whose regularization dominates, so that its terms are what is checked.
+    const MEDIUM: CellMaterial = CellMaterial {
+        law: ThermoElastic {
+            K: 1e-2,
+            mu: 1e-2,
+            alpha: 1e-3,
+            theta0: 10.0,
+        },
+        cond: Conductivity::Medium {
+            k_tm: 0.5,
+            k_max: 50.0,
+        },
+        medium: true,
+        reg: Some(Regularization {
+            beta1: 1.0,
+            beta2: 0.3,
+            d: 1.7,
+        }),
+    };
+
+    /// Central differences of the residual against the tangent, column by column.
+    fn check<const N: usize, const D: usize, E: RefElement<N, D>>(mat: &CellMaterial) {
+        let np = if mat.reg.is_some() {
+            if D == 2 { 1 } else { 3 }
+        } else {
+            0
+        };
         let mut s = CellState::<N> {
             X: [[0.0; 3]; N],
             u: [[0.0; 3]; N],
             theta: [0.0; N],
+            p: [[0.0; 3]; N],
         };
         for (I, xi) in E::nodes().iter().enumerate() {
             for d in 0..D {
@@ -343,33 +464,41 @@ mod tests {
                 s.u[I][d] = 0.05 * (((I * 3 + d * 5) % 7) as f64 / 7.0 - 0.5);
             }
             s.theta[I] = 10.0 + 30.0 * ((I * 5) % 4) as f64;
+            for c in 0..np {
+                s.p[I][c] = 0.2 * (((I * 5 + c * 3) % 7) as f64 / 7.0 - 0.5);
+            }
         }
         let lay = Layout {
             n: N,
             dim: D,
             has_u: true,
             has_theta: true,
-            np: 0,
+            np,
         };
         let nd = lay.ndof();
         let mut r = vec![0.0; nd];
         let mut k = vec![0.0; nd * nd];
-        bulk::<N, D, E>(&MAT, &lay, &s, &mut r, Some(&mut k)).unwrap();
+        bulk::<N, D, E>(mat, &lay, &s, &mut r, Some(&mut k)).unwrap();
         let h = 1e-7;
         let (mut rp, mut rm) = (vec![0.0; nd], vec![0.0; nd]);
+        let scale = k.iter().fold(0.0f64, |a, v| a.max(v.abs()));
         for b in 0..nd {
             let perturb = |s: &CellState<N>, e: f64| {
                 let mut t = *s;
-                if b < N * D {
-                    t.u[b / D][b % D] += e;
+                if b < lay.theta_off() + N {
+                    if b < N * D {
+                        t.u[b / D][b % D] += e;
+                    } else {
+                        t.theta[b - N * D] += e;
+                    }
                 } else {
-                    t.theta[b - N * D] += e;
+                    let q = b - lay.p_off();
+                    t.p[q / np][q % np] += e;
                 }
                 t
             };
-            bulk::<N, D, E>(&MAT, &lay, &perturb(&s, h), &mut rp, None).unwrap();
-            bulk::<N, D, E>(&MAT, &lay, &perturb(&s, -h), &mut rm, None).unwrap();
-            let scale = k.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            bulk::<N, D, E>(mat, &lay, &perturb(&s, h), &mut rp, None).unwrap();
+            bulk::<N, D, E>(mat, &lay, &perturb(&s, -h), &mut rm, None).unwrap();
             for a in 0..nd {
                 let fd = (rp[a] - rm[a]) / (2.0 * h);
                 assert!(
@@ -379,13 +508,32 @@ mod tests {
                 );
             }
         }
+        if np > 0 {
+            // the regularization blocks (u–p, p–p) are symmetric
+            for a in 0..nd {
+                for b in lay.p_off()..nd {
+                    assert!((k[a * nd + b] - k[b * nd + a]).abs() < 1e-12 * scale);
+                }
+            }
+            // and they matter: without them the p rows would be empty
+            let prow = lay.p_off() * nd;
+            assert!(k[prow..prow + nd].iter().any(|v| v.abs() > 1e-3 * scale));
+        }
     }
 
     #[test]
     fn bulk_tangent_matches_finite_differences() {
-        check::<3, 2, Tri3>();
-        check::<4, 2, Quad4>();
-        check::<4, 3, Tet4>();
-        check::<8, 3, Hex8>();
+        check::<3, 2, Tri3>(&SOLID);
+        check::<4, 2, Quad4>(&SOLID);
+        check::<4, 3, Tet4>(&SOLID);
+        check::<8, 3, Hex8>(&SOLID);
+    }
+
+    #[test]
+    fn medium_with_regularization_tangent_matches_finite_differences() {
+        check::<3, 2, Tri3>(&MEDIUM);
+        check::<4, 2, Quad4>(&MEDIUM);
+        check::<4, 3, Tet4>(&MEDIUM);
+        check::<8, 3, Hex8>(&MEDIUM);
     }
 }

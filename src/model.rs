@@ -5,7 +5,7 @@ use crate::case::{Case, CaseError, RegionKind};
 use crate::dofs::{Constraints, DofMap, Field, NONE, Prescribed};
 use crate::element::{Line2, Point1, Quad4, RefElement, Tri3, facet_measure};
 use crate::kernel::{CellMaterial, Layout};
-use crate::material::{Conductivity, ThermoElastic};
+use crate::material::{Conductivity, Regularization, ThermoElastic};
 use crate::mesh::{CellKind, Mesh};
 use serde::Serialize;
 
@@ -78,6 +78,20 @@ impl Model {
         x
     }
 
+    /// Mesh node and field kind of every free equation, for the linear solver.
+    pub fn equation_structure(&self) -> crate::linsolve::Structure {
+        let node_of_dof = self.dofs.node_of_dof();
+        let n = self.cons.n_eq;
+        let (mut node, mut thermal) = (vec![0u32; n], vec![false; n]);
+        for (d, &e) in self.cons.eq.iter().enumerate() {
+            if e != NONE {
+                node[e as usize] = node_of_dof[d];
+                thermal[e as usize] = self.dofs.field[d] == Field::Theta;
+            }
+        }
+        crate::linsolve::Structure { node, thermal }
+    }
+
     pub fn f_ext(&self, lambda: f64, out: &mut [f64]) {
         for ((o, r), f) in out.iter_mut().zip(&self.f_ramp).zip(&self.f_full) {
             *o = lambda * r + f;
@@ -120,7 +134,8 @@ pub fn decide_physics(case: &Case) -> Physics {
         mechanics_to_heat: mechanics && conduction,
         heat_to_mechanics: expansion && mechanics,
         medium,
-        regularization: false,
+        // every medium element is linear so far, and p only regularizes a deforming medium
+        regularization: medium && mechanics,
     }
 }
 
@@ -147,6 +162,7 @@ pub fn build(case: &Case, mesh: Mesh) -> Result<Model, CaseError> {
             }
         }
     }
+    let d = mesh.extent();
     let materials: Vec<CellMaterial> = f
         .region
         .iter()
@@ -162,6 +178,7 @@ pub fn build(case: &Case, mesh: Mesh) -> Result<Model, CaseError> {
                     },
                     cond: Conductivity::Constant(k),
                     medium: false,
+                    reg: None,
                 },
                 RegionKind::Medium => {
                     let gamma = *r.gamma.as_ref().expect("checked").get_ref();
@@ -179,6 +196,11 @@ pub fn build(case: &Case, mesh: Mesh) -> Result<Model, CaseError> {
                         },
                         cond: Conductivity::Medium { k_tm: k, k_max },
                         medium: true,
+                        reg: Some(Regularization {
+                            beta1: r.beta1.as_ref().map(|v| *v.get_ref()).unwrap_or(1.0),
+                            beta2: r.beta2.as_ref().map(|v| *v.get_ref()).unwrap_or(1e-2),
+                            d,
+                        }),
                     }
                 }
             }
@@ -190,13 +212,26 @@ pub fn build(case: &Case, mesh: Mesh) -> Result<Model, CaseError> {
             .iter()
             .position(|r| mesh.group(r.group.get_ref()) == Some(g))
     };
+    // regularization components per node of a medium cell: f1 in 2D, f1..f3 in 3D
+    let np = if physics.regularization {
+        if mesh.dim == 2 { 1 } else { 3 }
+    } else {
+        0
+    };
     let mut blocks = Vec::new();
+    let mut p_nodes = vec![false; mesh.coords.len()];
     for (bi, b) in mesh.cells.iter().enumerate() {
         let region = b
             .groups
             .iter()
             .find_map(|&g| region_of_group(g))
             .expect("validated");
+        let medium = materials[region].medium;
+        if medium && np > 0 {
+            for &n in &b.conn {
+                p_nodes[n] = true;
+            }
+        }
         blocks.push(BlockInfo {
             block: bi,
             region,
@@ -206,13 +241,12 @@ pub fn build(case: &Case, mesh: Mesh) -> Result<Model, CaseError> {
                 dim: mesh.dim,
                 has_u: physics.mechanics,
                 has_theta: physics.conduction,
-                np: 0,
+                np: if medium { np } else { 0 },
             },
         });
     }
 
-    let p_nodes = vec![false; mesh.coords.len()];
-    let dofs = DofMap::new(&mesh, physics.mechanics, physics.conduction, 0, &p_nodes);
+    let dofs = DofMap::new(&mesh, physics.mechanics, physics.conduction, np, &p_nodes);
 
     // initial temperature of each node: θ0 of its region (the last region listed wins on shared nodes)
     let mut theta_init = vec![0.0; mesh.coords.len()];
@@ -339,7 +373,6 @@ pub fn build(case: &Case, mesh: Mesh) -> Result<Model, CaseError> {
         }
     }
     debug_assert!(cons.eq.iter().filter(|&&e| e != NONE).count() == cons.n_eq);
-    let d = mesh.extent();
     Ok(Model {
         physics,
         dofs,

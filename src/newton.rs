@@ -6,6 +6,11 @@
 //! converged only when every field's residual is below `tol` times its reference *and* the
 //! update that residual implies (solved with the last factorisation, no new one) is below
 //! `sqrt(tol)` times the step's largest update of that field.
+//!
+//! The regularization fields p_i are lengths (p_i ≈ d f_i), so their residuals are forces like
+//! those of u: p is measured against the larger of the u and p references. Without that, a
+//! field that the load hardly excites (p in a uniaxial squeeze) would be judged against its
+//! own round-off.
 
 use crate::assembly::{Assembler, AssemblyError, AssemblyStats};
 use crate::dofs::{Field, NONE};
@@ -23,15 +28,31 @@ fn idx(f: Field) -> usize {
     }
 }
 
+/// Halvings of one update before the step is given up.
+const MAX_HALVINGS: usize = 8;
+
+/// The reference of field `f`: its own, or for p the larger of the u and p ones.
+fn same_units(f: usize, r: impl Fn(usize) -> f64) -> f64 {
+    if f == idx(Field::P) {
+        r(f).max(r(idx(Field::U)))
+    } else {
+        r(f)
+    }
+}
+
 #[derive(Clone, Debug)]
 pub struct StepReport {
     pub iterations: usize,
+    /// Times an update was halved because it left the admissible set.
+    pub halvings: usize,
     /// Relative residual per field at each iteration.
     pub history: Vec<FieldNorms>,
     pub stats: AssemblyStats,
     /// Seconds in assembly, factorisation and solves.
     pub t_assembly: f64,
     pub t_solve: f64,
+    /// Krylov iterations over the step (0 with a direct solver).
+    pub krylov: usize,
 }
 
 #[derive(Debug)]
@@ -121,40 +142,56 @@ impl Newton {
     ) -> Result<StepReport, StepFailure> {
         let n_eq = model.cons.n_eq;
         let eq = &model.cons.eq;
+        solver.take_krylov();
         let mut t_asm = 0.0;
         let mut t_sol = 0.0;
-        // increment of the prescribed values, moved to the right-hand side
+        // increment of the prescribed values still to apply, moved to the right-hand side
         let mut dx_p = vec![0.0; x.len()];
-        for (d, p) in model.cons.prescribed.iter().enumerate() {
-            if let Some(p) = p {
-                dx_p[d] = p.at(lambda) - x[d];
-            }
-        }
         let mut rhs = vec![0.0; n_eq];
+        // the update applied last (all dofs), halved on overshoot
+        let mut applied = vec![0.0; x.len()];
         let mut history = Vec::new();
         let mut step_ref = [0.0; 3];
         let mut du_ref = [0.0; 3];
         let mut last_update: FieldNorms;
+        let mut cuts = 0;
         let mut it = 0;
         loop {
             let t0 = std::time::Instant::now();
             let first = it == 0;
-            let stats = asm
-                .assemble(
-                    model,
-                    x,
-                    lambda,
-                    true,
-                    if first { Some(&dx_p) } else { None },
-                )
-                .map_err(StepFailure::Assembly)?;
+            // Safeguard: an update that leaves the admissible set (J ≤ 0, an unbounded
+            // regularization, NaN) is halved until the state is admissible again.
+            let mut halvings = 0;
+            let (stats, pending) = loop {
+                let mut pending = false;
+                for (d, p) in model.cons.prescribed.iter().enumerate() {
+                    if let Some(p) = p {
+                        dx_p[d] = p.at(lambda) - x[d];
+                        pending |= dx_p[d] != 0.0;
+                    }
+                }
+                match asm.assemble(model, x, lambda, true, pending.then_some(&dx_p[..])) {
+                    Ok(stats) => break (stats, pending),
+                    Err(e) if first || halvings == MAX_HALVINGS || !e.is_inadmissible() => {
+                        return Err(StepFailure::Assembly(e));
+                    }
+                    Err(_) => {
+                        halvings += 1;
+                        for (xi, a) in x.iter_mut().zip(applied.iter_mut()) {
+                            *a *= 0.5;
+                            *xi -= *a;
+                        }
+                    }
+                }
+            };
+            cuts += halvings;
             t_asm += t0.elapsed().as_secs_f64();
             for (d, &e) in eq.iter().enumerate() {
                 if e != NONE {
                     rhs[e as usize] = -asm.r_full[d];
                 }
             }
-            if first {
+            if pending {
                 for (r, l) in rhs.iter_mut().zip(&asm.lift) {
                     *r -= l;
                 }
@@ -169,12 +206,12 @@ impl Newton {
                 self.run_ref[f] = self.run_ref[f].max(step_ref[f]);
             }
             let rel: FieldNorms = std::array::from_fn(|f| {
-                let r = step_ref[f].max(self.run_ref[f]);
+                let r = same_units(f, |g| step_ref[g].max(self.run_ref[g]));
                 if r > 0.0 { res[f] / r } else { 0.0 }
             });
             history.push(rel);
             let residual_ok = rel.iter().all(|&r| r <= self.tol);
-            if it >= self.max_iter {
+            if it >= self.max_iter && !residual_ok {
                 return Err(StepFailure::NotConverged {
                     iterations: it,
                     last: rel,
@@ -184,18 +221,21 @@ impl Newton {
             if !residual_ok || first {
                 solver.factor(&asm.values).map_err(StepFailure::Linear)?;
             }
-            solver.solve(&mut rhs);
+            solver.solve(&mut rhs).map_err(StepFailure::Linear)?;
             t_sol += t1.elapsed().as_secs_f64();
             if !rhs.iter().all(|v| v.is_finite()) {
                 return Err(StepFailure::Assembly(AssemblyError::NotFinite));
             }
             last_update = self.norms(&rhs);
             for (d, &e) in eq.iter().enumerate() {
-                if e != NONE {
-                    x[d] += rhs[e as usize];
-                } else if first {
-                    x[d] += dx_p[d];
-                }
+                applied[d] = if e != NONE {
+                    rhs[e as usize]
+                } else if pending {
+                    dx_p[d]
+                } else {
+                    0.0
+                };
+                x[d] += applied[d];
             }
             if first {
                 let pres = {
@@ -215,18 +255,26 @@ impl Newton {
                 // field itself (a field the step hardly changes has round-off updates only)
                 let size = self.norms_of_state(model, x);
                 let update_ok = (0..3).all(|f| {
-                    last_update[f] <= self.tol.sqrt() * du_ref[f]
-                        || last_update[f] <= 1e-10 * size[f]
+                    last_update[f] <= self.tol.sqrt() * same_units(f, |g| du_ref[g])
+                        || last_update[f] <= 1e-10 * same_units(f, |g| size[g])
                 });
                 if update_ok {
                     return Ok(StepReport {
                         iterations: it,
+                        halvings: cuts,
                         history,
                         stats,
                         t_assembly: t_asm,
                         t_solve: t_sol,
+                        krylov: solver.take_krylov(),
                     });
                 }
+            }
+            if it >= self.max_iter {
+                return Err(StepFailure::NotConverged {
+                    iterations: it,
+                    last: rel,
+                });
             }
             it += 1;
         }

@@ -53,6 +53,8 @@ pub struct StepFields<'a> {
     pub u: &'a [[f64; 3]],
     /// Temperature per node, if simulated.
     pub theta: Option<&'a [f64]>,
+    /// Regularization fields per node (`np` components, zero off the medium), if any.
+    pub p: Option<(&'a [f64], usize)>,
     /// Cell data in mesh block order.
     pub cells: &'a [CellFields],
     /// Region index and kind (0 solid, 1 medium) per cell.
@@ -86,6 +88,9 @@ pub fn write_vtu(path: &Path, mesh: &Mesh, f: &StepFields) -> Result<(), OutputE
     ];
     if let Some(t) = f.theta {
         point.push(Attribute::scalars("theta", 1).with_data(t.to_vec()));
+    }
+    if let Some((p, np)) = f.p {
+        point.push(Attribute::scalars("p", np as u32).with_data(p.to_vec()));
     }
     let c = f.cells;
     let sigma: Vec<f64> = c

@@ -31,6 +31,7 @@ pub fn gather<const N: usize>(model: &Model, nodes: &[usize], x: &[f64]) -> Cell
         X: [[0.0; 3]; N],
         u: [[0.0; 3]; N],
         theta: [0.0; N],
+        p: [[0.0; 3]; N],
     };
     for (I, &n) in nodes.iter().enumerate() {
         s.X[I] = model.mesh.coords[n];
@@ -41,6 +42,13 @@ pub fn gather<const N: usize>(model: &Model, nodes: &[usize], x: &[f64]) -> Cell
         }
         if !model.dofs.theta.is_empty() {
             s.theta[I] = x[model.dofs.theta[n] as usize];
+        }
+        let np = model.dofs.np;
+        for c in 0..np {
+            let dof = model.dofs.p[n * np + c];
+            if dof != crate::dofs::NONE {
+                s.p[I][c] = x[dof as usize];
+            }
         }
     }
     s

@@ -2,7 +2,7 @@
 
 use crate::assembly::Assembler;
 use crate::case::{Case, CaseError, LinearChoice, RegionKind};
-use crate::dofs::Field;
+use crate::dofs::{Field, NONE};
 use crate::linsolve::{LinearError, LinearKind, LinearSolver};
 use crate::mesh::gmsh::{GmshError, MeshOptions, mesh_geo};
 use crate::mesh::msh::{MshError, read_msh};
@@ -72,6 +72,8 @@ pub struct Summary {
     pub wall_seconds: f64,
     pub assembly_seconds: f64,
     pub solver_seconds: f64,
+    /// GMRES iterations over all accepted steps (0 with a direct solver).
+    pub krylov_iterations: usize,
     pub probes: BTreeMap<String, f64>,
     pub reactions: BTreeMap<String, BTreeMap<String, f64>>,
     /// Smallest J at any quadrature point of any accepted step (solids and medium).
@@ -174,11 +176,12 @@ pub fn choose_linear(choice: LinearChoice, physics: &Physics) -> LinearKind {
     match choice {
         LinearChoice::Lu => LinearKind::Lu,
         LinearChoice::Ldlt => LinearKind::Ldlt,
+        LinearChoice::Gmres => LinearKind::BlockGmres,
         LinearChoice::Auto => {
             if symmetric {
                 LinearKind::Ldlt
             } else {
-                LinearKind::Lu
+                LinearKind::BlockGmres
             }
         }
     }
@@ -201,7 +204,7 @@ fn solve_model(
             .into());
     }
     let mut asm = Assembler::new(&model);
-    let mut solver = LinearSolver::new(kind, &asm.pattern)?;
+    let mut solver = LinearSolver::new(kind, &asm.pattern, &model.equation_structure())?;
     let steps = &case.file.steps;
     let mut newton = Newton::new(&model, steps.tol, steps.max_iter);
     let mut ctl = Controller::new(steps);
@@ -257,6 +260,7 @@ fn solve_model(
             format!("R_{g}_{k}")
         }
     }));
+    columns.extend(["krylov_iterations", "halvings"].map(String::from));
     let mut history = History::new(&out_dir.join("history.csv"), &columns);
     let name = case.name();
     let mut pvd: Vec<(f64, String)> = Vec::new();
@@ -283,6 +287,15 @@ fn solve_model(
             .dofs
             .has(Field::Theta)
             .then(|| model.dofs.theta.iter().map(|&t| x[t as usize]).collect());
+        let np = model.dofs.np;
+        let p: Option<Vec<f64>> = model.dofs.has(Field::P).then(|| {
+            model
+                .dofs
+                .p
+                .iter()
+                .map(|&d| if d == NONE { 0.0 } else { x[d as usize] })
+                .collect()
+        });
         let file = format!("step_{step:04}.vtu");
         output::write_vtu(
             &out_dir.join(&file),
@@ -290,6 +303,7 @@ fn solve_model(
             &StepFields {
                 u: &u,
                 theta: theta.as_deref(),
+                p: p.as_deref().map(|p| (p, np)),
                 cells: &cells,
                 region: &region_of_cell,
                 kind: &kind_of_cell,
@@ -324,6 +338,7 @@ fn solve_model(
             .iter()
             .map(|(g, k)| r0.get(g).and_then(|m| m.get(k)).copied().unwrap_or(0.0)),
     );
+    row0.extend([0.0, 0.0]);
     history.row(&row0)?;
 
     let pb = if opts.quiet {
@@ -339,6 +354,7 @@ fn solve_model(
         pb
     };
     let mut total_iterations = 0;
+    let mut total_krylov = 0;
     let (mut t_asm, mut t_sol) = (0.0, 0.0);
     let mut min_j = (f64::INFINITY, f64::INFINITY);
     let mut last_reactions = r0;
@@ -374,6 +390,7 @@ fn solve_model(
         wall_seconds: 0.0,
         assembly_seconds: 0.0,
         solver_seconds: 0.0,
+        krylov_iterations: 0,
         probes: BTreeMap::new(),
         reactions: BTreeMap::new(),
         min_J: 1.0,
@@ -417,10 +434,10 @@ fn solve_model(
 
     while !ctl.done() {
         let target = ctl.target();
+        let dl = target - ctl.lambda;
         let mut trial = x.clone();
         match newton.step(&model, &mut asm, &mut solver, &mut trial, target) {
             Ok(rep) => {
-                let dl = target - ctl.lambda;
                 ctl.accept(target, rep.iterations);
                 x = trial;
                 total_iterations += rep.iterations;
@@ -455,6 +472,9 @@ fn solve_model(
                         .copied()
                         .unwrap_or(0.0)
                 }));
+                row.extend([rep.krylov as f64, rep.halvings as f64]);
+                total_krylov += rep.krylov;
+                summary.krylov_iterations = total_krylov;
                 history.row(&row)?;
                 write_step(ctl.accepted, &x, &mut pvd, target)?;
                 let fmt_j = |j: f64| {
@@ -474,7 +494,13 @@ fn solve_model(
                     fmt_j(rep.stats.min_J_medium)
                 );
                 if opts.verbose {
-                    say(&pb, &line);
+                    // the Newton table: largest relative field residual per iteration
+                    let table: Vec<String> = rep
+                        .history
+                        .iter()
+                        .map(|h| format!("{:.0e}", h.iter().fold(0.0f64, |a, &b| a.max(b))))
+                        .collect();
+                    say(&pb, &format!("{line}  [{}]", table.join(" ")));
                 }
                 pb.set_position((target * 1000.0) as u64);
                 pb.set_message(format!("step {} its {}", ctl.accepted, total_iterations));
@@ -482,9 +508,10 @@ fn solve_model(
             Err(f) => {
                 last_failure = f.to_string();
                 if opts.verbose {
-                    pb.println(format!(
-                        "  step to λ {target:.4} failed: {last_failure}; cutting Δλ"
-                    ));
+                    say(
+                        &pb,
+                        &format!("  step to λ {target:.4} failed: {last_failure}; cutting Δλ"),
+                    );
                 }
                 if let Err(dl) = ctl.reject() {
                     pb.finish_and_clear();

@@ -137,7 +137,8 @@ ux = 1.0
 "#;
     let (_, model) = model_from(text, "bar3d.geo", "newton-quadratic");
     let mut asm = Assembler::new(&model);
-    let mut solver = LinearSolver::new(LinearKind::Ldlt, &asm.pattern).unwrap();
+    let mut solver =
+        LinearSolver::new(LinearKind::Ldlt, &asm.pattern, &model.equation_structure()).unwrap();
     let mut newton = Newton::new(&model, 1e-12, 20);
     let mut x = model.initial_state();
     let rep = newton

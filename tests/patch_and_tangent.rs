@@ -64,7 +64,8 @@ fn patch(model: &mut Model) {
         }
     }
     let mut asm = Assembler::new(model);
-    let mut solver = LinearSolver::new(LinearKind::Lu, &asm.pattern).unwrap();
+    let mut solver =
+        LinearSolver::new(LinearKind::Lu, &asm.pattern, &model.equation_structure()).unwrap();
     let mut newton = Newton::new(model, 1e-12, 30);
     let mut x = model.initial_state();
     for lambda in [0.25, 0.5, 0.75, 1.0] {
@@ -128,14 +129,18 @@ fn patch_test_hex8_mesh() {
 
 /// K v against (r(x + h v) − r(x − h v)) / 2h on the free equations, coupled and unsymmetric.
 fn tangent_check(model: &Model) {
+    if model.physics.regularization {
+        assert!(model.dofs.count(tmc::dofs::Field::P) > 0);
+    }
     let mut asm = Assembler::new(model);
     let n = model.dofs.n_dofs;
     let mut x = model.initial_state();
     let span = model.mesh.extent();
     for (i, v) in x.iter_mut().enumerate() {
         *v += match model.dofs.field[i] {
-            tmc::dofs::Field::U => 0.01 * span * noise(i),
-            _ => 20.0 * noise(i),
+            tmc::dofs::Field::Theta => 20.0 * noise(i),
+            // u and p are lengths
+            _ => 0.01 * span * noise(i),
         };
     }
     asm.assemble(model, &x, 1.0, true, None).unwrap();
@@ -215,5 +220,69 @@ fn assembled_tangent_tet4() {
 fn assembled_tangent_hex8() {
     let text = case_text(3, 1e-3).replace("\"boundary\"", "\"x0\"");
     let (_, model) = model_from(&text, "bar3d.geo", "tangent-hex");
+    tangent_check(&model);
+}
+
+/// A medium region with its regularization next to a solid, two-way coupled, for the
+/// assembled check: `groups` are (solid, medium, clamped boundary).
+fn medium_case(dim: usize) -> String {
+    let comps = if dim == 2 {
+        "ux = 0.0\nuy = 0.0"
+    } else {
+        "ux = 0.0\nuy = 0.0\nuz = 0.0"
+    };
+    let solid = if dim == 2 { "solid" } else { "block" };
+    let extra = if dim == 2 {
+        ""
+    } else {
+        "[[region]]\ngroup = \"plate\"\nkind = \"solid\"\nK = 20.0\nmu = 10.0\nk = 3.0\nalpha = 1e-3\n"
+    };
+    format!(
+        r#"
+[[region]]
+group = "{solid}"
+kind = "solid"
+K = 20.0
+mu = 10.0
+k = 3.0
+alpha = 1e-3
+{extra}
+[[region]]
+group = "medium"
+kind = "medium"
+gamma = 1e-2
+k = 0.5
+alpha = 2e-3
+beta2 = 0.1
+[[bc]]
+group = "bottom"
+{comps}
+theta = 0.0
+"#
+    )
+}
+
+#[test]
+fn assembled_tangent_with_regularized_medium_q1_t1() {
+    for tri in [0.0, 1.0] {
+        let (_, model) = model_with(
+            &medium_case(2),
+            "block.geo",
+            &[("n", 4.0), ("m", 2.0), ("l", 2.0), ("tri", tri)],
+            "tangent-medium-2d",
+        );
+        assert!(model.physics.regularization);
+        tangent_check(&model);
+    }
+}
+
+#[test]
+fn assembled_tangent_with_regularized_medium_h1() {
+    let (_, model) = model_with(
+        &medium_case(3),
+        "block-plate-3d.geo",
+        &[("n", 2.0), ("nb", 1.0), ("nm", 1.0), ("nq", 1.0)],
+        "tangent-medium-3d",
+    );
     tangent_check(&model);
 }

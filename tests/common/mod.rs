@@ -46,8 +46,45 @@ pub fn history(dir: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
     (cols, rows)
 }
 
+/// Solve a case given as text (its `mesh` key is prepended: `geo/GEO`, meshed with `params`)
+/// in a scratch folder.
+pub fn solve_text(tag: &str, geo: &str, params: &str, case_text: &str) -> (Summary, PathBuf) {
+    let dir = scratch(tag);
+    let text = format!(
+        "mesh = \"{}\"\n[mesh_options]\nparams = {{ {params} }}\n{case_text}",
+        root().join("geo").join(geo).display()
+    );
+    let path = dir.join("case.toml");
+    std::fs::write(&path, text).unwrap();
+    let out = dir.join("out");
+    let s = run(
+        &path,
+        &SolveOptions {
+            out_dir: Some(out.clone()),
+            quiet: true,
+            verbose: false,
+        },
+    )
+    .unwrap_or_else(|e| panic!("{tag}: {e}"));
+    (s, out)
+}
+
+/// The body of a case file without its `mesh` key and header comments.
+pub fn case_body(name: &str) -> String {
+    let text = std::fs::read_to_string(root().join("cases").join(format!("{name}.toml"))).unwrap();
+    text.lines()
+        .filter(|l| !l.starts_with("mesh =") && !l.starts_with('#'))
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
 /// Build a model from case text (paths relative to cases/) and a .geo meshed into scratch.
 pub fn model_from(case_text: &str, geo: &str, tag: &str) -> (Case, Model) {
+    model_with(case_text, geo, &[], tag)
+}
+
+/// As [`model_from`], with `.geo` parameters.
+pub fn model_with(case_text: &str, geo: &str, params: &[(&str, f64)], tag: &str) -> (Case, Model) {
     let dir = scratch(tag);
     let msh = dir.join("mesh.msh");
     mesh_geo(
@@ -55,6 +92,7 @@ pub fn model_from(case_text: &str, geo: &str, tag: &str) -> (Case, Model) {
         &msh,
         &MeshOptions {
             order: 1,
+            set_numbers: params.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
             ..Default::default()
         },
     )
