@@ -21,3 +21,7 @@ Physical Surface("solid") = {2};
 Physical Curve("bottom") = {1};
 Physical Curve("top") = {6};
 Physical Curve("interface") = {3};
+// the solid's sides and its lower-left corner (for tests that stretch the solid)
+Physical Curve("solid_left") = {7};
+Physical Curve("solid_right") = {5};
+Physical Point("corner") = {4};

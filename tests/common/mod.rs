@@ -76,6 +76,7 @@ pub fn case_body(name: &str) -> String {
         .filter(|l| !l.starts_with("mesh =") && !l.starts_with('#'))
         .collect::<Vec<_>>()
         .join("\n")
+        + "\n"
 }
 
 /// Build a model from case text (paths relative to cases/) and a .geo meshed into scratch.
