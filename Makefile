@@ -12,9 +12,8 @@ build: deps
 
 # Mesh and solve the default scene, then say where the results are.
 demo: build
-	$(TMC) mesh geo/plate-hole.geo
-	$(TMC) solve cases/plate-hole.toml --verbose
-	@echo "open results/plate-hole/plate-hole.pvd in ParaView"
+	$(TMC) solve cases/block.toml --verbose
+	@echo "results in results/block/: open block.pvd in ParaView"
 
 # Every test: unit, analytical, patch, tangent, end-to-end, bad input.
 test: deps
