@@ -2,7 +2,7 @@
 CARGO ?= cargo
 TMC := target/release/tmc
 
-.PHONY: deps build demo test clean
+.PHONY: deps build demo test bench clean
 
 deps:
 	@scripts/install-deps.sh
@@ -18,6 +18,10 @@ demo: build
 # Every test: unit, analytical, patch, tangent, end-to-end, bad input.
 test: deps
 	$(CARGO) test --release
+
+# Benchmarks print tables (tests never assert wall time).
+bench: deps
+	$(CARGO) bench --bench strategies
 
 clean:
 	$(CARGO) clean

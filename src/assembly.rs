@@ -7,7 +7,7 @@
 
 use crate::dofs::NONE;
 use crate::element::{Hex8, Quad4, RefElement, Tet4, Tri3};
-use crate::kernel::{KernelError, bulk};
+use crate::kernel::{Active, KernelError, bulk};
 use crate::mesh::CellKind;
 use crate::model::Model;
 use rayon::prelude::*;
@@ -231,6 +231,20 @@ impl Assembler {
         tangent: bool,
         dx_prescribed: Option<&[f64]>,
     ) -> Result<AssemblyStats, AssemblyError> {
+        self.assemble_part(model, x, lambda, tangent, dx_prescribed, Active::ALL)
+    }
+
+    /// As [`Assembler::assemble`], filling only the equations `act` names (the others' rows
+    /// and residuals are left at zero).
+    pub fn assemble_part(
+        &mut self,
+        model: &Model,
+        x: &[f64],
+        lambda: f64,
+        tangent: bool,
+        dx_prescribed: Option<&[f64]>,
+        act: Active,
+    ) -> Result<AssemblyStats, AssemblyError> {
         self.r_full.fill(0.0);
         if tangent {
             self.values.fill(0.0);
@@ -244,10 +258,18 @@ impl Assembler {
         for (bi, info) in model.blocks.iter().enumerate() {
             let kind = model.mesh.cells[info.block].kind;
             let res = match kind {
-                CellKind::Tri3 => self.block::<3, 2, Tri3>(model, bi, x, tangent, dx_prescribed),
-                CellKind::Quad4 => self.block::<4, 2, Quad4>(model, bi, x, tangent, dx_prescribed),
-                CellKind::Tet4 => self.block::<4, 3, Tet4>(model, bi, x, tangent, dx_prescribed),
-                CellKind::Hex8 => self.block::<8, 3, Hex8>(model, bi, x, tangent, dx_prescribed),
+                CellKind::Tri3 => {
+                    self.block::<3, 2, Tri3>(model, bi, x, tangent, dx_prescribed, act)
+                }
+                CellKind::Quad4 => {
+                    self.block::<4, 2, Quad4>(model, bi, x, tangent, dx_prescribed, act)
+                }
+                CellKind::Tet4 => {
+                    self.block::<4, 3, Tet4>(model, bi, x, tangent, dx_prescribed, act)
+                }
+                CellKind::Hex8 => {
+                    self.block::<8, 3, Hex8>(model, bi, x, tangent, dx_prescribed, act)
+                }
                 CellKind::Point1 | CellKind::Line2 => unreachable!("facets are not cells"),
             };
             let region = || model.regions[info.region].0.clone();
@@ -289,6 +311,7 @@ impl Assembler {
         x: &[f64],
         tangent: bool,
         dx_prescribed: Option<&[f64]>,
+        act: Active,
     ) -> Result<(f64, f64), (KernelError, usize)> {
         let info = &model.blocks[bi];
         let blk = &model.mesh.cells[info.block];
@@ -337,6 +360,7 @@ impl Assembler {
                             &info.mat,
                             &lay,
                             &s,
+                            act,
                             &mut r,
                             if tangent { Some(&mut k) } else { None },
                         )

@@ -129,8 +129,19 @@ impl Default for Steps {
 #[derive(Clone, Debug, Deserialize, Default)]
 #[serde(deny_unknown_fields, default)]
 pub struct Solver {
-    /// "auto" (symmetric LDLᵀ when the tangent is symmetric, else LU), "lu", "ldlt".
+    /// "auto" (LDLᵀ when the tangent is symmetric, else block-preconditioned GMRES), "gmres",
+    /// "lu", "ldlt".
     pub linear: LinearChoice,
+    /// "auto" (one-way coupled scenes solve mechanics, then heat, per step) or "monolithic".
+    pub coupling: CouplingChoice,
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, Default, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum CouplingChoice {
+    #[default]
+    Auto,
+    Monolithic,
 }
 
 #[derive(Clone, Copy, Debug, Deserialize, Default, PartialEq, Eq)]

@@ -137,6 +137,21 @@ fn point<const N: usize, const D: usize, E: RefElement<N, D>>(
     })
 }
 
+/// Which equations a kernel call fills: a one-way coupled solve needs only the mechanical rows
+/// while it iterates on mechanics, and only the thermal rows (with their θ columns) after.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Active {
+    pub mechanics: bool,
+    pub heat: bool,
+}
+
+impl Active {
+    pub const ALL: Active = Active {
+        mechanics: true,
+        heat: true,
+    };
+}
+
 /// Residual and (optionally) tangent of one cell of the bulk (solid or medium):
 ///
 /// r_u = ∫ P : ∇δu dV,  r_θ = ∫ −Q · ∇δθ dV  (eq. 5, 6, without external loads),
@@ -147,6 +162,7 @@ pub fn bulk<const N: usize, const D: usize, E: RefElement<N, D>>(
     mat: &CellMaterial,
     lay: &Layout,
     s: &CellState<N>,
+    act: Active,
     r: &mut [f64],
     mut k: Option<&mut [f64]>,
 ) -> Result<CellSummary, KernelError> {
@@ -169,7 +185,7 @@ pub fn bulk<const N: usize, const D: usize, E: RefElement<N, D>>(
             grad_theta: gt,
             theta,
         } = point::<N, D, E>(xi, *w, lay, s, theta_ref)?;
-        if lay.has_u {
+        if lay.has_u && act.mechanics {
             let m = mat
                 .law
                 .stress(&F, theta)
@@ -226,9 +242,9 @@ pub fn bulk<const N: usize, const D: usize, E: RefElement<N, D>>(
                     regularization::<N, D>(&reg, lay, s, &F, &g, &Nv, dV, r, k.as_deref_mut())?;
             }
         } else {
-            summary.min_J = summary.min_J.min(1.0);
+            summary.min_J = summary.min_J.min(F.determinant());
         }
-        if lay.has_theta {
+        if lay.has_theta && act.heat {
             let h =
                 fourier(&F, &gt, &mat.cond).ok_or(KernelError::Inverted { J: F.determinant() })?;
             for I in 0..N {
@@ -247,7 +263,7 @@ pub fn bulk<const N: usize, const D: usize, E: RefElement<N, D>>(
                         }
                         k[row + lay.theta(K)] += v * dV;
                     }
-                    if lay.has_u {
+                    if lay.has_u && act.mechanics {
                         for K in 0..N {
                             for kk in 0..D {
                                 let mut v = 0.0;
@@ -478,7 +494,7 @@ mod tests {
         let nd = lay.ndof();
         let mut r = vec![0.0; nd];
         let mut k = vec![0.0; nd * nd];
-        bulk::<N, D, E>(mat, &lay, &s, &mut r, Some(&mut k)).unwrap();
+        bulk::<N, D, E>(mat, &lay, &s, Active::ALL, &mut r, Some(&mut k)).unwrap();
         let h = 1e-7;
         let (mut rp, mut rm) = (vec![0.0; nd], vec![0.0; nd]);
         let scale = k.iter().fold(0.0f64, |a, v| a.max(v.abs()));
@@ -497,8 +513,8 @@ mod tests {
                 }
                 t
             };
-            bulk::<N, D, E>(mat, &lay, &perturb(&s, h), &mut rp, None).unwrap();
-            bulk::<N, D, E>(mat, &lay, &perturb(&s, -h), &mut rm, None).unwrap();
+            bulk::<N, D, E>(mat, &lay, &perturb(&s, h), Active::ALL, &mut rp, None).unwrap();
+            bulk::<N, D, E>(mat, &lay, &perturb(&s, -h), Active::ALL, &mut rm, None).unwrap();
             for a in 0..nd {
                 let fd = (rp[a] - rm[a]) / (2.0 * h);
                 assert!(

@@ -102,6 +102,26 @@ impl LinearSolver {
         })
     }
 
+    /// LDLᵀ of the symmetric sub-block of equations `eqs` (increasing): `factor` takes the
+    /// whole system's values, `solve` vectors of `eqs.len()`.
+    pub fn block_ldlt(
+        p: &Pattern,
+        s: &Structure,
+        eqs: &[usize],
+    ) -> Result<LinearSolver, LinearError> {
+        let nodes: Vec<u32> = eqs.iter().map(|&e| s.node[e]).collect();
+        let sub = SubMatrix::new(p, eqs, eqs);
+        let pattern = sub.pattern.clone();
+        Ok(LinearSolver {
+            kind: LinearKind::Ldlt,
+            backend: Backend::Ldlt(Box::new(SymFactor::new(sub, &nodes)?)),
+            pattern,
+            par: Par::rayon(0),
+            krylov_last: 0,
+            krylov_count: 0,
+        })
+    }
+
     /// Numeric factorisation of the matrix with this pattern and `values`.
     pub fn factor(&mut self, values: &[f64]) -> Result<(), LinearError> {
         match &mut self.backend {

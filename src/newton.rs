@@ -76,6 +76,52 @@ impl std::fmt::Display for StepFailure {
     }
 }
 
+impl StepReport {
+    /// The report of this part of a step followed by `next` (the next part, same step).
+    pub fn then(self, next: StepReport) -> StepReport {
+        let last = |r: &StepReport| r.history.last().copied().unwrap_or([0.0; 3]);
+        let (a, b) = (last(&self), last(&next));
+        let mut history = self.history;
+        history.extend(next.history);
+        // the step's final residuals: each field as its own part left it
+        history.push(std::array::from_fn(|f| a[f].max(b[f])));
+        StepReport {
+            iterations: self.iterations + next.iterations,
+            halvings: self.halvings + next.halvings,
+            history,
+            // a part assembles only its own equations: J from either, energy from mechanics
+            stats: AssemblyStats {
+                min_J_solid: self.stats.min_J_solid.min(next.stats.min_J_solid),
+                min_J_medium: self.stats.min_J_medium.min(next.stats.min_J_medium),
+                energy: self.stats.energy + next.stats.energy,
+            },
+            t_assembly: self.t_assembly + next.t_assembly,
+            t_solve: self.t_solve + next.t_solve,
+            krylov: self.krylov + next.krylov,
+        }
+    }
+}
+
+/// Which equations a Newton solve iterates on: all of them (monolithic), or one side of a
+/// one-way coupled system (mechanics u with p, then heat on the deformed state).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Part {
+    All,
+    Mechanics,
+    /// Conduction on the converged deformed state: linear in θ, so one solve.
+    Heat,
+}
+
+impl Part {
+    pub fn has(self, f: Field) -> bool {
+        match self {
+            Part::All => true,
+            Part::Mechanics => f != Field::Theta,
+            Part::Heat => f == Field::Theta,
+        }
+    }
+}
+
 /// Newton state carried across steps: references for the per-field residual scale.
 pub struct Newton {
     pub tol: f64,
@@ -99,6 +145,13 @@ impl Newton {
             run_ref: [0.0; 3],
             eq_field,
         }
+    }
+
+    /// The free equations of `part`, increasing.
+    pub fn equations(&self, part: Part) -> Vec<usize> {
+        (0..self.eq_field.len())
+            .filter(|&e| part.has(self.eq_field[e]))
+            .collect()
     }
 
     fn norms(&self, v: &[f64]) -> FieldNorms {
@@ -130,8 +183,10 @@ impl Newton {
         n.map(f64::sqrt)
     }
 
-    /// Solve the step λ_old → λ_new, updating `x` in place. On failure `x` is left modified:
-    /// the caller restores its copy of the last converged state.
+    /// Solve the step λ_old → λ_new for the equations of `part`, updating `x` in place (the
+    /// other fields stay as they are). `solver` must be built for exactly those equations
+    /// ([`Newton::equations`]). On failure `x` is left modified: the caller restores its copy
+    /// of the last converged state.
     pub fn step(
         &mut self,
         model: &Model,
@@ -139,9 +194,13 @@ impl Newton {
         solver: &mut LinearSolver,
         x: &mut [f64],
         lambda: f64,
+        part: Part,
     ) -> Result<StepReport, StepFailure> {
         let n_eq = model.cons.n_eq;
         let eq = &model.cons.eq;
+        let sub = (part != Part::All).then(|| self.equations(part));
+        let mut b_sub = vec![0.0; sub.as_ref().map_or(0, Vec::len)];
+        let active: [bool; 3] = Field::ALL.map(|f| part.has(f));
         solver.take_krylov();
         let mut t_asm = 0.0;
         let mut t_sol = 0.0;
@@ -165,12 +224,22 @@ impl Newton {
             let (stats, pending) = loop {
                 let mut pending = false;
                 for (d, p) in model.cons.prescribed.iter().enumerate() {
-                    if let Some(p) = p {
+                    if let Some(p) = p.filter(|_| part.has(model.dofs.field[d])) {
                         dx_p[d] = p.at(lambda) - x[d];
                         pending |= dx_p[d] != 0.0;
                     }
                 }
-                match asm.assemble(model, x, lambda, true, pending.then_some(&dx_p[..])) {
+                match asm.assemble_part(
+                    model,
+                    x,
+                    lambda,
+                    true,
+                    pending.then_some(&dx_p[..]),
+                    crate::kernel::Active {
+                        mechanics: part.has(Field::U),
+                        heat: part.has(Field::Theta),
+                    },
+                ) {
                     Ok(stats) => break (stats, pending),
                     Err(e) if first || halvings == MAX_HALVINGS || !e.is_inadmissible() => {
                         return Err(StepFailure::Assembly(e));
@@ -188,17 +257,23 @@ impl Newton {
             t_asm += t0.elapsed().as_secs_f64();
             for (d, &e) in eq.iter().enumerate() {
                 if e != NONE {
-                    rhs[e as usize] = -asm.r_full[d];
+                    rhs[e as usize] = if part.has(model.dofs.field[d]) {
+                        -asm.r_full[d]
+                    } else {
+                        0.0
+                    };
                 }
             }
             if pending {
-                for (r, l) in rhs.iter_mut().zip(&asm.lift) {
-                    *r -= l;
+                for ((r, l), f) in rhs.iter_mut().zip(&asm.lift).zip(&self.eq_field) {
+                    if part.has(*f) {
+                        *r -= l;
+                    }
                 }
             }
             let res = self.norms(&rhs);
             let reac = Self::reaction_norms(model, &asm.r_full);
-            for f in 0..3 {
+            for f in (0..3).filter(|&f| active[f]) {
                 if first {
                     step_ref[f] = res[f];
                 }
@@ -207,7 +282,11 @@ impl Newton {
             }
             let rel: FieldNorms = std::array::from_fn(|f| {
                 let r = same_units(f, |g| step_ref[g].max(self.run_ref[g]));
-                if r > 0.0 { res[f] / r } else { 0.0 }
+                if r > 0.0 && active[f] {
+                    res[f] / r
+                } else {
+                    0.0
+                }
             });
             history.push(rel);
             let residual_ok = rel.iter().all(|&r| r <= self.tol);
@@ -221,7 +300,17 @@ impl Newton {
             if !residual_ok || first {
                 solver.factor(&asm.values).map_err(StepFailure::Linear)?;
             }
-            solver.solve(&mut rhs).map_err(StepFailure::Linear)?;
+            if let Some(sub) = &sub {
+                for (b, &e) in b_sub.iter_mut().zip(sub) {
+                    *b = rhs[e];
+                }
+                solver.solve(&mut b_sub).map_err(StepFailure::Linear)?;
+                for (b, &e) in b_sub.iter().zip(sub) {
+                    rhs[e] = *b;
+                }
+            } else {
+                solver.solve(&mut rhs).map_err(StepFailure::Linear)?;
+            }
             t_sol += t1.elapsed().as_secs_f64();
             if !rhs.iter().all(|v| v.is_finite()) {
                 return Err(StepFailure::Assembly(AssemblyError::NotFinite));
@@ -250,11 +339,48 @@ impl Newton {
             for f in 0..3 {
                 du_ref[f] = du_ref[f].max(last_update[f]);
             }
+            if part == Part::Heat {
+                // conduction on a fixed deformed state is linear in θ (k depends on J only):
+                // the direct solve is the solution; a residual-only assembly reports it
+                let t2 = std::time::Instant::now();
+                let heat = crate::kernel::Active {
+                    mechanics: false,
+                    heat: true,
+                };
+                asm.assemble_part(model, x, lambda, false, None, heat)
+                    .map_err(StepFailure::Assembly)?;
+                t_asm += t2.elapsed().as_secs_f64();
+                let mut r = vec![0.0; n_eq];
+                for (d, &e) in eq.iter().enumerate() {
+                    if e != NONE && part.has(model.dofs.field[d]) {
+                        r[e as usize] = asm.r_full[d];
+                    }
+                }
+                let res = self.norms(&r);
+                let t = idx(Field::Theta);
+                let rel = res[t] / step_ref[t].max(self.run_ref[t]).max(f64::MIN_POSITIVE);
+                if !(rel <= self.tol) {
+                    return Err(StepFailure::NotConverged {
+                        iterations: 1,
+                        last: [0.0, rel, 0.0],
+                    });
+                }
+                history.push([0.0, rel, 0.0]);
+                return Ok(StepReport {
+                    iterations: 1,
+                    halvings: cuts,
+                    history,
+                    stats,
+                    t_assembly: t_asm,
+                    t_solve: t_sol,
+                    krylov: solver.take_krylov(),
+                });
+            }
             if residual_ok && !first {
                 // an update is small against the step's largest one, or negligible against the
                 // field itself (a field the step hardly changes has round-off updates only)
                 let size = self.norms_of_state(model, x);
-                let update_ok = (0..3).all(|f| {
+                let update_ok = (0..3).filter(|&f| active[f]).all(|f| {
                     last_update[f] <= self.tol.sqrt() * same_units(f, |g| du_ref[g])
                         || last_update[f] <= 1e-10 * same_units(f, |g| size[g])
                 });

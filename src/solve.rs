@@ -1,13 +1,13 @@
 //! `tmc solve`: case → mesh → model → load stepping with Newton → VTU series, history, summary.
 
 use crate::assembly::Assembler;
-use crate::case::{Case, CaseError, LinearChoice, RegionKind};
+use crate::case::{Case, CaseError, CouplingChoice, LinearChoice, RegionKind};
 use crate::dofs::{Field, NONE};
 use crate::linsolve::{LinearError, LinearKind, LinearSolver};
 use crate::mesh::gmsh::{GmshError, MeshOptions, mesh_geo};
 use crate::mesh::msh::{MshError, read_msh};
 use crate::model::{Model, Physics, build};
-use crate::newton::Newton;
+use crate::newton::{Newton, Part, StepFailure, StepReport};
 use crate::output::{self, History, OutputError, StepFields};
 use crate::probe::{self, Probe};
 use crate::stepping::Controller;
@@ -63,6 +63,9 @@ pub struct Summary {
     pub dofs: BTreeMap<String, usize>,
     pub physics: Physics,
     pub linear_solver: LinearKind,
+    /// How the coupled fields are solved: "single_field", "one_way" (mechanics, then heat on
+    /// the deformed state, each with a symmetric factorisation) or "monolithic".
+    pub strategy: Strategy,
     pub converged: bool,
     pub message: String,
     pub lambda: f64,
@@ -74,6 +77,8 @@ pub struct Summary {
     pub solver_seconds: f64,
     /// GMRES iterations over all accepted steps (0 with a direct solver).
     pub krylov_iterations: usize,
+    /// Peak resident memory of the process so far, MB (Linux; null elsewhere).
+    pub peak_memory_mb: Option<f64>,
     pub probes: BTreeMap<String, f64>,
     pub reactions: BTreeMap<String, BTreeMap<String, f64>>,
     /// Smallest J at any quadrature point of any accepted step (solids and medium).
@@ -170,6 +175,70 @@ pub fn run(case_path: &Path, opts: &SolveOptions) -> Result<Summary, SolveError>
     solve_model(&case, model, &probes, &out_dir, opts, start)
 }
 
+/// The process's peak resident set (VmHWM) in MB, where /proc tells it.
+fn peak_memory_mb() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb / 1024.0)
+}
+
+/// How the fields of a scene are solved.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Strategy {
+    /// One field only (mechanics or conduction): one symmetric system.
+    SingleField,
+    /// Mechanics drives conduction, not back: per step, Newton on (u, p), then the (linear)
+    /// conduction on the deformed state.
+    OneWay,
+    /// Newton on the whole coupled system.
+    Monolithic,
+}
+
+/// The strategy the physics allows, unless the case forces the monolithic one (or a
+/// whole-system linear solver).
+pub fn choose_strategy(solver: &crate::case::Solver, physics: &Physics) -> Strategy {
+    if !(physics.mechanics && physics.conduction) {
+        Strategy::SingleField
+    } else if physics.heat_to_mechanics
+        || solver.coupling == CouplingChoice::Monolithic
+        || matches!(solver.linear, LinearChoice::Lu | LinearChoice::Gmres)
+    {
+        Strategy::Monolithic
+    } else {
+        Strategy::OneWay
+    }
+}
+
+/// A line naming the active physics and the strategy.
+pub fn describe(physics: &Physics, strategy: Strategy) -> String {
+    let mut on = Vec::new();
+    if physics.mechanics {
+        on.push("mechanics");
+    }
+    if physics.conduction {
+        on.push("conduction");
+    }
+    if physics.medium {
+        on.push("third medium");
+    }
+    if physics.regularization {
+        on.push("regularization p");
+    }
+    let coupling = match (physics.mechanics_to_heat, physics.heat_to_mechanics) {
+        (true, true) => "two-way coupled",
+        (true, false) => "one-way coupled (deformation → heat)",
+        _ => "uncoupled",
+    };
+    let how = match strategy {
+        Strategy::SingleField => "one symmetric system",
+        Strategy::OneWay => "mechanics, then heat per step, symmetric factorisations",
+        Strategy::Monolithic => "monolithic Newton",
+    };
+    format!("physics: {}; {coupling}; {how}", on.join(" + "))
+}
+
 /// Choose the linear solver: LDLᵀ where the tangent is symmetric, LU where it is not.
 pub fn choose_linear(choice: LinearChoice, physics: &Physics) -> LinearKind {
     let symmetric = !(physics.mechanics && physics.conduction);
@@ -203,10 +272,36 @@ fn solve_model(
             .unwrap_err()
             .into());
     }
+    let strategy = choose_strategy(&case.file.solver, &model.physics);
     let mut asm = Assembler::new(&model);
-    let mut solver = LinearSolver::new(kind, &asm.pattern, &model.equation_structure())?;
     let steps = &case.file.steps;
     let mut newton = Newton::new(&model, steps.tol, steps.max_iter);
+    let structure = model.equation_structure();
+    // one solver per part: the whole system, or mechanics and heat of a one-way scene
+    let mut solvers: Vec<(Part, LinearSolver)> = match strategy {
+        Strategy::OneWay => vec![
+            (
+                Part::Mechanics,
+                LinearSolver::block_ldlt(
+                    &asm.pattern,
+                    &structure,
+                    &newton.equations(Part::Mechanics),
+                )?,
+            ),
+            (
+                Part::Heat,
+                LinearSolver::block_ldlt(&asm.pattern, &structure, &newton.equations(Part::Heat))?,
+            ),
+        ],
+        _ => vec![(
+            Part::All,
+            LinearSolver::new(kind, &asm.pattern, &structure)?,
+        )],
+    };
+    let kind = solvers[0].1.kind;
+    if !opts.quiet {
+        eprintln!("{}", describe(&model.physics, strategy));
+    }
     let mut ctl = Controller::new(steps);
     if !model.physics.mechanics {
         // conduction on the undeformed body is linear: one step, one solve
@@ -381,6 +476,7 @@ fn solve_model(
         },
         physics: model.physics,
         linear_solver: kind,
+        strategy,
         converged: false,
         message: String::new(),
         lambda: 0.0,
@@ -391,6 +487,7 @@ fn solve_model(
         assembly_seconds: 0.0,
         solver_seconds: 0.0,
         krylov_iterations: 0,
+        peak_memory_mb: None,
         probes: BTreeMap::new(),
         reactions: BTreeMap::new(),
         min_J: 1.0,
@@ -418,6 +515,7 @@ fn solve_model(
         s.wall_seconds = start.elapsed().as_secs_f64();
         s.assembly_seconds = ta;
         s.solver_seconds = ts;
+        s.peak_memory_mb = peak_memory_mb();
         s.probes = probes
             .iter()
             .map(|p| (p.name.clone(), p.eval(&model.mesh, &model.dofs, x)))
@@ -436,7 +534,17 @@ fn solve_model(
         let target = ctl.target();
         let dl = target - ctl.lambda;
         let mut trial = x.clone();
-        match newton.step(&model, &mut asm, &mut solver, &mut trial, target) {
+        let mut result: Result<Option<StepReport>, StepFailure> = Ok(None);
+        for (part, solver) in solvers.iter_mut() {
+            result = result.and_then(|acc| {
+                let rep = newton.step(&model, &mut asm, solver, &mut trial, target, *part)?;
+                Ok(Some(match acc {
+                    None => rep,
+                    Some(a) => a.then(rep),
+                }))
+            });
+        }
+        match result.map(|r| r.expect("at least one part")) {
             Ok(rep) => {
                 ctl.accept(target, rep.iterations);
                 x = trial;

@@ -9,7 +9,7 @@ use nalgebra::Matrix3;
 use tmc::assembly::Assembler;
 use tmc::linsolve::{LinearKind, LinearSolver};
 use tmc::material::ThermoElastic;
-use tmc::newton::Newton;
+use tmc::newton::{Newton, Part};
 
 const LAW: ThermoElastic = ThermoElastic {
     K: 20.0,
@@ -142,7 +142,7 @@ ux = 1.0
     let mut newton = Newton::new(&model, 1e-12, 20);
     let mut x = model.initial_state();
     let rep = newton
-        .step(&model, &mut asm, &mut solver, &mut x, 1.0)
+        .step(&model, &mut asm, &mut solver, &mut x, 1.0, Part::All)
         .unwrap();
     assert!(rep.iterations <= 6, "took {} iterations", rep.iterations);
     let r: Vec<f64> = rep.history.iter().map(|h| h[0]).collect();

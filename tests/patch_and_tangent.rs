@@ -10,7 +10,7 @@ use tmc::assembly::Assembler;
 use tmc::dofs::NONE;
 use tmc::linsolve::{LinearKind, LinearSolver};
 use tmc::model::Model;
-use tmc::newton::Newton;
+use tmc::newton::{Newton, Part};
 
 fn case_text(dim: usize, alpha: f64) -> String {
     let comps = if dim == 2 {
@@ -70,7 +70,7 @@ fn patch(model: &mut Model) {
     let mut x = model.initial_state();
     for lambda in [0.25, 0.5, 0.75, 1.0] {
         newton
-            .step(model, &mut asm, &mut solver, &mut x, lambda)
+            .step(model, &mut asm, &mut solver, &mut x, lambda, Part::All)
             .unwrap();
     }
     let mut interior = 0;

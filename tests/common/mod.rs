@@ -108,6 +108,15 @@ pub fn model_with(case_text: &str, geo: &str, params: &[(&str, f64)], tag: &str)
 
 /// A cell-data array of a written .vtu, flattened.
 pub fn cell_array(vtu: &Path, name: &str) -> Vec<f64> {
+    vtu_array(vtu, name, false)
+}
+
+/// A point-data array of a written .vtu, flattened.
+pub fn point_array(vtu: &Path, name: &str) -> Vec<f64> {
+    vtu_array(vtu, name, true)
+}
+
+fn vtu_array(vtu: &Path, name: &str, point: bool) -> Vec<f64> {
     use vtkio::model::{Attribute, DataSet, Piece};
     let vtk = vtkio::Vtk::import(vtu).unwrap_or_else(|e| panic!("{}: {e}", vtu.display()));
     let DataSet::UnstructuredGrid { pieces, .. } = vtk.data else {
@@ -116,12 +125,12 @@ pub fn cell_array(vtu: &Path, name: &str) -> Vec<f64> {
     let Piece::Inline(p) = &pieces[0] else {
         panic!("not inline")
     };
-    for a in &p.data.cell {
+    for a in if point { &p.data.point } else { &p.data.cell } {
         if let Attribute::DataArray(d) = a
             && d.name == name
         {
             return d.data.clone().cast_into::<f64>().unwrap();
         }
     }
-    panic!("no cell array {name} in {}", vtu.display())
+    panic!("no array {name} in {}", vtu.display())
 }
