@@ -2,7 +2,7 @@
 CARGO ?= cargo
 TMC := target/release/tmc
 
-.PHONY: deps build demo test bench clean
+.PHONY: deps build demo test bench validate clean
 
 deps:
 	@scripts/install-deps.sh
@@ -22,6 +22,10 @@ test: deps
 # Benchmarks print tables (tests never assert wall time).
 bench: deps
 	$(CARGO) bench --bench strategies
+
+# tmc against FEniCSx on four scenes (T1, Q1, tet4, H1); writes validation/fenicsx/RESULTS.md.
+validate: build
+	/usr/bin/python3 validation/fenicsx/run.py $(CURDIR)/$(TMC) $(CURDIR)/target/validate
 
 clean:
 	$(CARGO) clean

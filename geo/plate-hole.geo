@@ -1,7 +1,7 @@
-// Plate 2 x 1 with a circular hole of radius r at its centre; mixed mesh: the left half is
-// recombined into Q1 quads, the right half stays T1. Left edge clamped, right edge pulled
-// and heated (the demo scene of the solid pipeline).
-DefineConstant[ r = 0.25, h = 0.08 ];
+// Plate 2 x 1 with a circular hole of radius r at its centre. cells = 2 (default): mixed mesh,
+// the left half recombined into Q1 quads, the right half T1; cells = 0: T1 only; cells = 1:
+// Q1 only (quads by subdivision). Left edge clamped, right edge pulled and heated.
+DefineConstant[ r = 0.25, h = 0.08, cells = 2 ];
 SetFactory("OpenCASCADE");
 Rectangle(1) = {0, 0, 0, 1, 1};
 Rectangle(2) = {1, 0, 0, 1, 1};
@@ -11,7 +11,13 @@ Mesh.CharacteristicLengthMax = h;
 e = 1e-6;
 left() = Surface In BoundingBox{-e, -e, -e, 1 + e, 1 + e, e};
 right() = Surface In BoundingBox{1 - e, -e, -e, 2 + e, 1 + e, e};
-Recombine Surface{left()};
+If (cells == 2)
+  Recombine Surface{left()};
+EndIf
+If (cells == 1)
+  Mesh.SubdivisionAlgorithm = 1;
+  Recombine Surface{:};
+EndIf
 Physical Surface("solid") = Surface{:};
 Physical Curve("left") = Curve In BoundingBox{-e, -e, -e, e, 1 + e, e};
 Physical Curve("right") = Curve In BoundingBox{2 - e, -e, -e, 2 + e, 1 + e, e};
