@@ -7,12 +7,17 @@
 //! Quadrature rules are the standard Gauss rules that basix (FEniCSx) also uses, so a
 //! validation run can integrate with the very same points and weights.
 
+mod quadratic;
+pub use quadratic::{Hex20, Hex27, Line3, Quad8, Quad9, Tet10, Tri6};
+
 /// A reference element with `N` nodes in `D` reference dimensions.
 pub trait RefElement<const N: usize, const D: usize>: Sync + Send + 'static {
     /// Shape function values N_I(ξ).
     fn shape(xi: &[f64; D]) -> [f64; N];
     /// Reference gradients ∂N_I/∂ξ_j.
     fn grad(xi: &[f64; D]) -> [[f64; D]; N];
+    /// Reference second derivatives ∂²N_I/∂ξ_j∂ξ_k.
+    fn hessian(xi: &[f64; D]) -> [[[f64; D]; D]; N];
     /// Quadrature points and weights on the reference element.
     fn quadrature() -> &'static [([f64; D], f64)];
     /// Reference coordinates of the nodes.
@@ -52,6 +57,9 @@ impl RefElement<2, 1> for Line2 {
     fn grad(_xi: &[f64; 1]) -> [[f64; 1]; 2] {
         [[-0.5], [0.5]]
     }
+    fn hessian(_xi: &[f64; 1]) -> [[[f64; 1]; 1]; 2] {
+        [[[0.0]]; 2]
+    }
     fn quadrature() -> &'static [([f64; 1], f64)] {
         &LINE_GAUSS2
     }
@@ -70,6 +78,9 @@ impl RefElement<3, 2> for Tri3 {
     }
     fn grad(_xi: &[f64; 2]) -> [[f64; 2]; 3] {
         [[-1.0, -1.0], [1.0, 0.0], [0.0, 1.0]]
+    }
+    fn hessian(_xi: &[f64; 2]) -> [[[f64; 2]; 2]; 3] {
+        [[[0.0; 2]; 2]; 3]
     }
     fn quadrature() -> &'static [([f64; 2], f64)] {
         &TRI_CENTROID
@@ -101,6 +112,9 @@ impl RefElement<4, 2> for Quad4 {
             ]
         })
     }
+    fn hessian(_xi: &[f64; 2]) -> [[[f64; 2]; 2]; 4] {
+        QUAD_NODES.map(|a| [[0.0, 0.25 * a[0] * a[1]], [0.25 * a[0] * a[1], 0.0]])
+    }
     fn quadrature() -> &'static [([f64; 2], f64)] {
         &QUAD_GAUSS2
     }
@@ -123,6 +137,9 @@ impl RefElement<4, 3> for Tet4 {
             [0.0, 1.0, 0.0],
             [0.0, 0.0, 1.0],
         ]
+    }
+    fn hessian(_xi: &[f64; 3]) -> [[[f64; 3]; 3]; 4] {
+        [[[0.0; 3]; 3]; 4]
     }
     fn quadrature() -> &'static [([f64; 3], f64)] {
         &TET_CENTROID
@@ -173,6 +190,20 @@ impl RefElement<8, 3> for Hex8 {
                 0.125 * a[1] * s * u,
                 0.125 * a[2] * s * t,
             ]
+        })
+    }
+    fn hessian(xi: &[f64; 3]) -> [[[f64; 3]; 3]; 8] {
+        HEX_NODES.map(|a| {
+            let f = [1.0 + a[0] * xi[0], 1.0 + a[1] * xi[1], 1.0 + a[2] * xi[2]];
+            let mut h = [[0.0; 3]; 3];
+            for i in 0..3 {
+                for j in 0..3 {
+                    if i != j {
+                        h[i][j] = 0.125 * a[i] * a[j] * f[3 - i - j];
+                    }
+                }
+            }
+            h
         })
     }
     fn quadrature() -> &'static [([f64; 3], f64)] {
@@ -312,6 +343,9 @@ impl RefElement<1, 0> for Point1 {
     fn grad(_xi: &[f64; 0]) -> [[f64; 0]; 1] {
         [[]]
     }
+    fn hessian(_xi: &[f64; 0]) -> [[[f64; 0]; 0]; 1] {
+        [[]]
+    }
     fn quadrature() -> &'static [([f64; 0], f64)] {
         &POINT_RULE
     }
@@ -363,7 +397,87 @@ mod tests {
                 let s: f64 = g.iter().map(|gi| gi[d]).sum();
                 assert!(s.abs() < 1e-14);
             }
+            // second derivatives against finite differences of the gradients
+            let hs = E::hessian(&xi);
+            for d in 0..D {
+                let h = 1e-6;
+                let (mut p, mut m) = (xi, xi);
+                p[d] += h;
+                m[d] -= h;
+                let (gp, gm) = (E::grad(&p), E::grad(&m));
+                for i in 0..N {
+                    for e in 0..D {
+                        let fd = (gp[i][e] - gm[i][e]) / (2.0 * h);
+                        assert!(
+                            (fd - hs[i][e][d]).abs() < 1e-7,
+                            "d2N{i}/dxi{e}dxi{d}: {fd} vs {}",
+                            hs[i][e][d]
+                        );
+                        assert_eq!(hs[i][e][d], hs[i][d][e], "symmetric");
+                    }
+                }
+            }
         }
+    }
+
+    /// Quadratic elements reproduce every complete quadratic polynomial exactly, with its
+    /// gradient and Hessian, and their rules integrate quadratics (and the volume) exactly.
+    fn check_quadratic<const N: usize, const D: usize, E: RefElement<N, D>>(volume: f64) {
+        check_element::<N, D, E>();
+        let nodes = E::nodes();
+        // f = 1 + Σ c_d ξ_d + Σ_{d≤e} q_de ξ_d ξ_e
+        let c = [0.7, -1.3, 0.4];
+        let q = [[2.0, -0.6, 0.9], [0.0, 1.1, -1.7], [0.0, 0.0, 0.5]];
+        let f = |x: &[f64; D]| {
+            let mut v = 1.0;
+            for d in 0..D {
+                v += c[d] * x[d];
+                for e in d..D {
+                    v += q[d][e] * x[d] * x[e];
+                }
+            }
+            v
+        };
+        let hess_f = |d: usize, e: usize| {
+            if d == e {
+                2.0 * q[d][d]
+            } else {
+                q[d.min(e)][d.max(e)]
+            }
+        };
+        let fv: Vec<f64> = nodes.iter().map(f).collect();
+        for xi in [[0.13; D], std::array::from_fn(|d| 0.05 + 0.1 * d as f64)] {
+            let n = E::shape(&xi);
+            let v: f64 = n.iter().zip(&fv).map(|(a, b)| a * b).sum();
+            assert!((v - f(&xi)).abs() < 1e-13, "value {v} vs {}", f(&xi));
+            let hs = E::hessian(&xi);
+            for d in 0..D {
+                for e in 0..D {
+                    let h: f64 = (0..N).map(|i| hs[i][d][e] * fv[i]).sum();
+                    assert!((h - hess_f(d, e)).abs() < 1e-12, "hessian {d}{e}: {h}");
+                }
+            }
+        }
+        let rule = E::quadrature();
+        assert!((rule.iter().map(|r| r.1).sum::<f64>() - volume).abs() < 1e-14);
+        // ∫ f = Σ_I f_I ∫ N_I, exact for the rule's degree ≥ 2
+        let exact: f64 = rule.iter().map(|(x, w)| w * f(x)).sum();
+        let by_shape: f64 = rule
+            .iter()
+            .map(|(x, w)| w * E::shape(x).iter().zip(&fv).map(|(a, b)| a * b).sum::<f64>())
+            .sum();
+        assert!((exact - by_shape).abs() < 1e-13);
+    }
+
+    #[test]
+    fn quadratic_elements_reproduce_quadratic_fields() {
+        check_quadratic::<3, 1, Line3>(2.0);
+        check_quadratic::<6, 2, Tri6>(0.5);
+        check_quadratic::<8, 2, Quad8>(4.0);
+        check_quadratic::<9, 2, Quad9>(4.0);
+        check_quadratic::<10, 3, Tet10>(1.0 / 6.0);
+        check_quadratic::<20, 3, Hex20>(8.0);
+        check_quadratic::<27, 3, Hex27>(8.0);
     }
 
     #[test]
