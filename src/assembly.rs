@@ -6,9 +6,8 @@
 #![allow(non_snake_case)]
 
 use crate::dofs::NONE;
-use crate::element::{Hex8, Quad4, RefElement, Tet4, Tri3};
+use crate::element::RefElement;
 use crate::kernel::{Active, KernelError, bulk};
-use crate::mesh::CellKind;
 use crate::model::Model;
 use rayon::prelude::*;
 
@@ -257,21 +256,9 @@ impl Assembler {
         };
         for (bi, info) in model.blocks.iter().enumerate() {
             let kind = model.mesh.cells[info.block].kind;
-            let res = match kind {
-                CellKind::Tri3 => {
-                    self.block::<3, 2, Tri3>(model, bi, x, tangent, dx_prescribed, act)
-                }
-                CellKind::Quad4 => {
-                    self.block::<4, 2, Quad4>(model, bi, x, tangent, dx_prescribed, act)
-                }
-                CellKind::Tet4 => {
-                    self.block::<4, 3, Tet4>(model, bi, x, tangent, dx_prescribed, act)
-                }
-                CellKind::Hex8 => {
-                    self.block::<8, 3, Hex8>(model, bi, x, tangent, dx_prescribed, act)
-                }
-                CellKind::Point1 | CellKind::Line2 => unreachable!("facets are not cells"),
-            };
+            let res = crate::with_cell!(kind, |N, D, E| {
+                self.block::<N, D, E>(model, bi, x, tangent, dx_prescribed, act)
+            });
             let region = || model.regions[info.region].0.clone();
             let (min_j, energy) = res.map_err(|(e, cell)| match e {
                 KernelError::Inverted { J } => AssemblyError::Inverted {

@@ -3,7 +3,7 @@
 
 use crate::case::{Case, CaseError, RegionKind};
 use crate::dofs::{Constraints, DofMap, Field, NONE, Prescribed};
-use crate::element::{Line2, Point1, Quad4, RefElement, Tri3, facet_measure};
+use crate::element::{RefElement, facet_measure};
 use crate::kernel::{CellMaterial, Layout};
 use crate::material::{Conductivity, Regularization, ThermoElastic};
 use crate::mesh::{CellKind, Mesh};
@@ -207,6 +207,35 @@ pub fn build(case: &Case, mesh: Mesh) -> Result<Model, CaseError> {
         })
         .collect();
 
+    // element orders must agree: a linear cell next to a quadratic one is not conforming
+    let orders: std::collections::BTreeSet<usize> =
+        mesh.cells.iter().map(|b| b.kind.order()).collect();
+    if orders.len() > 1 {
+        let kinds: Vec<&str> = mesh.cells.iter().map(|b| b.kind.name()).collect();
+        return case.error(
+            case.file.mesh.span(),
+            format!(
+                "the mesh mixes linear and quadratic cells ({}), which do not conform; mesh all with one order",
+                kinds.join(", ")
+            ),
+        );
+    }
+    for r in f.region.iter().filter(|r| r.kind == RegionKind::Medium) {
+        let g = mesh.group(r.group.get_ref()).expect("validated");
+        if mesh
+            .cells
+            .iter()
+            .any(|b| b.groups.contains(&g) && b.kind.order() == 2)
+        {
+            return case.error(
+                r.group.span(),
+                format!(
+                    "region \"{}\": a medium of quadratic cells needs the direct regularization of eq. 18, which tmc does not have yet; mesh the scene with linear cells",
+                    r.group.get_ref()
+                ),
+            );
+        }
+    }
     let region_of_group = |g: usize| {
         f.region
             .iter()
@@ -409,12 +438,5 @@ pub fn facet_weights(kind: CellKind, nodes: &[usize], mesh: &Mesh) -> Vec<f64> {
         }
         w
     }
-    match kind {
-        CellKind::Point1 => integrate::<1, 0, Point1>(nodes, mesh),
-        CellKind::Line2 => integrate::<2, 1, Line2>(nodes, mesh),
-        CellKind::Tri3 => integrate::<3, 2, Tri3>(nodes, mesh),
-        CellKind::Quad4 => integrate::<4, 2, Quad4>(nodes, mesh),
-        CellKind::Tet4 => integrate::<4, 3, crate::element::Tet4>(nodes, mesh),
-        CellKind::Hex8 => integrate::<8, 3, crate::element::Hex8>(nodes, mesh),
-    }
+    crate::with_element!(kind, |N, D, E| integrate::<N, D, E>(nodes, mesh))
 }

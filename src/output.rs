@@ -43,6 +43,13 @@ fn vtk_cell_type(id: u8) -> CellType {
         9 => CellType::Quad,
         10 => CellType::Tetra,
         12 => CellType::Hexahedron,
+        21 => CellType::QuadraticEdge,
+        22 => CellType::QuadraticTriangle,
+        23 => CellType::QuadraticQuad,
+        28 => CellType::BiquadraticQuad,
+        24 => CellType::QuadraticTetra,
+        25 => CellType::QuadraticHexahedron,
+        29 => CellType::TriquadraticHexahedron,
         _ => CellType::Vertex,
     }
 }
@@ -70,7 +77,11 @@ pub fn write_vtu(path: &Path, mesh: &Mesh, f: &StepFields) -> Result<(), OutputE
     let mut types = Vec::new();
     for b in &mesh.cells {
         for c in 0..b.n_cells() {
-            connectivity.extend(b.cell(c).iter().map(|&n| n as u64));
+            let cell = b.cell(c);
+            match b.kind.vtk_order() {
+                Some(order) => connectivity.extend(order.iter().map(|&i| cell[i] as u64)),
+                None => connectivity.extend(cell.iter().map(|&n| n as u64)),
+            }
             offsets.push(connectivity.len() as u64);
             types.push(vtk_cell_type(b.kind.vtk_id()));
         }

@@ -1,9 +1,8 @@
 //! Post-processing: cell averages of J, Cauchy stress, current heat flux and conductivity.
 #![allow(non_snake_case)]
 
-use crate::element::{Hex8, Quad4, RefElement, Tet4, Tri3};
+use crate::element::RefElement;
 use crate::kernel::{CellFields, CellState, KernelError, cell_fields};
-use crate::mesh::CellKind;
 use crate::model::Model;
 use rayon::prelude::*;
 
@@ -12,13 +11,7 @@ pub fn all_cell_fields(model: &Model, x: &[f64]) -> Result<Vec<CellFields>, Kern
     let mut out = Vec::with_capacity(model.mesh.n_cells());
     for info in &model.blocks {
         let kind = model.mesh.cells[info.block].kind;
-        let v = match kind {
-            CellKind::Tri3 => block::<3, 2, Tri3>(model, info, x)?,
-            CellKind::Quad4 => block::<4, 2, Quad4>(model, info, x)?,
-            CellKind::Tet4 => block::<4, 3, Tet4>(model, info, x)?,
-            CellKind::Hex8 => block::<8, 3, Hex8>(model, info, x)?,
-            _ => unreachable!("facets are not cells"),
-        };
+        let v = crate::with_cell!(kind, |N, D, E| block::<N, D, E>(model, info, x)?);
         out.extend(v);
     }
     Ok(out)

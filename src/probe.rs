@@ -2,8 +2,8 @@
 
 use crate::case::{Case, CaseError};
 use crate::dofs::DofMap;
-use crate::element::{Hex8, Quad4, RefElement, Tet4, Tri3, invert_small};
-use crate::mesh::{CellKind, Mesh};
+use crate::element::{RefElement, invert_small};
+use crate::mesh::Mesh;
 
 /// A material point: the nodes of the cell that contains it and its shape-function weights.
 #[derive(Clone, Debug)]
@@ -91,13 +91,9 @@ pub fn locate(mesh: &Mesh, X: &[f64]) -> Option<MaterialPoint> {
             if !inside_box {
                 continue;
             }
-            let w = match b.kind {
-                CellKind::Tri3 => inverse_map::<3, 2, Tri3>(mesh, nodes, &p, tol),
-                CellKind::Quad4 => inverse_map::<4, 2, Quad4>(mesh, nodes, &p, tol),
-                CellKind::Tet4 => inverse_map::<4, 3, Tet4>(mesh, nodes, &p, tol),
-                CellKind::Hex8 => inverse_map::<8, 3, Hex8>(mesh, nodes, &p, tol),
-                _ => None,
-            };
+            let w = crate::with_cell!(b.kind, |N, D, E| inverse_map::<N, D, E>(
+                mesh, nodes, &p, tol
+            ));
             if let Some(weights) = w {
                 return Some(MaterialPoint {
                     nodes: nodes.to_vec(),

@@ -317,3 +317,67 @@ fn geo_parameters_do_not_leak_into_the_next_mesh() {
     assert_eq!(cells(&[("n", 2.0), ("m", 1.0)], "a.msh"), 2);
     assert_eq!(cells(&[], "b.msh"), 8 * 4, "defaults of slab.geo");
 }
+
+/// Quadratic cells are written in VTK's node order: meshio, which maps gmsh's order to VTK's
+/// on its own, reads the same cells (as sequences of node positions) from the `.msh` as from
+/// tmc's `.vtu`.
+#[test]
+fn quadratic_cells_reach_vtk_in_vtk_order() {
+    use tmc::mesh::gmsh::{MeshOptions, mesh_geo};
+    use tmc::mesh::msh::read_msh;
+    use tmc::output::{StepFields, write_vtu};
+    let dir = scratch("vtk-order");
+    for (geo, incomplete) in [
+        ("bar3d.geo", false),
+        ("bar3d.geo", true),
+        ("box-tet.geo", false),
+        ("mixed2d.geo", false),
+        ("mixed2d.geo", true),
+    ] {
+        let tag = format!("{}-{incomplete}", geo.trim_end_matches(".geo"));
+        let msh = dir.join(format!("{tag}.msh"));
+        let opts = MeshOptions {
+            order: 2,
+            incomplete,
+            ..Default::default()
+        };
+        mesh_geo(&root().join("geo").join(geo), &msh, &opts).unwrap();
+        let mesh = read_msh(&msh).unwrap();
+        let n = mesh.coords.len();
+        let cells = vec![Default::default(); mesh.n_cells()];
+        let ints = vec![0; mesh.n_cells()];
+        let vtu = dir.join(format!("{tag}.vtu"));
+        let u = vec![[0.0; 3]; n];
+        let fields = StepFields {
+            u: &u,
+            theta: None,
+            p: None,
+            cells: &cells,
+            region: &ints,
+            kind: &ints,
+        };
+        write_vtu(&vtu, &mesh, &fields).unwrap();
+        let script = "import sys, meshio, numpy as np
+def cells(m, dim):
+    out = {}
+    for b in m.cells:
+        if b.dim != dim: continue
+        out.setdefault(b.type, []).extend(
+            sorted(tuple(map(tuple, np.round(m.points[c], 9))) for c in b.data))
+    return {k: sorted(v) for k, v in out.items()}
+a, b = meshio.read(sys.argv[1]), meshio.read(sys.argv[2])
+dim = int(sys.argv[3])
+ca, cb = cells(a, dim), cells(b, dim)
+print(sorted(ca), sorted(cb), 'same' if ca == cb else 'DIFFERENT')";
+        let o = Command::new("/usr/bin/python3")
+            .args(["-c", script])
+            .arg(&msh)
+            .arg(&vtu)
+            .arg(mesh.dim.to_string())
+            .output()
+            .unwrap();
+        let out = String::from_utf8_lossy(&o.stdout);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(out.trim_end().ends_with("same"), "{tag}: {out}");
+    }
+}

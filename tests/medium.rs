@@ -323,3 +323,28 @@ fn block_plate_3d_fine_is_the_same_scene_refined() {
     let text = std::fs::read_to_string(root().join("cases/block-plate-3d-fine.toml")).unwrap();
     assert!(text.contains("n = 16, nb = 10, nm = 4, nq = 6"));
 }
+
+/// A quadratic medium needs eq. 18, which tmc does not have yet: refused, naming the group.
+#[test]
+fn a_quadratic_medium_is_refused_clearly() {
+    use tmc::case::Case;
+    use tmc::mesh::gmsh::{MeshOptions, mesh_geo};
+    use tmc::mesh::msh::read_msh;
+    let dir = scratch("quadratic-medium");
+    let msh = dir.join("mesh.msh");
+    let opts = MeshOptions {
+        order: 2,
+        set_numbers: vec![("n".into(), 4.0), ("m".into(), 2.0), ("l".into(), 2.0)],
+        ..Default::default()
+    };
+    mesh_geo(&root().join("geo/block.geo"), &msh, &opts).unwrap();
+    let text = format!("mesh = \"{}\"\n{}", msh.display(), case_body("block"));
+    let case = Case::parse(&dir.join("case.toml"), text).unwrap();
+    let mesh = read_msh(&msh).unwrap();
+    case.validate(&mesh).unwrap();
+    let err = tmc::model::build(&case, mesh).unwrap_err().to_string();
+    assert!(
+        err.contains("\"medium\"") && err.contains("eq. 18"),
+        "{err}"
+    );
+}

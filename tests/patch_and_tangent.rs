@@ -286,3 +286,95 @@ fn assembled_tangent_with_regularized_medium_h1() {
     );
     tangent_check(&model);
 }
+
+/// Move every node that carries no Dirichlet condition by up to `a` × (smallest cell size) in
+/// pseudo-random directions: quadratic cells get curved edges, which isoparametric elements
+/// must still handle exactly for a linear field.
+fn distort(model: &mut Model, a: f64) {
+    let d = model.mesh.dim;
+    let h = model.mesh.extent() / 20.0;
+    for n in 0..model.mesh.coords.len() {
+        let free = model.cons.eq[model.dofs.theta[n] as usize] != NONE;
+        if free {
+            for c in 0..d {
+                model.mesh.coords[n][c] += a * h * noise(7 * n + c);
+            }
+        }
+    }
+}
+
+fn patch_quadratic(
+    geo: &str,
+    boundary_groups: &[&str],
+    order: (u8, bool),
+    kinds: &[&str],
+    amplitude: f64,
+) {
+    let dim = if geo.contains("2d") { 2 } else { 3 };
+    let mut text =
+        case_text(dim, 0.0).replace("\"boundary\"", &format!("\"{}\"", boundary_groups[0]));
+    for g in &boundary_groups[1..] {
+        let comps = if dim == 2 {
+            "ux = 0.0\nuy = 0.0"
+        } else {
+            "ux = 0.0\nuy = 0.0\nuz = 0.0"
+        };
+        text.push_str(&format!("[[bc]]\ngroup = \"{g}\"\n{comps}\ntheta = 0.0\n"));
+    }
+    let (_, mut model) = model_order(
+        &text,
+        geo,
+        &[],
+        order,
+        &format!("patch-{geo}-{}{}", order.0, order.1),
+    );
+    let names: Vec<&str> = model.mesh.cells.iter().map(|b| b.kind.name()).collect();
+    for k in kinds {
+        assert!(
+            names.contains(k),
+            "{geo}: expected {k} cells, got {names:?}"
+        );
+    }
+    distort(&mut model, amplitude);
+    patch(&mut model);
+}
+
+const HEX_FACES: [&str; 6] = ["x0", "x1", "y0", "y1", "z0", "z1"];
+
+#[test]
+fn patch_test_distorted_tri6_quad9() {
+    patch_quadratic(
+        "mixed2d.geo",
+        &["boundary"],
+        (2, false),
+        &["T2 (tri6)", "Q2 (quad9)"],
+        0.15,
+    );
+}
+
+#[test]
+fn patch_test_distorted_quad8() {
+    patch_quadratic(
+        "mixed2d.geo",
+        &["boundary"],
+        (2, true),
+        &["Q2S (quad8)"],
+        0.15,
+    );
+}
+
+#[test]
+fn patch_test_distorted_tet10() {
+    // unstructured tets include slivers: a smaller push keeps every Jacobian positive
+    patch_quadratic("box-tet.geo", &["boundary"], (2, false), &["tet10"], 0.05);
+}
+
+#[test]
+fn patch_test_distorted_hex27() {
+    patch_quadratic("bar3d.geo", &HEX_FACES, (2, false), &["H2 (hex27)"], 0.15);
+}
+
+#[test]
+fn patch_test_distorted_hex20() {
+    patch_quadratic("bar3d.geo", &HEX_FACES, (2, true), &["H2S (hex20)"], 0.15);
+}

@@ -10,6 +10,52 @@
 mod quadratic;
 pub use quadratic::{Hex20, Hex27, Line3, Quad8, Quad9, Tet10, Tri6};
 
+/// Evaluate `$body` with `$n` (nodes), `$d` (reference dimension) and `$e` (the element type)
+/// bound for a cell kind of dimension 2 or 3, so a generic kernel is called monomorphically
+/// per element block. Facet kinds are a logic error here.
+#[macro_export]
+macro_rules! with_cell {
+    ($kind:expr, |$n:ident, $d:ident, $e:ident| $body:expr) => {{
+        use $crate::element as el;
+        use $crate::mesh::CellKind as K;
+        match $kind {
+            K::Tri3 => $crate::with_cell!(@ 3, 2, el::Tri3, $n, $d, $e, $body),
+            K::Quad4 => $crate::with_cell!(@ 4, 2, el::Quad4, $n, $d, $e, $body),
+            K::Tet4 => $crate::with_cell!(@ 4, 3, el::Tet4, $n, $d, $e, $body),
+            K::Hex8 => $crate::with_cell!(@ 8, 3, el::Hex8, $n, $d, $e, $body),
+            K::Tri6 => $crate::with_cell!(@ 6, 2, el::Tri6, $n, $d, $e, $body),
+            K::Quad8 => $crate::with_cell!(@ 8, 2, el::Quad8, $n, $d, $e, $body),
+            K::Quad9 => $crate::with_cell!(@ 9, 2, el::Quad9, $n, $d, $e, $body),
+            K::Tet10 => $crate::with_cell!(@ 10, 3, el::Tet10, $n, $d, $e, $body),
+            K::Hex20 => $crate::with_cell!(@ 20, 3, el::Hex20, $n, $d, $e, $body),
+            K::Hex27 => $crate::with_cell!(@ 27, 3, el::Hex27, $n, $d, $e, $body),
+            K::Point1 | K::Line2 | K::Line3 => unreachable!("facets are not cells"),
+        }
+    }};
+    (@ $nv:literal, $dv:literal, $ty:ty, $n:ident, $d:ident, $e:ident, $body:expr) => {{
+        const $n: usize = $nv;
+        const $d: usize = $dv;
+        type $e = $ty;
+        $body
+    }};
+}
+
+/// As [`with_cell!`], for any kind including boundary facets (points, lines, and the 2D kinds
+/// as faces of 3D cells).
+#[macro_export]
+macro_rules! with_element {
+    ($kind:expr, |$n:ident, $d:ident, $e:ident| $body:expr) => {{
+        use $crate::element as el;
+        use $crate::mesh::CellKind as K;
+        match $kind {
+            K::Point1 => $crate::with_cell!(@ 1, 0, el::Point1, $n, $d, $e, $body),
+            K::Line2 => $crate::with_cell!(@ 2, 1, el::Line2, $n, $d, $e, $body),
+            K::Line3 => $crate::with_cell!(@ 3, 1, el::Line3, $n, $d, $e, $body),
+            k => $crate::with_cell!(k, |$n, $d, $e| $body),
+        }
+    }};
+}
+
 /// A reference element with `N` nodes in `D` reference dimensions.
 pub trait RefElement<const N: usize, const D: usize>: Sync + Send + 'static {
     /// Shape function values N_I(ξ).

@@ -3,9 +3,10 @@
 //! those `gmsh.model.mesh.getElementProperties` reports for gmsh 4.8), so cells read from a
 //! `.msh` need no permutation; output maps them to VTK's order.
 //!
-//! Quadrature: 3-point Gauss per direction on lines, quads and hexes; the degree-2 rules on
-//! triangles (3 points) and tetrahedra (4 points). These are basix's rules of degree 4
-//! (interval, quadrilateral, hexahedron) and 2 (simplices).
+//! Quadrature: 3-point Gauss per direction on lines, quads and hexes, the degree-2 rule on
+//! triangles (3 points) and the degree-4 rule on tetrahedra (14 points): basix's rules of
+//! degree 4 (interval, quadrilateral, hexahedron, tetrahedron) and 2 (triangle). Each is exact
+//! for ∇N det(∂X/∂ξ) of a curved (isoparametric) cell, so patch tests pass on curved meshes.
 
 use super::RefElement;
 
@@ -263,13 +264,30 @@ static TRI_DEG2: [([f64; 2], f64); 3] = [
     ([2.0 / 3.0, 1.0 / 6.0], 1.0 / 6.0),
 ];
 
-const TA: f64 = 0.585_410_196_624_968_5;
-const TB: f64 = 0.138_196_601_125_010_5;
-static TET_DEG2: [([f64; 3], f64); 4] = [
-    ([TA, TB, TB], 1.0 / 24.0),
-    ([TB, TA, TB], 1.0 / 24.0),
-    ([TB, TB, TA], 1.0 / 24.0),
-    ([TB, TB, TB], 1.0 / 24.0),
+// basix's degree-4 tetrahedron rule (14 points, positive weights). Degree 2 would do for
+// straight-sided tet10, but on curved ones ∇N det(∂X/∂ξ) is cubic: the patch test caught it.
+const TA: f64 = 0.100_526_765_225_204_5;
+const TB: f64 = 0.698_419_704_324_386_6;
+const TC: f64 = 0.314_372_873_493_192_2;
+const TD: f64 = 0.056_881_379_520_423_4;
+const W1: f64 = 0.003_174_603_174_603_17;
+const W2: f64 = 0.014_764_970_790_496_78;
+const W3T: f64 = 0.022_139_791_114_265_12;
+static TET_DEG4: [([f64; 3], f64); 14] = [
+    ([0.0, 0.5, 0.5], W1),
+    ([0.5, 0.0, 0.5], W1),
+    ([0.5, 0.5, 0.0], W1),
+    ([0.5, 0.0, 0.0], W1),
+    ([0.0, 0.5, 0.0], W1),
+    ([0.0, 0.0, 0.5], W1),
+    ([TB, TA, TA], W2),
+    ([TA, TA, TA], W2),
+    ([TA, TA, TB], W2),
+    ([TA, TB, TA], W2),
+    ([TD, TC, TC], W3T),
+    ([TC, TC, TC], W3T),
+    ([TC, TC, TD], W3T),
+    ([TC, TD, TC], W3T),
 ];
 
 impl RefElement<3, 1> for Line3 {
@@ -367,7 +385,7 @@ impl RefElement<10, 3> for Tet10 {
         simplex(&TET_EDGES, xi).2
     }
     fn quadrature() -> &'static [([f64; 3], f64)] {
-        &TET_DEG2
+        &TET_DEG4
     }
     fn nodes() -> [[f64; 3]; 10] {
         let c = [

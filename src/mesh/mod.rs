@@ -16,6 +16,13 @@ pub enum CellKind {
     Quad4,
     Tet4,
     Hex8,
+    Line3,
+    Tri6,
+    Quad8,
+    Quad9,
+    Tet10,
+    Hex20,
+    Hex27,
 }
 
 impl CellKind {
@@ -23,9 +30,17 @@ impl CellKind {
     pub fn dim(self) -> usize {
         match self {
             CellKind::Point1 => 0,
-            CellKind::Line2 => 1,
-            CellKind::Tri3 | CellKind::Quad4 => 2,
-            CellKind::Tet4 | CellKind::Hex8 => 3,
+            CellKind::Line2 | CellKind::Line3 => 1,
+            CellKind::Tri3
+            | CellKind::Quad4
+            | CellKind::Tri6
+            | CellKind::Quad8
+            | CellKind::Quad9 => 2,
+            CellKind::Tet4
+            | CellKind::Hex8
+            | CellKind::Tet10
+            | CellKind::Hex20
+            | CellKind::Hex27 => 3,
         }
     }
 
@@ -36,6 +51,68 @@ impl CellKind {
             CellKind::Tri3 => 3,
             CellKind::Quad4 | CellKind::Tet4 => 4,
             CellKind::Hex8 => 8,
+            CellKind::Line3 => 3,
+            CellKind::Tri6 => 6,
+            CellKind::Quad8 => 8,
+            CellKind::Quad9 => 9,
+            CellKind::Tet10 => 10,
+            CellKind::Hex20 => 20,
+            CellKind::Hex27 => 27,
+        }
+    }
+
+    /// Polynomial order of the shape functions.
+    pub fn order(self) -> usize {
+        match self {
+            CellKind::Point1
+            | CellKind::Line2
+            | CellKind::Tri3
+            | CellKind::Quad4
+            | CellKind::Tet4
+            | CellKind::Hex8 => 1,
+            _ => 2,
+        }
+    }
+
+    /// Node permutation that reverses the orientation of a 2D cell (corners, edges along).
+    pub fn flip(self) -> &'static [usize] {
+        match self {
+            CellKind::Tri3 => &[0, 2, 1],
+            CellKind::Quad4 => &[0, 3, 2, 1],
+            CellKind::Tri6 => &[0, 2, 1, 5, 4, 3],
+            CellKind::Quad8 => &[0, 3, 2, 1, 7, 6, 5, 4],
+            CellKind::Quad9 => &[0, 3, 2, 1, 7, 6, 5, 4, 8],
+            _ => &[],
+        }
+    }
+
+    /// Number of corner nodes (the first ones in tmc's order).
+    pub fn corners(self) -> usize {
+        match self {
+            CellKind::Point1 => 1,
+            CellKind::Line2 | CellKind::Line3 => 2,
+            CellKind::Tri3 | CellKind::Tri6 => 3,
+            CellKind::Quad4
+            | CellKind::Quad8
+            | CellKind::Quad9
+            | CellKind::Tet4
+            | CellKind::Tet10 => 4,
+            CellKind::Hex8 | CellKind::Hex20 | CellKind::Hex27 => 8,
+        }
+    }
+
+    /// VTK's node order: VTK node i is tmc (gmsh) node `vtk_order()[i]`.
+    pub fn vtk_order(self) -> Option<&'static [usize]> {
+        match self {
+            CellKind::Tet10 => Some(&[0, 1, 2, 3, 4, 5, 6, 7, 9, 8]),
+            CellKind::Hex20 => Some(&[
+                0, 1, 2, 3, 4, 5, 6, 7, 8, 11, 13, 9, 16, 18, 19, 17, 10, 12, 14, 15,
+            ]),
+            CellKind::Hex27 => Some(&[
+                0, 1, 2, 3, 4, 5, 6, 7, 8, 11, 13, 9, 16, 18, 19, 17, 10, 12, 14, 15, 22, 23, 21,
+                24, 20, 25, 26,
+            ]),
+            _ => None,
         }
     }
 
@@ -48,6 +125,13 @@ impl CellKind {
             CellKind::Quad4 => "Q1 (quad4)",
             CellKind::Tet4 => "tet4",
             CellKind::Hex8 => "H1 (hex8)",
+            CellKind::Line3 => "line3",
+            CellKind::Tri6 => "T2 (tri6)",
+            CellKind::Quad8 => "Q2S (quad8)",
+            CellKind::Quad9 => "Q2 (quad9)",
+            CellKind::Tet10 => "tet10",
+            CellKind::Hex20 => "H2S (hex20)",
+            CellKind::Hex27 => "H2 (hex27)",
         }
     }
 
@@ -60,6 +144,13 @@ impl CellKind {
             CellKind::Quad4 => 9,
             CellKind::Tet4 => 10,
             CellKind::Hex8 => 12,
+            CellKind::Line3 => 21,
+            CellKind::Tri6 => 22,
+            CellKind::Quad8 => 23,
+            CellKind::Quad9 => 28,
+            CellKind::Tet10 => 24,
+            CellKind::Hex20 => 25,
+            CellKind::Hex27 => 29,
         }
     }
 
@@ -72,6 +163,13 @@ impl CellKind {
             3 => CellKind::Quad4,
             4 => CellKind::Tet4,
             5 => CellKind::Hex8,
+            8 => CellKind::Line3,
+            9 => CellKind::Tri6,
+            16 => CellKind::Quad8,
+            10 => CellKind::Quad9,
+            11 => CellKind::Tet10,
+            17 => CellKind::Hex20,
+            12 => CellKind::Hex27,
             _ => return None,
         })
     }

@@ -236,16 +236,20 @@ fn orient_cells(mesh: &mut Mesh) {
         return;
     }
     for b in &mut mesh.cells {
-        let n = b.kind.n_nodes();
+        let (n, k) = (b.kind.n_nodes(), b.kind.corners());
+        let flip = b.kind.flip();
         for c in b.conn.chunks_mut(n) {
-            let area2: f64 = (0..n)
+            let area2: f64 = (0..k)
                 .map(|i| {
-                    let (p, q) = (mesh.coords[c[i]], mesh.coords[c[(i + 1) % n]]);
+                    let (p, q) = (mesh.coords[c[i]], mesh.coords[c[(i + 1) % k]]);
                     p[0] * q[1] - q[0] * p[1]
                 })
                 .sum();
             if area2 < 0.0 {
-                c[1..].reverse();
+                let old: Vec<usize> = c.to_vec();
+                for (new, &from) in c.iter_mut().zip(flip) {
+                    *new = old[from];
+                }
             }
         }
     }

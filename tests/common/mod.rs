@@ -86,13 +86,25 @@ pub fn model_from(case_text: &str, geo: &str, tag: &str) -> (Case, Model) {
 
 /// As [`model_from`], with `.geo` parameters.
 pub fn model_with(case_text: &str, geo: &str, params: &[(&str, f64)], tag: &str) -> (Case, Model) {
+    model_order(case_text, geo, params, (1, false), tag)
+}
+
+/// As [`model_with`], meshed with element `order` (1 or 2) and `incomplete` (serendipity).
+pub fn model_order(
+    case_text: &str,
+    geo: &str,
+    params: &[(&str, f64)],
+    (order, incomplete): (u8, bool),
+    tag: &str,
+) -> (Case, Model) {
     let dir = scratch(tag);
     let msh = dir.join("mesh.msh");
     mesh_geo(
         &root().join("geo").join(geo),
         &msh,
         &MeshOptions {
-            order: 1,
+            order,
+            incomplete,
             set_numbers: params.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
             ..Default::default()
         },
