@@ -206,6 +206,30 @@ pub fn rotation_measure(F: &Matrix3<f64>, i: usize) -> Option<RotationMeasure> {
     })
 }
 
+/// Third derivatives of the rotation measure `i` with respect to its four entries of F (in
+/// the order of [`RotationMeasure::entries`]); `None` where the measure is unbounded.
+/// With n = F_ab − F_ba and s = F_aa + F_bb, f = n/s has f_nss = 2/s³ and f_sss = −6n/s⁴.
+pub fn rotation_measure_d3(F: &Matrix3<f64>, i: usize) -> Option<[[[f64; 4]; 4]; 4]> {
+    let (a, b) = ROTATION_PLANES[i];
+    let n = F[(a, b)] - F[(b, a)];
+    let s = F[(a, a)] + F[(b, b)];
+    if !(s.abs() > 1e-12) {
+        return None;
+    }
+    let dn = [1.0, -1.0, 0.0, 0.0];
+    let ds = [0.0, 0.0, 1.0, 1.0];
+    let (f_nss, f_sss) = (2.0 / (s * s * s), -6.0 * n / (s * s * s * s));
+    Some(std::array::from_fn(|p| {
+        std::array::from_fn(|q| {
+            std::array::from_fn(|r| {
+                f_sss * ds[p] * ds[q] * ds[r]
+                    + f_nss
+                        * (dn[p] * ds[q] * ds[r] + ds[p] * dn[q] * ds[r] + ds[p] * ds[q] * dn[r])
+            })
+        })
+    }))
+}
+
 /// Regularization of the linear medium elements, eq. (20):
 ///
 /// Ψ_Rf = Σ_i β1/2 (f_i − p_i/d)² + β2/2 |∇_X p_i|²
@@ -453,6 +477,33 @@ mod tests {
         let mut F = Matrix3::identity();
         F[(0, 0)] = -1.0;
         assert!(rotation_measure(&F, 0).is_none());
+    }
+
+    #[test]
+    fn rotation_measure_third_derivatives() {
+        for plane in [false, true] {
+            let F = sample_F(plane);
+            for i in 0..if plane { 1 } else { 3 } {
+                let m = rotation_measure(&F, i).unwrap();
+                let d3 = rotation_measure_d3(&F, i).unwrap();
+                let h = 1e-5;
+                for (q, &(r, c)) in m.entries.iter().enumerate() {
+                    let (mut p, mut mm) = (F, F);
+                    p[(r, c)] += h;
+                    mm[(r, c)] -= h;
+                    let (hp, hm) = (
+                        rotation_measure(&p, i).unwrap().hess,
+                        rotation_measure(&mm, i).unwrap().hess,
+                    );
+                    for a in 0..4 {
+                        for b in 0..4 {
+                            let fd = (hp[a][b] - hm[a][b]) / (2.0 * h);
+                            assert!((fd - d3[a][b][q]).abs() < 1e-6, "f{i} d3 {a}{b}{q}");
+                        }
+                    }
+                }
+            }
+        }
     }
 
     #[test]

@@ -179,6 +179,7 @@ pub fn build(case: &Case, mesh: Mesh) -> Result<Model, CaseError> {
                     cond: Conductivity::Constant(k),
                     medium: false,
                     reg: None,
+                    reg_direct: None,
                 },
                 RegionKind::Medium => {
                     let gamma = *r.gamma.as_ref().expect("checked").get_ref();
@@ -201,6 +202,7 @@ pub fn build(case: &Case, mesh: Mesh) -> Result<Model, CaseError> {
                             beta2: r.beta2.as_ref().map(|v| *v.get_ref()).unwrap_or(1e-2),
                             d,
                         }),
+                        reg_direct: None,
                     }
                 }
             }
@@ -220,28 +222,16 @@ pub fn build(case: &Case, mesh: Mesh) -> Result<Model, CaseError> {
             ),
         );
     }
-    for r in f.region.iter().filter(|r| r.kind == RegionKind::Medium) {
-        let g = mesh.group(r.group.get_ref()).expect("validated");
-        if mesh
-            .cells
-            .iter()
-            .any(|b| b.groups.contains(&g) && b.kind.order() == 2)
-        {
-            return case.error(
-                r.group.span(),
-                format!(
-                    "region \"{}\": a medium of quadratic cells needs the direct regularization of eq. 18, which tmc does not have yet; mesh the scene with linear cells",
-                    r.group.get_ref()
-                ),
-            );
-        }
-    }
     let region_of_group = |g: usize| {
         f.region
             .iter()
             .position(|r| mesh.group(r.group.get_ref()) == Some(g))
     };
-    // regularization components per node of a medium cell: f1 in 2D, f1..f3 in 3D
+    // regularization: p fields (f1 in 2D, f1..f3 in 3D per node) on linear medium cells, the
+    // direct gradient regularization of eq. 18 on quadratic ones (no unknowns)
+    let linear = mesh.cells.iter().all(|b| b.kind.order() == 1);
+    let mut physics = physics;
+    physics.regularization &= linear;
     let np = if physics.regularization {
         if mesh.dim == 2 { 1 } else { 3 }
     } else {
@@ -255,16 +245,29 @@ pub fn build(case: &Case, mesh: Mesh) -> Result<Model, CaseError> {
             .iter()
             .find_map(|&g| region_of_group(g))
             .expect("validated");
-        let medium = materials[region].medium;
+        let mut mat = materials[region];
+        let medium = mat.medium;
         if medium && np > 0 {
             for &n in &b.conn {
                 p_nodes[n] = true;
             }
         }
+        if medium && b.kind.order() == 2 && physics.mechanics {
+            // γ α_r: given, or β2 d² so that it weighs |∇f|² like eq. 20 with p = d f
+            let r = &f.region[region];
+            let gamma = *r.gamma.as_ref().expect("checked").get_ref();
+            let beta2 = mat.reg.map_or(1e-2, |g| g.beta2);
+            mat.reg_direct = Some(
+                r.alpha_r
+                    .as_ref()
+                    .map_or(beta2 * d * d, |a| gamma * *a.get_ref()),
+            );
+            mat.reg = None;
+        }
         blocks.push(BlockInfo {
             block: bi,
             region,
-            mat: materials[region],
+            mat,
             layout: Layout {
                 n: b.kind.n_nodes(),
                 dim: mesh.dim,

@@ -324,27 +324,27 @@ fn block_plate_3d_fine_is_the_same_scene_refined() {
     assert!(text.contains("n = 16, nb = 10, nm = 4, nq = 6"));
 }
 
-/// A quadratic medium needs eq. 18, which tmc does not have yet: refused, naming the group.
+/// A medium of quad9 cells regularizes through eq. 18 (no p unknowns) and still closes the
+/// block's gap in equilibrium.
 #[test]
-fn a_quadratic_medium_is_refused_clearly() {
-    use tmc::case::Case;
-    use tmc::mesh::gmsh::{MeshOptions, mesh_geo};
-    use tmc::mesh::msh::read_msh;
-    let dir = scratch("quadratic-medium");
-    let msh = dir.join("mesh.msh");
-    let opts = MeshOptions {
-        order: 2,
-        set_numbers: vec![("n".into(), 4.0), ("m".into(), 2.0), ("l".into(), 2.0)],
-        ..Default::default()
-    };
-    mesh_geo(&root().join("geo/block.geo"), &msh, &opts).unwrap();
-    let text = format!("mesh = \"{}\"\n{}", msh.display(), case_body("block"));
-    let case = Case::parse(&dir.join("case.toml"), text).unwrap();
-    let mesh = read_msh(&msh).unwrap();
-    case.validate(&mesh).unwrap();
-    let err = tmc::model::build(&case, mesh).unwrap_err().to_string();
+fn a_quadratic_medium_uses_the_direct_regularization() {
+    let (s, _) = solve_text_opts(
+        "quadratic-medium",
+        "block.geo",
+        "order = 2\nparams = { n = 8, m = 8, l = 2 }",
+        &case_body("block"),
+    );
+    assert!(s.converged && s.lambda == 1.0 && s.min_J > 0.0);
+    assert_eq!(s.cells.keys().collect::<Vec<_>>(), ["Q2 (quad9)"]);
+    assert_eq!(s.dofs["p"], 0, "no p fields on quadratic cells");
+    assert!(!s.physics.regularization);
+    let gap = s.probes["gap"];
+    assert!(gap > 0.0 && gap < 2e-3, "gap {gap}");
+    let (t, b) = (&s.reactions["top"], &s.reactions["bottom"]);
+    assert!((t["y"] + b["y"]).abs() < 1e-8 * t["y"].abs());
     assert!(
-        err.contains("\"medium\"") && err.contains("eq. 18"),
-        "{err}"
+        -t["y"] > 5.0,
+        "the closed medium carries the load: {}",
+        t["y"]
     );
 }

@@ -49,9 +49,14 @@ pub fn history(dir: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
 /// Solve a case given as text (its `mesh` key is prepended: `geo/GEO`, meshed with `params`)
 /// in a scratch folder.
 pub fn solve_text(tag: &str, geo: &str, params: &str, case_text: &str) -> (Summary, PathBuf) {
+    solve_text_opts(tag, geo, &format!("params = {{ {params} }}"), case_text)
+}
+
+/// As [`solve_text`], with the whole `[mesh_options]` body (e.g. `order = 2`).
+pub fn solve_text_opts(tag: &str, geo: &str, options: &str, case_text: &str) -> (Summary, PathBuf) {
     let dir = scratch(tag);
     let text = format!(
-        "mesh = \"{}\"\n[mesh_options]\nparams = {{ {params} }}\n{case_text}",
+        "mesh = \"{}\"\n[mesh_options]\n{options}\n{case_text}",
         root().join("geo").join(geo).display()
     );
     let path = dir.join("case.toml");
