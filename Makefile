@@ -22,6 +22,7 @@ test: deps
 # Benchmarks print tables (tests never assert wall time).
 bench: deps
 	$(CARGO) bench --bench strategies
+	$(CARGO) bench --bench table2
 
 # tmc against FEniCSx on four scenes (T1, Q1, tet4, H1); writes validation/fenicsx/RESULTS.md.
 validate: build

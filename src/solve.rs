@@ -59,6 +59,8 @@ pub struct Summary {
     pub case: String,
     pub mesh: String,
     pub dim: usize,
+    /// Mesh nodes (of cells).
+    pub nodes: usize,
     pub cells: BTreeMap<String, usize>,
     pub dofs: BTreeMap<String, usize>,
     pub physics: Physics,
@@ -458,6 +460,7 @@ fn solve_model(
         case: case.path.display().to_string(),
         mesh: model.mesh.source.display().to_string(),
         dim: d,
+        nodes: model.mesh.coords.len(),
         cells: {
             let mut m = BTreeMap::new();
             for b in &model.mesh.cells {

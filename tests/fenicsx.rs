@@ -1,6 +1,6 @@
 //! tmc against FEniCSx (Debian's python3-dolfinx 0.5.2) on the same meshes: a 2D and a 3D
-//! scene of `validation/fenicsx/` must agree node by node to 1e-8 of the solution's max-norm
-//! (`make validate` runs all four scenes and writes RESULTS.md).
+//! scene of `validation/fenicsx/` (and the quadratic tri6 one) must agree node by node to 1e-8
+//! of the solution's max-norm (`make validate` runs all six scenes and writes RESULTS.md).
 
 mod common;
 use common::*;
@@ -37,4 +37,9 @@ fn t1_plate_with_hole_matches_fenicsx() {
 #[test]
 fn h1_block_with_hole_matches_fenicsx() {
     compare(&["block-hole-h1"]);
+}
+
+#[test]
+fn t2_plate_with_curved_hole_matches_fenicsx() {
+    compare(&["plate-hole-t2"]);
 }

@@ -4,7 +4,8 @@
     /usr/bin/python3 solve_fenicsx.py CASE.toml TMC_OUT_DIR OUT.npz
 
 Same discrete problem as tmc: the mesh tmc wrote (TMC_OUT_DIR/mesh.msh, read with
-gmshio.model_to_mesh after gmsh.merge), P1 displacement and temperature, the Neo-Hooke +
+gmshio.model_to_mesh after gmsh.merge), displacement and temperature of the mesh's order (P1
+or isoparametric P2), the Neo-Hooke +
 thermal-expansion energy of eq. 12 and the pulled-back Fourier law (plane strain with 3D
 invariants in 2D), the case's boundary conditions, tmc's load steps (from its history.csv) and
 tmc's quadrature rules (1 point on simplices, 2^d Gauss points on quads and hexes).
@@ -42,11 +43,17 @@ def main(case_path, tmc_out, out_path):
     gmsh.finalize()
 
     cell = mesh.ufl_cell()
-    simplex = cell.cellname() in ("triangle", "tetrahedron")
-    # tmc's rules: centroid on T1/tet4, 2x2 (2x2x2) Gauss on Q1/H1 (basix degree 3)
-    dx = ufl.dx(metadata={"quadrature_degree": 1 if simplex else 3})
-    el_u = ufl.VectorElement("Lagrange", cell, 1)
-    el_t = ufl.FiniteElement("Lagrange", cell, 1)
+    name = cell.cellname()
+    order = mesh.ufl_domain().ufl_coordinate_element().degree()
+    # tmc's rules (basix degrees): linear: centroid on T1/tet4 (1), 2x2(x2) Gauss on Q1/H1 (3);
+    # quadratic: 3 points on tri6 (2), 14 on tet10 (4), 3x3(x3) Gauss on quad9/hex27 (4)
+    degree = {
+        (1, "triangle"): 1, (1, "tetrahedron"): 1, (1, "quadrilateral"): 3, (1, "hexahedron"): 3,
+        (2, "triangle"): 2, (2, "tetrahedron"): 4, (2, "quadrilateral"): 4, (2, "hexahedron"): 4,
+    }[(order, name)]
+    dx = ufl.dx(metadata={"quadrature_degree": degree})
+    el_u = ufl.VectorElement("Lagrange", cell, order)
+    el_t = ufl.FiniteElement("Lagrange", cell, order)
     W = fem.FunctionSpace(mesh, ufl.MixedElement([el_u, el_t]))
     w = fem.Function(W)
     u, th = ufl.split(w)

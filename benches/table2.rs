@@ -1,0 +1,104 @@
+//! `make bench` (second table): the paper's Table 2 — block-plate-3d with one medium layer,
+//! linear H1 (p-field regularization, eq. 20) against quadratic H2 / H2S (direct
+//! regularization, eq. 18) — dofs, load steps, Newton iterations, gap, linear-solver time and
+//! assembly time, beside the paper's H1 rows (Pardiso on a 12-core M4 Pro).
+
+use std::path::PathBuf;
+use std::process::Command;
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn main() {
+    // (label, cells in plan, [mesh_options] body); z layers: block nb, medium 1, plate nq
+    let variants = [
+        (
+            "H1",
+            "8×8",
+            "params = { n = 8, nb = 5, nm = 1, nq = 3 }",
+            "3.15k, 25, 191, 1.6 s, 0.39 s",
+        ),
+        (
+            "H1",
+            "16×16",
+            "params = { n = 16, nb = 10, nm = 1, nq = 6 }",
+            "20.5k, 26, 203, 26.7 s, 2.3 s",
+        ),
+        (
+            "H2",
+            "4×4",
+            "order = 2\nparams = { n = 4, nb = 3, nm = 1, nq = 2 }",
+            "",
+        ),
+        (
+            "H2",
+            "8×8",
+            "order = 2\nparams = { n = 8, nb = 5, nm = 1, nq = 3 }",
+            "",
+        ),
+        (
+            "H2S",
+            "4×4",
+            "order = 2\nincomplete = true\nparams = { n = 4, nb = 3, nm = 1, nq = 2 }",
+            "",
+        ),
+        (
+            "H2S",
+            "8×8",
+            "order = 2\nincomplete = true\nparams = { n = 8, nb = 5, nm = 1, nq = 3 }",
+            "",
+        ),
+    ];
+    let base = std::fs::read_to_string(root().join("cases/block-plate-3d-tm1.toml")).unwrap();
+    let cases = root().join("cases");
+    let base = base.replace("\"../geo/", &format!("\"{}/../geo/", cases.display()));
+    println!(
+        "| disc. | plan | cells | nodes / dofs (free) | load steps | iterations | gap | solver s | K & R s | K & R per iteration and cell, µs | paper: dofs, steps, its, solver, K & R |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|---|---|");
+    for (disc, plan, options, paper) in variants {
+        let dir = root()
+            .join("target/bench/table2")
+            .join(format!("{disc}-{plan}"));
+        std::fs::create_dir_all(&dir).unwrap();
+        let text = base.replace("params = { nm = 1 }", options);
+        let case = dir.join("case.toml");
+        std::fs::write(&case, text).unwrap();
+        let out = dir.join("out");
+        let ok = Command::new(env!("CARGO_BIN_EXE_tmc"))
+            .args([
+                "solve",
+                case.to_str().unwrap(),
+                "-q",
+                "-o",
+                out.to_str().unwrap(),
+            ])
+            .status()
+            .unwrap()
+            .success();
+        let s: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
+                .unwrap();
+        let cells: u64 = s["cells"]
+            .as_object()
+            .unwrap()
+            .values()
+            .map(|v| v.as_u64().unwrap())
+            .sum();
+        let its = s["newton_iterations"].as_u64().unwrap();
+        let kr = s["assembly_seconds"].as_f64().unwrap();
+        println!(
+            "| {disc} | {plan} | {cells} | {} / {} ({}) | {}{} | {its} | {:.2e} | {:.1} | {:.1} | {:.0} | {paper} |",
+            s["nodes"],
+            s["dofs"]["total"],
+            s["dofs"]["free"],
+            s["load_steps"],
+            if ok { "" } else { " (failed)" },
+            s["probes"]["gap"].as_f64().unwrap_or(f64::NAN),
+            s["solver_seconds"].as_f64().unwrap(),
+            kr,
+            kr / its.max(1) as f64 / cells as f64 * 1e6,
+        );
+    }
+}
