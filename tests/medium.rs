@@ -348,3 +348,56 @@ fn a_quadratic_medium_uses_the_direct_regularization() {
         t["y"]
     );
 }
+
+/// A mesh that mixes linear and quadratic cells does not conform: refused, naming the kinds.
+#[test]
+fn mixed_element_orders_are_refused() {
+    use tmc::case::Case;
+    use tmc::mesh::{Block, CellKind, Mesh, PhysicalGroup};
+    // a unit square split into a tri3 and a tri6 sharing the diagonal
+    let coords = vec![
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.5, 1.0, 0.0],
+        [0.0, 0.5, 0.0],
+        [0.5, 0.5, 0.0],
+    ];
+    let group = |name: &str, dim, tag| PhysicalGroup {
+        name: name.into(),
+        dim,
+        tag,
+    };
+    let mesh = Mesh {
+        dim: 2,
+        coords,
+        cells: vec![
+            Block {
+                kind: CellKind::Tri3,
+                groups: vec![0],
+                conn: vec![0, 1, 2],
+            },
+            Block {
+                kind: CellKind::Tri6,
+                groups: vec![0],
+                conn: vec![0, 2, 3, 6, 4, 5],
+            },
+        ],
+        facets: vec![Block {
+            kind: CellKind::Line2,
+            groups: vec![1],
+            conn: vec![0, 1],
+        }],
+        groups: vec![group("solid", 2, 1), group("bottom", 1, 2)],
+        source: "mixed.msh".into(),
+    };
+    let text = "mesh = \"mixed.msh\"\n[[region]]\ngroup = \"solid\"\nkind = \"solid\"\nK = 1.0\nmu = 1.0\n[[bc]]\ngroup = \"bottom\"\nuy = -0.1\n";
+    let case = Case::parse(std::path::Path::new("mixed.toml"), text.into()).unwrap();
+    case.validate(&mesh).unwrap();
+    let err = tmc::model::build(&case, mesh).unwrap_err().to_string();
+    assert!(
+        err.contains("mixes linear and quadratic") && err.contains("T2 (tri6)"),
+        "{err}"
+    );
+}
