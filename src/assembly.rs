@@ -321,11 +321,12 @@ impl Assembler {
                             vec![0.0; nd],
                             vec![0.0; if tangent { nd * nd } else { 0 }],
                             vec![0u32; nd],
+                            Vec::<(usize, usize)>::with_capacity(nd),
                             f64::INFINITY,
                             0.0,
                         )
                     },
-                    |(mut r, mut k, mut ld, mj, en), &c| {
+                    |(mut r, mut k, mut ld, mut rows, mj, en), &c| {
                         let c = c as usize;
                         let nodes = blk.cell(c);
                         let s = crate::post::gather::<N>(model, nodes, x);
@@ -356,31 +357,43 @@ impl Assembler {
                         // below touches rows (and residual entries) owned by this cell alone.
                         unsafe {
                             for a in 0..nd {
-                                let ga = ld[a] as usize;
-                                *r_full.at(ga) += r[a];
-                                if !tangent {
-                                    continue;
-                                }
-                                let row = eq[ga];
-                                if row == NONE {
-                                    continue;
-                                }
+                                *r_full.at(ld[a] as usize) += r[a];
+                            }
+                            if tangent {
+                                // the cell's free rows in increasing equation order, so each
+                                // column of the CSC pattern is walked once, front to back
+                                rows.clear();
+                                rows.extend((0..nd).filter_map(|a| {
+                                    let e = eq[ld[a] as usize];
+                                    (e != NONE).then_some((e as usize, a))
+                                }));
+                                rows.sort_unstable();
                                 for b in 0..nd {
                                     let gb = ld[b] as usize;
-                                    let kab = k[a * nd + b];
                                     let col = eq[gb];
-                                    if col != NONE {
-                                        *values.at(pattern.slot(row as usize, col as usize)) += kab;
-                                    } else if let Some(dx) = dx_prescribed {
-                                        *lift.at(row as usize) += kab * dx[gb];
+                                    if col == NONE {
+                                        if let Some(dx) = dx_prescribed {
+                                            for &(row, a) in rows.iter() {
+                                                *lift.at(row) += k[a * nd + b] * dx[gb];
+                                            }
+                                        }
+                                        continue;
+                                    }
+                                    let col = col as usize;
+                                    let mut q = pattern.col_ptr[col];
+                                    for &(row, a) in rows.iter() {
+                                        while pattern.row_idx[q] != row {
+                                            q += 1;
+                                        }
+                                        *values.at(q) += k[a * nd + b];
                                     }
                                 }
                             }
                         }
-                        Ok((r, k, ld, mj.min(out.min_J), en + out.energy))
+                        Ok((r, k, ld, rows, mj.min(out.min_J), en + out.energy))
                     },
                 )
-                .map(|res| res.map(|(_, _, _, mj, en)| (mj, en)))
+                .map(|res| res.map(|(_, _, _, _, mj, en)| (mj, en)))
                 .try_reduce(
                     || (f64::INFINITY, 0.0),
                     |a, b| Ok((a.0.min(b.0), a.1 + b.1)),
