@@ -113,6 +113,14 @@ pub enum Part {
 }
 
 impl Part {
+    /// The equations a kernel call must fill for this part.
+    pub fn active(self) -> crate::kernel::Active {
+        crate::kernel::Active {
+            mechanics: self.has(Field::U),
+            heat: self.has(Field::Theta),
+        }
+    }
+
     pub fn has(self, f: Field) -> bool {
         match self {
             Part::All => true,
@@ -160,6 +168,19 @@ impl Newton {
             n[idx(f)] += x * x;
         }
         n.map(f64::sqrt)
+    }
+
+    /// −r on the free equations of `part`, 0 on the others.
+    fn free_residual(&self, model: &Model, part: Part, r_full: &[f64], out: &mut [f64]) {
+        for (d, &e) in model.cons.eq.iter().enumerate() {
+            if e != NONE {
+                out[e as usize] = if part.has(model.dofs.field[d]) {
+                    -r_full[d]
+                } else {
+                    0.0
+                };
+            }
+        }
     }
 
     /// Norms of the free part of the state per field.
@@ -235,10 +256,7 @@ impl Newton {
                     lambda,
                     true,
                     pending.then_some(&dx_p[..]),
-                    crate::kernel::Active {
-                        mechanics: part.has(Field::U),
-                        heat: part.has(Field::Theta),
-                    },
+                    part.active(),
                 ) {
                     Ok(stats) => break (stats, pending),
                     Err(e) if first || halvings == MAX_HALVINGS || !e.is_inadmissible() => {
@@ -255,15 +273,7 @@ impl Newton {
             };
             cuts += halvings;
             t_asm += t0.elapsed().as_secs_f64();
-            for (d, &e) in eq.iter().enumerate() {
-                if e != NONE {
-                    rhs[e as usize] = if part.has(model.dofs.field[d]) {
-                        -asm.r_full[d]
-                    } else {
-                        0.0
-                    };
-                }
-            }
+            self.free_residual(model, part, &asm.r_full, &mut rhs);
             if pending {
                 for ((r, l), f) in rhs.iter_mut().zip(&asm.lift).zip(&self.eq_field) {
                     if part.has(*f) {
@@ -339,26 +349,18 @@ impl Newton {
             for f in 0..3 {
                 du_ref[f] = du_ref[f].max(last_update[f]);
             }
-            if part == Part::Heat {
+            let converged_after = if part == Part::Heat {
                 // conduction on a fixed deformed state is linear in θ (k depends on J only):
                 // the direct solve is the solution; a residual-only assembly reports it
                 let t2 = std::time::Instant::now();
-                let heat = crate::kernel::Active {
-                    mechanics: false,
-                    heat: true,
-                };
-                asm.assemble_part(model, x, lambda, false, None, heat)
+                asm.assemble_part(model, x, lambda, false, None, part.active())
                     .map_err(StepFailure::Assembly)?;
                 t_asm += t2.elapsed().as_secs_f64();
                 let mut r = vec![0.0; n_eq];
-                for (d, &e) in eq.iter().enumerate() {
-                    if e != NONE && part.has(model.dofs.field[d]) {
-                        r[e as usize] = asm.r_full[d];
-                    }
-                }
-                let res = self.norms(&r);
+                self.free_residual(model, part, &asm.r_full, &mut r);
                 let t = idx(Field::Theta);
-                let rel = res[t] / step_ref[t].max(self.run_ref[t]).max(f64::MIN_POSITIVE);
+                let rel =
+                    self.norms(&r)[t] / step_ref[t].max(self.run_ref[t]).max(f64::MIN_POSITIVE);
                 if !(rel <= self.tol) {
                     return Err(StepFailure::NotConverged {
                         iterations: 1,
@@ -366,17 +368,8 @@ impl Newton {
                     });
                 }
                 history.push([0.0, rel, 0.0]);
-                return Ok(StepReport {
-                    iterations: 1,
-                    halvings: cuts,
-                    history,
-                    stats,
-                    t_assembly: t_asm,
-                    t_solve: t_sol,
-                    krylov: solver.take_krylov(),
-                });
-            }
-            if residual_ok && !first {
+                Some(1)
+            } else if residual_ok && !first {
                 // an update is small against the step's largest one, or negligible against the
                 // field itself (a field the step hardly changes has round-off updates only)
                 let size = self.norms_of_state(model, x);
@@ -384,17 +377,20 @@ impl Newton {
                     last_update[f] <= self.tol.sqrt() * same_units(f, |g| du_ref[g])
                         || last_update[f] <= 1e-10 * same_units(f, |g| size[g])
                 });
-                if update_ok {
-                    return Ok(StepReport {
-                        iterations: it,
-                        halvings: cuts,
-                        history,
-                        stats,
-                        t_assembly: t_asm,
-                        t_solve: t_sol,
-                        krylov: solver.take_krylov(),
-                    });
-                }
+                update_ok.then_some(it)
+            } else {
+                None
+            };
+            if let Some(iterations) = converged_after {
+                return Ok(StepReport {
+                    iterations,
+                    halvings: cuts,
+                    history,
+                    stats,
+                    t_assembly: t_asm,
+                    t_solve: t_sol,
+                    krylov: solver.take_krylov(),
+                });
             }
             if it >= self.max_iter {
                 return Err(StepFailure::NotConverged {

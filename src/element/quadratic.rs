@@ -290,155 +290,79 @@ static TET_DEG4: [([f64; 3], f64); 14] = [
     ([TC, TD, TC], W3T),
 ];
 
-impl RefElement<3, 1> for Line3 {
-    const SIMPLEX: bool = false;
-    fn shape(xi: &[f64; 1]) -> [f64; 3] {
-        tensor(&Self::nodes(), xi).0
-    }
-    fn grad(xi: &[f64; 1]) -> [[f64; 1]; 3] {
-        tensor(&Self::nodes(), xi).1
-    }
-    fn hessian(xi: &[f64; 1]) -> [[[f64; 1]; 1]; 3] {
-        tensor(&Self::nodes(), xi).2
-    }
-    fn quadrature() -> &'static [([f64; 1], f64)] {
-        &LINE_GAUSS3
-    }
-    fn nodes() -> [[f64; 1]; 3] {
-        [[-1.0], [1.0], [0.0]]
-    }
-}
-
-impl RefElement<6, 2> for Tri6 {
-    const SIMPLEX: bool = true;
-    fn shape(xi: &[f64; 2]) -> [f64; 6] {
-        simplex(&TRI_EDGES, xi).0
-    }
-    fn grad(xi: &[f64; 2]) -> [[f64; 2]; 6] {
-        simplex(&TRI_EDGES, xi).1
-    }
-    fn hessian(xi: &[f64; 2]) -> [[[f64; 2]; 2]; 6] {
-        simplex(&TRI_EDGES, xi).2
-    }
-    fn quadrature() -> &'static [([f64; 2], f64)] {
-        &TRI_DEG2
-    }
-    fn nodes() -> [[f64; 2]; 6] {
-        [
-            [0.0, 0.0],
-            [1.0, 0.0],
-            [0.0, 1.0],
-            [0.5, 0.0],
-            [0.5, 0.5],
-            [0.0, 0.5],
-        ]
-    }
-}
-
-impl RefElement<8, 2> for Quad8 {
-    const SIMPLEX: bool = false;
-    fn shape(xi: &[f64; 2]) -> [f64; 8] {
-        serendipity(&Self::nodes(), xi).0
-    }
-    fn grad(xi: &[f64; 2]) -> [[f64; 2]; 8] {
-        serendipity(&Self::nodes(), xi).1
-    }
-    fn hessian(xi: &[f64; 2]) -> [[[f64; 2]; 2]; 8] {
-        serendipity(&Self::nodes(), xi).2
-    }
-    fn quadrature() -> &'static [([f64; 2], f64)] {
-        &QUAD_GAUSS3
-    }
-    fn nodes() -> [[f64; 2]; 8] {
-        std::array::from_fn(|i| QUAD_NODES9[i])
-    }
-}
-
-impl RefElement<9, 2> for Quad9 {
-    const SIMPLEX: bool = false;
-    fn shape(xi: &[f64; 2]) -> [f64; 9] {
-        tensor(&QUAD_NODES9, xi).0
-    }
-    fn grad(xi: &[f64; 2]) -> [[f64; 2]; 9] {
-        tensor(&QUAD_NODES9, xi).1
-    }
-    fn hessian(xi: &[f64; 2]) -> [[[f64; 2]; 2]; 9] {
-        tensor(&QUAD_NODES9, xi).2
-    }
-    fn quadrature() -> &'static [([f64; 2], f64)] {
-        &QUAD_GAUSS3
-    }
-    fn nodes() -> [[f64; 2]; 9] {
-        QUAD_NODES9
-    }
-}
-
-impl RefElement<10, 3> for Tet10 {
-    const SIMPLEX: bool = true;
-    fn shape(xi: &[f64; 3]) -> [f64; 10] {
-        simplex(&TET_EDGES, xi).0
-    }
-    fn grad(xi: &[f64; 3]) -> [[f64; 3]; 10] {
-        simplex(&TET_EDGES, xi).1
-    }
-    fn hessian(xi: &[f64; 3]) -> [[[f64; 3]; 3]; 10] {
-        simplex(&TET_EDGES, xi).2
-    }
-    fn quadrature() -> &'static [([f64; 3], f64)] {
-        &TET_DEG4
-    }
-    fn nodes() -> [[f64; 3]; 10] {
-        let c = [
-            [0.0, 0.0, 0.0],
-            [1.0, 0.0, 0.0],
-            [0.0, 1.0, 0.0],
-            [0.0, 0.0, 1.0],
-        ];
-        std::array::from_fn(|i| {
-            if i < 4 {
-                c[i]
-            } else {
-                let (a, b) = TET_EDGES[i - 4];
-                std::array::from_fn(|d| 0.5 * (c[a][d] + c[b][d]))
+/// A quadratic element whose values, gradients and Hessians all come from one evaluation
+/// `$eval(nodes, ξ)` (`tensor`, `serendipity`) or `simplex(edges, ξ)`.
+macro_rules! quadratic_element {
+    ($ty:ty, $n:literal, $d:literal, simplex: $simplex:literal, $eval:expr, $rule:expr, $nodes:expr) => {
+        impl RefElement<$n, $d> for $ty {
+            const SIMPLEX: bool = $simplex;
+            fn shape(xi: &[f64; $d]) -> [f64; $n] {
+                $eval(xi).0
             }
-        })
-    }
+            fn grad(xi: &[f64; $d]) -> [[f64; $d]; $n] {
+                $eval(xi).1
+            }
+            fn hessian(xi: &[f64; $d]) -> [[[f64; $d]; $d]; $n] {
+                $eval(xi).2
+            }
+            fn quadrature() -> &'static [([f64; $d], f64)] {
+                &$rule
+            }
+            fn nodes() -> [[f64; $d]; $n] {
+                $nodes
+            }
+        }
+    };
 }
 
-impl RefElement<20, 3> for Hex20 {
-    const SIMPLEX: bool = false;
-    fn shape(xi: &[f64; 3]) -> [f64; 20] {
-        serendipity(&Self::nodes(), xi).0
-    }
-    fn grad(xi: &[f64; 3]) -> [[f64; 3]; 20] {
-        serendipity(&Self::nodes(), xi).1
-    }
-    fn hessian(xi: &[f64; 3]) -> [[[f64; 3]; 3]; 20] {
-        serendipity(&Self::nodes(), xi).2
-    }
-    fn quadrature() -> &'static [([f64; 3], f64)] {
-        &HEX_GAUSS3
-    }
-    fn nodes() -> [[f64; 3]; 20] {
-        std::array::from_fn(|i| HEX_NODES27[i])
-    }
+const LINE_NODES3: [[f64; 1]; 3] = [[-1.0], [1.0], [0.0]];
+
+/// tet10 nodes: corners, then the midpoints of `TET_EDGES`.
+fn tet10_nodes() -> [[f64; 3]; 10] {
+    let c = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, 0.0, 1.0],
+    ];
+    std::array::from_fn(|i| {
+        if i < 4 {
+            c[i]
+        } else {
+            let (a, b) = TET_EDGES[i - 4];
+            std::array::from_fn(|d| 0.5 * (c[a][d] + c[b][d]))
+        }
+    })
 }
 
-impl RefElement<27, 3> for Hex27 {
-    const SIMPLEX: bool = false;
-    fn shape(xi: &[f64; 3]) -> [f64; 27] {
-        tensor(&HEX_NODES27, xi).0
-    }
-    fn grad(xi: &[f64; 3]) -> [[f64; 3]; 27] {
-        tensor(&HEX_NODES27, xi).1
-    }
-    fn hessian(xi: &[f64; 3]) -> [[[f64; 3]; 3]; 27] {
-        tensor(&HEX_NODES27, xi).2
-    }
-    fn quadrature() -> &'static [([f64; 3], f64)] {
-        &HEX_GAUSS3
-    }
-    fn nodes() -> [[f64; 3]; 27] {
-        HEX_NODES27
-    }
-}
+quadratic_element!(Line3, 3, 1, simplex: false, |xi| tensor(&LINE_NODES3, xi), LINE_GAUSS3, LINE_NODES3);
+quadratic_element!(
+    Tri6,
+    6,
+    2,
+    simplex: true,
+    |xi| simplex(&TRI_EDGES, xi),
+    TRI_DEG2,
+    [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [0.5, 0.0], [0.5, 0.5], [0.0, 0.5]]
+);
+quadratic_element!(
+    Quad8,
+    8,
+    2,
+    simplex: false,
+    |xi| serendipity(&Self::nodes(), xi),
+    QUAD_GAUSS3,
+    std::array::from_fn(|i| QUAD_NODES9[i])
+);
+quadratic_element!(Quad9, 9, 2, simplex: false, |xi| tensor(&QUAD_NODES9, xi), QUAD_GAUSS3, QUAD_NODES9);
+quadratic_element!(Tet10, 10, 3, simplex: true, |xi| simplex(&TET_EDGES, xi), TET_DEG4, tet10_nodes());
+quadratic_element!(
+    Hex20,
+    20,
+    3,
+    simplex: false,
+    |xi| serendipity(&Self::nodes(), xi),
+    HEX_GAUSS3,
+    std::array::from_fn(|i| HEX_NODES27[i])
+);
+quadratic_element!(Hex27, 27, 3, simplex: false, |xi| tensor(&HEX_NODES27, xi), HEX_GAUSS3, HEX_NODES27);
