@@ -3,39 +3,15 @@
 //! time of the reduced path relative to the monolithic one. Every run is a separate `tmc
 //! solve` process, so peak memory is its own.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
+mod common;
+use common::{case_text, root, solve};
 
 /// Solve `cases/NAME.toml` with a `[solver]` table appended; the parsed summary.
 fn run(name: &str, solver: &str, tag: &str) -> serde_json::Value {
     let dir = root().join("target/bench").join(format!("{name}-{tag}"));
-    std::fs::create_dir_all(&dir).unwrap();
-    let text = std::fs::read_to_string(root().join("cases").join(format!("{name}.toml"))).unwrap();
-    let cases = root().join("cases");
-    let text = text.replace("\"../geo/", &format!("\"{}/../geo/", cases.display()));
-    let case = dir.join(format!("{name}.toml"));
-    std::fs::write(&case, format!("{text}\n[solver]\n{solver}\n")).unwrap();
-    let out = dir.join("out");
-    let status = Command::new(env!("CARGO_BIN_EXE_tmc"))
-        .args([
-            "solve",
-            case.to_str().unwrap(),
-            "-q",
-            "-o",
-            out.to_str().unwrap(),
-        ])
-        .status()
-        .unwrap();
-    assert!(status.success(), "{name} ({tag}) failed");
-    summary(&out)
-}
-
-fn summary(dir: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
+    let (ok, summary) = solve(&dir, &format!("{}\n[solver]\n{solver}\n", case_text(name)));
+    assert!(ok, "{name} ({tag}) failed");
+    summary
 }
 
 fn main() {

@@ -3,12 +3,8 @@
 //! regularization, eq. 18) — dofs, load steps, Newton iterations, gap, linear-solver time and
 //! assembly time, beside the paper's H1 rows (Pardiso on a 12-core M4 Pro).
 
-use std::path::PathBuf;
-use std::process::Command;
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
+mod common;
+use common::{case_text, root, solve};
 
 fn main() {
     // (label, cells in plan, [mesh_options] body); z layers: block nb, medium 1, plate nq
@@ -50,9 +46,7 @@ fn main() {
             "",
         ),
     ];
-    let base = std::fs::read_to_string(root().join("cases/block-plate-3d-tm1.toml")).unwrap();
-    let cases = root().join("cases");
-    let base = base.replace("\"../geo/", &format!("\"{}/../geo/", cases.display()));
+    let base = case_text("block-plate-3d-tm1");
     println!(
         "| disc. | plan | cells | nodes / dofs (free) | load steps | iterations | gap | solver s | K & R s | K & R per iteration and cell, µs | paper: dofs, steps, its, solver, K & R |"
     );
@@ -61,25 +55,7 @@ fn main() {
         let dir = root()
             .join("target/bench/table2")
             .join(format!("{disc}-{plan}"));
-        std::fs::create_dir_all(&dir).unwrap();
-        let text = base.replace("params = { nm = 1 }", options);
-        let case = dir.join("case.toml");
-        std::fs::write(&case, text).unwrap();
-        let out = dir.join("out");
-        let ok = Command::new(env!("CARGO_BIN_EXE_tmc"))
-            .args([
-                "solve",
-                case.to_str().unwrap(),
-                "-q",
-                "-o",
-                out.to_str().unwrap(),
-            ])
-            .status()
-            .unwrap()
-            .success();
-        let s: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
-                .unwrap();
+        let (ok, s) = solve(&dir, &base.replace("params = { nm = 1 }", options));
         let cells: u64 = s["cells"]
             .as_object()
             .unwrap()

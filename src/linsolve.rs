@@ -57,7 +57,6 @@ const GMRES_MAX: usize = 300;
 /// A sparse direct solver for a fixed pattern.
 pub struct LinearSolver {
     pub kind: LinearKind,
-    pattern: SymbolicSparseColMat<usize>,
     backend: Backend,
     par: Par,
     /// Krylov iterations of the last solve and since the last `take_krylov` (0 for direct).
@@ -65,8 +64,12 @@ pub struct LinearSolver {
     krylov_count: usize,
 }
 
-/// faer's symbolic LU and the last numeric factor.
-type LuFactor = (SymbolicLu<usize>, Option<Lu<usize, f64>>);
+/// The whole system's pattern, faer's symbolic LU of it and the last numeric factor.
+type LuFactor = (
+    SymbolicSparseColMat<usize>,
+    SymbolicLu<usize>,
+    Option<Lu<usize, f64>>,
+);
 
 enum Backend {
     Lu(Box<LuFactor>),
@@ -77,29 +80,17 @@ enum Backend {
 impl LinearSolver {
     /// Symbolic analysis of the pattern (once per mesh).
     pub fn new(kind: LinearKind, p: &Pattern, s: &Structure) -> Result<LinearSolver, LinearError> {
-        let pattern =
-            SymbolicSparseColMat::new_checked(p.n, p.n, p.col_ptr.clone(), None, p.row_idx.clone());
         let backend = match kind {
-            LinearKind::Lu => Backend::Lu(Box::new((
-                SymbolicLu::try_new(pattern.as_ref())
-                    .map_err(|e| LinearError::Symbolic(format!("{e:?}")))?,
-                None,
-            ))),
-            LinearKind::Ldlt => {
-                let all: Vec<usize> = (0..p.n).collect();
-                let sub = SubMatrix::new(p, &all, &all);
-                Backend::Ldlt(Box::new(SymFactor::new(sub, &s.node)?))
+            LinearKind::Lu => {
+                let pattern = full_pattern(p);
+                let symbolic = SymbolicLu::try_new(pattern.as_ref())
+                    .map_err(|e| LinearError::Symbolic(format!("{e:?}")))?;
+                Backend::Lu(Box::new((pattern, symbolic, None)))
             }
+            LinearKind::Ldlt => return Self::block_ldlt(p, s, &(0..p.n).collect::<Vec<_>>()),
             LinearKind::BlockGmres => Backend::BlockGmres(Box::new(BlockTriangular::new(p, s)?)),
         };
-        Ok(LinearSolver {
-            kind,
-            pattern,
-            backend,
-            par: Par::rayon(0),
-            krylov_last: 0,
-            krylov_count: 0,
-        })
+        Ok(Self::with(kind, backend))
     }
 
     /// LDLᵀ of the symmetric sub-block of equations `eqs` (increasing): `factor` takes the
@@ -111,24 +102,27 @@ impl LinearSolver {
     ) -> Result<LinearSolver, LinearError> {
         let nodes: Vec<u32> = eqs.iter().map(|&e| s.node[e]).collect();
         let sub = SubMatrix::new(p, eqs, eqs);
-        let pattern = sub.pattern.clone();
-        Ok(LinearSolver {
-            kind: LinearKind::Ldlt,
-            backend: Backend::Ldlt(Box::new(SymFactor::new(sub, &nodes)?)),
-            pattern,
+        let backend = Backend::Ldlt(Box::new(SymFactor::new(sub, &nodes)?));
+        Ok(Self::with(LinearKind::Ldlt, backend))
+    }
+
+    fn with(kind: LinearKind, backend: Backend) -> LinearSolver {
+        LinearSolver {
+            kind,
+            backend,
             par: Par::rayon(0),
             krylov_last: 0,
             krylov_count: 0,
-        })
+        }
     }
 
     /// Numeric factorisation of the matrix with this pattern and `values`.
     pub fn factor(&mut self, values: &[f64]) -> Result<(), LinearError> {
         match &mut self.backend {
             Backend::Lu(lu) => {
-                let (symbolic, numeric) = &mut **lu;
+                let (pattern, symbolic, numeric) = &mut **lu;
                 *numeric = None;
-                let a = SparseColMatRef::new(self.pattern.as_ref(), values);
+                let a = SparseColMatRef::new(pattern.as_ref(), values);
                 let lu = Lu::try_new_with_symbolic(symbolic.clone(), a)
                     .map_err(|e| LinearError::Factor(format!("{e:?}")))?;
                 *numeric = Some(lu);
@@ -148,13 +142,13 @@ impl LinearSolver {
         match &mut self.backend {
             Backend::Lu(lu) => {
                 let n = b.len();
-                lu.1.as_ref()
+                lu.2.as_ref()
                     .expect("factored before solve")
                     .solve_in_place(MatMut::from_column_major_slice_mut(b, n, 1));
             }
             Backend::Ldlt(f) => f.solve(b, self.par),
             Backend::BlockGmres(bt) => {
-                let its = bt.solve(&self.pattern, b, self.par)?;
+                let its = bt.solve(b, self.par)?;
                 self.krylov_last = its;
                 self.krylov_count += its;
             }
@@ -166,6 +160,11 @@ impl LinearSolver {
     pub fn take_krylov(&mut self) -> usize {
         std::mem::take(&mut self.krylov_count)
     }
+}
+
+/// The whole system's pattern in faer's form.
+fn full_pattern(p: &Pattern) -> SymbolicSparseColMat<usize> {
+    SymbolicSparseColMat::new_checked(p.n, p.n, p.col_ptr.clone(), None, p.row_idx.clone())
 }
 
 /// A square sub-block of the system matrix, `rows × cols` of the free equations, with the slot
@@ -377,7 +376,8 @@ struct BlockTriangular {
     ft: Option<SymFactor>,
     /// K_θm: temperature rows, mechanics columns.
     coupling: SubMatrix,
-    /// Copy of the whole matrix for the products.
+    /// Copy of the whole matrix (pattern and values) for the products.
+    pattern: SymbolicSparseColMat<usize>,
     values: Vec<f64>,
 }
 
@@ -396,6 +396,7 @@ impl BlockTriangular {
             fm: block(&mech)?,
             ft: block(&heat)?,
             coupling: SubMatrix::new(p, &heat, &mech),
+            pattern: full_pattern(p),
             values: vec![0.0; p.nnz()],
             mech,
             heat,
@@ -431,13 +432,8 @@ impl BlockTriangular {
         }
     }
 
-    fn solve(
-        &self,
-        pattern: &SymbolicSparseColMat<usize>,
-        b: &mut [f64],
-        par: Par,
-    ) -> Result<usize, LinearError> {
-        let a = SparseColMatRef::new(pattern.as_ref(), &self.values);
+    fn solve(&self, b: &mut [f64], par: Par) -> Result<usize, LinearError> {
+        let a = SparseColMatRef::new(self.pattern.as_ref(), &self.values);
         let matvec = |x: &[f64], y: &mut [f64]| {
             y.fill(0.0);
             let (cp, ri, v) = (a.col_ptr(), a.row_idx(), a.val());

@@ -241,7 +241,8 @@ pub fn describe(physics: &Physics, strategy: Strategy) -> String {
     format!("physics: {}; {coupling}; {how}", on.join(" + "))
 }
 
-/// Choose the linear solver: LDLᵀ where the tangent is symmetric, LU where it is not.
+/// Choose the whole-system linear solver: LDLᵀ where the tangent is symmetric, GMRES with the
+/// block-triangular preconditioner where it is not (LU or LDLᵀ when the case asks).
 pub fn choose_linear(choice: LinearChoice, physics: &Physics) -> LinearKind {
     let symmetric = !(physics.mechanics && physics.conduction);
     match choice {
