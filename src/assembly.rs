@@ -220,17 +220,17 @@ impl Assembler {
         }
     }
 
-    /// Assemble at the state `x` (all dofs) and load factor `lambda`. With `tangent`, fills
+    /// Assemble at the state `x` (all dofs) and pseudo-time `t` (see `LoadPath`). With `tangent`, fills
     /// `values`; with `dx_prescribed`, also the lifting of those prescribed increments.
     pub fn assemble(
         &mut self,
         model: &Model,
         x: &[f64],
-        lambda: f64,
+        t: f64,
         tangent: bool,
         dx_prescribed: Option<&[f64]>,
     ) -> Result<AssemblyStats, AssemblyError> {
-        self.assemble_part(model, x, lambda, tangent, dx_prescribed, Active::ALL)
+        self.assemble_part(model, x, t, tangent, dx_prescribed, Active::ALL)
     }
 
     /// As [`Assembler::assemble`], filling only the equations `act` names (the others' rows
@@ -239,7 +239,7 @@ impl Assembler {
         &mut self,
         model: &Model,
         x: &[f64],
-        lambda: f64,
+        t: f64,
         tangent: bool,
         dx_prescribed: Option<&[f64]>,
         act: Active,
@@ -279,7 +279,7 @@ impl Assembler {
             stats.energy += energy;
         }
         let mut fe = vec![0.0; model.dofs.n_dofs];
-        model.f_ext(lambda, &mut fe);
+        model.f_ext(t, &mut fe);
         for (r, f) in self.r_full.iter_mut().zip(&fe) {
             *r -= f;
         }

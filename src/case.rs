@@ -82,6 +82,9 @@ pub struct Bc {
     /// Scale by the load factor λ (true) or hold at full value from the start (false).
     #[serde(default = "yes")]
     pub ramp: bool,
+    /// This group's own amplitude at pseudo-times 0, 1, …, T (as `[steps] path`), instead of
+    /// λ: e.g. press first, then slide. Prescribed values only.
+    pub path: Option<Spanned<Vec<f64>>>,
 }
 
 fn yes() -> bool {
@@ -108,6 +111,10 @@ pub struct Steps {
     pub grow: f64,
     /// Cut factor after a failed step.
     pub cut: f64,
+    /// Load path: λ at pseudo-times t = 0, 1, …, T, linear in between (default `[0, 1]`).
+    /// Every value is reached by a step: e.g. `[0, 1, 0.2]` loads, then unloads to 0.2, and
+    /// `[0, 0.25, 0.5, 1]` also writes the states at λ = 0.25 and 0.5.
+    pub path: Option<Vec<f64>>,
 }
 
 impl Default for Steps {
@@ -121,6 +128,7 @@ impl Default for Steps {
             easy_iter: 4,
             grow: 1.5,
             cut: 0.25,
+            path: None,
         }
     }
 }
@@ -335,6 +343,31 @@ impl Case {
         }
         if !(s.grow >= 1.0 && s.cut > 0.0 && s.cut < 1.0) {
             bad("need grow >= 1 and 0 < cut < 1")?;
+        }
+        let n_path = match &s.path {
+            Some(p) if p.len() < 2 || p[0] != 0.0 || p.iter().any(|v| !v.is_finite()) => {
+                bad("path needs at least two finite values, the first 0 (the unloaded state)")?;
+                0
+            }
+            Some(p) => p.len(),
+            None => 2,
+        };
+        for bc in &f.bc {
+            let Some(own) = &bc.path else { continue };
+            let g = bc.group.get_ref();
+            let v = own.get_ref();
+            if v.len() != n_path || v[0] != 0.0 || v.iter().any(|v| !v.is_finite()) {
+                return self.error(
+                    own.span(),
+                    format!("bc on \"{g}\": `path` needs {n_path} finite values (one per value of [steps] path), the first 0"),
+                );
+            }
+            if bc.traction.is_some() || bc.heat_flux.is_some() || !bc.ramp {
+                return self.error(
+                    own.span(),
+                    format!("bc on \"{g}\": `path` applies to prescribed values (ux, uy, uz, theta) only, not to `traction`, `heat_flux` or `ramp = false`"),
+                );
+            }
         }
         for p in &f.probe {
             let field = p.field.get_ref().as_str();

@@ -138,24 +138,24 @@ impl DofMap {
     }
 }
 
-/// A prescribed value of one dof: `start + λ (value − start)` when ramped, else `value`.
-/// `start` is the dof's initial state: 0 for displacements, θ0 for temperatures.
+/// A prescribed value of one dof: `start + a (value − start)`, with `a` the value of its
+/// amplitude (see [`crate::model::LoadPath`]): 1 for values held from the start, the load
+/// factor λ for ramped ones, or the group's own path. `start` is the dof's initial state: 0 for
+/// displacements, θ0 for temperatures.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Prescribed {
     pub value: f64,
     pub start: f64,
-    pub ramp: bool,
+    /// Index into the amplitudes of [`crate::model::LoadPath::amplitudes`].
+    pub amp: usize,
     /// Index of the boundary-condition group that prescribes it (for reactions).
     pub bc: usize,
 }
 
 impl Prescribed {
-    pub fn at(&self, lambda: f64) -> f64 {
-        if self.ramp {
-            self.start + lambda * (self.value - self.start)
-        } else {
-            self.value
-        }
+    /// The value at amplitudes `amps` (from `LoadPath::amplitudes`).
+    pub fn at(&self, amps: &[f64]) -> f64 {
+        self.start + amps[self.amp] * (self.value - self.start)
     }
 }
 

@@ -55,7 +55,9 @@ pub struct Model {
     pub blocks: Vec<BlockInfo>,
     /// Region names and kinds, in case order.
     pub regions: Vec<(String, RegionKind)>,
-    /// External loads on all dofs: f_ext(λ) = λ f_ramp + f_full.
+    /// The load factor and the groups' own amplitudes over pseudo-time.
+    pub path: LoadPath,
+    /// External loads on all dofs: f_ext(t) = λ(t) f_ramp + f_full.
     pub f_ramp: Vec<f64>,
     pub f_full: Vec<f64>,
     /// Dirichlet groups, indexed by `Prescribed::bc`.
@@ -92,10 +94,65 @@ impl Model {
         crate::linsolve::Structure { node, thermal }
     }
 
-    pub fn f_ext(&self, lambda: f64, out: &mut [f64]) {
+    /// External loads at pseudo-time `t`.
+    pub fn f_ext(&self, t: f64, out: &mut [f64]) {
+        let lambda = self.path.lambda(t);
         for ((o, r), f) in out.iter_mut().zip(&self.f_ramp).zip(&self.f_full) {
             *o = lambda * r + f;
         }
+    }
+}
+
+/// Loads over pseudo-time t ∈ [0, T]: the load factor λ(t) and the amplitudes of groups with
+/// their own `path`, each piecewise linear between the values given at t = 0, 1, …, T.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LoadPath {
+    /// λ at t = 0, 1, …, T (default `[0, 1]`: t = λ).
+    pub lambda: Vec<f64>,
+    /// Amplitudes of groups with their own path, at the same times.
+    pub own: Vec<Vec<f64>>,
+}
+
+impl Default for LoadPath {
+    fn default() -> Self {
+        LoadPath {
+            lambda: vec![0.0, 1.0],
+            own: Vec::new(),
+        }
+    }
+}
+
+impl LoadPath {
+    /// Amplitude index of values held at full value from the start.
+    pub const HELD: usize = 0;
+    /// Amplitude index of values scaled by λ.
+    pub const RAMPED: usize = 1;
+
+    /// The end of pseudo-time, T.
+    pub fn end(&self) -> f64 {
+        (self.lambda.len() - 1) as f64
+    }
+
+    fn interp(v: &[f64], t: f64) -> f64 {
+        let t = t.clamp(0.0, (v.len() - 1) as f64);
+        if t.fract() == 0.0 {
+            return v[t as usize]; // a vertex: exactly its value
+        }
+        let i = t.floor() as usize;
+        let s = t - i as f64;
+        v[i] + s * (v[i + 1] - v[i])
+    }
+
+    /// The load factor λ(t).
+    pub fn lambda(&self, t: f64) -> f64 {
+        Self::interp(&self.lambda, t)
+    }
+
+    /// All amplitudes at t: [1, λ(t), own paths…], indexed by `Prescribed::amp`.
+    pub fn amplitudes(&self, t: f64) -> Vec<f64> {
+        let mut a = vec![1.0, self.lambda(t)];
+        a.extend(self.own.iter().map(|v| Self::interp(v, t)));
+        a
     }
 }
 
@@ -289,6 +346,10 @@ pub fn build(case: &Case, mesh: Mesh) -> Result<Model, CaseError> {
     }
 
     // Dirichlet conditions
+    let mut path = LoadPath {
+        lambda: f.steps.path.clone().unwrap_or_else(|| vec![0.0, 1.0]),
+        own: Vec::new(),
+    };
     let mut prescribed: Vec<Option<Prescribed>> = vec![None; dofs.n_dofs];
     let mut bc_groups: Vec<BcGroup> = Vec::new();
     for bc in &f.bc {
@@ -307,6 +368,14 @@ pub fn build(case: &Case, mesh: Mesh) -> Result<Model, CaseError> {
         let g = mesh.group(bc.group.get_ref()).expect("validated");
         let nodes = mesh.group_nodes(g);
         let index = bc_groups.len();
+        let amp = match (&bc.path, bc.ramp) {
+            (Some(own), _) => {
+                path.own.push(own.get_ref().clone());
+                LoadPath::RAMPED + path.own.len()
+            }
+            (None, true) => LoadPath::RAMPED,
+            (None, false) => LoadPath::HELD,
+        };
         bc_groups.push(BcGroup {
             name: bc.group.get_ref().clone(),
             fields: comps.iter().map(|c| c.0).collect(),
@@ -326,11 +395,11 @@ pub fn build(case: &Case, mesh: Mesh) -> Result<Model, CaseError> {
                         Field::Theta => theta_init[n],
                         _ => 0.0,
                     },
-                    ramp: bc.ramp,
+                    amp,
                     bc: index,
                 };
                 if let Some(old) = prescribed[dof] {
-                    if old.value != new.value || old.ramp != new.ramp {
+                    if old.value != new.value || old.amp != new.amp {
                         let other = &bc_groups[old.bc].name;
                         return case.error(
                             bc.group.span(),
@@ -415,6 +484,7 @@ pub fn build(case: &Case, mesh: Mesh) -> Result<Model, CaseError> {
             .iter()
             .map(|r| (r.group.get_ref().clone(), r.kind))
             .collect(),
+        path,
         f_ramp,
         f_full,
         bc_groups,

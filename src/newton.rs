@@ -214,9 +214,10 @@ impl Newton {
         asm: &mut Assembler,
         solver: &mut LinearSolver,
         x: &mut [f64],
-        lambda: f64,
+        t: f64,
         part: Part,
     ) -> Result<StepReport, StepFailure> {
+        let amps = model.path.amplitudes(t);
         let n_eq = model.cons.n_eq;
         let eq = &model.cons.eq;
         let sub = (part != Part::All).then(|| self.equations(part));
@@ -246,14 +247,14 @@ impl Newton {
                 let mut pending = false;
                 for (d, p) in model.cons.prescribed.iter().enumerate() {
                     if let Some(p) = p.filter(|_| part.has(model.dofs.field[d])) {
-                        dx_p[d] = p.at(lambda) - x[d];
+                        dx_p[d] = p.at(&amps) - x[d];
                         pending |= dx_p[d] != 0.0;
                     }
                 }
                 match asm.assemble_part(
                     model,
                     x,
-                    lambda,
+                    t,
                     true,
                     pending.then_some(&dx_p[..]),
                     part.active(),
@@ -353,7 +354,7 @@ impl Newton {
                 // conduction on a fixed deformed state is linear in θ (k depends on J only):
                 // the direct solve is the solution; a residual-only assembly reports it
                 let t2 = std::time::Instant::now();
-                asm.assemble_part(model, x, lambda, false, None, part.active())
+                asm.assemble_part(model, x, t, false, None, part.active())
                     .map_err(StepFailure::Assembly)?;
                 t_asm += t2.elapsed().as_secs_f64();
                 let mut r = vec![0.0; n_eq];

@@ -71,6 +71,8 @@ pub struct Summary {
     pub converged: bool,
     pub message: String,
     pub lambda: f64,
+    /// Pseudo-time reached (equal to λ without a `[steps] path`).
+    pub time: f64,
     pub load_steps: usize,
     pub rejected_steps: usize,
     pub newton_iterations: usize,
@@ -88,6 +90,11 @@ pub struct Summary {
     pub min_J_solid: Option<f64>,
     /// `null` without a medium.
     pub min_J_medium: Option<f64>,
+    /// Stored energy of the last accepted state (elastic, medium and regularization).
+    pub energy: f64,
+    /// Work of the forces on the displacements, ∫ f·du summed by the trapezoidal rule over the
+    /// accepted steps. Equals `energy` for hyperelastic scenes without thermal strain.
+    pub external_work: f64,
     pub output: String,
 }
 
@@ -305,10 +312,10 @@ fn solve_model(
     if !opts.quiet {
         eprintln!("{}", describe(&model.physics, strategy));
     }
-    let mut ctl = Controller::new(steps);
+    let mut ctl = Controller::new(steps, model.path.end());
     if !model.physics.mechanics {
-        // conduction on the undeformed body is linear: one step, one solve
-        ctl.dlambda = 1.0;
+        // conduction on the undeformed body is linear: one step (per path segment), one solve
+        ctl.dt = 1.0;
     }
     let mut x = model.initial_state();
 
@@ -358,7 +365,7 @@ fn solve_model(
             format!("R_{g}_{k}")
         }
     }));
-    columns.extend(["krylov_iterations", "halvings"].map(String::from));
+    columns.extend(["krylov_iterations", "halvings", "time", "work"].map(String::from));
     let mut history = History::new(&out_dir.join("history.csv"), &columns);
     let name = case.name();
     let mut pvd: Vec<(f64, String)> = Vec::new();
@@ -436,8 +443,19 @@ fn solve_model(
             .iter()
             .map(|(g, k)| r0.get(g).and_then(|m| m.get(k)).copied().unwrap_or(0.0)),
     );
-    row0.extend([0.0, 0.0]);
+    row0.extend([0.0, 0.0, 0.0, 0.0]);
     history.row(&row0)?;
+    // the forces on the displacement dofs, f_int = r + f_ext, for the work done by them
+    let u_dofs: Vec<usize> = (0..model.dofs.n_dofs)
+        .filter(|&d| model.dofs.field[d] == Field::U)
+        .collect();
+    let forces = |r: &[f64], t: f64| -> Vec<f64> {
+        let mut fe = vec![0.0; model.dofs.n_dofs];
+        model.f_ext(t, &mut fe);
+        u_dofs.iter().map(|&d| r[d] + fe[d]).collect()
+    };
+    let mut f_last = forces(&asm.r_full, 0.0);
+    let mut work = 0.0;
 
     let pb = if opts.quiet {
         indicatif::ProgressBar::hidden()
@@ -484,6 +502,7 @@ fn solve_model(
         converged: false,
         message: String::new(),
         lambda: 0.0,
+        time: 0.0,
         load_steps: 0,
         rejected_steps: 0,
         newton_iterations: 0,
@@ -497,6 +516,8 @@ fn solve_model(
         min_J: 1.0,
         min_J_solid: None,
         min_J_medium: None,
+        energy: stats0.energy,
+        external_work: 0.0,
         output: out_dir.display().to_string(),
     };
     let finish = |s: &mut Summary,
@@ -512,7 +533,8 @@ fn solve_model(
      -> Result<(), SolveError> {
         s.converged = converged;
         s.message = message;
-        s.lambda = ctl.lambda;
+        s.lambda = model.path.lambda(ctl.t);
+        s.time = ctl.t;
         s.load_steps = ctl.accepted;
         s.rejected_steps = ctl.rejected;
         s.newton_iterations = its;
@@ -536,7 +558,8 @@ fn solve_model(
 
     while !ctl.done() {
         let target = ctl.target();
-        let dl = target - ctl.lambda;
+        let lambda = model.path.lambda(target);
+        let dl = lambda - model.path.lambda(ctl.t);
         let mut trial = x.clone();
         let mut result: Result<Option<StepReport>, StepFailure> = Ok(None);
         for (part, solver) in solvers.iter_mut() {
@@ -550,8 +573,8 @@ fn solve_model(
         }
         match result.map(|r| r.expect("at least one part")) {
             Ok(rep) => {
+                let x_last = std::mem::replace(&mut x, trial);
                 ctl.accept(target, rep.iterations);
-                x = trial;
                 total_iterations += rep.iterations;
                 t_asm += rep.t_assembly;
                 t_sol += rep.t_solve;
@@ -563,10 +586,19 @@ fn solve_model(
                 asm.assemble(&model, &x, target, false, None)
                     .map_err(|e| SolveError::Setup(format!("converged state is invalid: {e}")))?;
                 last_reactions = reactions(&model, &asm.r_full);
+                let f_now = forces(&asm.r_full, target);
+                work += u_dofs
+                    .iter()
+                    .zip(f_last.iter().zip(&f_now))
+                    .map(|(&d, (a, b))| 0.5 * (a + b) * (x[d] - x_last[d]))
+                    .sum::<f64>();
+                f_last = f_now;
+                summary.energy = rep.stats.energy;
+                summary.external_work = work;
                 let last = rep.history.last().copied().unwrap_or([0.0; 3]);
                 let mut row = vec![
                     ctl.accepted as f64,
-                    target,
+                    lambda,
                     dl,
                     rep.iterations as f64,
                     last[0],
@@ -584,7 +616,7 @@ fn solve_model(
                         .copied()
                         .unwrap_or(0.0)
                 }));
-                row.extend([rep.krylov as f64, rep.halvings as f64]);
+                row.extend([rep.krylov as f64, rep.halvings as f64, target, work]);
                 total_krylov += rep.krylov;
                 summary.krylov_iterations = total_krylov;
                 history.row(&row)?;
@@ -599,7 +631,7 @@ fn solve_model(
                 let line = format!(
                     "step {:3}  λ {:.4}  Δλ {:.2e}  its {:2}  min J solid {} medium {}",
                     ctl.accepted,
-                    target,
+                    lambda,
                     dl,
                     rep.iterations,
                     fmt_j(rep.stats.min_J_solid),
@@ -614,7 +646,7 @@ fn solve_model(
                         .collect();
                     say(&pb, &format!("{line}  [{}]", table.join(" ")));
                 }
-                pb.set_position((target * 1000.0) as u64);
+                pb.set_position((target / ctl.end * 1000.0) as u64);
                 pb.set_message(format!("step {} its {}", ctl.accepted, total_iterations));
             }
             Err(f) => {
@@ -622,13 +654,15 @@ fn solve_model(
                 if opts.verbose {
                     say(
                         &pb,
-                        &format!("  step to λ {target:.4} failed: {last_failure}; cutting Δλ"),
+                        &format!(
+                            "  step to λ {lambda:.4} failed: {last_failure}; cutting the step"
+                        ),
                     );
                 }
                 if let Err(dl) = ctl.reject() {
                     pb.finish_and_clear();
                     let err = SolveError::StepTooSmall {
-                        lambda: ctl.lambda,
+                        lambda: model.path.lambda(ctl.t),
                         dlambda: dl,
                         reason: last_failure.clone(),
                         steps: ctl.accepted,

@@ -381,3 +381,52 @@ print(sorted(ca), sorted(cb), 'same' if ca == cb else 'DIFFERENT')";
         assert!(out.trim_end().ends_with("same"), "{tag}: {out}");
     }
 }
+
+#[test]
+fn bad_load_paths_are_refused_with_the_line() {
+    // a group's path must have one value per value of [steps] path
+    let (o, p) = case_with("path-length", |t| {
+        t.replace("ux = 0.2\n", "ux = 0.2\npath = [0.0, 1.0]\n")
+            + "[steps]\npath = [0.0, 1.0, 0.5]\n"
+    });
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    let text = std::fs::read_to_string(&p).unwrap();
+    let line = 1 + text.lines().position(|l| l == "path = [0.0, 1.0]").unwrap();
+    assert!(
+        e.contains(&format!("{}:{line}:", p.display())) && e.contains("3 finite values"),
+        "{e}"
+    );
+    // the load path starts unloaded
+    let (o, _) = case_with("path-start", |t| {
+        t.to_string() + "[steps]\npath = [0.5, 1.0]\n"
+    });
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("the first 0"), "{}", stderr(&o));
+}
+
+#[test]
+fn a_load_path_ends_where_it_says_and_the_work_matches_the_energy() {
+    // stretch to 0.2, back to 0.1: every path value is a step, the state at the end is the
+    // state at λ = 0.5 of a monotonic run (hyperelastic), and ∫ f·du = stored energy
+    let (o, p) = case_with("path-ok", |t| {
+        t.to_string() + "[steps]\ninitial = 0.05\nmax = 0.05\npath = [0.0, 1.0, 0.5]\n"
+    });
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = p.parent().unwrap().join("out");
+    let s = summary(&out);
+    assert_eq!(s["time"], 2.0);
+    assert_eq!(s["lambda"], 0.5);
+    let (w, e) = (
+        s["external_work"].as_f64().unwrap(),
+        s["energy"].as_f64().unwrap(),
+    );
+    assert!(e > 0.0 && (w - e).abs() < 1e-3 * e, "work {w} energy {e}");
+    let (cols, rows) = common::history(&out);
+    let c = cols.iter().position(|c| c == "time").unwrap();
+    let times: Vec<f64> = rows.iter().map(|r| r[c]).collect();
+    assert!(
+        times.contains(&1.0) && times.last() == Some(&2.0),
+        "{times:?}"
+    );
+}
