@@ -2,7 +2,7 @@
 CARGO ?= cargo
 TMC := target/release/tmc
 
-.PHONY: deps build demo test bench validate clean
+.PHONY: deps build demo test bench validate figures clean
 
 deps:
 	@scripts/install-deps.sh
@@ -23,10 +23,25 @@ test: deps
 bench: deps
 	$(CARGO) bench --bench strategies
 	$(CARGO) bench --bench table2
+	$(CARGO) bench --bench stability
 
 # tmc against FEniCSx on four scenes (T1, Q1, tet4, H1); writes validation/fenicsx/RESULTS.md.
 validate: build
 	/usr/bin/python3 validation/fenicsx/run.py $(CURDIR)/$(TMC) $(CURDIR)/target/validate
+
+# The README's renders: solve the curved scenes (sphere-block takes about 8 minutes), then draw.
+R = /usr/bin/python3 validation/render/render.py
+figures: build
+	$(TMC) solve cases/discs-ellipse.toml -q
+	$(TMC) solve cases/micro-contact.toml -q
+	$(TMC) solve cases/sphere-block.toml -q
+	$(R) results/discs-ellipse docs/img/discs-ellipse.png --title "discs-ellipse: θ, ū = 0.9"
+	for l in 0.25 0.5 1; do $(R) results/micro-contact docs/img/micro-contact-$$l.png \
+	  --at-lambda $$l --window 0,4,1.2,3.4 --title "micro-contact: θ at λ = $$l"; done
+	/usr/bin/python3 validation/render/curve.py results/micro-contact \
+	  docs/img/micro-contact-conductance.png Q_top --scale-x 1.3333333333 \
+	  --xlabel "top displacement v̄" --mark 0.25,0.5,1
+	$(R) results/sphere-block docs/img/sphere-block.png --title "sphere-block: θ, ū = 0.2"
 
 clean:
 	$(CARGO) clean

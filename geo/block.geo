@@ -1,15 +1,18 @@
 // Block on a third-medium layer (Wriggers 2025, section 4.1.1).
 // Medium 0 <= y <= t, solid t <= y <= t + H, both 0 <= x <= W; structured Q1 mesh.
 // Parameters (tmc mesh --set name=value): n cells along x, m across the solid, l across
-// the medium. The paper's mesh is n = m = 32, l = 8.
-DefineConstant[ W = 2.0, H = 1.0, t = 0.25, n = 32, m = 32, l = 8, tri = 0 ];
+// the medium. The paper's mesh is n = m = 32, l = 8. skew != 1 grades the cells along the
+// medium's bottom and top in opposite directions (ratio skew from cell to cell), which
+// distorts the medium's cells into slanted trapezoids (a test of distorted meshes).
+DefineConstant[ W = 2.0, H = 1.0, t = 0.25, n = 32, m = 32, l = 8, tri = 0, skew = 1 ];
 Point(1) = {0, 0, 0}; Point(2) = {W, 0, 0}; Point(3) = {W, t, 0}; Point(4) = {0, t, 0};
 Point(5) = {W, t + H, 0}; Point(6) = {0, t + H, 0};
 Line(1) = {1, 2}; Line(2) = {2, 3}; Line(3) = {3, 4}; Line(4) = {4, 1};
 Line(5) = {3, 5}; Line(6) = {5, 6}; Line(7) = {6, 4};
 Curve Loop(1) = {1, 2, 3, 4}; Plane Surface(1) = {1};
 Curve Loop(2) = {-3, 5, 6, 7}; Plane Surface(2) = {2};
-Transfinite Curve{1, 3, 6} = n + 1;
+Transfinite Curve{1, 3} = n + 1 Using Progression skew;
+Transfinite Curve{6} = n + 1;
 Transfinite Curve{2, 4} = l + 1;
 Transfinite Curve{5, 7} = m + 1;
 Transfinite Surface{1}; Transfinite Surface{2};

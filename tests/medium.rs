@@ -401,3 +401,37 @@ fn mixed_element_orders_are_refused() {
         "{err}"
     );
 }
+
+#[test]
+fn discs_ellipse_scene_reaches_full_load_in_fewer_steps_than_the_paper() {
+    let (s, _) = solve_case("discs-ellipse");
+    assert!(s.converged && s.lambda == 1.0 && s.min_J > 0.0);
+    // paper: 103 load steps, 556 Newton iterations
+    assert!(s.load_steps <= 103 && s.newton_iterations <= 556, "{s:?}");
+    let p = &s.probes;
+    assert!(
+        p["disc_left_ux"] < -0.05 && p["disc_right_ux"] > 0.05,
+        "{p:?}"
+    );
+    assert!(
+        p["theta_disc_left"] > 20.0 && p["theta_disc_right"] > 20.0,
+        "{p:?}"
+    );
+}
+
+#[test]
+fn micro_contact_scene_closes_two_spots_then_everything() {
+    let (s, out) = solve_case("micro-contact");
+    assert!(s.converged && s.lambda == 1.0 && s.min_J > 0.0);
+    let (cols, rows) = history(&out);
+    let col = |n: &str| cols.iter().position(|c| c == n).unwrap();
+    let at = |l: f64| rows.iter().find(|r| r[col("lambda")] == l).unwrap();
+    let (third, two_thirds, full) = (at(0.25), at(0.5), at(1.0));
+    for g in ["gap_spot1", "gap_spot2", "gap_middle"] {
+        assert!(third[col(g)] > 0.15, "no contact at v = 1/3: {g}");
+        assert!(full[col(g)].abs() < 2e-3, "full contact at v = 4/3: {g}");
+    }
+    assert!(two_thirds[col("gap_spot1")].abs() < 2e-3 && two_thirds[col("gap_spot2")].abs() < 2e-3);
+    assert!(two_thirds[col("gap_middle")] > 0.05);
+    assert!(full[col("Q_top")] > 5.0 * third[col("Q_top")]);
+}
