@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
 # Install what tmc needs and the machine lacks: Debian's gmsh (library and headers) for
-# meshing, python3-meshio to read results, python3-gmsh and python3-dolfinx (FEniCSx 0.5.2)
+# meshing, fontconfig/freetype and a font for the plots (plotters), python3-meshio and
+# python3-matplotlib to read and render results, python3-gmsh and python3-dolfinx (FEniCSx 0.5.2)
 # for the validation against FEniCSx. Idempotent: installs only missing packages.
 set -euo pipefail
 need=()
-for pkg in gmsh libgmsh-dev pkg-config python3-meshio python3-gmsh python3-dolfinx; do
+for pkg in gmsh libgmsh-dev pkg-config libfontconfig1-dev libfreetype-dev fonts-dejavu-core \
+  python3-meshio python3-matplotlib python3-gmsh python3-dolfinx; do
   dpkg -s "$pkg" >/dev/null 2>&1 || need+=("$pkg")
 done
 if [ ${#need[@]} -gt 0 ]; then

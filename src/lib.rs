@@ -3,7 +3,7 @@
 //! Layers in pipeline order: [`mesh`] (gmsh → .msh → mesh) → [`dofs`] → [`element`] and
 //! [`material`] → [`kernel`] → [`assembly`] → [`linsolve`] → [`newton`] → [`stepping`] →
 //! [`output`]. [`case`] reads the case file, [`model`] builds the discrete problem from it,
-//! [`solve`] drives a run.
+//! [`solve`] drives a run, [`study`] runs a scene over variants, [`plot`] draws charts.
 
 #![allow(non_snake_case)]
 // maths names: F, P, J, X, dP_dF
@@ -21,7 +21,9 @@ pub mod mesh;
 pub mod model;
 pub mod newton;
 pub mod output;
+pub mod plot;
 pub mod post;
 pub mod probe;
 pub mod solve;
 pub mod stepping;
+pub mod study;

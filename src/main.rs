@@ -53,6 +53,32 @@ enum Command {
         #[arg(short, long)]
         verbose: bool,
     },
+    /// Solve a scene over a list of variants: study.csv, study.md, error-vs-time and history
+    /// plots.
+    Study {
+        /// The study (.toml).
+        study: PathBuf,
+        /// Output folder (default: results/NAME).
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        /// No progress lines.
+        #[arg(short, long)]
+        quiet: bool,
+    },
+    /// Draw history.csv columns of a solved case against λ, one PNG per column.
+    Plot {
+        /// The results folder of a solve (holds history.csv).
+        results: PathBuf,
+        /// Columns to draw (default: probes, reactions, energy, work).
+        #[arg(short, long, value_delimiter = ',')]
+        columns: Vec<String>,
+        /// The x column.
+        #[arg(short, long, default_value = "lambda")]
+        x: String,
+        /// Output folder (default: the results folder).
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+    },
 }
 
 fn parse_param(s: &str) -> Result<(String, f64), String> {
@@ -78,6 +104,61 @@ fn print_chain(e: &dyn std::error::Error) {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
+        Command::Study {
+            study,
+            output,
+            quiet,
+        } => {
+            let exe = match std::env::current_exe() {
+                Ok(e) => e,
+                Err(e) => {
+                    eprintln!("error: cannot find the tmc executable: {e}");
+                    return ExitCode::FAILURE;
+                }
+            };
+            let opts = tmc::study::StudyOptions {
+                out_dir: output,
+                exe,
+                quiet,
+            };
+            match tmc::study::run_study(&study, &opts) {
+                Ok(r) => {
+                    let failed = r.outcomes.iter().filter(|o| !o.converged).count();
+                    println!(
+                        "study {}: {} variants ({failed} failed); wrote {}",
+                        r.name,
+                        r.outcomes.len(),
+                        r.files
+                            .iter()
+                            .map(|f| f.display().to_string())
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    );
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    print_chain(&e);
+                    ExitCode::FAILURE
+                }
+            }
+        }
+        Command::Plot {
+            results,
+            columns,
+            x,
+            output,
+        } => match tmc::plot::plot_results(&results, &columns, &x, output.as_deref()) {
+            Ok(files) => {
+                for f in files {
+                    println!("wrote {}", f.display());
+                }
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                print_chain(&e);
+                ExitCode::FAILURE
+            }
+        },
         Command::Mesh {
             geo,
             output,

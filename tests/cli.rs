@@ -430,3 +430,131 @@ fn a_load_path_ends_where_it_says_and_the_work_matches_the_energy() {
         "{times:?}"
     );
 }
+
+fn is_png(p: &Path) -> bool {
+    std::fs::read(p).is_ok_and(|b| b.len() > 1000 && b.starts_with(b"\x89PNG\r\n\x1a\n"))
+}
+
+#[test]
+fn a_tiny_study_writes_its_csv_table_and_plots() {
+    let dir = scratch("study-tiny");
+    let study = dir.join("tiny.toml");
+    std::fs::write(
+        &study,
+        format!(
+            r#"description = "two meshes of the block"
+case = "{}"
+measure = ["gap", "Q_top"]
+reference = "last"
+history = ["gap"]
+
+[[variant]]
+name = "coarse"
+set = {{ mesh_options = {{ params = {{ n = 4, m = 4, l = 1 }} }} }}
+
+[[variant]]
+name = "fine"
+set = {{ "mesh_options.params" = {{ n = 16, m = 8, l = 4 }}, "region.medium.gamma" = 1e-4 }}
+paper = {{ gap = 6.3e-4 }}
+"#,
+            root().join("cases/block.toml").display()
+        ),
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let o = tmc(&[
+        "study",
+        study.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "-q",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let csv = std::fs::read_to_string(out.join("study.csv")).unwrap();
+    let lines: Vec<&str> = csv.lines().collect();
+    assert_eq!(lines.len(), 3, "{csv}");
+    let head: Vec<&str> = lines[0].split(',').collect();
+    for c in [
+        "variant",
+        "dofs",
+        "load_steps",
+        "newton_iterations",
+        "assembly_s",
+        "solver_s",
+        "total_s",
+        "peak_memory_mb",
+        "gap",
+        "Q_top",
+        "err_gap",
+        "error",
+        "converged",
+    ] {
+        assert!(head.contains(&c), "no column {c}: {head:?}");
+    }
+    let field = |row: &str, c: &str| -> String {
+        let i = head.iter().position(|h| *h == c).unwrap();
+        row.split(',').nth(i).unwrap().to_string()
+    };
+    let (coarse, fine) = (lines[1], lines[2]);
+    assert!(
+        field(coarse, "dofs").parse::<f64>().unwrap() < field(fine, "dofs").parse::<f64>().unwrap()
+    );
+    // the reference (the last variant) has no error; the coarse mesh has some
+    assert_eq!(field(fine, "error").parse::<f64>().unwrap(), 0.0);
+    let e = field(coarse, "error").parse::<f64>().unwrap();
+    assert!(e > 0.0 && e < 0.5, "coarse error {e}");
+    assert_eq!(field(coarse, "converged"), "true");
+    let md = std::fs::read_to_string(out.join("study.md")).unwrap();
+    assert!(
+        md.contains("| coarse |") && md.contains("gap 0.00063") && md.contains("\"fine\""),
+        "{md}"
+    );
+    for png in ["error_vs_time.png", "history_gap.png"] {
+        assert!(is_png(&out.join(png)), "{png}");
+    }
+    // each variant's case is kept beside its results
+    let case = std::fs::read_to_string(out.join("runs/fine/case.toml")).unwrap();
+    assert!(
+        case.contains("n = 16") && case.contains("block.geo"),
+        "{case}"
+    );
+}
+
+#[test]
+fn a_study_naming_a_missing_group_is_refused_before_solving() {
+    let dir = scratch("study-bad");
+    let study = dir.join("bad.toml");
+    std::fs::write(
+        &study,
+        format!(
+            "case = \"{}\"\nmeasure = [\"gap\"]\nreference = \"last\"\n[[variant]]\nname = \"a\"\nset = {{ \"region.gas.gamma\" = 1e-3 }}\n",
+            root().join("cases/block.toml").display()
+        ),
+    )
+    .unwrap();
+    let o = tmc(&[
+        "study",
+        study.to_str().unwrap(),
+        "-o",
+        dir.join("out").to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(
+        e.contains("bad.toml") && e.contains("variant \"a\"") && e.contains("gas"),
+        "{e}"
+    );
+    assert!(!dir.join("out/runs/a").exists(), "nothing ran");
+}
+
+#[test]
+fn plot_draws_history_columns() {
+    let (o, p) = case_with("plot", |t| t.to_string());
+    assert!(o.status.success());
+    let out = p.parent().unwrap().join("out");
+    let o = tmc(&["plot", out.to_str().unwrap(), "-c", "R_right_x,energy"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(is_png(&out.join("R_right_x.png")) && is_png(&out.join("energy.png")));
+    let o = tmc(&["plot", out.to_str().unwrap(), "-c", "nope"]);
+    assert!(!o.status.success() && stderr(&o).contains("no column \"nope\""));
+}

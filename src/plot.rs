@@ -1,0 +1,268 @@
+//! Line charts to PNG (plotters): history columns against λ (`tmc plot`) and the study plots.
+
+use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
+use plotters::prelude::*;
+use std::path::{Path, PathBuf};
+
+#[derive(Debug, thiserror::Error)]
+pub enum PlotError {
+    #[error("cannot read {path}: {source}")]
+    Read {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{path}: {msg}")]
+    Bad { path: PathBuf, msg: String },
+    #[error("cannot draw {path}: {msg}")]
+    Draw { path: PathBuf, msg: String },
+}
+
+/// One named curve.
+pub struct Series {
+    pub name: String,
+    pub points: Vec<(f64, f64)>,
+}
+
+/// A chart: title, axis labels, curves, and which axes are logarithmic.
+pub struct Chart<'a> {
+    pub title: &'a str,
+    pub x_label: &'a str,
+    pub y_label: &'a str,
+    pub series: &'a [Series],
+    pub log_x: bool,
+    pub log_y: bool,
+}
+
+/// The range of `v` with a margin; positive values only on a log axis.
+fn range(v: impl Iterator<Item = f64>, log: bool) -> std::ops::Range<f64> {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for x in v.filter(|x| x.is_finite() && (!log || *x > 0.0)) {
+        lo = lo.min(x);
+        hi = hi.max(x);
+    }
+    if !lo.is_finite() {
+        return if log { 0.1..10.0 } else { 0.0..1.0 };
+    }
+    if log {
+        (lo / 1.5)..(hi * 1.5)
+    } else {
+        let pad = if hi > lo {
+            0.05 * (hi - lo)
+        } else {
+            0.5 * lo.abs().max(1.0)
+        };
+        (lo - pad)..(hi + pad)
+    }
+}
+
+/// Draw `chart` into a PNG at `path`.
+pub fn line_chart(path: &Path, chart: &Chart) -> Result<(), PlotError> {
+    let xs = range(
+        chart
+            .series
+            .iter()
+            .flat_map(|s| s.points.iter().map(|p| p.0)),
+        chart.log_x,
+    );
+    let ys = range(
+        chart
+            .series
+            .iter()
+            .flat_map(|s| s.points.iter().map(|p| p.1)),
+        chart.log_y,
+    );
+    let r = match (chart.log_x, chart.log_y) {
+        (false, false) => draw(path, chart, xs, ys),
+        (true, false) => draw(path, chart, xs.log_scale(), ys),
+        (false, true) => draw(path, chart, xs, ys.log_scale()),
+        (true, true) => draw(path, chart, xs.log_scale(), ys.log_scale()),
+    };
+    r.map_err(|msg| PlotError::Draw {
+        path: path.to_owned(),
+        msg,
+    })
+}
+
+fn draw<X, Y>(path: &Path, chart: &Chart, x: X, y: Y) -> Result<(), String>
+where
+    X: AsRangedCoord<Value = f64>,
+    Y: AsRangedCoord<Value = f64>,
+    X::CoordDescType: ValueFormatter<f64>,
+    Y::CoordDescType: ValueFormatter<f64>,
+{
+    let e = |e: &dyn std::fmt::Display| e.to_string();
+    let root = BitMapBackend::new(path, (900, 600)).into_drawing_area();
+    root.fill(&WHITE).map_err(|x| e(&x))?;
+    let mut c = ChartBuilder::on(&root)
+        .caption(chart.title, ("sans-serif", 22))
+        .margin(15)
+        .x_label_area_size(45)
+        .y_label_area_size(80)
+        .build_cartesian_2d(x, y)
+        .map_err(|x| e(&x))?;
+    c.configure_mesh()
+        .x_desc(chart.x_label)
+        .y_desc(chart.y_label)
+        .x_label_formatter(&|v| format!("{v:.3}"))
+        .y_label_formatter(&|v| format!("{v:.3e}"))
+        .draw()
+        .map_err(|x| e(&x))?;
+    for (i, s) in chart.series.iter().enumerate() {
+        let color = Palette99::pick(i).to_rgba();
+        let pts: Vec<(f64, f64)> = s
+            .points
+            .iter()
+            .copied()
+            .filter(|(a, b)| {
+                a.is_finite()
+                    && b.is_finite()
+                    && (!chart.log_x || *a > 0.0)
+                    && (!chart.log_y || *b > 0.0)
+            })
+            .collect();
+        c.draw_series(LineSeries::new(pts.iter().copied(), color.stroke_width(2)))
+            .map_err(|x| e(&x))?
+            .label(s.name.clone())
+            .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], color.stroke_width(2)));
+        c.draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled())))
+            .map_err(|x| e(&x))?;
+    }
+    c.configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::UpperLeft)
+        .draw()
+        .map_err(|x| e(&x))?;
+    root.present().map_err(|x| e(&x))?;
+    Ok(())
+}
+
+/// A history.csv: column names and rows.
+pub struct History {
+    pub columns: Vec<String>,
+    pub rows: Vec<Vec<f64>>,
+}
+
+impl History {
+    pub fn read(path: &Path) -> Result<History, PlotError> {
+        let text = std::fs::read_to_string(path).map_err(|source| PlotError::Read {
+            path: path.to_owned(),
+            source,
+        })?;
+        let mut lines = text.lines();
+        let columns: Vec<String> = lines
+            .next()
+            .ok_or_else(|| PlotError::Bad {
+                path: path.to_owned(),
+                msg: "empty file".into(),
+            })?
+            .split(',')
+            .map(String::from)
+            .collect();
+        let mut rows = Vec::new();
+        for (i, l) in lines.enumerate() {
+            let row: Result<Vec<f64>, _> = l.split(',').map(|v| v.trim().parse::<f64>()).collect();
+            let row = row.map_err(|e| PlotError::Bad {
+                path: path.to_owned(),
+                msg: format!("line {}: {e}", i + 2),
+            })?;
+            rows.push(row);
+        }
+        Ok(History { columns, rows })
+    }
+
+    pub fn column(&self, name: &str) -> Option<Vec<f64>> {
+        let c = self.columns.iter().position(|c| c == name)?;
+        Some(self.rows.iter().map(|r| r[c]).collect())
+    }
+}
+
+/// The columns `tmc plot` draws by default: probes, reactions, energy and work (those after
+/// the bookkeeping ones), skipping columns the scene does not have (NaN).
+pub fn default_columns(h: &History) -> Vec<String> {
+    const BOOKKEEPING: [&str; 12] = [
+        "step",
+        "lambda",
+        "dlambda",
+        "newton_iterations",
+        "res_u",
+        "res_theta",
+        "res_p",
+        "min_J_solid",
+        "min_J_medium",
+        "krylov_iterations",
+        "halvings",
+        "time",
+    ];
+    h.columns
+        .iter()
+        .filter(|c| !BOOKKEEPING.contains(&c.as_str()))
+        .filter(|c| {
+            h.column(c)
+                .is_some_and(|v| v.iter().any(|x| x.is_finite() && *x != 0.0))
+        })
+        .cloned()
+        .collect()
+}
+
+/// `tmc plot`: one PNG per column of `results/NAME/history.csv` against `x` (default λ),
+/// written to `out` (default the results folder). Returns the files written.
+pub fn plot_results(
+    dir: &Path,
+    columns: &[String],
+    x: &str,
+    out: Option<&Path>,
+) -> Result<Vec<PathBuf>, PlotError> {
+    let path = dir.join("history.csv");
+    let h = History::read(&path)?;
+    let bad = |msg: String| PlotError::Bad {
+        path: path.clone(),
+        msg,
+    };
+    let xs = h.column(x).ok_or_else(|| {
+        bad(format!(
+            "no column \"{x}\" (columns: {})",
+            h.columns.join(", ")
+        ))
+    })?;
+    let columns = if columns.is_empty() {
+        default_columns(&h)
+    } else {
+        columns.to_vec()
+    };
+    let out = out.unwrap_or(dir);
+    std::fs::create_dir_all(out).map_err(|source| PlotError::Read {
+        path: out.to_owned(),
+        source,
+    })?;
+    let name = dir
+        .file_name()
+        .map(|n| n.to_string_lossy().to_string())
+        .unwrap_or_default();
+    let mut written = Vec::new();
+    for c in &columns {
+        let ys = h.column(c).ok_or_else(|| {
+            bad(format!(
+                "no column \"{c}\" (columns: {})",
+                h.columns.join(", ")
+            ))
+        })?;
+        let file = out.join(format!("{c}.png"));
+        line_chart(
+            &file,
+            &Chart {
+                title: &format!("{name}: {c}"),
+                x_label: x,
+                y_label: c,
+                series: &[Series {
+                    name: c.clone(),
+                    points: xs.iter().copied().zip(ys).collect(),
+                }],
+                log_x: false,
+                log_y: false,
+            },
+        )?;
+        written.push(file);
+    }
+    Ok(written)
+}
