@@ -1,5 +1,10 @@
-//! Assembly: the sparsity pattern (built once per mesh), cell colouring for conflict-free
-//! parallel scatter, and the global residual and tangent.
+//! Assembly: the sparsity pattern (built once per mesh) and the global residual and tangent.
+//!
+//! Parallel over cells without locks: each block's cells are cut into one contiguous chunk
+//! per thread, and each chunk adds into its own copy of the arrays (the first into the
+//! result itself), summed at the end. On few cores this beats colouring (one parallel region
+//! per colour, each too small to pay for its scheduling) and keeps cells in mesh order for
+//! locality; the copies cost (threads − 1) × nnz values, so at most 8 threads assemble.
 //!
 //! The system is reduced to the free equations; a prescribed dof's column is moved to the
 //! right-hand side with its increment ("lifting"), so symmetric tangents stay symmetric.
@@ -10,6 +15,9 @@ use crate::element::RefElement;
 use crate::kernel::{Active, KernelError, bulk};
 use crate::model::Model;
 use rayon::prelude::*;
+
+/// At most this many threads assemble (each beyond the first holds a copy of the arrays).
+const MAX_ASSEMBLY_THREADS: usize = 8;
 
 /// CSC pattern of the free equations, rows sorted within each column.
 #[derive(Clone, Debug)]
@@ -99,29 +107,6 @@ pub fn build_pattern(model: &Model) -> Pattern {
     }
 }
 
-/// Greedy colouring of a block's cells so that no two cells of one colour share a node.
-pub fn colour_cells(conn: &[usize], n_nodes_per_cell: usize, n_nodes: usize) -> Vec<Vec<u32>> {
-    let mut used: Vec<u128> = vec![0; n_nodes];
-    let mut colours: Vec<Vec<u32>> = Vec::new();
-    for (c, cell) in conn.chunks(n_nodes_per_cell).enumerate() {
-        let mask = cell.iter().fold(0u128, |m, &n| m | used[n]);
-        let k = (!mask).trailing_zeros() as usize;
-        if k >= 128 {
-            // more than 128 colours: extremely unusual valence; give it a colour of its own
-            colours.push(vec![c as u32]);
-            continue;
-        }
-        if k >= colours.len() {
-            colours.resize(k + 1, Vec::new());
-        }
-        colours[k].push(c as u32);
-        for &n in cell {
-            used[n] |= 1u128 << k;
-        }
-    }
-    colours
-}
-
 /// Failure found while assembling.
 #[derive(Clone, Debug, PartialEq)]
 pub enum AssemblyError {
@@ -172,11 +157,18 @@ pub struct AssemblyStats {
     pub energy: f64,
 }
 
-/// Assembler state reused across calls: pattern, colours, value and vector storage.
+/// The arrays one assembly thread adds into.
+struct Arrays {
+    values: Vec<f64>,
+    r_full: Vec<f64>,
+    lift: Vec<f64>,
+}
+
+/// Assembler state reused across calls: pattern, value and vector storage.
 pub struct Assembler {
     pub pattern: Pattern,
-    /// Colours per model block.
-    colours: Vec<Vec<Vec<u32>>>,
+    /// The arrays of threads 1.. (thread 0 adds into the result).
+    private: Vec<Arrays>,
     /// Tangent values (CSC, free equations).
     pub values: Vec<f64>,
     /// Internal-minus-external force on every dof (reactions on prescribed dofs).
@@ -202,21 +194,25 @@ impl Shared {
 impl Assembler {
     pub fn new(model: &Model) -> Assembler {
         let pattern = build_pattern(model);
-        let colours = model
-            .blocks
-            .iter()
-            .map(|b| {
-                let blk = &model.mesh.cells[b.block];
-                colour_cells(&blk.conn, blk.kind.n_nodes(), model.mesh.coords.len())
-            })
-            .collect();
         let nnz = pattern.nnz();
-        Assembler {
+        let arrays = || Arrays {
             values: vec![0.0; nnz],
             r_full: vec![0.0; model.dofs.n_dofs],
             lift: vec![0.0; pattern.n],
+        };
+        let cells: usize = model.mesh.cells.iter().map(|b| b.n_cells()).sum();
+        // no thread gets fewer than 256 cells
+        let threads = rayon::current_num_threads()
+            .min(MAX_ASSEMBLY_THREADS)
+            .min(cells / 256)
+            .max(1);
+        let main = arrays();
+        Assembler {
+            private: (1..threads).map(|_| arrays()).collect(),
+            values: main.values,
+            r_full: main.r_full,
+            lift: main.lift,
             pattern,
-            colours,
         }
     }
 
@@ -249,6 +245,14 @@ impl Assembler {
             self.values.fill(0.0);
         }
         self.lift.fill(0.0);
+        // a failed call may have left partial sums in the threads' arrays
+        for p in &mut self.private {
+            if tangent {
+                p.values.fill(0.0);
+            }
+            p.r_full.fill(0.0);
+            p.lift.fill(0.0);
+        }
         let mut stats = AssemblyStats {
             min_J_solid: f64::INFINITY,
             min_J_medium: f64::INFINITY,
@@ -278,6 +282,7 @@ impl Assembler {
             }
             stats.energy += energy;
         }
+        self.gather_private(tangent);
         let mut fe = vec![0.0; model.dofs.n_dofs];
         model.f_ext(t, &mut fe);
         for (r, f) in self.r_full.iter_mut().zip(&fe) {
@@ -290,7 +295,32 @@ impl Assembler {
         Ok(stats)
     }
 
-    /// One block, colour by colour, cells of a colour in parallel. Returns (min J, energy).
+    /// Add the threads' private arrays into the result.
+    fn gather_private(&mut self, tangent: bool) {
+        const CHUNK: usize = 1 << 14;
+        for p in &self.private {
+            let pairs: [(&mut Vec<f64>, &Vec<f64>, bool); 3] = [
+                (&mut self.values, &p.values, tangent),
+                (&mut self.r_full, &p.r_full, true),
+                (&mut self.lift, &p.lift, true),
+            ];
+            for (dst, src, on) in pairs {
+                if !on {
+                    continue;
+                }
+                dst.par_chunks_mut(CHUNK)
+                    .zip(src.par_chunks(CHUNK))
+                    .for_each(|(d, s)| {
+                        for (a, b) in d.iter_mut().zip(s.iter()) {
+                            *a += *b;
+                        }
+                    });
+            }
+        }
+    }
+
+    /// One block: its cells cut into one contiguous chunk per thread, each chunk adding into
+    /// its thread's arrays. Returns (min J, energy).
     fn block<const N: usize, const D: usize, E: RefElement<N, D>>(
         &mut self,
         model: &Model,
@@ -307,100 +337,102 @@ impl Assembler {
         let dofs = &model.dofs;
         let eq = &model.cons.eq;
         let pattern = &self.pattern;
-        let values = Shared(self.values.as_mut_ptr());
-        let r_full = Shared(self.r_full.as_mut_ptr());
-        let lift = Shared(self.lift.as_mut_ptr());
-        let mut min_j = f64::INFINITY;
-        let mut energy = 0.0;
-        for colour in &self.colours[bi] {
-            let (mj, en) = colour
-                .par_iter()
-                .try_fold(
-                    || {
-                        (
-                            vec![0.0; nd],
-                            vec![0.0; if tangent { nd * nd } else { 0 }],
-                            vec![0u32; nd],
-                            Vec::<(usize, usize)>::with_capacity(nd),
-                            f64::INFINITY,
-                            0.0,
-                        )
-                    },
-                    |(mut r, mut k, mut ld, mut rows, mj, en), &c| {
-                        let c = c as usize;
-                        let nodes = blk.cell(c);
-                        let s = crate::post::gather::<N>(model, nodes, x);
-                        // local → global dofs
-                        for (I, &n) in nodes.iter().enumerate() {
-                            if lay.has_u {
-                                for i in 0..D {
-                                    ld[lay.u(I, i)] = dofs.u[n * D + i];
-                                }
-                            }
-                            if lay.has_theta {
-                                ld[lay.theta(I)] = dofs.theta[n];
-                            }
-                            for c in 0..lay.np {
-                                ld[lay.p(I, c)] = dofs.p[n * lay.np + c];
-                            }
-                        }
-                        let out = bulk::<N, D, E>(
-                            &info.mat,
-                            &lay,
-                            &s,
-                            act,
-                            &mut r,
-                            if tangent { Some(&mut k) } else { None },
-                        )
-                        .map_err(|e| (e, c))?;
-                        // SAFETY: cells of one colour share no node, hence no dof: every write
-                        // below touches rows (and residual entries) owned by this cell alone.
-                        unsafe {
-                            for a in 0..nd {
-                                *r_full.at(ld[a] as usize) += r[a];
-                            }
-                            if tangent {
-                                // the cell's free rows in increasing equation order, so each
-                                // column of the CSC pattern is walked once, front to back
-                                rows.clear();
-                                rows.extend((0..nd).filter_map(|a| {
-                                    let e = eq[ld[a] as usize];
-                                    (e != NONE).then_some((e as usize, a))
-                                }));
-                                rows.sort_unstable();
-                                for b in 0..nd {
-                                    let gb = ld[b] as usize;
-                                    let col = eq[gb];
-                                    if col == NONE {
-                                        if let Some(dx) = dx_prescribed {
-                                            for &(row, a) in rows.iter() {
-                                                *lift.at(row) += k[a * nd + b] * dx[gb];
-                                            }
-                                        }
-                                        continue;
-                                    }
-                                    let col = col as usize;
-                                    let mut q = pattern.col_ptr[col];
-                                    for &(row, a) in rows.iter() {
-                                        while pattern.row_idx[q] != row {
-                                            q += 1;
-                                        }
-                                        *values.at(q) += k[a * nd + b];
-                                    }
-                                }
-                            }
-                        }
-                        Ok((r, k, ld, rows, mj.min(out.min_J), en + out.energy))
-                    },
-                )
-                .map(|res| res.map(|(_, _, _, _, mj, en)| (mj, en)))
-                .try_reduce(
-                    || (f64::INFINITY, 0.0),
-                    |a, b| Ok((a.0.min(b.0), a.1 + b.1)),
-                )?;
-            min_j = min_j.min(mj);
-            energy += en;
+        let mut targets = vec![(
+            Shared(self.values.as_mut_ptr()),
+            Shared(self.r_full.as_mut_ptr()),
+            Shared(self.lift.as_mut_ptr()),
+        )];
+        for p in &mut self.private {
+            targets.push((
+                Shared(p.values.as_mut_ptr()),
+                Shared(p.r_full.as_mut_ptr()),
+                Shared(p.lift.as_mut_ptr()),
+            ));
         }
-        Ok((min_j, energy))
+        let n_cells = blk.n_cells();
+        let chunk = n_cells.div_ceil(targets.len()).max(1);
+        let work = |(values, r_full, lift): (Shared, Shared, Shared),
+                    cells: std::ops::Range<usize>| {
+            let mut r = vec![0.0; nd];
+            let mut k = vec![0.0; if tangent { nd * nd } else { 0 }];
+            let mut ld = vec![0u32; nd];
+            let mut rows = Vec::<(usize, usize)>::with_capacity(nd);
+            let (mut mj, mut en) = (f64::INFINITY, 0.0);
+            for c in cells {
+                let nodes = blk.cell(c);
+                let s = crate::post::gather::<N>(model, nodes, x);
+                // local → global dofs
+                for (I, &n) in nodes.iter().enumerate() {
+                    if lay.has_u {
+                        for i in 0..D {
+                            ld[lay.u(I, i)] = dofs.u[n * D + i];
+                        }
+                    }
+                    if lay.has_theta {
+                        ld[lay.theta(I)] = dofs.theta[n];
+                    }
+                    for c in 0..lay.np {
+                        ld[lay.p(I, c)] = dofs.p[n * lay.np + c];
+                    }
+                }
+                let out = bulk::<N, D, E>(
+                    &info.mat,
+                    &lay,
+                    &s,
+                    act,
+                    &mut r,
+                    if tangent { Some(&mut k) } else { None },
+                )
+                .map_err(|e| (e, c))?;
+                mj = mj.min(out.min_J);
+                en += out.energy;
+                // SAFETY: each chunk writes only into its own thread's arrays.
+                unsafe {
+                    for a in 0..nd {
+                        *r_full.at(ld[a] as usize) += r[a];
+                    }
+                    if !tangent {
+                        continue;
+                    }
+                    // the cell's free rows in increasing equation order, so each column of
+                    // the CSC pattern is walked once, front to back
+                    rows.clear();
+                    rows.extend((0..nd).filter_map(|a| {
+                        let e = eq[ld[a] as usize];
+                        (e != NONE).then_some((e as usize, a))
+                    }));
+                    rows.sort_unstable();
+                    for b in 0..nd {
+                        let gb = ld[b] as usize;
+                        let col = eq[gb];
+                        if col == NONE {
+                            if let Some(dx) = dx_prescribed {
+                                for &(row, a) in rows.iter() {
+                                    *lift.at(row) += k[a * nd + b] * dx[gb];
+                                }
+                            }
+                            continue;
+                        }
+                        let col = col as usize;
+                        let mut q = pattern.col_ptr[col];
+                        for &(row, a) in rows.iter() {
+                            while pattern.row_idx[q] != row {
+                                q += 1;
+                            }
+                            *values.at(q) += k[a * nd + b];
+                        }
+                    }
+                }
+            }
+            Ok((mj, en))
+        };
+        targets
+            .into_par_iter()
+            .enumerate()
+            .map(|(i, tg)| work(tg, (i * chunk).min(n_cells)..((i + 1) * chunk).min(n_cells)))
+            .try_reduce(
+                || (f64::INFINITY, 0.0),
+                |a, b| Ok((a.0.min(b.0), a.1 + b.1)),
+            )
     }
 }

@@ -203,24 +203,40 @@ pub fn bulk<const N: usize, const D: usize, E: RefElement<N, D>>(
                 }
             }
             if let Some(k) = k.as_deref_mut() {
-                // B[(iJ), k] = Σ_L A_iJkL ∂N_K/∂X_L for each K
+                // A = ∂P/∂F has major symmetry (A_iJkL = A_kLiJ: P derives from an energy), so
+                // K_uu is symmetric: the blocks I ≤ K are computed, the others mirrored.
+                let mut A = [[0.0; 9]; 9];
+                for (a, row) in A.iter_mut().enumerate() {
+                    for (b, v) in row.iter_mut().enumerate() {
+                        *v = m.dP_dF[(a, b)] * dV;
+                    }
+                }
                 for K in 0..N {
+                    // B[(iJ), k] = Σ_L A_iJkL ∂N_K/∂X_L
                     let mut B = [[0.0; 3]; 9];
                     for i in 0..D {
                         for J in 0..D {
                             for kk in 0..D {
-                                B[3 * i + J][kk] = (0..D)
-                                    .map(|L| m.dP_dF[(3 * i + J, 3 * kk + L)] * g[K][L])
-                                    .sum();
+                                let mut v = 0.0;
+                                for L in 0..D {
+                                    v += A[3 * i + J][3 * kk + L] * g[K][L];
+                                }
+                                B[3 * i + J][kk] = v;
                             }
                         }
                     }
-                    for I in 0..N {
+                    for I in 0..=K {
                         for i in 0..D {
-                            let row = lay.u(I, i) * nd;
                             for kk in 0..D {
-                                let v: f64 = (0..D).map(|J| g[I][J] * B[3 * i + J][kk]).sum();
-                                k[row + lay.u(K, kk)] += v * dV;
+                                let mut v = 0.0;
+                                for J in 0..D {
+                                    v += g[I][J] * B[3 * i + J][kk];
+                                }
+                                let (a, b) = (lay.u(I, i), lay.u(K, kk));
+                                k[a * nd + b] += v;
+                                if I != K {
+                                    k[b * nd + a] += v;
+                                }
                             }
                         }
                     }
@@ -261,6 +277,20 @@ pub fn bulk<const N: usize, const D: usize, E: RefElement<N, D>>(
                 r[lay.theta(I)] -= v * dV;
             }
             if let Some(k) = k.as_deref_mut() {
+                let mut dQ_dF_g = [[[0.0; 3]; 3]; N];
+                if lay.has_u && act.mechanics {
+                    for K in 0..N {
+                        for kk in 0..D {
+                            for J in 0..D {
+                                let mut v = 0.0;
+                                for L in 0..D {
+                                    v += h.dQ_dF[(J, 3 * kk + L)] * g[K][L];
+                                }
+                                dQ_dF_g[K][kk][J] = v;
+                            }
+                        }
+                    }
+                }
                 for I in 0..N {
                     let row = lay.theta(I) * nd;
                     for K in 0..N {
@@ -273,13 +303,12 @@ pub fn bulk<const N: usize, const D: usize, E: RefElement<N, D>>(
                         k[row + lay.theta(K)] += v * dV;
                     }
                     if lay.has_u && act.mechanics {
+                        // C[K][kk][J] = Σ_L ∂Q_J/∂F_kkL ∂N_K/∂X_L, then v = −g_I · C
                         for K in 0..N {
                             for kk in 0..D {
                                 let mut v = 0.0;
                                 for J in 0..D {
-                                    for L in 0..D {
-                                        v -= g[I][J] * h.dQ_dF[(J, 3 * kk + L)] * g[K][L];
-                                    }
+                                    v -= g[I][J] * dQ_dF_g[K][kk][J];
                                 }
                                 k[row + lay.u(K, kk)] += v * dV;
                             }
