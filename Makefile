@@ -2,7 +2,7 @@
 CARGO ?= cargo
 TMC := target/release/tmc
 
-.PHONY: deps build demo test bench validate figures clean
+.PHONY: deps build demo test bench validate figures studies clean
 
 deps:
 	@scripts/install-deps.sh
@@ -42,6 +42,12 @@ figures: build
 	  docs/img/micro-contact-conductance.png Q_top --scale-x 1.3333333333 \
 	  --xlabel "top displacement v̄" --mark 0.25,0.5,1
 	$(R) results/sphere-block docs/img/sphere-block.png --title "sphere-block: θ, ū = 0.2"
+
+# The accuracy-against-time studies: tables and plots into validation/studies/NAME/
+# (one command each: tmc study validation/studies/NAME.toml -o validation/studies/NAME).
+STUDIES = block-refinement block-gamma block-plate-layers h1-vs-h2
+studies: build
+	for s in $(STUDIES); do $(TMC) study validation/studies/$$s.toml -o validation/studies/$$s || exit 1; done
 
 clean:
 	$(CARGO) clean
