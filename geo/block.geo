@@ -28,3 +28,6 @@ Physical Curve("interface") = {3};
 Physical Curve("solid_left") = {7};
 Physical Curve("solid_right") = {5};
 Physical Point("corner") = {4};
+// the medium's sides (free in cases/block.toml)
+Physical Curve("medium_left") = {4};
+Physical Curve("medium_right") = {2};

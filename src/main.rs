@@ -134,7 +134,12 @@ fn main() -> ExitCode {
                             .collect::<Vec<_>>()
                             .join(", ")
                     );
-                    ExitCode::SUCCESS
+                    // the report names the failures; the exit status tells scripts
+                    if failed == 0 {
+                        ExitCode::SUCCESS
+                    } else {
+                        ExitCode::FAILURE
+                    }
                 }
                 Err(e) => {
                     print_chain(&e);

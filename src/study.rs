@@ -6,6 +6,7 @@
 //! ```toml
 //! case = "../../cases/block.toml"     # the base case (relative to the study file)
 //! measure = ["gap", "Q_top"]          # probes, Q_<group> or R_<group>_<x|y|z>
+//! show = ["min_J_medium"]             # shown, not compared (also any summary.json number)
 //! reference = "last"                  # "last" (the finest variant), a variant's name, or
 //!                                     # a table of values: reference = { gap = 3.0e-4 }
 //! history = ["gap", "Q_top"]          # history.csv columns drawn against λ, per variant
@@ -71,6 +72,10 @@ pub struct StudyFile {
     pub description: Option<String>,
     pub case: String,
     pub measure: Vec<String>,
+    /// Quantities shown beside the measured ones but not compared (e.g. a gap whose reference
+    /// is 0).
+    #[serde(default)]
+    pub show: Vec<String>,
     pub reference: Reference,
     #[serde(default)]
     pub history: Vec<String>,
@@ -97,6 +102,8 @@ pub struct Outcome {
     pub values: Vec<f64>,
     /// Relative errors against the reference, in `measure` order.
     pub errors: Vec<f64>,
+    /// The `show` quantities.
+    pub shown: Vec<f64>,
 }
 
 impl Outcome {
@@ -289,7 +296,15 @@ pub fn run_study(path: &Path, opts: &StudyOptions) -> Result<StudyReport, StudyE
     })?;
     let base: toml::Table =
         toml::from_str(&case_text).map_err(|e| invalid(&case_path, e.to_string()))?;
-    let case_dir = case_path.parent().unwrap_or(Path::new(".")).to_owned();
+    // absolute: the variants' case files live elsewhere
+    let case_dir = std::fs::canonicalize(&case_path)
+        .map_err(|source| StudyError::Io {
+            path: case_path.clone(),
+            source,
+        })?
+        .parent()
+        .unwrap_or(Path::new("/"))
+        .to_owned();
     // every variant's case is built (and refused) before anything runs
     let cases: Vec<String> = study
         .variant
@@ -387,6 +402,17 @@ pub fn run_study(path: &Path, opts: &StudyOptions) -> Result<StudyReport, StudyE
                 })
                 .collect(),
             errors: Vec::new(),
+            shown: study
+                .show
+                .iter()
+                .map(|q| {
+                    if converged {
+                        measured(&summary, q)
+                    } else {
+                        f64::NAN
+                    }
+                })
+                .collect(),
         };
         if !opts.quiet {
             eprintln!(
@@ -482,6 +508,7 @@ fn write_file(path: PathBuf, text: &str) -> Result<PathBuf, StudyError> {
 fn write_csv(out: &Path, study: &StudyFile, os: &[Outcome]) -> Result<PathBuf, StudyError> {
     let mut cols: Vec<String> = COLUMNS.iter().map(|s| s.to_string()).collect();
     cols.extend(study.measure.iter().cloned());
+    cols.extend(study.show.iter().cloned());
     cols.extend(study.measure.iter().map(|q| format!("err_{q}")));
     cols.extend(["error", "converged"].map(String::from));
     let mut text = cols.join(",") + "\n";
@@ -505,6 +532,7 @@ fn write_csv(out: &Path, study: &StudyFile, os: &[Outcome]) -> Result<PathBuf, S
             .map(|v| format!("{v}")),
         );
         row.extend(o.values.iter().map(|v| format!("{v:e}")));
+        row.extend(o.shown.iter().map(|v| format!("{v:e}")));
         row.extend(o.errors.iter().map(|v| format!("{v:e}")));
         row.push(format!("{:e}", o.error()));
         row.push(o.converged.to_string());
@@ -522,6 +550,14 @@ fn fmt_num(v: f64) -> String {
         format!("{v:.3}")
     } else {
         format!("{v:.3e}")
+    }
+}
+
+fn secs(v: f64) -> String {
+    if v.is_finite() {
+        format!("{v:.2}")
+    } else {
+        "—".into()
     }
 }
 
@@ -547,7 +583,7 @@ fn write_markdown(
     let paper = os.iter().any(|o| !o.variant.paper.is_empty());
     let mut head = vec![
         "variant",
-        "dofs",
+        "dofs (free)",
         "steps",
         "its",
         "assembly s",
@@ -559,6 +595,7 @@ fn write_markdown(
     .map(String::from)
     .collect::<Vec<_>>();
     head.extend(study.measure.iter().cloned());
+    head.extend(study.show.iter().cloned());
     head.push("error".into());
     if paper {
         head.push("paper".into());
@@ -568,15 +605,20 @@ fn write_markdown(
     for o in os {
         let mut row = vec![
             o.variant.name.clone(),
-            fmt_num(o.dofs),
+            format!("{} ({})", fmt_num(o.dofs), fmt_num(o.free_dofs)),
             fmt_num(o.load_steps),
             fmt_num(o.newton_iterations),
-            format!("{:.2}", o.assembly_s),
-            format!("{:.2}", o.solver_s),
-            format!("{:.2}", o.total_s),
-            format!("{:.0}", o.peak_memory_mb),
+            secs(o.assembly_s),
+            secs(o.solver_s),
+            secs(o.total_s),
+            if o.peak_memory_mb.is_finite() {
+                format!("{:.0}", o.peak_memory_mb)
+            } else {
+                "—".into()
+            },
         ];
         row.extend(o.values.iter().map(|v| fmt_num(*v)));
+        row.extend(o.shown.iter().map(|v| fmt_num(*v)));
         row.push(if o.converged {
             format!("{:.2e}", o.error())
         } else {

@@ -441,34 +441,30 @@ fn a_tiny_study_writes_its_csv_table_and_plots() {
     let study = dir.join("tiny.toml");
     std::fs::write(
         &study,
-        format!(
-            r#"description = "two meshes of the block"
-case = "{}"
+        r#"description = "two meshes of the block"
+case = "../../../cases/block.toml"
 measure = ["gap", "Q_top"]
 reference = "last"
 history = ["gap"]
 
 [[variant]]
 name = "coarse"
-set = {{ mesh_options = {{ params = {{ n = 4, m = 4, l = 1 }} }} }}
+set = { mesh_options = { params = { n = 4, m = 4, l = 1 } } }
 
 [[variant]]
 name = "fine"
-set = {{ "mesh_options.params" = {{ n = 16, m = 8, l = 4 }}, "region.medium.gamma" = 1e-4 }}
-paper = {{ gap = 6.3e-4 }}
+set = { "mesh_options.params" = { n = 16, m = 8, l = 4 }, "region.medium.gamma" = 1e-4 }
+paper = { gap = 6.3e-4 }
 "#,
-            root().join("cases/block.toml").display()
-        ),
     )
     .unwrap();
     let out = dir.join("out");
-    let o = tmc(&[
-        "study",
-        study.to_str().unwrap(),
-        "-o",
-        out.to_str().unwrap(),
-        "-q",
-    ]);
+    // run from the study's folder with relative paths, as `make studies` does from the root
+    let o = Command::new(env!("CARGO_BIN_EXE_tmc"))
+        .current_dir(&dir)
+        .args(["study", "tiny.toml", "-o", "out", "-q"])
+        .output()
+        .unwrap();
     assert!(o.status.success(), "{}", stderr(&o));
     let csv = std::fs::read_to_string(out.join("study.csv")).unwrap();
     let lines: Vec<&str> = csv.lines().collect();
