@@ -13,7 +13,7 @@ fn main() {
     );
     for h in hard::all() {
         let t = std::time::Instant::now();
-        let r = hard::solve(&h, &root.join(h.name));
+        let r = hard::solve(&h, &root.join(&h.name));
         let wall = t.elapsed().as_secs_f64();
         match r {
             Ok(s) => println!(

@@ -22,6 +22,7 @@ use faer::sparse::linalg::cholesky::{
 };
 use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
+use faer::traits::ComplexField;
 use faer::{Conj, MatMut, Par, Side};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
@@ -310,76 +311,95 @@ impl SymFactor {
     }
 
     fn factor(&mut self) -> Result<(), LinearError> {
-        let par = self.par;
         self.factored = false;
+        let pattern = &self.sub.pattern;
         let stack = MemStack::new(&mut self.factor_mem);
-        let done = match self.precision {
-            Precision::Double => {
-                let a = SparseColMatRef::new(self.sub.pattern.as_ref(), &self.sub.values);
-                self.symbolic
-                    .factorize_numeric_ldlt(
-                        &mut self.l64,
-                        a,
-                        Side::Lower,
-                        Default::default(),
-                        par,
-                        stack,
-                        Default::default(),
-                    )
-                    .map(|_| ())
-            }
+        match self.precision {
+            Precision::Double => ldlt_numeric(
+                &self.symbolic,
+                &mut self.l64,
+                pattern,
+                &self.sub.values,
+                self.par,
+                stack,
+            )?,
             Precision::Single => {
                 for (s, d) in self.sub.values.iter().zip(self.a32.iter_mut()) {
                     *d = *s as f32;
                 }
-                let a = SparseColMatRef::new(self.sub.pattern.as_ref(), &self.a32);
-                self.symbolic
-                    .factorize_numeric_ldlt(
-                        &mut self.l32,
-                        a,
-                        Side::Lower,
-                        Default::default(),
-                        par,
-                        stack,
-                        Default::default(),
-                    )
-                    .map(|_| ())
+                ldlt_numeric(
+                    &self.symbolic,
+                    &mut self.l32,
+                    pattern,
+                    &self.a32,
+                    self.par,
+                    stack,
+                )?
             }
-        };
-        done.map_err(|e| LinearError::Factor(format!("{e:?}")))?;
+        }
         self.factored = true;
         Ok(())
     }
 
     fn solve(&self, b: &mut [f64]) {
-        let par = self.par;
         assert!(self.factored, "factored before solve");
-        let n = b.len();
         let mut guard = self.solve_mem.borrow_mut();
         let (mem, b32) = &mut *guard;
+        let stack = MemStack::new(mem);
         match self.precision {
-            Precision::Double => LdltRef::new(&self.symbolic, &self.l64).solve_in_place_with_conj(
-                Conj::No,
-                MatMut::from_column_major_slice_mut(b, n, 1),
-                par,
-                MemStack::new(mem),
-            ),
+            Precision::Double => ldlt_solve(&self.symbolic, &self.l64, b, self.par, stack),
             Precision::Single => {
                 for (d, s) in b32.iter_mut().zip(b.iter()) {
                     *d = *s as f32;
                 }
-                LdltRef::new(&self.symbolic, &self.l32).solve_in_place_with_conj(
-                    Conj::No,
-                    MatMut::from_column_major_slice_mut(b32, n, 1),
-                    par,
-                    MemStack::new(mem),
-                );
+                ldlt_solve(&self.symbolic, &self.l32, b32, self.par, stack);
                 for (d, s) in b.iter_mut().zip(b32.iter()) {
                     *d = *s as f64;
                 }
             }
         }
     }
+}
+
+/// Numeric LDLᵀ of `values` (on `pattern`, lower triangle used) into `l`, in the precision T.
+fn ldlt_numeric<T: ComplexField>(
+    symbolic: &SymbolicCholesky<usize>,
+    l: &mut [T],
+    pattern: &SymbolicSparseColMat<usize>,
+    values: &[T],
+    par: Par,
+    stack: &mut MemStack,
+) -> Result<(), LinearError> {
+    let a = SparseColMatRef::new(pattern.as_ref(), values);
+    symbolic
+        .factorize_numeric_ldlt(
+            l,
+            a,
+            Side::Lower,
+            Default::default(),
+            par,
+            stack,
+            Default::default(),
+        )
+        .map(|_| ())
+        .map_err(|e| LinearError::Factor(format!("{e:?}")))
+}
+
+/// b ← (L D Lᵀ)⁻¹ b with the factor `l`, in the precision T.
+fn ldlt_solve<T: ComplexField>(
+    symbolic: &SymbolicCholesky<usize>,
+    l: &[T],
+    b: &mut [T],
+    par: Par,
+    stack: &mut MemStack,
+) {
+    let n = b.len();
+    LdltRef::new(symbolic, l).solve_in_place_with_conj(
+        Conj::No,
+        MatMut::from_column_major_slice_mut(b, n, 1),
+        par,
+        stack,
+    );
 }
 
 /// Fill-reducing ordering of a symmetric pattern: METIS nested dissection of the graph whose

@@ -180,23 +180,12 @@ impl History {
 /// The columns `tmc plot` draws by default: probes, reactions, energy and work (those after
 /// the bookkeeping ones), skipping columns the scene does not have (NaN).
 pub fn default_columns(h: &History) -> Vec<String> {
-    const BOOKKEEPING: [&str; 12] = [
-        "step",
-        "lambda",
-        "dlambda",
-        "newton_iterations",
-        "res_u",
-        "res_theta",
-        "res_p",
-        "min_J_solid",
-        "min_J_medium",
-        "krylov_iterations",
-        "halvings",
-        "time",
-    ];
+    use crate::solve::{HISTORY_SOLVER_COLUMNS, HISTORY_STEP_COLUMNS};
+    let bookkeeping =
+        |c: &str| HISTORY_STEP_COLUMNS.contains(&c) || HISTORY_SOLVER_COLUMNS.contains(&c);
     h.columns
         .iter()
-        .filter(|c| !BOOKKEEPING.contains(&c.as_str()))
+        .filter(|c| !bookkeeping(c))
         .filter(|c| {
             h.column(c)
                 .is_some_and(|v| v.iter().any(|x| x.is_finite() && *x != 0.0))

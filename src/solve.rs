@@ -98,6 +98,23 @@ pub struct Summary {
     pub output: String,
 }
 
+/// The leading columns of history.csv: the step's bookkeeping. Then come `energy`, the probes
+/// and the reactions, then [`HISTORY_SOLVER_COLUMNS`] and `work`.
+pub const HISTORY_STEP_COLUMNS: [&str; 9] = [
+    "step",
+    "lambda",
+    "dlambda",
+    "newton_iterations",
+    "res_u",
+    "res_theta",
+    "res_p",
+    "min_J_solid",
+    "min_J_medium",
+];
+
+/// The solver's counters and the pseudo-time, near the end of history.csv.
+pub const HISTORY_SOLVER_COLUMNS: [&str; 3] = ["krylov_iterations", "halvings", "time"];
+
 /// Mesh the case's `.geo` into `out_dir/mesh.msh`, or return its `.msh` path.
 fn mesh_for(case: &Case, out_dir: &Path) -> Result<PathBuf, SolveError> {
     let path = case.mesh_path();
@@ -342,21 +359,8 @@ fn solve_model(
             }
         }
     }
-    let mut columns: Vec<String> = [
-        "step",
-        "lambda",
-        "dlambda",
-        "newton_iterations",
-        "res_u",
-        "res_theta",
-        "res_p",
-        "min_J_solid",
-        "min_J_medium",
-        "energy",
-    ]
-    .iter()
-    .map(|s| s.to_string())
-    .collect();
+    let mut columns: Vec<String> = HISTORY_STEP_COLUMNS.map(String::from).to_vec();
+    columns.push("energy".into());
     columns.extend(probes.iter().map(|p| p.name.clone()));
     columns.extend(reaction_cols.iter().map(|(g, k)| {
         if k == "heat" {
@@ -365,7 +369,8 @@ fn solve_model(
             format!("R_{g}_{k}")
         }
     }));
-    columns.extend(["krylov_iterations", "halvings", "time", "work"].map(String::from));
+    columns.extend(HISTORY_SOLVER_COLUMNS.map(String::from));
+    columns.push("work".into());
     let mut history = History::new(&out_dir.join("history.csv"), &columns);
     let name = case.name();
     let mut pvd: Vec<(f64, String)> = Vec::new();

@@ -175,24 +175,16 @@ pub fn set_path(doc: &mut toml::Table, path: &str, value: toml::Value) -> Result
                     ));
                 };
                 // the array segment consumed the next one too
-                return set_rest(t, &segs[i + 2..], path, value);
+                let rest = &segs[i + 2..];
+                if rest.is_empty() {
+                    return Err(format!("\"{path}\": names an entry, not a key in it"));
+                }
+                return set_path(t, &rest.join("."), value);
             }
             _ => return Err(format!("\"{path}\": \"{seg}\" is not a table")),
         };
     }
     Err(format!("\"{path}\": empty key"))
-}
-
-fn set_rest(
-    t: &mut toml::Table,
-    rest: &[&str],
-    path: &str,
-    value: toml::Value,
-) -> Result<(), String> {
-    if rest.is_empty() {
-        return Err(format!("\"{path}\": names an entry, not a key in it"));
-    }
-    set_path(t, &rest.join("."), value)
 }
 
 /// The case text of one variant: the base case with the variant's keys set, and `mesh` made
@@ -360,6 +352,17 @@ pub fn run_study(path: &Path, opts: &StudyOptions) -> Result<StudyReport, StudyE
             .unwrap_or(serde_json::Value::Null);
         let num = |k: &str| summary[k].as_f64().unwrap_or(f64::NAN);
         let converged = proc.status.success() && summary["converged"].as_bool() == Some(true);
+        let quantities = |qs: &[String]| -> Vec<f64> {
+            qs.iter()
+                .map(|q| {
+                    if converged {
+                        measured(&summary, q)
+                    } else {
+                        f64::NAN
+                    }
+                })
+                .collect()
+        };
         let message = if converged {
             "converged".to_string()
         } else {
@@ -390,29 +393,9 @@ pub fn run_study(path: &Path, opts: &StudyOptions) -> Result<StudyReport, StudyE
                 num("wall_seconds")
             },
             peak_memory_mb: num("peak_memory_mb"),
-            values: study
-                .measure
-                .iter()
-                .map(|q| {
-                    if converged {
-                        measured(&summary, q)
-                    } else {
-                        f64::NAN
-                    }
-                })
-                .collect(),
+            values: quantities(&study.measure),
             errors: Vec::new(),
-            shown: study
-                .show
-                .iter()
-                .map(|q| {
-                    if converged {
-                        measured(&summary, q)
-                    } else {
-                        f64::NAN
-                    }
-                })
-                .collect(),
+            shown: quantities(&study.show),
         };
         if !opts.quiet {
             eprintln!(

@@ -5,20 +5,18 @@
 //! `make bench` prints the table of these cases (benches/stability.rs).
 
 mod common;
-#[path = "common/hard.rs"]
-mod hard;
 
+use common::hard::{self, Hard};
 use common::{history, root};
-use hard::Hard;
 use tmc::solve::Summary;
 
 type Rows = (Vec<String>, Vec<Vec<f64>>);
 
 /// Solve twice; check the common properties; return the summary and the history.
 fn solve_checked(h: &Hard) -> (Summary, Rows) {
-    let dir = root().join("target/test-scratch/stability").join(h.name);
+    let dir = root().join("target/test-scratch/stability").join(&h.name);
     let s = hard::solve(h, &dir).unwrap_or_else(|e| panic!("{}: {e}", h.name));
-    let end = *s_path_end(h);
+    let end = path_end(h);
     assert!(s.converged, "{} ({}): {}", h.name, h.what, s.message);
     assert_eq!(s.time, end, "{}: end of the load path", h.name);
     // J > 0 everywhere, every accepted step (the summary keeps the smallest)
@@ -63,7 +61,7 @@ fn solve_checked(h: &Hard) -> (Summary, Rows) {
     (s, (cols, rows))
 }
 
-fn s_path_end(h: &Hard) -> &'static f64 {
+fn path_end(h: &Hard) -> f64 {
     // the end of pseudo-time: one less than the number of values in `[steps] path`
     let n = h
         .body
@@ -72,7 +70,7 @@ fn s_path_end(h: &Hard) -> &'static f64 {
         .find_map(|l| l.trim().strip_prefix("path = "))
         .map(|p| p.split(',').count())
         .unwrap_or(2);
-    Box::leak(Box::new((n - 1) as f64))
+    (n - 1) as f64
 }
 
 fn case(name: &str) -> Hard {

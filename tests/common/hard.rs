@@ -7,7 +7,7 @@ use tmc::solve::{SolveError, SolveOptions, Summary, run};
 
 /// One hard case: a scene from `geo/`, its mesh parameters and the case body.
 pub struct Hard {
-    pub name: &'static str,
+    pub name: String,
     /// What makes it hard.
     pub what: &'static str,
     pub geo: &'static str,
@@ -56,7 +56,7 @@ pub fn all() -> Vec<Hard> {
     let coarse = "n = 16, m = 8, l = 4";
     let mut v = vec![
         Hard {
-            name: "squeeze",
+            name: "squeeze".into(),
             what: "medium squeezed to J < 1e-3 (block, top 0.4 down)",
             geo: "block.geo",
             params: coarse,
@@ -64,7 +64,7 @@ pub fn all() -> Vec<Hard> {
             energy_tol: Some(0.01),
         },
         Hard {
-            name: "sliding",
+            name: "sliding".into(),
             what: "press 0.3, then slide 0.6 (30 % of the width) along the interface",
             geo: "block.geo",
             params: coarse,
@@ -77,7 +77,7 @@ pub fn all() -> Vec<Hard> {
             energy_tol: Some(0.01),
         },
         Hard {
-            name: "distorted",
+            name: "distorted".into(),
             what: "medium cells graded 1.15 per cell in opposite directions (slanted)",
             geo: "block.geo",
             params: "n = 16, m = 8, l = 4, skew = 1.15",
@@ -85,7 +85,7 @@ pub fn all() -> Vec<Hard> {
             energy_tol: Some(0.01),
         },
         Hard {
-            name: "very-coarse",
+            name: "very-coarse".into(),
             what: "4 x 1 medium cells under a 4 x 2 solid",
             geo: "block.geo",
             params: "n = 4, m = 2, l = 1",
@@ -93,7 +93,7 @@ pub fn all() -> Vec<Hard> {
             energy_tol: Some(0.01),
         },
         Hard {
-            name: "one-step",
+            name: "one-step".into(),
             what: "micro-contact's whole load asked for in one step: the controller cuts it",
             geo: "micro-contact.geo",
             params: "h = 0.1, np = 40, l = 3",
@@ -104,7 +104,7 @@ pub fn all() -> Vec<Hard> {
             energy_tol: None,
         },
         Hard {
-            name: "unloading",
+            name: "unloading".into(),
             what: "load to λ = 1 and back to 0.2: the medium reopens, the heat flow drops",
             geo: "block.geo",
             params: coarse,
@@ -112,7 +112,7 @@ pub fn all() -> Vec<Hard> {
             energy_tol: None,
         },
         Hard {
-            name: "discs-ellipse",
+            name: "discs-ellipse".into(),
             what: "curved bodies wedged apart, two-way coupled (h = 0.12)",
             geo: "discs-ellipse.geo",
             params: "h = 0.12",
@@ -120,7 +120,7 @@ pub fn all() -> Vec<Hard> {
             energy_tol: None,
         },
         Hard {
-            name: "micro-contact",
+            name: "micro-contact".into(),
             what: "rough surfaces: no contact, two spots, full contact",
             geo: "micro-contact.geo",
             params: "h = 0.1, np = 40, l = 3",
@@ -128,7 +128,7 @@ pub fn all() -> Vec<Hard> {
             energy_tol: None,
         },
         Hard {
-            name: "sphere-block",
+            name: "sphere-block".into(),
             what: "3D tet4 indenter, curved contact (h = 0.15)",
             geo: "sphere-block.geo",
             params: "h = 0.15",
@@ -138,7 +138,7 @@ pub fn all() -> Vec<Hard> {
     ];
     for g in GAMMAS {
         v.push(Hard {
-            name: Box::leak(format!("gamma-{g:.0e}").into_boxed_str()),
+            name: format!("gamma-{g:.0e}"),
             what: "medium stiffness γ",
             geo: "block.geo",
             params: coarse,

@@ -1,6 +1,8 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
+pub mod hard;
+
 use std::path::{Path, PathBuf};
 use tmc::case::Case;
 use tmc::mesh::gmsh::{MeshOptions, mesh_geo};
@@ -76,12 +78,7 @@ pub fn solve_text_opts(tag: &str, geo: &str, options: &str, case_text: &str) -> 
 
 /// The body of a case file without its `mesh` key and header comments.
 pub fn case_body(name: &str) -> String {
-    let text = std::fs::read_to_string(root().join("cases").join(format!("{name}.toml"))).unwrap();
-    text.lines()
-        .filter(|l| !l.starts_with("mesh =") && !l.starts_with('#'))
-        .collect::<Vec<_>>()
-        .join("\n")
-        + "\n"
+    hard::body_of(name)
 }
 
 /// Build a model from case text (paths relative to cases/) and a .geo meshed into scratch.
