@@ -426,13 +426,14 @@ impl Assembler {
             }
             Ok((mj, en))
         };
-        targets
+        // chunks summed in their order, so the energy does not depend on work stealing
+        let parts: Vec<(f64, f64)> = targets
             .into_par_iter()
             .enumerate()
             .map(|(i, tg)| work(tg, (i * chunk).min(n_cells)..((i + 1) * chunk).min(n_cells)))
-            .try_reduce(
-                || (f64::INFINITY, 0.0),
-                |a, b| Ok((a.0.min(b.0), a.1 + b.1)),
-            )
+            .collect::<Result<_, _>>()?;
+        Ok(parts
+            .into_iter()
+            .fold((f64::INFINITY, 0.0), |a, b| (a.0.min(b.0), a.1 + b.1)))
     }
 }

@@ -441,6 +441,10 @@ fn nested_dissection(p: &SymbolicSparseColMat<usize>, node: &[u32]) -> (Vec<usiz
         let mut perm = vec![0i32; nv];
         let mut iperm = vec![0i32; nv];
         let mut options = [-1i32; metis_sys::METIS_NOPTIONS as usize];
+        // METIS (its GKlib random generator and memory core) keeps process-wide statics:
+        // concurrent calls race, giving orderings that depend on other threads, or crash.
+        static METIS: std::sync::Mutex<()> = std::sync::Mutex::new(());
+        let _one_at_a_time = METIS.lock().unwrap_or_else(|e| e.into_inner());
         // SAFETY: METIS reads xadj/adjncy (a valid CSR graph without self loops) and writes
         // nv entries of perm and iperm; options is set to defaults (−1) before the call.
         let status = unsafe {
@@ -782,6 +786,45 @@ mod tests {
         assert!(err < 1e-9 * 30.0);
         // too small a budget is reported, not hidden
         assert!(gmres(&matvec, &id, &b, &mut x, 1e-12, 5, 3).is_err());
+    }
+
+    #[test]
+    fn nested_dissection_is_the_same_from_concurrent_threads() {
+        // METIS keeps its random generator in process-wide statics: orderings computed at the
+        // same time on other threads (tests, studies) must not change this one
+        // a 40 × 40 grid of nodes, 2 unknowns each, 9-point coupling (both triangles, as
+        // the solver passes it)
+        let k: usize = 40;
+        let node: Vec<u32> = (0..k * k).flat_map(|v| [v as u32; 2]).collect();
+        let (mut col_ptr, mut row_idx) = (vec![0], Vec::new());
+        for j in 0..2 * k * k {
+            let (vj, (xj, yj)) = (j / 2, (j / 2 % k, j / 2 / k));
+            for i in 0..2 * k * k {
+                let (xi, yi) = (i / 2 % k, i / 2 / k);
+                if i / 2 == vj || (xi.abs_diff(xj) <= 1 && yi.abs_diff(yj) <= 1) {
+                    row_idx.push(i);
+                }
+            }
+            col_ptr.push(row_idx.len());
+        }
+        let n = 2 * k * k;
+        let sp = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
+        let alone = nested_dissection(&sp, &node);
+        let together: Vec<_> = std::thread::scope(|s| {
+            let runs: Vec<_> = (0..8)
+                .map(|_| {
+                    s.spawn(|| {
+                        (0..20)
+                            .map(|_| nested_dissection(&sp, &node))
+                            .collect::<Vec<_>>()
+                    })
+                })
+                .collect();
+            runs.into_iter().flat_map(|r| r.join().unwrap()).collect()
+        });
+        for o in &together {
+            assert!(o == &alone, "an ordering changed under concurrent calls");
+        }
     }
 
     #[test]
