@@ -167,6 +167,10 @@ struct Arrays {
 /// Assembler state reused across calls: pattern, value and vector storage.
 pub struct Assembler {
     pub pattern: Pattern,
+    /// Per model block, per cell, column-major over the cell's local dofs (b, a): the position
+    /// in `values` of tangent entry (row a, column b), or `NO_SLOT` where either is prescribed.
+    /// Built once per mesh, so the scatter is a load and an add per entry, not a search.
+    slots: Vec<Vec<u32>>,
     /// The arrays of threads 1.. (thread 0 adds into the result).
     private: Vec<Arrays>,
     /// Tangent values (CSC, free equations).
@@ -191,9 +195,82 @@ impl Shared {
     }
 }
 
+/// Marks a tangent entry that is not in the free system.
+const NO_SLOT: u32 = u32::MAX;
+
+/// The global dofs of a cell's local dofs, in the kernel's layout.
+fn local_dofs(model: &Model, bi: usize, nodes: &[usize], ld: &mut [u32]) {
+    let lay = model.blocks[bi].layout;
+    let (dofs, D) = (&model.dofs, lay.dim);
+    for (I, &n) in nodes.iter().enumerate() {
+        if lay.has_u {
+            for i in 0..D {
+                ld[lay.u(I, i)] = dofs.u[n * D + i];
+            }
+        }
+        if lay.has_theta {
+            ld[lay.theta(I)] = dofs.theta[n];
+        }
+        for c in 0..lay.np {
+            ld[lay.p(I, c)] = dofs.p[n * lay.np + c];
+        }
+    }
+}
+
+/// The slot map of every block (see `Assembler::slots`).
+fn build_slots(model: &Model, pattern: &Pattern) -> Vec<Vec<u32>> {
+    let eq = &model.cons.eq;
+    (0..model.blocks.len())
+        .map(|bi| {
+            let blk = &model.mesh.cells[model.blocks[bi].block];
+            let nd = model.blocks[bi].layout.ndof();
+            let mut slots = vec![NO_SLOT; blk.n_cells() * nd * nd];
+            if nd == 0 {
+                return slots;
+            }
+            slots
+                .par_chunks_mut(nd * nd)
+                .enumerate()
+                .for_each_init(
+                    || (vec![0u32; nd], Vec::with_capacity(nd)),
+                    |(ld, rows), (c, cell)| {
+                        local_dofs(model, bi, blk.cell(c), ld);
+                        // the cell's free rows in increasing order: each column is walked
+                        // once, front to back
+                        rows.clear();
+                        rows.extend((0..nd).filter_map(|a| {
+                            let e = eq[ld[a] as usize];
+                            (e != NONE).then_some((e as usize, a))
+                        }));
+                        rows.sort_unstable();
+                        for b in 0..nd {
+                            let col = eq[ld[b] as usize];
+                            if col == NONE {
+                                continue;
+                            }
+                            let mut q = pattern.col_ptr[col as usize];
+                            for &(row, a) in rows.iter() {
+                                while pattern.row_idx[q] != row {
+                                    q += 1;
+                                }
+                                cell[b * nd + a] = q as u32;
+                            }
+                        }
+                    },
+                );
+            slots
+        })
+        .collect()
+}
+
 impl Assembler {
     pub fn new(model: &Model) -> Assembler {
         let pattern = build_pattern(model);
+        assert!(
+            pattern.nnz() < NO_SLOT as usize,
+            "more than 2³² − 1 tangent entries"
+        );
+        let slots = build_slots(model, &pattern);
         let nnz = pattern.nnz();
         let arrays = || Arrays {
             values: vec![0.0; nnz],
@@ -213,6 +290,7 @@ impl Assembler {
             r_full: main.r_full,
             lift: main.lift,
             pattern,
+            slots,
         }
     }
 
@@ -334,9 +412,8 @@ impl Assembler {
         let blk = &model.mesh.cells[info.block];
         let lay = info.layout;
         let nd = lay.ndof();
-        let dofs = &model.dofs;
         let eq = &model.cons.eq;
-        let pattern = &self.pattern;
+        let slots = &self.slots[bi];
         let mut targets = vec![(
             Shared(self.values.as_mut_ptr()),
             Shared(self.r_full.as_mut_ptr()),
@@ -356,25 +433,11 @@ impl Assembler {
             let mut r = vec![0.0; nd];
             let mut k = vec![0.0; if tangent { nd * nd } else { 0 }];
             let mut ld = vec![0u32; nd];
-            let mut rows = Vec::<(usize, usize)>::with_capacity(nd);
             let (mut mj, mut en) = (f64::INFINITY, 0.0);
             for c in cells {
                 let nodes = blk.cell(c);
                 let s = crate::post::gather::<N>(model, nodes, x);
-                // local → global dofs
-                for (I, &n) in nodes.iter().enumerate() {
-                    if lay.has_u {
-                        for i in 0..D {
-                            ld[lay.u(I, i)] = dofs.u[n * D + i];
-                        }
-                    }
-                    if lay.has_theta {
-                        ld[lay.theta(I)] = dofs.theta[n];
-                    }
-                    for c in 0..lay.np {
-                        ld[lay.p(I, c)] = dofs.p[n * lay.np + c];
-                    }
-                }
+                local_dofs(model, bi, nodes, &mut ld);
                 let out = bulk::<N, D, E>(
                     &info.mat,
                     &lay,
@@ -386,7 +449,8 @@ impl Assembler {
                 .map_err(|e| (e, c))?;
                 mj = mj.min(out.min_J);
                 en += out.energy;
-                // SAFETY: each chunk writes only into its own thread's arrays.
+                // SAFETY: each chunk writes only into its own thread's arrays, at positions
+                // the pattern and the dof map give (in bounds by construction).
                 unsafe {
                     for a in 0..nd {
                         *r_full.at(ld[a] as usize) += r[a];
@@ -394,32 +458,28 @@ impl Assembler {
                     if !tangent {
                         continue;
                     }
-                    // the cell's free rows in increasing equation order, so each column of
-                    // the CSC pattern is walked once, front to back
-                    rows.clear();
-                    rows.extend((0..nd).filter_map(|a| {
-                        let e = eq[ld[a] as usize];
-                        (e != NONE).then_some((e as usize, a))
-                    }));
-                    rows.sort_unstable();
+                    let cell = &slots[c * nd * nd..(c + 1) * nd * nd];
                     for b in 0..nd {
-                        let gb = ld[b] as usize;
-                        let col = eq[gb];
-                        if col == NONE {
-                            if let Some(dx) = dx_prescribed {
-                                for &(row, a) in rows.iter() {
-                                    *lift.at(row) += k[a * nd + b] * dx[gb];
+                        let column = &cell[b * nd..(b + 1) * nd];
+                        for (a, &q) in column.iter().enumerate() {
+                            if q != NO_SLOT {
+                                *values.at(q as usize) += k[a * nd + b];
+                            }
+                        }
+                    }
+                    // prescribed columns: their increments lifted to the right-hand side
+                    if let Some(dx) = dx_prescribed {
+                        for b in 0..nd {
+                            let gb = ld[b] as usize;
+                            if eq[gb] != NONE || dx[gb] == 0.0 {
+                                continue;
+                            }
+                            for a in 0..nd {
+                                let row = eq[ld[a] as usize];
+                                if row != NONE {
+                                    *lift.at(row as usize) += k[a * nd + b] * dx[gb];
                                 }
                             }
-                            continue;
-                        }
-                        let col = col as usize;
-                        let mut q = pattern.col_ptr[col];
-                        for &(row, a) in rows.iter() {
-                            while pattern.row_idx[q] != row {
-                                q += 1;
-                            }
-                            *values.at(q) += k[a * nd + b];
                         }
                     }
                 }

@@ -1,0 +1,112 @@
+//! Time of one cell's residual and tangent (`kernel::bulk`), single-threaded, for each linear
+//! element with the physics the scenes give it: the number behind "assembly per Newton
+//! iteration per element" once the scatter and the threads are taken away.
+
+use std::hint::black_box;
+use std::time::Instant;
+use tmc::element::{Hex8, Quad4, RefElement, Tet4, Tri3};
+use tmc::kernel::{bulk, Active, CellMaterial, CellState, Layout};
+use tmc::material::{Conductivity, Regularization, ThermoElastic};
+
+const SOLID: CellMaterial = CellMaterial {
+    law: ThermoElastic {
+        K: 20.0,
+        mu: 10.0,
+        alpha: 1e-5,
+        theta0: 0.0,
+    },
+    cond: Conductivity::Constant(10.0),
+    medium: false,
+    reg: None,
+    reg_direct: None,
+};
+
+const MEDIUM: CellMaterial = CellMaterial {
+    law: ThermoElastic {
+        K: 2e-4,
+        mu: 1e-4,
+        alpha: 1e-5,
+        theta0: 0.0,
+    },
+    cond: Conductivity::Medium {
+        k_tm: 0.1,
+        k_max: 10.0,
+    },
+    medium: true,
+    reg: Some(Regularization {
+        beta1: 1.0,
+        beta2: 1e-2,
+        d: 0.05,
+    }),
+    reg_direct: None,
+};
+
+/// Microseconds per call of `bulk` with the tangent, on a distorted, deformed, heated cell.
+fn time<const N: usize, const D: usize, E: RefElement<N, D>>(
+    mat: &CellMaterial,
+    has_theta: bool,
+) -> f64 {
+    let np = if mat.reg.is_some() { D * (D - 1) / 2 } else { 0 };
+    let mut s = CellState::<N> {
+        X: [[0.0; 3]; N],
+        u: [[0.0; 3]; N],
+        theta: [0.0; N],
+        p: [[0.0; 3]; N],
+    };
+    for (a, xi) in E::nodes().iter().enumerate() {
+        for (d, x) in xi.iter().enumerate() {
+            s.X[a][d] = 0.5 * x + 0.05 * ((a * 7 + d * 3) % 5) as f64 / 5.0;
+            s.u[a][d] = 0.03 * (((a * 3 + d * 5) % 7) as f64 / 7.0 - 0.5);
+        }
+        s.theta[a] = 10.0 * (a % 3) as f64;
+    }
+    let lay = Layout {
+        n: N,
+        dim: D,
+        has_u: true,
+        has_theta,
+        np,
+    };
+    let nd = lay.ndof();
+    let (mut r, mut k) = (vec![0.0; nd], vec![0.0; nd * nd]);
+    let mut calls = 0;
+    let t0 = Instant::now();
+    while calls < 2000 || t0.elapsed().as_secs_f64() < 0.5 {
+        bulk::<N, D, E>(
+            mat,
+            &lay,
+            black_box(&s),
+            Active::ALL,
+            &mut r,
+            Some(&mut k),
+        )
+        .unwrap();
+        black_box(&k);
+        calls += 1;
+    }
+    t0.elapsed().as_secs_f64() / calls as f64 * 1e6
+}
+
+fn main() {
+    println!("\nkernel::bulk, residual + tangent of one cell, one thread (µs per cell)\n");
+    println!("| element | physics | dofs | µs |");
+    println!("|---|---|---:|---:|");
+    let rows: [(&str, &str, usize, f64); 8] = [
+        ("T1", "solid u", 6, time::<3, 2, Tri3>(&SOLID, false)),
+        ("Q1", "solid u, θ", 12, time::<4, 2, Quad4>(&SOLID, true)),
+        ("Q1", "medium u, θ, p", 16, time::<4, 2, Quad4>(&MEDIUM, true)),
+        ("tet4", "solid u, θ", 16, time::<4, 3, Tet4>(&SOLID, true)),
+        ("H1", "solid u", 24, time::<8, 3, Hex8>(&SOLID, false)),
+        ("H1", "solid u, θ", 32, time::<8, 3, Hex8>(&SOLID, true)),
+        ("H1", "medium u, θ", 32, time::<8, 3, Hex8>(&MEDIUM_NO_P, true)),
+        ("H1", "medium u, θ, p", 56, time::<8, 3, Hex8>(&MEDIUM, true)),
+    ];
+    for (e, what, nd, us) in rows {
+        println!("| {e} | {what} | {nd} | {us:.2} |");
+    }
+}
+
+const MEDIUM_NO_P: CellMaterial = CellMaterial {
+    reg: None,
+    ..MEDIUM
+};
