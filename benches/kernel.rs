@@ -5,7 +5,7 @@
 use std::hint::black_box;
 use std::time::Instant;
 use tmc::element::{Hex8, Quad4, RefElement, Tet4, Tri3};
-use tmc::kernel::{bulk, Active, CellMaterial, CellState, Layout};
+use tmc::kernel::{Active, CellMaterial, CellState, Layout, bulk};
 use tmc::material::{Conductivity, Regularization, ThermoElastic};
 
 const SOLID: CellMaterial = CellMaterial {
@@ -46,7 +46,11 @@ fn time<const N: usize, const D: usize, E: RefElement<N, D>>(
     mat: &CellMaterial,
     has_theta: bool,
 ) -> f64 {
-    let np = if mat.reg.is_some() { D * (D - 1) / 2 } else { 0 };
+    let np = if mat.reg.is_some() {
+        D * (D - 1) / 2
+    } else {
+        0
+    };
     let mut s = CellState::<N> {
         X: [[0.0; 3]; N],
         u: [[0.0; 3]; N],
@@ -69,40 +73,56 @@ fn time<const N: usize, const D: usize, E: RefElement<N, D>>(
     };
     let nd = lay.ndof();
     let (mut r, mut k) = (vec![0.0; nd], vec![0.0; nd * nd]);
+    // TMC_KERNEL_CALLS=n: exactly n calls (for instruction counts under callgrind)
+    let fixed: Option<usize> = std::env::var("TMC_KERNEL_CALLS")
+        .ok()
+        .and_then(|v| v.parse().ok());
     let mut calls = 0;
     let t0 = Instant::now();
-    while calls < 2000 || t0.elapsed().as_secs_f64() < 0.5 {
-        bulk::<N, D, E>(
-            mat,
-            &lay,
-            black_box(&s),
-            Active::ALL,
-            &mut r,
-            Some(&mut k),
-        )
-        .unwrap();
+    while match fixed {
+        Some(n) => calls < n,
+        None => calls < 2000 || t0.elapsed().as_secs_f64() < 0.5,
+    } {
+        bulk::<N, D, E>(mat, &lay, black_box(&s), Active::ALL, &mut r, Some(&mut k)).unwrap();
         black_box(&k);
         calls += 1;
     }
     t0.elapsed().as_secs_f64() / calls as f64 * 1e6
 }
 
+type Row = (&'static str, &'static str, usize, fn() -> f64);
+
 fn main() {
     println!("\nkernel::bulk, residual + tangent of one cell, one thread (µs per cell)\n");
     println!("| element | physics | dofs | µs |");
     println!("|---|---|---:|---:|");
-    let rows: [(&str, &str, usize, f64); 8] = [
-        ("T1", "solid u", 6, time::<3, 2, Tri3>(&SOLID, false)),
-        ("Q1", "solid u, θ", 12, time::<4, 2, Quad4>(&SOLID, true)),
-        ("Q1", "medium u, θ, p", 16, time::<4, 2, Quad4>(&MEDIUM, true)),
-        ("tet4", "solid u, θ", 16, time::<4, 3, Tet4>(&SOLID, true)),
-        ("H1", "solid u", 24, time::<8, 3, Hex8>(&SOLID, false)),
-        ("H1", "solid u, θ", 32, time::<8, 3, Hex8>(&SOLID, true)),
-        ("H1", "medium u, θ", 32, time::<8, 3, Hex8>(&MEDIUM_NO_P, true)),
-        ("H1", "medium u, θ, p", 56, time::<8, 3, Hex8>(&MEDIUM, true)),
+    let rows: [Row; 8] = [
+        ("T1", "solid u", 6, || time::<3, 2, Tri3>(&SOLID, false)),
+        ("Q1", "solid u, θ", 12, || {
+            time::<4, 2, Quad4>(&SOLID, true)
+        }),
+        ("Q1", "medium u, θ, p", 16, || {
+            time::<4, 2, Quad4>(&MEDIUM, true)
+        }),
+        ("tet4", "solid u, θ", 16, || {
+            time::<4, 3, Tet4>(&SOLID, true)
+        }),
+        ("H1", "solid u", 24, || time::<8, 3, Hex8>(&SOLID, false)),
+        ("H1", "solid u, θ", 32, || time::<8, 3, Hex8>(&SOLID, true)),
+        ("H1", "medium u, θ", 32, || {
+            time::<8, 3, Hex8>(&MEDIUM_NO_P, true)
+        }),
+        ("H1", "medium u, θ, p", 56, || {
+            time::<8, 3, Hex8>(&MEDIUM, true)
+        }),
     ];
-    for (e, what, nd, us) in rows {
-        println!("| {e} | {what} | {nd} | {us:.2} |");
+    // TMC_KERNEL_ONLY="H1 solid u, θ": that row only
+    let only = std::env::var("TMC_KERNEL_ONLY").ok();
+    for (e, what, nd, f) in rows {
+        if only.as_ref().is_some_and(|o| *o != format!("{e} {what}")) {
+            continue;
+        }
+        println!("| {e} | {what} | {nd} | {:.2} |", f());
     }
 }
 

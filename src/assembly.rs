@@ -228,36 +228,33 @@ fn build_slots(model: &Model, pattern: &Pattern) -> Vec<Vec<u32>> {
             if nd == 0 {
                 return slots;
             }
-            slots
-                .par_chunks_mut(nd * nd)
-                .enumerate()
-                .for_each_init(
-                    || (vec![0u32; nd], Vec::with_capacity(nd)),
-                    |(ld, rows), (c, cell)| {
-                        local_dofs(model, bi, blk.cell(c), ld);
-                        // the cell's free rows in increasing order: each column is walked
-                        // once, front to back
-                        rows.clear();
-                        rows.extend((0..nd).filter_map(|a| {
-                            let e = eq[ld[a] as usize];
-                            (e != NONE).then_some((e as usize, a))
-                        }));
-                        rows.sort_unstable();
-                        for b in 0..nd {
-                            let col = eq[ld[b] as usize];
-                            if col == NONE {
-                                continue;
-                            }
-                            let mut q = pattern.col_ptr[col as usize];
-                            for &(row, a) in rows.iter() {
-                                while pattern.row_idx[q] != row {
-                                    q += 1;
-                                }
-                                cell[b * nd + a] = q as u32;
-                            }
+            slots.par_chunks_mut(nd * nd).enumerate().for_each_init(
+                || (vec![0u32; nd], Vec::with_capacity(nd)),
+                |(ld, rows), (c, cell)| {
+                    local_dofs(model, bi, blk.cell(c), ld);
+                    // the cell's free rows in increasing order: each column is walked
+                    // once, front to back
+                    rows.clear();
+                    rows.extend((0..nd).filter_map(|a| {
+                        let e = eq[ld[a] as usize];
+                        (e != NONE).then_some((e as usize, a))
+                    }));
+                    rows.sort_unstable();
+                    for b in 0..nd {
+                        let col = eq[ld[b] as usize];
+                        if col == NONE {
+                            continue;
                         }
-                    },
-                );
+                        let mut q = pattern.col_ptr[col as usize];
+                        for &(row, a) in rows.iter() {
+                            while pattern.row_idx[q] != row {
+                                q += 1;
+                            }
+                            cell[b * nd + a] = q as u32;
+                        }
+                    }
+                },
+            );
             slots
         })
         .collect()

@@ -180,6 +180,16 @@ pub fn bulk<const N: usize, const D: usize, E: RefElement<N, D>>(
         energy: 0.0,
     };
     let theta_ref = mat.law.theta0;
+    let tangent = k.is_some();
+    // The cell's tangent blocks, summed over the quadrature points and added to `k` at the
+    // end: node-by-node matrices whose inner loops run over the second node (vectorisable).
+    // kuu[i][kk][I][K] = ∂r_u(I,i)/∂u(K,kk) (blocks i ≤ kk; the others are their transposes,
+    // ∂P/∂F having major symmetry), kut[i][I][K] = ∂r_u(I,i)/∂θ_K,
+    // ktu[kk][I][K] = ∂r_θ(I)/∂u(K,kk), ktt[I][K] = ∂r_θ(I)/∂θ_K.
+    let mut kuu = [[[[0.0; N]; N]; 3]; 3];
+    let mut kut = [[[0.0; N]; N]; 3];
+    let mut ktu = [[[0.0; N]; N]; 3];
+    let mut ktt = [[0.0; N]; N];
     for (xi, w) in E::quadrature() {
         let Point {
             g,
@@ -189,6 +199,13 @@ pub fn bulk<const N: usize, const D: usize, E: RefElement<N, D>>(
             grad_theta: gt,
             theta,
         } = point::<N, D, E>(xi, *w, lay, s, theta_ref)?;
+        // gT[J][K] = ∂N_K/∂X_J
+        let mut gT = [[0.0; N]; 3];
+        for K in 0..N {
+            for J in 0..D {
+                gT[J][K] = g[K][J];
+            }
+        }
         if lay.has_u && act.mechanics {
             let m = mat
                 .law
@@ -202,55 +219,30 @@ pub fn bulk<const N: usize, const D: usize, E: RefElement<N, D>>(
                     r[lay.u(I, i)] += v * dV;
                 }
             }
-            if let Some(k) = k.as_deref_mut() {
-                // A = ∂P/∂F has major symmetry (A_iJkL = A_kLiJ: P derives from an energy), so
-                // K_uu is symmetric: the blocks I ≤ K are computed, the others mirrored.
-                let mut A = [[0.0; 9]; 9];
-                for (a, row) in A.iter_mut().enumerate() {
-                    for (b, v) in row.iter_mut().enumerate() {
-                        *v = m.dP_dF[(a, b)] * dV;
-                    }
-                }
-                for K in 0..N {
-                    // B[(iJ), k] = Σ_L A_iJkL ∂N_K/∂X_L
-                    let mut B = [[0.0; 3]; 9];
-                    for i in 0..D {
-                        for J in 0..D {
-                            for kk in 0..D {
-                                let mut v = 0.0;
-                                for L in 0..D {
-                                    v += A[3 * i + J][3 * kk + L] * g[K][L];
-                                }
-                                B[3 * i + J][kk] = v;
-                            }
-                        }
-                    }
-                    for I in 0..=K {
-                        for i in 0..D {
-                            for kk in 0..D {
-                                let mut v = 0.0;
-                                for J in 0..D {
-                                    v += g[I][J] * B[3 * i + J][kk];
-                                }
-                                let (a, b) = (lay.u(I, i), lay.u(K, kk));
-                                k[a * nd + b] += v;
-                                if I != K {
-                                    k[b * nd + a] += v;
+            if tangent {
+                for i in 0..D {
+                    for kk in i..D {
+                        // c[J][K] = Σ_L A_iJkL ∂N_K/∂X_L dV, then block += Σ_J ∂N_I/∂X_J c[J]
+                        let mut c = [[0.0; N]; 3];
+                        for (J, cJ) in c.iter_mut().enumerate().take(D) {
+                            for L in 0..D {
+                                let a = m.dP_dF[(3 * i + J, 3 * kk + L)] * dV;
+                                for K in 0..N {
+                                    cJ[K] += a * gT[L][K];
                                 }
                             }
                         }
+                        add_gradient_product(&mut kuu[i][kk], &gT, &c, D);
                     }
                 }
                 if lay.has_theta {
-                    // K_uθ = ∫ ∂P/∂θ : ∇δu N_K
-                    for I in 0..N {
-                        for i in 0..D {
+                    // ∂r_u(I,i)/∂θ_K = ∫ ∂P_iJ/∂θ ∂N_I/∂X_J N_K
+                    for (i, kut_i) in kut.iter_mut().enumerate().take(D) {
+                        for (I, row) in kut_i.iter_mut().enumerate() {
                             let v: f64 = (0..D).map(|J| m.dP_dtheta[(i, J)] * g[I][J]).sum();
-                            if v != 0.0 {
-                                let row = lay.u(I, i) * nd;
-                                for K in 0..N {
-                                    k[row + lay.theta(K)] += v * Nv[K] * dV;
-                                }
+                            let v = v * dV;
+                            for K in 0..N {
+                                row[K] += v * Nv[K];
                             }
                         }
                     }
@@ -276,42 +268,67 @@ pub fn bulk<const N: usize, const D: usize, E: RefElement<N, D>>(
                 let v: f64 = (0..D).map(|J| h.Q[J] * g[I][J]).sum();
                 r[lay.theta(I)] -= v * dV;
             }
-            if let Some(k) = k.as_deref_mut() {
-                let mut dQ_dF_g = [[[0.0; 3]; 3]; N];
-                if lay.has_u && act.mechanics {
-                    for K in 0..N {
-                        for kk in 0..D {
-                            for J in 0..D {
-                                let mut v = 0.0;
-                                for L in 0..D {
-                                    v += h.dQ_dF[(J, 3 * kk + L)] * g[K][L];
-                                }
-                                dQ_dF_g[K][kk][J] = v;
-                            }
+            if tangent {
+                // ∂r_θ(I)/∂θ_K = −∫ ∂N_I/∂X_J ∂Q_J/∂(∇θ)_L ∂N_K/∂X_L
+                let mut c = [[0.0; N]; 3];
+                for (J, cJ) in c.iter_mut().enumerate().take(D) {
+                    for L in 0..D {
+                        let a = -h.dQ_dgrad[(J, L)] * dV;
+                        for K in 0..N {
+                            cJ[K] += a * gT[L][K];
                         }
                     }
                 }
-                for I in 0..N {
-                    let row = lay.theta(I) * nd;
-                    for K in 0..N {
-                        let mut v = 0.0;
-                        for J in 0..D {
+                add_gradient_product(&mut ktt, &gT, &c, D);
+                if lay.has_u && act.mechanics {
+                    // ∂r_θ(I)/∂u(K,kk) = −∫ ∂N_I/∂X_J ∂Q_J/∂F_kkL ∂N_K/∂X_L
+                    for (kk, ktu_k) in ktu.iter_mut().enumerate().take(D) {
+                        let mut c = [[0.0; N]; 3];
+                        for (J, cJ) in c.iter_mut().enumerate().take(D) {
                             for L in 0..D {
-                                v -= g[I][J] * h.dQ_dgrad[(J, L)] * g[K][L];
+                                let a = -h.dQ_dF[(J, 3 * kk + L)] * dV;
+                                for K in 0..N {
+                                    cJ[K] += a * gT[L][K];
+                                }
                             }
                         }
-                        k[row + lay.theta(K)] += v * dV;
+                        add_gradient_product(ktu_k, &gT, &c, D);
                     }
-                    if lay.has_u && act.mechanics {
-                        // C[K][kk][J] = Σ_L ∂Q_J/∂F_kkL ∂N_K/∂X_L, then v = −g_I · C
+                }
+            }
+        }
+    }
+    if let Some(k) = k {
+        let th = |I: usize| lay.theta(I);
+        for I in 0..N {
+            for i in 0..D {
+                let row = lay.u(I, i) * nd;
+                if lay.has_u && act.mechanics {
+                    for kk in 0..D {
                         for K in 0..N {
-                            for kk in 0..D {
-                                let mut v = 0.0;
-                                for J in 0..D {
-                                    v -= g[I][J] * dQ_dF_g[K][kk][J];
-                                }
-                                k[row + lay.u(K, kk)] += v * dV;
-                            }
+                            k[row + lay.u(K, kk)] += if i <= kk {
+                                kuu[i][kk][I][K]
+                            } else {
+                                kuu[kk][i][K][I]
+                            };
+                        }
+                    }
+                    if lay.has_theta {
+                        for K in 0..N {
+                            k[row + th(K)] += kut[i][I][K];
+                        }
+                    }
+                }
+            }
+            if lay.has_theta && act.heat {
+                let row = th(I) * nd;
+                for K in 0..N {
+                    k[row + th(K)] += ktt[I][K];
+                }
+                if lay.has_u && act.mechanics {
+                    for kk in 0..D {
+                        for K in 0..N {
+                            k[row + lay.u(K, kk)] += ktu[kk][I][K];
                         }
                     }
                 }
@@ -319,6 +336,24 @@ pub fn bulk<const N: usize, const D: usize, E: RefElement<N, D>>(
         }
     }
     Ok(summary)
+}
+
+/// block[I][K] += Σ_J ∂N_I/∂X_J c[J][K] (J < d), the inner loop over K.
+#[inline(always)]
+fn add_gradient_product<const N: usize>(
+    block: &mut [[f64; N]; N],
+    gT: &[[f64; N]; 3],
+    c: &[[f64; N]; 3],
+    d: usize,
+) {
+    for (I, row) in block.iter_mut().enumerate() {
+        for J in 0..d {
+            let gIJ = gT[J][I];
+            for K in 0..N {
+                row[K] += gIJ * c[J][K];
+            }
+        }
+    }
 }
 
 /// Regularization of a linear medium cell at one quadrature point, eq. (20): adds

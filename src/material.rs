@@ -56,26 +56,28 @@ impl ThermoElastic {
         let a = self.K * lnJ - c; // coefficient of F⁻ᵀ from the volumetric and thermal parts
         let m = self.mu * Jm23;
         let P = H * a + (F - H * (I1 / 3.0)) * m;
+        // A_iJkL = K H_kL H_iJ − a H_iL H_kJ
+        //        + m (δ_ik δ_JL − ⅔ H_kL dev_iJ − ⅔ F_kL H_iJ + ⅓ I1 H_iL H_kJ),
+        // dev = F − ⅓ I1 H, gathered as H_kL α_iJ + F_kL β_iJ + γ H_iL H_kJ + m δ_ik δ_JL
+        let alpha = (H * self.K) - (F - H * (I1 / 3.0)) * (2.0 / 3.0 * m);
+        let beta = H * (-2.0 / 3.0 * m);
+        let gamma = m * I1 / 3.0 - a;
         let mut A = Tensor4::zeros();
-        for i in 0..3 {
-            for Jc in 0..3 {
-                let r = 3 * i + Jc;
-                let dev = F[(i, Jc)] - I1 / 3.0 * H[(i, Jc)];
-                for k in 0..3 {
-                    for L in 0..3 {
-                        let s = 3 * k + L;
-                        let mut v = self.K * H[(k, L)] * H[(i, Jc)] - a * H[(i, L)] * H[(k, Jc)];
-                        let mut w = -2.0 / 3.0 * H[(k, L)] * dev
-                            - 2.0 / 3.0 * F[(k, L)] * H[(i, Jc)]
-                            + I1 / 3.0 * H[(i, L)] * H[(k, Jc)];
-                        if i == k && Jc == L {
-                            w += 1.0;
-                        }
-                        v += m * w;
-                        A[(r, s)] = v;
+        for L in 0..3 {
+            for k in 0..3 {
+                let (hkl, fkl) = (H[(k, L)], F[(k, L)]);
+                let s = 3 * k + L;
+                for Jc in 0..3 {
+                    let ghkj = gamma * H[(k, Jc)];
+                    for i in 0..3 {
+                        A[(3 * i + Jc, s)] =
+                            hkl * alpha[(i, Jc)] + fkl * beta[(i, Jc)] + ghkj * H[(i, L)];
                     }
                 }
             }
+        }
+        for r in 0..9 {
+            A[(r, r)] += m;
         }
         let dP_dtheta = H * (-3.0 * self.alpha * self.K);
         Some(StressResponse {
