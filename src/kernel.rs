@@ -141,6 +141,18 @@ fn point<const N: usize, const D: usize, E: RefElement<N, D>>(
     })
 }
 
+/// A node-by-node matrix: `[I][K]` couples node I's equation with node K's unknown.
+type NodeBlock<const N: usize> = [[f64; N]; N];
+/// ∂r_u/∂u by component pair: `[i][k]`, blocks i ≤ k only (K_uu is symmetric).
+type UuBlocks<const N: usize> = [[NodeBlock<N>; 3]; 3];
+
+/// The regularization's own tangent blocks: ∂r_u(a)/∂p(c) (K_pu is its transpose) and
+/// ∂r_p(c)/∂p(c).
+struct PBlocks<const N: usize> {
+    up: [[NodeBlock<N>; 3]; 3],
+    pp: [NodeBlock<N>; 3],
+}
+
 /// Which equations a kernel call fills: a one-way coupled solve needs only the mechanical rows
 /// while it iterates on mechanics, and only the thermal rows (with their θ columns) after.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -186,7 +198,15 @@ pub fn bulk<const N: usize, const D: usize, E: RefElement<N, D>>(
     // kuu[i][kk][I][K] = ∂r_u(I,i)/∂u(K,kk) (blocks i ≤ kk; the others are their transposes,
     // ∂P/∂F having major symmetry), kut[i][I][K] = ∂r_u(I,i)/∂θ_K,
     // ktu[kk][I][K] = ∂r_θ(I)/∂u(K,kk), ktt[I][K] = ∂r_θ(I)/∂θ_K.
-    let mut kuu = [[[[0.0; N]; N]; 3]; 3];
+    let mut kuu: UuBlocks<N> = [[[[0.0; N]; N]; 3]; 3];
+    let mut kp = if tangent && lay.np > 0 {
+        Some(PBlocks::<N> {
+            up: [[[[0.0; N]; N]; 3]; 3],
+            pp: [[[0.0; N]; N]; 3],
+        })
+    } else {
+        None
+    };
     let mut kut = [[[0.0; N]; N]; 3];
     let mut ktu = [[[0.0; N]; N]; 3];
     let mut ktt = [[0.0; N]; N];
@@ -250,8 +270,17 @@ pub fn bulk<const N: usize, const D: usize, E: RefElement<N, D>>(
             }
             if lay.np > 0 {
                 let reg = mat.reg.expect("a cell with p fields has a regularization");
-                summary.energy +=
-                    regularization::<N, D>(&reg, lay, s, &F, &g, &Nv, dV, r, k.as_deref_mut())?;
+                summary.energy += regularization::<N, D>(
+                    &reg,
+                    lay,
+                    s,
+                    &F,
+                    (&g, &gT),
+                    &Nv,
+                    dV,
+                    r,
+                    kp.as_mut().map(|kp| (&mut kuu, kp)),
+                )?;
             }
             if let Some(c) = mat.reg_direct {
                 let hX = physical_hessians::<N, D, E>(xi, &s.X, &g)?;
@@ -293,6 +322,24 @@ pub fn bulk<const N: usize, const D: usize, E: RefElement<N, D>>(
                             }
                         }
                         add_gradient_product(ktu_k, &gT, &c, D);
+                    }
+                }
+            }
+        }
+    }
+    if let (Some(k), Some(kp)) = (k.as_deref_mut(), &kp) {
+        for c in 0..lay.np {
+            for I in 0..N {
+                let row = lay.p(I, c) * nd;
+                for K in 0..N {
+                    k[row + lay.p(K, c)] += kp.pp[c][I][K];
+                }
+                for a in 0..D {
+                    let ua = lay.u(I, a);
+                    for K in 0..N {
+                        let v = kp.up[a][c][I][K];
+                        k[ua * nd + lay.p(K, c)] += v;
+                        k[lay.p(K, c) * nd + ua] += v;
                     }
                 }
             }
@@ -364,14 +411,14 @@ fn regularization<const N: usize, const D: usize>(
     lay: &Layout,
     s: &CellState<N>,
     F: &Matrix3<f64>,
-    g: &[[f64; D]; N],
+    (g, gT): (&[[f64; D]; N], &[[f64; N]; 3]),
     Nv: &[f64; N],
     dV: f64,
     r: &mut [f64],
-    mut k: Option<&mut [f64]>,
+    tangent: Option<(&mut UuBlocks<N>, &mut PBlocks<N>)>,
 ) -> Result<f64, KernelError> {
-    let nd = lay.ndof();
     let mut energy = 0.0;
+    let mut tangent = tangent;
     for c in 0..lay.np {
         let rm = rotation_measure(F, c).ok_or(KernelError::Singular)?;
         let mut p = 0.0;
@@ -385,53 +432,61 @@ fn regularization<const N: usize, const D: usize>(
         let (psi, d1, d2) = reg.penalty(rm.f, p);
         let gp2: f64 = gp.iter().map(|v| v * v).sum();
         energy += (psi + 0.5 * reg.beta2 * gp2) * dV;
-        // Bf[I][a] = ∂f/∂F_aJ ∂N_I/∂X_J = ∂f/∂u_Ia
-        let mut Bf = [[0.0; D]; N];
+        // Bf[a][I] = ∂f/∂F_aJ ∂N_I/∂X_J = ∂f/∂u_Ia
+        let mut Bf = [[0.0; N]; 3];
         for (q, &(a, J)) in rm.entries.iter().enumerate() {
             for I in 0..N {
-                Bf[I][a] += rm.grad[q] * g[I][J];
+                Bf[a][I] += rm.grad[q] * g[I][J];
             }
         }
         for I in 0..N {
             for a in 0..D {
-                r[lay.u(I, a)] += d1[0] * Bf[I][a] * dV;
+                r[lay.u(I, a)] += d1[0] * Bf[a][I] * dV;
             }
             let gg: f64 = (0..D).map(|J| gp[J] * g[I][J]).sum();
             r[lay.p(I, c)] += (d1[1] * Nv[I] + reg.beta2 * gg) * dV;
         }
-        let Some(k) = k.as_deref_mut() else { continue };
-        for I in 0..N {
-            for a in 0..D {
-                let row = lay.u(I, a) * nd;
-                let w = d2[0][0] * Bf[I][a] * dV;
-                for K in 0..N {
-                    for b in 0..D {
-                        k[row + lay.u(K, b)] += w * Bf[K][b];
-                    }
-                    // K_up and its transpose K_pu
-                    let v = d2[0][1] * Bf[I][a] * Nv[K] * dV;
-                    k[row + lay.p(K, c)] += v;
-                    k[lay.p(K, c) * nd + lay.u(I, a)] += v;
-                }
-            }
-            // second derivative of f: Σ_qs ∂²f/∂F_q∂F_s (∇N_I)_Jq (∇N_K)_Js
-            for (q, &(a, Jq)) in rm.entries.iter().enumerate() {
-                for (t, &(b, Js)) in rm.entries.iter().enumerate() {
-                    let h = rm.hess[q][t];
-                    if h == 0.0 {
-                        continue;
-                    }
-                    let w = d1[0] * h * g[I][Jq] * dV;
-                    let row = lay.u(I, a) * nd;
+        let Some((uu, pb)) = tangent.as_mut() else {
+            continue;
+        };
+        for a in 0..D {
+            for b in a..D {
+                // d²ψ/df² ∂f/∂u ⊗ ∂f/∂u
+                for I in 0..N {
+                    let w = d2[0][0] * Bf[a][I] * dV;
                     for K in 0..N {
-                        k[row + lay.u(K, b)] += w * g[K][Js];
+                        uu[a][b][I][K] += w * Bf[b][K];
                     }
                 }
             }
-            let row = lay.p(I, c) * nd;
+            // K_up (K_pu is its transpose)
+            for I in 0..N {
+                let w = d2[0][1] * Bf[a][I] * dV;
+                for K in 0..N {
+                    pb.up[a][c][I][K] += w * Nv[K];
+                }
+            }
+        }
+        // dψ/df Σ_qt ∂²f/∂F_q∂F_t (∇N_I)_Jq (∇N_K)_Jt, blocks a ≤ b (∂²f is symmetric)
+        for (q, &(a, Jq)) in rm.entries.iter().enumerate() {
+            for (t, &(b, Js)) in rm.entries.iter().enumerate() {
+                let h = rm.hess[q][t];
+                if h == 0.0 || a > b {
+                    continue;
+                }
+                for I in 0..N {
+                    let w = d1[0] * h * gT[Jq][I] * dV;
+                    for K in 0..N {
+                        uu[a][b][I][K] += w * gT[Js][K];
+                    }
+                }
+            }
+        }
+        for I in 0..N {
+            let w = d2[1][1] * Nv[I] * dV;
             for K in 0..N {
-                let gg: f64 = (0..D).map(|J| g[I][J] * g[K][J]).sum();
-                k[row + lay.p(K, c)] += (d2[1][1] * Nv[I] * Nv[K] + reg.beta2 * gg) * dV;
+                let gg: f64 = (0..D).map(|J| gT[J][I] * gT[J][K]).sum();
+                pb.pp[c][I][K] += w * Nv[K] + reg.beta2 * gg * dV;
             }
         }
     }
