@@ -519,10 +519,16 @@ impl BlockTriangular {
 
     fn factor(&mut self, values: &[f64]) -> Result<(), LinearError> {
         self.values.copy_from_slice(values);
-        for f in [&mut self.fm, &mut self.ft].into_iter().flatten() {
-            f.sub.update(values);
-            f.factor()?;
-        }
+        // the temperature block factors on the other core while the mechanics block does
+        let one = |f: &mut Option<SymFactor>| -> Result<(), LinearError> {
+            if let Some(f) = f {
+                f.sub.update(values);
+                f.factor()?;
+            }
+            Ok(())
+        };
+        let (m, t) = rayon::join(|| one(&mut self.fm), || one(&mut self.ft));
+        m.and(t)?;
         self.coupling.update(values);
         Ok(())
     }
