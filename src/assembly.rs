@@ -167,8 +167,9 @@ struct Arrays {
 /// Assembler state reused across calls: pattern, value and vector storage.
 pub struct Assembler {
     pub pattern: Pattern,
-    /// Per model block, per cell, column-major over the cell's local dofs (b, a): the position
-    /// in `values` of tangent entry (row a, column b), or `NO_SLOT` where either is prescribed.
+    /// Per model block, per cell, row-major over the cell's local dofs (a, b) like the kernel's
+    /// tangent: the position in `values` of entry (row a, column b), or `NO_SLOT` where either
+    /// is prescribed.
     /// Built once per mesh, so the scatter is a load and an add per entry, not a search.
     slots: Vec<Vec<u32>>,
     /// The arrays of threads 1.. (thread 0 adds into the result).
@@ -250,7 +251,7 @@ fn build_slots(model: &Model, pattern: &Pattern) -> Vec<Vec<u32>> {
                             while pattern.row_idx[q] != row {
                                 q += 1;
                             }
-                            cell[b * nd + a] = q as u32;
+                            cell[a * nd + b] = q as u32;
                         }
                     }
                 },
@@ -456,12 +457,9 @@ impl Assembler {
                         continue;
                     }
                     let cell = &slots[c * nd * nd..(c + 1) * nd * nd];
-                    for b in 0..nd {
-                        let column = &cell[b * nd..(b + 1) * nd];
-                        for (a, &q) in column.iter().enumerate() {
-                            if q != NO_SLOT {
-                                *values.at(q as usize) += k[a * nd + b];
-                            }
+                    for (&q, &v) in cell.iter().zip(k.iter()) {
+                        if q != NO_SLOT {
+                            *values.at(q as usize) += v;
                         }
                     }
                     // prescribed columns: their increments lifted to the right-hand side

@@ -81,6 +81,9 @@ pub struct Summary {
     pub solver_seconds: f64,
     /// GMRES iterations over all accepted steps (0 with a direct solver).
     pub krylov_iterations: usize,
+    /// Accepted steps whose converging residual was assembled without the tangent (its
+    /// factorisation was reused for the last update).
+    pub tangents_skipped: usize,
     /// Peak resident memory of the process so far, MB (Linux; null elsewhere).
     pub peak_memory_mb: Option<f64>,
     pub probes: BTreeMap<String, f64>,
@@ -116,7 +119,7 @@ pub const HISTORY_STEP_COLUMNS: [&str; 9] = [
 pub const HISTORY_SOLVER_COLUMNS: [&str; 3] = ["krylov_iterations", "halvings", "time"];
 
 /// Mesh the case's `.geo` into `out_dir/mesh.msh`, or return its `.msh` path.
-fn mesh_for(case: &Case, out_dir: &Path) -> Result<PathBuf, SolveError> {
+pub fn mesh_for(case: &Case, out_dir: &Path) -> Result<PathBuf, SolveError> {
     let path = case.mesh_path();
     match path.extension().and_then(|e| e.to_str()) {
         Some("geo") => {
@@ -515,6 +518,7 @@ fn solve_model(
         assembly_seconds: 0.0,
         solver_seconds: 0.0,
         krylov_iterations: 0,
+        tangents_skipped: 0,
         peak_memory_mb: None,
         probes: BTreeMap::new(),
         reactions: BTreeMap::new(),
@@ -624,6 +628,7 @@ fn solve_model(
                 row.extend([rep.krylov as f64, rep.halvings as f64, target, work]);
                 total_krylov += rep.krylov;
                 summary.krylov_iterations = total_krylov;
+                summary.tangents_skipped += rep.tangents_skipped;
                 history.row(&row)?;
                 write_step(ctl.accepted, &x, &mut pvd, target)?;
                 let fmt_j = |j: f64| {

@@ -17,6 +17,7 @@ pub fn case_text(name: &str) -> String {
 }
 
 /// Write `text` as `dir/case.toml`, solve it into `dir/out`: (succeeded, summary.json).
+#[allow(dead_code)] // not every benchmark solves a whole case
 pub fn solve(dir: &Path, text: &str) -> (bool, serde_json::Value) {
     std::fs::create_dir_all(dir).unwrap();
     let case = dir.join("case.toml");
