@@ -53,6 +53,9 @@ pub struct StepReport {
     pub t_solve: f64,
     /// Krylov iterations over the step (0 with a direct solver).
     pub krylov: usize,
+    /// Tangents not assembled: a step about to converge reuses its factorisation for the
+    /// last update, so its last assembly is the residual only (1, or 0 if mispredicted).
+    pub tangents_skipped: usize,
 }
 
 #[derive(Debug)]
@@ -98,6 +101,7 @@ impl StepReport {
             t_assembly: self.t_assembly + next.t_assembly,
             t_solve: self.t_solve + next.t_solve,
             krylov: self.krylov + next.krylov,
+            tangents_skipped: self.tangents_skipped + next.tangents_skipped,
         }
     }
 }
@@ -237,70 +241,83 @@ impl Newton {
         let mut last_update: FieldNorms;
         let mut cuts = 0;
         let mut it = 0;
+        // the last update was small: the step most likely ends at the next residual
+        let mut expect_converged = false;
         loop {
             let t0 = std::time::Instant::now();
             let first = it == 0;
-            // Safeguard: an update that leaves the admissible set (J ≤ 0, an unbounded
-            // regularization, NaN) is halved until the state is admissible again.
-            let mut halvings = 0;
-            let (stats, pending) = loop {
-                let mut pending = false;
-                for (d, p) in model.cons.prescribed.iter().enumerate() {
-                    if let Some(p) = p.filter(|_| part.has(model.dofs.field[d])) {
-                        dx_p[d] = p.at(&amps) - x[d];
-                        pending |= dx_p[d] != 0.0;
+            // A step that is about to converge reuses its factorisation for the last update, so
+            // its last tangent would be thrown away: then the residual is assembled alone, and
+            // the tangent only if the residual turns out not converged after all.
+            let mut tangent = first || !expect_converged;
+            let (stats, pending, rel, residual_ok) = loop {
+                // Safeguard: an update that leaves the admissible set (J ≤ 0, an unbounded
+                // regularization, NaN) is halved until the state is admissible again.
+                let mut halvings = 0;
+                let (stats, pending) = loop {
+                    let mut pending = false;
+                    for (d, p) in model.cons.prescribed.iter().enumerate() {
+                        if let Some(p) = p.filter(|_| part.has(model.dofs.field[d])) {
+                            dx_p[d] = p.at(&amps) - x[d];
+                            pending |= dx_p[d] != 0.0;
+                        }
                     }
-                }
-                match asm.assemble_part(
-                    model,
-                    x,
-                    t,
-                    true,
-                    pending.then_some(&dx_p[..]),
-                    part.active(),
-                ) {
-                    Ok(stats) => break (stats, pending),
-                    Err(e) if first || halvings == MAX_HALVINGS || !e.is_inadmissible() => {
-                        return Err(StepFailure::Assembly(e));
+                    match asm.assemble_part(
+                        model,
+                        x,
+                        t,
+                        tangent,
+                        pending.then_some(&dx_p[..]),
+                        part.active(),
+                    ) {
+                        Ok(stats) => break (stats, pending),
+                        Err(e) if first || halvings == MAX_HALVINGS || !e.is_inadmissible() => {
+                            return Err(StepFailure::Assembly(e));
+                        }
+                        Err(_) => {
+                            halvings += 1;
+                            for (xi, a) in x.iter_mut().zip(applied.iter_mut()) {
+                                *a *= 0.5;
+                                *xi -= *a;
+                            }
+                        }
                     }
-                    Err(_) => {
-                        halvings += 1;
-                        for (xi, a) in x.iter_mut().zip(applied.iter_mut()) {
-                            *a *= 0.5;
-                            *xi -= *a;
+                };
+                cuts += halvings;
+                self.free_residual(model, part, &asm.r_full, &mut rhs);
+                if pending {
+                    for ((r, l), f) in rhs.iter_mut().zip(&asm.lift).zip(&self.eq_field) {
+                        if part.has(*f) {
+                            *r -= l;
                         }
                     }
                 }
-            };
-            cuts += halvings;
-            t_asm += t0.elapsed().as_secs_f64();
-            self.free_residual(model, part, &asm.r_full, &mut rhs);
-            if pending {
-                for ((r, l), f) in rhs.iter_mut().zip(&asm.lift).zip(&self.eq_field) {
-                    if part.has(*f) {
-                        *r -= l;
+                let res = self.norms(&rhs);
+                let reac = Self::reaction_norms(model, &asm.r_full);
+                for f in (0..3).filter(|&f| active[f]) {
+                    if first {
+                        step_ref[f] = res[f];
                     }
+                    step_ref[f] = step_ref[f].max(reac[f]);
+                    self.run_ref[f] = self.run_ref[f].max(step_ref[f]);
                 }
-            }
-            let res = self.norms(&rhs);
-            let reac = Self::reaction_norms(model, &asm.r_full);
-            for f in (0..3).filter(|&f| active[f]) {
-                if first {
-                    step_ref[f] = res[f];
+                let rel: FieldNorms = std::array::from_fn(|f| {
+                    let r = same_units(f, |g| step_ref[g].max(self.run_ref[g]));
+                    if r > 0.0 && active[f] {
+                        res[f] / r
+                    } else {
+                        0.0
+                    }
+                });
+                let residual_ok = rel.iter().all(|&r| r <= self.tol);
+                if !tangent && (!residual_ok || pending) {
+                    tangent = true;
+                    continue;
                 }
-                step_ref[f] = step_ref[f].max(reac[f]);
-                self.run_ref[f] = self.run_ref[f].max(step_ref[f]);
-            }
-            let rel: FieldNorms = std::array::from_fn(|f| {
-                let r = same_units(f, |g| step_ref[g].max(self.run_ref[g]));
-                if r > 0.0 && active[f] {
-                    res[f] / r
-                } else {
-                    0.0
-                }
-            });
+                break (stats, pending, rel, residual_ok);
+            };
+            t_asm += t0.elapsed().as_secs_f64();
             history.push(rel);
-            let residual_ok = rel.iter().all(|&r| r <= self.tol);
             if it >= self.max_iter && !residual_ok {
                 return Err(StepFailure::NotConverged {
                     iterations: it,
@@ -370,7 +387,7 @@ impl Newton {
                 }
                 history.push([0.0, rel, 0.0]);
                 Some(1)
-            } else if residual_ok && !first {
+            } else {
                 // an update is small against the step's largest one, or negligible against the
                 // field itself (a field the step hardly changes has round-off updates only)
                 let size = self.norms_of_state(model, x);
@@ -378,9 +395,14 @@ impl Newton {
                     last_update[f] <= self.tol.sqrt() * same_units(f, |g| du_ref[g])
                         || last_update[f] <= 1e-10 * same_units(f, |g| size[g])
                 });
-                update_ok.then_some(it)
-            } else {
-                None
+                // and the residual, falling at its last rate, would be below tolerance
+                let worst = |h: &FieldNorms| h.iter().fold(0.0f64, |a, &v| a.max(v));
+                let falling = match history.as_slice() {
+                    [.., a, b] => worst(b) * worst(b) <= self.tol * worst(a),
+                    _ => false,
+                };
+                expect_converged = update_ok && falling;
+                (residual_ok && !first && update_ok).then_some(it)
             };
             if let Some(iterations) = converged_after {
                 return Ok(StepReport {
@@ -391,6 +413,7 @@ impl Newton {
                     t_assembly: t_asm,
                     t_solve: t_sol,
                     krylov: solver.take_krylov(),
+                    tangents_skipped: usize::from(!tangent),
                 });
             }
             if it >= self.max_iter {
