@@ -196,6 +196,32 @@ impl Shared {
     }
 }
 
+/// Length of the pieces the whole-array passes below are cut into, one task each.
+const PASS_CHUNK: usize = 1 << 15;
+
+/// `v` ← 0, in parallel (the tangent's values are tens of MB on 3D meshes).
+fn zero(v: &mut [f64]) {
+    v.par_chunks_mut(PASS_CHUNK).for_each(|c| c.fill(0.0));
+}
+
+/// `dst` += every array of `srcs` (the threads' partial sums), in one parallel pass that also
+/// tells whether the result is finite everywhere.
+fn gather<'a>(dst: &mut [f64], srcs: impl Iterator<Item = &'a Vec<f64>>) -> bool {
+    let srcs: Vec<&Vec<f64>> = srcs.collect();
+    dst.par_chunks_mut(PASS_CHUNK)
+        .enumerate()
+        .map(|(i, d)| {
+            let span = i * PASS_CHUNK..i * PASS_CHUNK + d.len();
+            for s in &srcs {
+                for (a, b) in d.iter_mut().zip(&s[span.clone()]) {
+                    *a += *b;
+                }
+            }
+            d.iter().all(|v| v.is_finite())
+        })
+        .reduce(|| true, |a, b| a && b)
+}
+
 /// Marks a tangent entry that is not in the free system.
 const NO_SLOT: u32 = u32::MAX;
 
@@ -318,13 +344,13 @@ impl Assembler {
     ) -> Result<AssemblyStats, AssemblyError> {
         self.r_full.fill(0.0);
         if tangent {
-            self.values.fill(0.0);
+            zero(&mut self.values);
         }
         self.lift.fill(0.0);
         // a failed call may have left partial sums in the threads' arrays
         for p in &mut self.private {
             if tangent {
-                p.values.fill(0.0);
+                zero(&mut p.values);
             }
             p.r_full.fill(0.0);
             p.lift.fill(0.0);
@@ -358,41 +384,19 @@ impl Assembler {
             }
             stats.energy += energy;
         }
-        self.gather_private(tangent);
+        let private = &self.private;
+        let finite = (!tangent || gather(&mut self.values, private.iter().map(|p| &p.values)))
+            & gather(&mut self.r_full, private.iter().map(|p| &p.r_full))
+            & gather(&mut self.lift, private.iter().map(|p| &p.lift));
+        if !finite {
+            return Err(AssemblyError::NotFinite);
+        }
         let mut fe = vec![0.0; model.dofs.n_dofs];
         model.f_ext(t, &mut fe);
         for (r, f) in self.r_full.iter_mut().zip(&fe) {
             *r -= f;
         }
-        if !self.r_full.iter().all(|v| v.is_finite()) || !self.values.iter().all(|v| v.is_finite())
-        {
-            return Err(AssemblyError::NotFinite);
-        }
         Ok(stats)
-    }
-
-    /// Add the threads' private arrays into the result.
-    fn gather_private(&mut self, tangent: bool) {
-        const CHUNK: usize = 1 << 14;
-        for p in &self.private {
-            let pairs: [(&mut Vec<f64>, &Vec<f64>, bool); 3] = [
-                (&mut self.values, &p.values, tangent),
-                (&mut self.r_full, &p.r_full, true),
-                (&mut self.lift, &p.lift, true),
-            ];
-            for (dst, src, on) in pairs {
-                if !on {
-                    continue;
-                }
-                dst.par_chunks_mut(CHUNK)
-                    .zip(src.par_chunks(CHUNK))
-                    .for_each(|(d, s)| {
-                        for (a, b) in d.iter_mut().zip(s.iter()) {
-                            *a += *b;
-                        }
-                    });
-            }
-        }
     }
 
     /// One block: its cells cut into one contiguous chunk per thread, each chunk adding into

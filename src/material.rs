@@ -41,6 +41,7 @@ pub struct StressResponse {
 
 impl ThermoElastic {
     /// Energy, stress and tangents; `None` when J ≤ 0 or not finite.
+    #[inline(always)]
     pub fn stress(&self, F: &Matrix3<f64>, theta: f64) -> Option<StressResponse> {
         let J = F.determinant();
         if !(J > 0.0) || !J.is_finite() {
@@ -131,6 +132,7 @@ pub struct HeatResponse {
 }
 
 /// Pulled-back Fourier law Q = −J k(J) C⁻¹ ∇_X θ and its exact derivatives.
+#[inline(always)]
 pub fn fourier(
     F: &Matrix3<f64>,
     grad_theta: &Vector3<f64>,

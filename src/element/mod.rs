@@ -266,6 +266,7 @@ impl RefElement<8, 3> for Hex8 {
 /// `None` when the reference map is singular or inverted (det ≤ 0), which for an undeformed
 /// mesh means the mesh itself is broken.
 #[allow(non_snake_case)]
+#[inline(always)]
 pub fn physical_gradients<const N: usize, const D: usize>(
     dN_dxi: &[[f64; D]; N],
     X: &[[f64; 3]; N],
