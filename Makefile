@@ -25,6 +25,7 @@ bench: deps
 	$(CARGO) bench --bench table2
 	$(CARGO) bench --bench stability
 	$(CARGO) bench --bench kernel
+	$(CARGO) bench --bench assembly
 
 # tmc against FEniCSx on four scenes (T1, Q1, tet4, H1); writes validation/fenicsx/RESULTS.md.
 validate: build

@@ -4,7 +4,7 @@
 
 use std::hint::black_box;
 use std::time::Instant;
-use tmc::element::{Hex8, Quad4, RefElement, Tet4, Tri3};
+use tmc::element::{Hex8, Hex27, Quad4, RefElement, Tet4, Tri3};
 use tmc::kernel::{Active, CellMaterial, CellState, Layout, bulk};
 use tmc::material::{Conductivity, Regularization, ThermoElastic};
 
@@ -96,7 +96,7 @@ fn main() {
     println!("\nkernel::bulk, residual + tangent of one cell, one thread (µs per cell)\n");
     println!("| element | physics | dofs | µs |");
     println!("|---|---|---:|---:|");
-    let rows: [Row; 8] = [
+    let rows: [Row; 10] = [
         ("T1", "solid u", 6, || time::<3, 2, Tri3>(&SOLID, false)),
         ("Q1", "solid u, θ", 12, || {
             time::<4, 2, Quad4>(&SOLID, true)
@@ -115,6 +115,12 @@ fn main() {
         ("H1", "medium u, θ, p", 56, || {
             time::<8, 3, Hex8>(&MEDIUM, true)
         }),
+        ("H2", "solid u, θ", 108, || {
+            time::<27, 3, Hex27>(&SOLID, true)
+        }),
+        ("H2", "medium u, θ, direct regularization", 108, || {
+            time::<27, 3, Hex27>(&MEDIUM_DIRECT, true)
+        }),
     ];
     // TMC_KERNEL_ONLY="H1 solid u, θ": that row only
     let only = std::env::var("TMC_KERNEL_ONLY").ok();
@@ -128,5 +134,12 @@ fn main() {
 
 const MEDIUM_NO_P: CellMaterial = CellMaterial {
     reg: None,
+    ..MEDIUM
+};
+
+/// A quadratic medium cell: the direct regularization of eq. 18, weight γ α_r.
+const MEDIUM_DIRECT: CellMaterial = CellMaterial {
+    reg: None,
+    reg_direct: Some(1e-4),
     ..MEDIUM
 };

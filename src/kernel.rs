@@ -609,18 +609,28 @@ fn direct_regularization<const N: usize, const D: usize>(
     hX: &[[[f64; D]; D]; N],
     dV: f64,
     r: &mut [f64],
-    mut k: Option<&mut [f64]>,
+    k: Option<&mut [f64]>,
 ) -> Result<f64, KernelError> {
     let nd = lay.ndof();
     let nu = N * D; // local u dofs come first: α = I D + b
+    assert!(
+        nu <= MAX_U,
+        "at most {MAX_U} displacement unknowns per cell"
+    );
     let mut energy = 0.0;
     let planes = if D == 2 { 1 } else { 3 };
+    let tangent = k.is_some();
+    // The tangent is Σ_planes L Rᵀ with, per plane, L_α = [A_α, pm_α + V_α, P_α] and
+    // R_α = [A_α, P_α, V_α] (see below): rank 11 at most, one matrix product per point.
+    let mut L = [[0.0; RANK]; MAX_U];
+    let mut R = [[0.0; RANK]; MAX_U];
     for i in 0..planes {
         let rm = rotation_measure(F, i).ok_or(KernelError::Singular)?;
         let d3 = rotation_measure_d3(F, i).ok_or(KernelError::Singular)?;
-        // T[q][K] = ∂F_(a_q J_q)/∂X_K;  P[t][α] = ∂F_(a_t J_t)/∂u_α;  R[q][K][α] = ∂T[q][K]/∂u_α
+        // T[q][K] = ∂F_(a_q J_q)/∂X_K;  P[α][t] = ∂F_(a_t J_t)/∂u_α;  ∂T[q][K]/∂u_α is
+        // hX[I][J_q][K] where α = (I, a_q), 0 otherwise
         let mut T = [[0.0; D]; 4];
-        let mut P = vec![[0.0; 4]; nu];
+        let mut P = [[0.0; 4]; MAX_U];
         for (q, &(a, J)) in rm.entries.iter().enumerate() {
             for I in 0..N {
                 P[I * D + a][q] = g[I][J];
@@ -629,63 +639,92 @@ fn direct_regularization<const N: usize, const D: usize>(
                 }
             }
         }
-        let R = |q: usize, K: usize, al: usize| -> f64 {
-            let (a, J) = rm.entries[q];
-            if al % D == a { hX[al / D][J][K] } else { 0.0 }
-        };
         let G: [f64; D] = std::array::from_fn(|K| (0..4).map(|q| rm.grad[q] * T[q][K]).sum());
         energy += 0.5 * c * G.iter().map(|v| v * v).sum::<f64>() * dV;
-        // A[α][K] = ∂G_K/∂u_α
-        let mut A = vec![[0.0; D]; nu];
-        for (al, Aa) in A.iter_mut().enumerate() {
-            for K in 0..D {
-                let mut v = 0.0;
-                for q in 0..4 {
-                    let ht: f64 = (0..4).map(|t| rm.hess[q][t] * P[al][t]).sum();
-                    v += ht * T[q][K] + rm.grad[q] * R(q, K, al);
+        // HT[t][K] = Σ_q hess[q][t] T[q][K]; GT[q] = Σ_K G_K T[q][K]
+        let HT: [[f64; D]; 4] = std::array::from_fn(|t| {
+            std::array::from_fn(|K| (0..4).map(|q| rm.hess[q][t] * T[q][K]).sum())
+        });
+        let GT: [f64; 4] = std::array::from_fn(|q| (0..D).map(|K| G[K] * T[q][K]).sum());
+        // Mbar[t][w] = Σ_q d3[q][t][w] GT[q]
+        let Mbar: [[f64; 4]; 4] = std::array::from_fn(|t| {
+            std::array::from_fn(|w| (0..4).map(|q| d3[q][t][w] * GT[q]).sum())
+        });
+        let col = i * RANK_PER_PLANE;
+        for I in 0..N {
+            for a in 0..D {
+                let al = I * D + a;
+                let Pa = &P[al];
+                // A[α][K] = ∂G_K/∂u_α = Σ_t P[α][t] HT[t][K] + Σ_(q: a_q = a) grad[q] hX[I][J_q][K]
+                let mut A = [0.0; D];
+                for (K, AK) in A.iter_mut().enumerate() {
+                    *AK = (0..4).map(|t| Pa[t] * HT[t][K]).sum();
                 }
-                Aa[K] = v;
-            }
-            let ga: f64 = (0..D).map(|K| G[K] * Aa[K]).sum();
-            r[lay.u(al / D, al % D)] += c * ga * dV;
-        }
-        let Some(k) = k.as_deref_mut() else { continue };
-        // Mbar[t][w] = Σ_K G_K Σ_q d3[q][t][w] T[q][K];  V[α][w] = Σ_K G_K Σ_q hess[q][w] R[q][K][α]
-        let mut Mbar = [[0.0; 4]; 4];
-        for t in 0..4 {
-            for w in 0..4 {
-                for q in 0..4 {
-                    Mbar[t][w] += d3[q][t][w] * (0..D).map(|K| G[K] * T[q][K]).sum::<f64>();
-                }
-            }
-        }
-        let V: Vec<[f64; 4]> = (0..nu)
-            .map(|al| {
-                std::array::from_fn(|w| {
-                    let mut v = 0.0;
-                    for q in 0..4 {
-                        if rm.hess[q][w] != 0.0 {
-                            v += rm.hess[q][w] * (0..D).map(|K| G[K] * R(q, K, al)).sum::<f64>();
-                        }
+                // V[α][w] = Σ_K G_K Σ_(q: a_q = a) hess[q][w] hX[I][J_q][K]
+                let mut V = [0.0; 4];
+                for (q, &(aq, J)) in rm.entries.iter().enumerate() {
+                    if aq != a {
+                        continue;
                     }
-                    v
-                })
-            })
-            .collect();
-        for al in 0..nu {
-            let row = lay.u(al / D, al % D) * nd;
-            let pm: [f64; 4] = std::array::from_fn(|w| (0..4).map(|t| P[al][t] * Mbar[t][w]).sum());
-            for be in 0..nu {
-                let mut v: f64 = (0..D).map(|K| A[al][K] * A[be][K]).sum();
-                for w in 0..4 {
-                    v += pm[w] * P[be][w] + V[al][w] * P[be][w] + P[al][w] * V[be][w];
+                    let h = &hX[I][J];
+                    let gh: f64 = (0..D).map(|K| G[K] * h[K]).sum();
+                    for K in 0..D {
+                        A[K] += rm.grad[q] * h[K];
+                    }
+                    for (w, Vw) in V.iter_mut().enumerate() {
+                        *Vw += rm.hess[q][w] * gh;
+                    }
                 }
-                k[row + lay.u(be / D, be % D)] += c * v * dV;
+                let ga: f64 = (0..D).map(|K| G[K] * A[K]).sum();
+                r[lay.u(I, a)] += c * ga * dV;
+                if !tangent {
+                    continue;
+                }
+                let (l, rr) = (
+                    &mut L[al][col..col + RANK_PER_PLANE],
+                    &mut R[al][col..col + RANK_PER_PLANE],
+                );
+                l[..D].copy_from_slice(&A);
+                rr[..D].copy_from_slice(&A);
+                for w in 0..4 {
+                    let pm: f64 = (0..4).map(|t| Pa[t] * Mbar[t][w]).sum();
+                    l[3 + w] = pm + V[w];
+                    l[7 + w] = Pa[w];
+                    rr[3 + w] = Pa[w];
+                    rr[7 + w] = V[w];
+                }
             }
         }
     }
+    if let Some(k) = k {
+        // k_uu += c dV L Rᵀ (the u block is the leading nu × nu one, row stride nd)
+        let width = planes * RANK_PER_PLANE;
+        let lhs = faer::MatRef::from_row_major_slice_with_stride(L.as_flattened(), nu, width, RANK);
+        let rhs = faer::MatRef::from_row_major_slice_with_stride(R.as_flattened(), nu, width, RANK);
+        let dst = faer::MatMut::from_row_major_slice_with_stride_mut(
+            &mut k[..(nu - 1) * nd + nu],
+            nu,
+            nu,
+            nd,
+        );
+        faer::linalg::matmul::matmul(
+            dst,
+            faer::Accum::Add,
+            lhs,
+            rhs.transpose(),
+            c * dV,
+            faer::Par::Seq,
+        );
+    }
     Ok(energy)
 }
+
+/// Displacement unknowns of the largest cell (hex27).
+const MAX_U: usize = 81;
+/// Columns of one rotation plane's factors: A (up to 3), then two groups of 4.
+const RANK_PER_PLANE: usize = 11;
+/// Columns of the factors of all three planes.
+const RANK: usize = 3 * RANK_PER_PLANE;
 
 /// Cell averages for output.
 #[derive(Clone, Copy, Debug, Default)]
