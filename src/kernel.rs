@@ -310,7 +310,12 @@ fn bulk_body<const N: usize, const D: usize, E: RefElement<N, D>, M: MulAdd>(
                                 }
                             }
                         }
-                        add_gradient_product::<N, D, M>(&mut kuu[i][kk], &gT, &c);
+                        // a diagonal block is symmetric: its upper triangle (K ≥ I) only
+                        if i == kk {
+                            add_gradient_product::<N, D, M, true>(&mut kuu[i][kk], &gT, &c);
+                        } else {
+                            add_gradient_product::<N, D, M, false>(&mut kuu[i][kk], &gT, &c);
+                        }
                     }
                 }
                 if lay.has_theta {
@@ -366,7 +371,8 @@ fn bulk_body<const N: usize, const D: usize, E: RefElement<N, D>, M: MulAdd>(
                         }
                     }
                 }
-                add_gradient_product::<N, D, M>(&mut ktt, &gT, &c);
+                // ∂Q/∂∇θ = −J k C⁻¹ is symmetric, and so is this block
+                add_gradient_product::<N, D, M, true>(&mut ktt, &gT, &c);
                 if lay.has_u && act.mechanics {
                     // ∂r_θ(I)/∂u(K,kk) = −∫ ∂N_I/∂X_J ∂Q_J/∂F_kkL ∂N_K/∂X_L
                     for (kk, ktu_k) in ktu.iter_mut().enumerate().take(D) {
@@ -379,7 +385,7 @@ fn bulk_body<const N: usize, const D: usize, E: RefElement<N, D>, M: MulAdd>(
                                 }
                             }
                         }
-                        add_gradient_product::<N, D, M>(ktu_k, &gT, &c);
+                        add_gradient_product::<N, D, M, false>(ktu_k, &gT, &c);
                     }
                 }
             }
@@ -411,7 +417,8 @@ fn bulk_body<const N: usize, const D: usize, E: RefElement<N, D>, M: MulAdd>(
                 if lay.has_u && act.mechanics {
                     for kk in 0..D {
                         for K in 0..N {
-                            k[row + lay.u(K, kk)] += if i <= kk {
+                            // blocks i ≤ kk stored; of a diagonal one, its upper triangle
+                            k[row + lay.u(K, kk)] += if i < kk || (i == kk && K >= I) {
                                 kuu[i][kk][I][K]
                             } else {
                                 kuu[kk][i][K][I]
@@ -428,7 +435,7 @@ fn bulk_body<const N: usize, const D: usize, E: RefElement<N, D>, M: MulAdd>(
             if lay.has_theta && act.heat {
                 let row = th(I) * nd;
                 for K in 0..N {
-                    k[row + th(K)] += ktt[I][K];
+                    k[row + th(K)] += if K >= I { ktt[I][K] } else { ktt[K][I] };
                 }
                 if lay.has_u && act.mechanics {
                     for kk in 0..D {
@@ -443,9 +450,10 @@ fn bulk_body<const N: usize, const D: usize, E: RefElement<N, D>, M: MulAdd>(
     Ok(summary)
 }
 
-/// block[I][K] += Σ_J ∂N_I/∂X_J c[J][K] (J < d), the inner loop over K.
+/// block[I][K] += Σ_J ∂N_I/∂X_J c[J][K] (J < D), the inner loop over K; with `UPPER`, for
+/// K ≥ I only (a symmetric block's other half is its transpose).
 #[inline(always)]
-fn add_gradient_product<const N: usize, const D: usize, M: MulAdd>(
+fn add_gradient_product<const N: usize, const D: usize, M: MulAdd, const UPPER: bool>(
     block: &mut [[f64; N]; N],
     gT: &[[f64; N]; 3],
     c: &[[f64; N]; 3],
@@ -453,7 +461,7 @@ fn add_gradient_product<const N: usize, const D: usize, M: MulAdd>(
     for (I, row) in block.iter_mut().enumerate() {
         for J in 0..D {
             let gIJ = gT[J][I];
-            for K in 0..N {
+            for K in if UPPER { I } else { 0 }..N {
                 row[K] = M::mul_add(gIJ, c[J][K], row[K]);
             }
         }
