@@ -1,10 +1,13 @@
 //! Assembly: the sparsity pattern (built once per mesh) and the global residual and tangent.
 //!
-//! Parallel over cells without locks: each block's cells are cut into one contiguous chunk
-//! per thread, and each chunk adds into its own copy of the arrays (the first into the
-//! result itself), summed at the end. On few cores this beats colouring (one parallel region
-//! per colour, each too small to pay for its scheduling) and keeps cells in mesh order for
-//! locality; the copies cost (threads − 1) × nnz values, so at most 8 threads assemble.
+//! Parallel over cells without locks and without per-thread copies of the arrays: each block's
+//! cells are cut in two by recursive coordinate bisection (one level per doubling of the
+//! threads), and the two halves run at once. Of each half, only the cells that share a node
+//! with the other half can add into the same entries; the left half runs its shared cells
+//! first, the right half its own last, after the left's are done. So no two cells that share
+//! a node ever run at once, every entry is summed in the same order whatever the scheduling,
+//! and the arrays are written once, in place (copies per thread cost a zeroing and a
+//! summing pass over the tangent's tens of MB per assembly, more than the cells' scatter).
 //!
 //! The system is reduced to the free equations; a prescribed dof's column is moved to the
 //! right-hand side with its increment ("lifting"), so symmetric tangents stay symmetric.
@@ -15,9 +18,11 @@ use crate::element::RefElement;
 use crate::kernel::{Active, KernelError, bulk};
 use crate::model::Model;
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
 
-/// At most this many threads assemble (each beyond the first holds a copy of the arrays).
-const MAX_ASSEMBLY_THREADS: usize = 8;
+/// A block is not split into parts of fewer cells than this (a part's scheduling costs more
+/// than its cells save).
+const MIN_PART_CELLS: usize = 256;
 
 /// CSC pattern of the free equations, rows sorted within each column.
 #[derive(Clone, Debug)]
@@ -157,11 +162,137 @@ pub struct AssemblyStats {
     pub energy: f64,
 }
 
-/// The arrays one assembly thread adds into.
-struct Arrays {
-    values: Vec<f64>,
-    r_full: Vec<f64>,
-    lift: Vec<f64>,
+/// The order a block's cells are assembled in, and which of them may run at once.
+#[derive(Debug)]
+enum Schedule {
+    /// Cells run one after another.
+    Cells(Vec<u32>),
+    /// Two halves that run at once. `first`: the left half's cells sharing a node with the
+    /// right half, run before the rest of the left; `last`: the right half's cells sharing a
+    /// node with the left half, run after the rest of the right and after `first`.
+    Split {
+        first: Vec<u32>,
+        left: Box<Schedule>,
+        right: Box<Schedule>,
+        last: Vec<u32>,
+    },
+}
+
+impl Schedule {
+    /// Split `cells` (`nodes` gives each one's mesh nodes) `depth` times by coordinate
+    /// bisection of their centroids along the widest extent. `mark` (one entry per mesh node)
+    /// is scratch.
+    fn build<'m>(
+        nodes: &impl Fn(u32) -> &'m [usize],
+        coords: &[[f64; 3]],
+        mut cells: Vec<u32>,
+        depth: usize,
+        mark: &mut [u32],
+        stamp: &mut u32,
+    ) -> Schedule {
+        if depth == 0 || cells.len() < 2 * MIN_PART_CELLS {
+            cells.sort_unstable();
+            return Schedule::Cells(cells);
+        }
+        let centroid = |c: u32| -> [f64; 3] {
+            let nodes = nodes(c);
+            let mut m = [0.0; 3];
+            for &n in nodes {
+                for (mi, xi) in m.iter_mut().zip(&coords[n]) {
+                    *mi += xi;
+                }
+            }
+            m.map(|v| v / nodes.len() as f64)
+        };
+        let mut keyed: Vec<([f64; 3], u32)> = cells.iter().map(|&c| (centroid(c), c)).collect();
+        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        for (m, _) in &keyed {
+            for i in 0..3 {
+                lo[i] = lo[i].min(m[i]);
+                hi[i] = hi[i].max(m[i]);
+            }
+        }
+        let axis = (0..3)
+            .max_by(|&a, &b| (hi[a] - lo[a]).total_cmp(&(hi[b] - lo[b])))
+            .unwrap_or(0);
+        keyed.sort_by(|a, b| a.0[axis].total_cmp(&b.0[axis]).then(a.1.cmp(&b.1)));
+        cells = keyed.into_iter().map(|(_, c)| c).collect();
+        let right = cells.split_off(cells.len() / 2);
+        let left = cells;
+        // the cells of one half with a node in a cell of the other
+        let mut shared_with = |of: &[u32], other: &[u32]| -> (Vec<u32>, Vec<u32>) {
+            *stamp += 1;
+            for &c in other {
+                for &n in nodes(c) {
+                    mark[n] = *stamp;
+                }
+            }
+            let (mut shared, rest): (Vec<u32>, Vec<u32>) = of
+                .iter()
+                .partition(|&&c| nodes(c).iter().any(|&n| mark[n] == *stamp));
+            shared.sort_unstable();
+            (shared, rest)
+        };
+        let (first, left_rest) = shared_with(&left, &right);
+        let (last, right_rest) = shared_with(&right, &left);
+        Schedule::Split {
+            first,
+            left: Box::new(Schedule::build(
+                nodes,
+                coords,
+                left_rest,
+                depth - 1,
+                mark,
+                stamp,
+            )),
+            right: Box::new(Schedule::build(
+                nodes,
+                coords,
+                right_rest,
+                depth - 1,
+                mark,
+                stamp,
+            )),
+            last,
+        }
+    }
+
+    /// Run `cells` on every part, halves at once; results combined in a fixed order.
+    fn run<T: Send, E: Send>(
+        &self,
+        cells: &(impl Fn(&[u32]) -> Result<T, E> + Sync),
+        combine: &(impl Fn(T, T) -> T + Sync),
+    ) -> Result<T, E> {
+        match self {
+            Schedule::Cells(c) => cells(c),
+            Schedule::Split {
+                first,
+                left,
+                right,
+                last,
+            } => {
+                let first_done = AtomicBool::new(false);
+                let (a, b) = rayon::join(
+                    || {
+                        // set even on failure, or the right half would wait forever
+                        let a = cells(first);
+                        first_done.store(true, Ordering::Release);
+                        Ok(combine(a?, left.run(cells, combine)?))
+                    },
+                    || {
+                        let b = right.run(cells, combine)?;
+                        // `first` runs at once on the thread that called join (never waiting
+                        // itself), so this wait ends; it is normally over before it starts
+                        while !first_done.load(Ordering::Acquire) {
+                            std::thread::yield_now();
+                        }
+                        Ok(combine(b, cells(last)?))
+                    },
+                );
+                Ok(combine(a?, b?))
+            }
+        }
+    }
 }
 
 /// Assembler state reused across calls: pattern, value and vector storage.
@@ -172,8 +303,10 @@ pub struct Assembler {
     /// is prescribed.
     /// Built once per mesh, so the scatter is a load and an add per entry, not a search.
     slots: Vec<Vec<u32>>,
-    /// The arrays of threads 1.. (thread 0 adds into the result).
-    private: Vec<Arrays>,
+    /// The order the cells run in, by global number (a model block's cells follow those of
+    /// the blocks before it, from `first_cell[block]`).
+    schedule: Schedule,
+    first_cell: Vec<u32>,
     /// Tangent values (CSC, free equations).
     pub values: Vec<f64>,
     /// Internal-minus-external force on every dof (reactions on prescribed dofs).
@@ -204,22 +337,10 @@ fn zero(v: &mut [f64]) {
     v.par_chunks_mut(PASS_CHUNK).for_each(|c| c.fill(0.0));
 }
 
-/// `dst` += every array of `srcs` (the threads' partial sums), in one parallel pass that also
-/// tells whether the result is finite everywhere.
-fn gather<'a>(dst: &mut [f64], srcs: impl Iterator<Item = &'a Vec<f64>>) -> bool {
-    let srcs: Vec<&Vec<f64>> = srcs.collect();
-    dst.par_chunks_mut(PASS_CHUNK)
-        .enumerate()
-        .map(|(i, d)| {
-            let span = i * PASS_CHUNK..i * PASS_CHUNK + d.len();
-            for s in &srcs {
-                for (a, b) in d.iter_mut().zip(&s[span.clone()]) {
-                    *a += *b;
-                }
-            }
-            d.iter().all(|v| v.is_finite())
-        })
-        .reduce(|| true, |a, b| a && b)
+/// Whether every entry of `v` is finite, in parallel.
+fn all_finite(v: &[f64]) -> bool {
+    v.par_chunks(PASS_CHUNK)
+        .all(|c| c.iter().fold(true, |ok, x| ok & x.is_finite()))
 }
 
 /// Marks a tangent entry that is not in the free system.
@@ -295,26 +416,31 @@ impl Assembler {
             "more than 2³² − 1 tangent entries"
         );
         let slots = build_slots(model, &pattern);
-        let nnz = pattern.nnz();
-        let arrays = || Arrays {
-            values: vec![0.0; nnz],
+        // one level of halves per doubling of the threads
+        let depth = rayon::current_num_threads()
+            .next_power_of_two()
+            .trailing_zeros() as usize;
+        let mesh = &model.mesh;
+        let mut first_cell = vec![0u32];
+        for info in &model.blocks {
+            let n = mesh.cells[info.block].n_cells() as u32;
+            first_cell.push(first_cell.last().unwrap() + n);
+        }
+        let nodes = |g: u32| -> &[usize] {
+            let bi = first_cell.partition_point(|&f| f <= g) - 1;
+            mesh.cells[model.blocks[bi].block].cell((g - first_cell[bi]) as usize)
+        };
+        let cells = (0..*first_cell.last().unwrap()).collect();
+        let (mut mark, mut stamp) = (vec![0u32; mesh.coords.len()], 0);
+        let schedule = Schedule::build(&nodes, &mesh.coords, cells, depth, &mut mark, &mut stamp);
+        Assembler {
+            values: vec![0.0; pattern.nnz()],
             r_full: vec![0.0; model.dofs.n_dofs],
             lift: vec![0.0; pattern.n],
-        };
-        let cells: usize = model.mesh.cells.iter().map(|b| b.n_cells()).sum();
-        // no thread gets fewer than 256 cells
-        let threads = rayon::current_num_threads()
-            .min(MAX_ASSEMBLY_THREADS)
-            .min(cells / 256)
-            .max(1);
-        let main = arrays();
-        Assembler {
-            private: (1..threads).map(|_| arrays()).collect(),
-            values: main.values,
-            r_full: main.r_full,
-            lift: main.lift,
             pattern,
             slots,
+            schedule,
+            first_cell,
         }
     }
 
@@ -347,47 +473,72 @@ impl Assembler {
             zero(&mut self.values);
         }
         self.lift.fill(0.0);
-        // a failed call may have left partial sums in the threads' arrays
-        for p in &mut self.private {
-            if tangent {
-                zero(&mut p.values);
-            }
-            p.r_full.fill(0.0);
-            p.lift.fill(0.0);
-        }
-        let mut stats = AssemblyStats {
+        let first_cell = &self.first_cell;
+        let slots = &self.slots;
+        let arrays = Arrays {
+            values: Shared(self.values.as_mut_ptr()),
+            r_full: Shared(self.r_full.as_mut_ptr()),
+            lift: Shared(self.lift.as_mut_ptr()),
+        };
+        let empty = AssemblyStats {
             min_J_solid: f64::INFINITY,
             min_J_medium: f64::INFINITY,
             energy: 0.0,
         };
-        for (bi, info) in model.blocks.iter().enumerate() {
-            let kind = model.mesh.cells[info.block].kind;
-            let res = crate::with_cell!(kind, |N, D, E| {
-                self.block::<N, D, E>(model, bi, x, tangent, dx_prescribed, act)
-            });
-            let region = || model.regions[info.region].0.clone();
-            let (min_j, energy) = res.map_err(|(e, cell)| match e {
-                KernelError::Inverted { J } => AssemblyError::Inverted {
-                    region: region(),
-                    J,
-                },
-                KernelError::BadGeometry => AssemblyError::BadMesh {
-                    region: region(),
-                    cell,
-                },
-                KernelError::Singular => AssemblyError::Singular { region: region() },
-            })?;
-            if info.mat.medium {
-                stats.min_J_medium = stats.min_J_medium.min(min_j);
-            } else {
-                stats.min_J_solid = stats.min_J_solid.min(min_j);
+        // a part's cells, sorted: runs of one model block each
+        let run = |cells: &[u32]| -> Result<AssemblyStats, AssemblyError> {
+            let mut stats = empty;
+            let mut rest = cells;
+            while let Some(&g) = rest.first() {
+                let bi = first_cell.partition_point(|&f| f <= g) - 1;
+                let len = rest.partition_point(|&h| h < first_cell[bi + 1]);
+                let (these, next) = rest.split_at(len);
+                rest = next;
+                let info = &model.blocks[bi];
+                let kind = model.mesh.cells[info.block].kind;
+                let job = Cells {
+                    model,
+                    bi,
+                    first: first_cell[bi],
+                    slots: &slots[bi],
+                    x,
+                    tangent,
+                    dx_prescribed,
+                    act,
+                    arrays,
+                };
+                let res = crate::with_cell!(kind, |N, D, E| job.run::<N, D, E>(these));
+                let region = || model.regions[info.region].0.clone();
+                let (min_j, energy) = res.map_err(|(e, cell)| match e {
+                    KernelError::Inverted { J } => AssemblyError::Inverted {
+                        region: region(),
+                        J,
+                    },
+                    KernelError::BadGeometry => AssemblyError::BadMesh {
+                        region: region(),
+                        cell,
+                    },
+                    KernelError::Singular => AssemblyError::Singular { region: region() },
+                })?;
+                if info.mat.medium {
+                    stats.min_J_medium = stats.min_J_medium.min(min_j);
+                } else {
+                    stats.min_J_solid = stats.min_J_solid.min(min_j);
+                }
+                stats.energy += energy;
             }
-            stats.energy += energy;
-        }
-        let private = &self.private;
-        let finite = (!tangent || gather(&mut self.values, private.iter().map(|p| &p.values)))
-            & gather(&mut self.r_full, private.iter().map(|p| &p.r_full))
-            & gather(&mut self.lift, private.iter().map(|p| &p.lift));
+            Ok(stats)
+        };
+        let stats = self
+            .schedule
+            .run(&run, &|a: AssemblyStats, b: AssemblyStats| AssemblyStats {
+                min_J_solid: a.min_J_solid.min(b.min_J_solid),
+                min_J_medium: a.min_J_medium.min(b.min_J_medium),
+                energy: a.energy + b.energy,
+            })?;
+        let finite = (!tangent || all_finite(&self.values))
+            && all_finite(&self.r_full)
+            && all_finite(&self.lift);
         if !finite {
             return Err(AssemblyError::NotFinite);
         }
@@ -398,101 +549,185 @@ impl Assembler {
         }
         Ok(stats)
     }
+}
 
-    /// One block: its cells cut into one contiguous chunk per thread, each chunk adding into
-    /// its thread's arrays. Returns (min J, energy).
-    fn block<const N: usize, const D: usize, E: RefElement<N, D>>(
-        &mut self,
-        model: &Model,
-        bi: usize,
-        x: &[f64],
-        tangent: bool,
-        dx_prescribed: Option<&[f64]>,
-        act: Active,
+/// The global arrays the cells add into.
+#[derive(Clone, Copy)]
+struct Arrays {
+    values: Shared,
+    r_full: Shared,
+    lift: Shared,
+}
+
+/// What the cells of one model block need to add their part.
+#[derive(Clone, Copy)]
+struct Cells<'a> {
+    model: &'a Model,
+    bi: usize,
+    /// Global number of the block's first cell.
+    first: u32,
+    slots: &'a [u32],
+    x: &'a [f64],
+    tangent: bool,
+    dx_prescribed: Option<&'a [f64]>,
+    act: Active,
+    arrays: Arrays,
+}
+
+impl Cells<'_> {
+    /// Add the cells `cells` (global numbers, all of this block). Returns (min J, energy), or
+    /// the kernel's error with the block's cell number.
+    fn run<const N: usize, const D: usize, E: RefElement<N, D>>(
+        self,
+        cells: &[u32],
     ) -> Result<(f64, f64), (KernelError, usize)> {
+        let Cells {
+            model,
+            bi,
+            first,
+            slots,
+            x,
+            tangent,
+            dx_prescribed,
+            act,
+            arrays:
+                Arrays {
+                    values,
+                    r_full,
+                    lift,
+                },
+        } = self;
         let info = &model.blocks[bi];
         let blk = &model.mesh.cells[info.block];
         let lay = info.layout;
         let nd = lay.ndof();
         let eq = &model.cons.eq;
-        let slots = &self.slots[bi];
-        let mut targets = vec![(
-            Shared(self.values.as_mut_ptr()),
-            Shared(self.r_full.as_mut_ptr()),
-            Shared(self.lift.as_mut_ptr()),
-        )];
-        for p in &mut self.private {
-            targets.push((
-                Shared(p.values.as_mut_ptr()),
-                Shared(p.r_full.as_mut_ptr()),
-                Shared(p.lift.as_mut_ptr()),
-            ));
-        }
-        let n_cells = blk.n_cells();
-        let chunk = n_cells.div_ceil(targets.len()).max(1);
-        let work = |(values, r_full, lift): (Shared, Shared, Shared),
-                    cells: std::ops::Range<usize>| {
-            let mut r = vec![0.0; nd];
-            let mut k = vec![0.0; if tangent { nd * nd } else { 0 }];
-            let mut ld = vec![0u32; nd];
-            let (mut mj, mut en) = (f64::INFINITY, 0.0);
-            for c in cells {
-                let nodes = blk.cell(c);
-                let s = crate::post::gather::<N>(model, nodes, x);
-                local_dofs(model, bi, nodes, &mut ld);
-                let out = bulk::<N, D, E>(
-                    &info.mat,
-                    &lay,
-                    &s,
-                    act,
-                    &mut r,
-                    if tangent { Some(&mut k) } else { None },
-                )
-                .map_err(|e| (e, c))?;
-                mj = mj.min(out.min_J);
-                en += out.energy;
-                // SAFETY: each chunk writes only into its own thread's arrays, at positions
-                // the pattern and the dof map give (in bounds by construction).
-                unsafe {
-                    for a in 0..nd {
-                        *r_full.at(ld[a] as usize) += r[a];
+        let mut r = vec![0.0; nd];
+        let mut k = vec![0.0; if tangent { nd * nd } else { 0 }];
+        let mut ld = vec![0u32; nd];
+        let (mut mj, mut en) = (f64::INFINITY, 0.0);
+        for &g in cells {
+            let c = (g - first) as usize;
+            let nodes = blk.cell(c);
+            let s = crate::post::gather::<N>(model, nodes, x);
+            local_dofs(model, bi, nodes, &mut ld);
+            let out = bulk::<N, D, E>(
+                &info.mat,
+                &lay,
+                &s,
+                act,
+                &mut r,
+                if tangent { Some(&mut k) } else { None },
+            )
+            .map_err(|e| (e, c))?;
+            mj = mj.min(out.min_J);
+            en += out.energy;
+            // SAFETY: the schedule never runs two cells that share a node at once, and a
+            // cell writes only at its own nodes' rows (in bounds by construction).
+            unsafe {
+                for a in 0..nd {
+                    *r_full.at(ld[a] as usize) += r[a];
+                }
+                if !tangent {
+                    continue;
+                }
+                let cell = &slots[c * nd * nd..(c + 1) * nd * nd];
+                for (&q, &v) in cell.iter().zip(k.iter()) {
+                    if q != NO_SLOT {
+                        *values.at(q as usize) += v;
                     }
-                    if !tangent {
-                        continue;
-                    }
-                    let cell = &slots[c * nd * nd..(c + 1) * nd * nd];
-                    for (&q, &v) in cell.iter().zip(k.iter()) {
-                        if q != NO_SLOT {
-                            *values.at(q as usize) += v;
+                }
+                // prescribed columns: their increments lifted to the right-hand side
+                if let Some(dx) = dx_prescribed {
+                    for b in 0..nd {
+                        let gb = ld[b] as usize;
+                        if eq[gb] != NONE || dx[gb] == 0.0 {
+                            continue;
                         }
-                    }
-                    // prescribed columns: their increments lifted to the right-hand side
-                    if let Some(dx) = dx_prescribed {
-                        for b in 0..nd {
-                            let gb = ld[b] as usize;
-                            if eq[gb] != NONE || dx[gb] == 0.0 {
-                                continue;
-                            }
-                            for a in 0..nd {
-                                let row = eq[ld[a] as usize];
-                                if row != NONE {
-                                    *lift.at(row as usize) += k[a * nd + b] * dx[gb];
-                                }
+                        for a in 0..nd {
+                            let row = eq[ld[a] as usize];
+                            if row != NONE {
+                                *lift.at(row as usize) += k[a * nd + b] * dx[gb];
                             }
                         }
                     }
                 }
             }
-            Ok((mj, en))
+        }
+        Ok((mj, en))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every cell once; the cells that may run at once (one half with its `first`, against
+    /// the other half with its `last`, except `first` against `last`) share no node.
+    fn check(s: &Schedule, nodes: &dyn Fn(u32) -> Vec<usize>, seen: &mut Vec<u32>) {
+        let all = |s: &Schedule| {
+            let mut v = Vec::new();
+            check(s, nodes, &mut v);
+            v
         };
-        // chunks summed in their order, so the energy does not depend on work stealing
-        let parts: Vec<(f64, f64)> = targets
-            .into_par_iter()
-            .enumerate()
-            .map(|(i, tg)| work(tg, (i * chunk).min(n_cells)..((i + 1) * chunk).min(n_cells)))
-            .collect::<Result<_, _>>()?;
-        Ok(parts
-            .into_iter()
-            .fold((f64::INFINITY, 0.0), |a, b| (a.0.min(b.0), a.1 + b.1)))
+        match s {
+            Schedule::Cells(c) => seen.extend(c),
+            Schedule::Split {
+                first,
+                left,
+                right,
+                last,
+            } => {
+                let (l, r) = (all(left), all(right));
+                let node_set = |cells: &[&[u32]]| -> std::collections::HashSet<usize> {
+                    cells
+                        .iter()
+                        .flat_map(|c| c.iter())
+                        .flat_map(|&c| nodes(c))
+                        .collect()
+                };
+                let a = node_set(&[first, &l]);
+                assert!(
+                    node_set(&[&r]).is_disjoint(&a),
+                    "left and right share a node"
+                );
+                assert!(node_set(&[last]).is_disjoint(&node_set(&[&l])));
+                // a real split: both halves have work that runs at once
+                assert!(!l.is_empty() && !r.is_empty());
+                seen.extend(first.iter().chain(&l).chain(&r).chain(last));
+            }
+        }
+    }
+
+    #[test]
+    fn schedule_never_runs_cells_sharing_a_node_at_once() {
+        // a 40 × 30 grid of quads, cells numbered in a scrambled order
+        let (nx, ny) = (40usize, 30usize);
+        let coords: Vec<[f64; 3]> = (0..(nx + 1) * (ny + 1))
+            .map(|n| [(n % (nx + 1)) as f64, (n / (nx + 1)) as f64, 0.0])
+            .collect();
+        let n_cells = nx * ny;
+        let conn: Vec<Vec<usize>> = (0..n_cells)
+            .map(|c| (c * 7919) % n_cells)
+            .map(|c| {
+                let (i, j) = (c % nx, c / nx);
+                let n0 = j * (nx + 1) + i;
+                vec![n0, n0 + 1, n0 + nx + 2, n0 + nx + 1]
+            })
+            .collect();
+        let nodes = |c: u32| -> &[usize] { &conn[c as usize] };
+        for depth in 0..4 {
+            let (mut mark, mut stamp) = (vec![0u32; coords.len()], 0);
+            let cells = (0..n_cells as u32).collect();
+            let s = Schedule::build(&nodes, &coords, cells, depth, &mut mark, &mut stamp);
+            let mut seen = Vec::new();
+            check(&s, &|c| nodes(c).to_vec(), &mut seen);
+            seen.sort_unstable();
+            assert_eq!(seen, (0..n_cells as u32).collect::<Vec<_>>());
+            // the halves are cut across the grid's long side: few cells are shared
+            if let Schedule::Split { first, last, .. } = &s {
+                assert!(first.len() + last.len() <= 2 * ny, "{}", first.len());
+            }
+        }
     }
 }

@@ -378,3 +378,52 @@ fn patch_test_distorted_hex27() {
 fn patch_test_distorted_hex20() {
     patch_quadratic("bar3d.geo", &HEX_FACES, (2, true), &["H2S (hex20)"], 0.15);
 }
+
+/// Assembled with 8 threads (cells cut three times into halves that run at once) and with
+/// one, the residual, tangent, lifting and energy agree to round-off: no entry is lost or
+/// added twice by cells running at once.
+#[test]
+fn parallel_assembly_matches_one_thread() {
+    let (_, model) = model_with(
+        &medium_case(3),
+        "block-plate-3d.geo",
+        &[("n", 16.0), ("nb", 4.0), ("nm", 1.0), ("nq", 3.0)],
+        "parallel-assembly",
+    );
+    let mut x = model.initial_state();
+    for (d, v) in x.iter_mut().enumerate() {
+        *v += 1e-3 * (((d * 7919) % 101) as f64 / 101.0 - 0.5);
+    }
+    let dx: Vec<f64> = (0..x.len()).map(|d| 1e-4 * (d % 3) as f64).collect();
+    let assemble = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let mut asm = Assembler::new(&model);
+            let stats = asm.assemble(&model, &x, 0.5, true, Some(&dx)).unwrap();
+            (asm.values, asm.r_full, asm.lift, stats.energy)
+        })
+    };
+    let cells: usize = model.mesh.cells.iter().map(|b| b.n_cells()).sum();
+    assert!(
+        cells >= 2048,
+        "{cells} cells: too few to be cut three times"
+    );
+    let one = assemble(1);
+    let eight = assemble(8);
+    let close = |a: &[f64], b: &[f64]| {
+        let scale = a.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        assert!(scale > 0.0);
+        let worst = a
+            .iter()
+            .zip(b)
+            .fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
+        assert!(worst <= 1e-13 * scale, "{worst:e} of {scale:e}");
+    };
+    close(&one.0, &eight.0);
+    close(&one.1, &eight.1);
+    close(&one.2, &eight.2);
+    assert!((one.3 - eight.3).abs() <= 1e-13 * one.3.abs());
+}
