@@ -1,11 +1,12 @@
 //! Time of one cell's residual and tangent (`kernel::bulk`), single-threaded, for each linear
 //! element with the physics the scenes give it: the number behind "assembly per Newton
-//! iteration per element" once the scatter and the threads are taken away.
+//! iteration per element" once the scatter and the threads are taken away. Where the cell can
+//! take it, also the lane kernel (`kernel::lanes`, four cells per call), per cell.
 
 use std::hint::black_box;
 use std::time::Instant;
 use tmc::element::{Hex8, Hex27, Quad4, RefElement, Tet4, Tri3};
-use tmc::kernel::{Active, CellMaterial, CellState, Layout, bulk};
+use tmc::kernel::{Active, CellMaterial, CellState, Layout, bulk, lanes};
 use tmc::material::{Conductivity, Regularization, ThermoElastic};
 
 const SOLID: CellMaterial = CellMaterial {
@@ -41,11 +42,12 @@ const MEDIUM: CellMaterial = CellMaterial {
     reg_direct: None,
 };
 
-/// Microseconds per call of `bulk` with the tangent, on a distorted, deformed, heated cell.
+/// Microseconds per cell of `bulk` with the tangent, on a distorted, deformed, heated cell,
+/// and of the lane kernel where the cell can take it.
 fn time<const N: usize, const D: usize, E: RefElement<N, D>>(
     mat: &CellMaterial,
     has_theta: bool,
-) -> f64 {
+) -> (f64, Option<f64>) {
     let np = if mat.reg.is_some() {
         D * (D - 1) / 2
     } else {
@@ -72,30 +74,48 @@ fn time<const N: usize, const D: usize, E: RefElement<N, D>>(
         np,
     };
     let nd = lay.ndof();
-    let (mut r, mut k) = (vec![0.0; nd], vec![0.0; nd * nd]);
+    let (mut r, mut k) = (vec![0.0; lanes::W * nd], vec![0.0; lanes::W * nd * nd]);
     // TMC_KERNEL_CALLS=n: exactly n calls (for instruction counts under callgrind)
     let fixed: Option<usize> = std::env::var("TMC_KERNEL_CALLS")
         .ok()
         .and_then(|v| v.parse().ok());
-    let mut calls = 0;
-    let t0 = Instant::now();
-    while match fixed {
-        Some(n) => calls < n,
-        None => calls < 2000 || t0.elapsed().as_secs_f64() < 0.5,
-    } {
+    let repeat = |call: &mut dyn FnMut()| {
+        let mut calls = 0;
+        let t0 = Instant::now();
+        while match fixed {
+            Some(n) => calls < n,
+            None => calls < 2000 || t0.elapsed().as_secs_f64() < 0.5,
+        } {
+            call();
+            calls += 1;
+        }
+        t0.elapsed().as_secs_f64() / calls as f64 * 1e6
+    };
+    let one = repeat(&mut || {
         bulk::<N, D, E>(mat, &lay, black_box(&s), Active::ALL, &mut r, Some(&mut k)).unwrap();
         black_box(&k);
-        calls += 1;
-    }
-    t0.elapsed().as_secs_f64() / calls as f64 * 1e6
+    });
+    let four = [s; lanes::W];
+    let lanes = (lanes::available() && lanes::eligible(mat, &lay, Active::ALL)).then(|| {
+        repeat(&mut || {
+            lanes::bulk_lanes::<N, D, E>(mat, &lay, black_box(&four), &mut r, &mut k).unwrap();
+            black_box(&k);
+        }) / lanes::W as f64
+    });
+    (one, lanes)
 }
 
-type Row = (&'static str, &'static str, usize, fn() -> f64);
+type Row = (
+    &'static str,
+    &'static str,
+    usize,
+    fn() -> (f64, Option<f64>),
+);
 
 fn main() {
     println!("\nkernel::bulk, residual + tangent of one cell, one thread (µs per cell)\n");
-    println!("| element | physics | dofs | µs |");
-    println!("|---|---|---:|---:|");
+    println!("| element | physics | dofs | µs | lanes µs |");
+    println!("|---|---|---:|---:|---:|");
     let rows: [Row; 10] = [
         ("T1", "solid u", 6, || time::<3, 2, Tri3>(&SOLID, false)),
         ("Q1", "solid u, θ", 12, || {
@@ -128,7 +148,9 @@ fn main() {
         if only.as_ref().is_some_and(|o| *o != format!("{e} {what}")) {
             continue;
         }
-        println!("| {e} | {what} | {nd} | {:.2} |", f());
+        let (one, lanes) = f();
+        let lanes = lanes.map_or("-".into(), |t| format!("{t:.2}"));
+        println!("| {e} | {what} | {nd} | {one:.2} | {lanes} |");
     }
 }
 

@@ -15,7 +15,7 @@
 
 use crate::dofs::NONE;
 use crate::element::RefElement;
-use crate::kernel::{Active, KernelError, bulk};
+use crate::kernel::{Active, CellState, KernelError, bulk, lanes};
 use crate::model::Model;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -602,26 +602,8 @@ impl Cells<'_> {
         let lay = info.layout;
         let nd = lay.ndof();
         let eq = &model.cons.eq;
-        let mut r = vec![0.0; nd];
-        let mut k = vec![0.0; if tangent { nd * nd } else { 0 }];
-        let mut ld = vec![0u32; nd];
-        let (mut mj, mut en) = (f64::INFINITY, 0.0);
-        for &g in cells {
-            let c = (g - first) as usize;
-            let nodes = blk.cell(c);
-            let s = crate::post::gather::<N>(model, nodes, x);
-            local_dofs(model, bi, nodes, &mut ld);
-            let out = bulk::<N, D, E>(
-                &info.mat,
-                &lay,
-                &s,
-                act,
-                &mut r,
-                if tangent { Some(&mut k) } else { None },
-            )
-            .map_err(|e| (e, c))?;
-            mj = mj.min(out.min_J);
-            en += out.energy;
+        // add a cell's residual and tangent (row-major, nd × nd) into the global arrays
+        let add = |c: usize, ld: &[u32], r: &[f64], k: &[f64]| {
             // SAFETY: the schedule never runs two cells that share a node at once, and a
             // cell writes only at its own nodes' rows (in bounds by construction).
             unsafe {
@@ -629,7 +611,7 @@ impl Cells<'_> {
                     *r_full.at(ld[a] as usize) += r[a];
                 }
                 if !tangent {
-                    continue;
+                    return;
                 }
                 let cell = &slots[c * nd * nd..(c + 1) * nd * nd];
                 for (&q, &v) in cell.iter().zip(k.iter()) {
@@ -653,6 +635,54 @@ impl Cells<'_> {
                     }
                 }
             }
+        };
+        let mut ld = vec![0u32; nd];
+        let (mut mj, mut en) = (f64::INFINITY, 0.0);
+        if tangent && lanes::available() && lanes::eligible(&info.mat, &lay, act) {
+            // W cells per kernel call; a short last group repeats its last cell
+            const W: usize = lanes::W;
+            let mut r = vec![0.0; W * nd];
+            let mut k = vec![0.0; W * nd * nd];
+            for group in cells.chunks(W) {
+                let cell = |l: usize| (group[l.min(group.len() - 1)] - first) as usize;
+                let s: [CellState<N>; W] =
+                    std::array::from_fn(|l| crate::post::gather::<N>(model, blk.cell(cell(l)), x));
+                let out = lanes::bulk_lanes::<N, D, E>(&info.mat, &lay, &s, &mut r, &mut k)
+                    .map_err(|(e, l)| (e, cell(l)))?;
+                for l in 0..group.len() {
+                    let c = cell(l);
+                    mj = mj.min(out[l].min_J);
+                    en += out[l].energy;
+                    local_dofs(model, bi, blk.cell(c), &mut ld);
+                    add(
+                        c,
+                        &ld,
+                        &r[l * nd..(l + 1) * nd],
+                        &k[l * nd * nd..(l + 1) * nd * nd],
+                    );
+                }
+            }
+            return Ok((mj, en));
+        }
+        let mut r = vec![0.0; nd];
+        let mut k = vec![0.0; if tangent { nd * nd } else { 0 }];
+        for &g in cells {
+            let c = (g - first) as usize;
+            let nodes = blk.cell(c);
+            let s = crate::post::gather::<N>(model, nodes, x);
+            local_dofs(model, bi, nodes, &mut ld);
+            let out = bulk::<N, D, E>(
+                &info.mat,
+                &lay,
+                &s,
+                act,
+                &mut r,
+                if tangent { Some(&mut k) } else { None },
+            )
+            .map_err(|e| (e, c))?;
+            mj = mj.min(out.min_J);
+            en += out.energy;
+            add(c, &ld, &r, &k);
         }
         Ok((mj, en))
     }

@@ -39,7 +39,31 @@ pub struct StressResponse {
     pub J: f64,
 }
 
+/// The law's scalar functions of J, tr C and θ, from which its stress and tangent are built:
+/// P = a F⁻ᵀ + m (F − ⅓ tr C F⁻ᵀ), and ∂P/∂F as in [`ThermoElastic::stress`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Scalars {
+    pub psi: f64,
+    /// Coefficient of F⁻ᵀ from the volumetric and thermal parts: K ln J − 3 α (θ − θ0) K.
+    pub a: f64,
+    /// μ J^(−2/3).
+    pub m: f64,
+}
+
 impl ThermoElastic {
+    /// Ψ, a and m at J > 0, I1 = tr C and θ.
+    #[inline(always)]
+    pub fn scalars(&self, J: f64, I1: f64, theta: f64) -> Scalars {
+        let lnJ = J.ln();
+        let Jm23 = J.powf(-2.0 / 3.0);
+        let c = 3.0 * self.alpha * (theta - self.theta0) * self.K;
+        Scalars {
+            psi: 0.5 * self.K * lnJ * lnJ + 0.5 * self.mu * (Jm23 * I1 - 3.0) - c * lnJ,
+            a: self.K * lnJ - c,
+            m: self.mu * Jm23,
+        }
+    }
+
     /// Energy, stress and tangents; `None` when J ≤ 0 or not finite.
     #[inline(always)]
     pub fn stress(&self, F: &Matrix3<f64>, theta: f64) -> Option<StressResponse> {
@@ -49,13 +73,8 @@ impl ThermoElastic {
         }
         let Finv = F.try_inverse()?;
         let H = Finv.transpose(); // F⁻ᵀ = ∂J/∂F / J
-        let lnJ = J.ln();
         let I1 = F.norm_squared(); // tr C
-        let Jm23 = J.powf(-2.0 / 3.0);
-        let c = 3.0 * self.alpha * (theta - self.theta0) * self.K;
-        let psi = 0.5 * self.K * lnJ * lnJ + 0.5 * self.mu * (Jm23 * I1 - 3.0) - c * lnJ;
-        let a = self.K * lnJ - c; // coefficient of F⁻ᵀ from the volumetric and thermal parts
-        let m = self.mu * Jm23;
+        let Scalars { psi, a, m } = self.scalars(J, I1, theta);
         let P = H * a + (F - H * (I1 / 3.0)) * m;
         // A_iJkL = K H_kL H_iJ − a H_iL H_kJ
         //        + m (δ_ik δ_JL − ⅔ H_kL dev_iJ − ⅔ F_kL H_iJ + ⅓ I1 H_iL H_kJ),

@@ -1,0 +1,578 @@
+//! The bulk kernel of [`super::bulk`] for four cells at once, one per SIMD lane (AVX2: four
+//! doubles), for the cells that carry u (and θ) but no regularization: the solids, which are
+//! most of a mesh.
+//!
+//! Lanes make every operation full width (the one-cell kernel's node loops are 8 or 4 wide
+//! with tails, and its point-wise algebra is scalar), and the tangent is built from the law's
+//! structure instead of a 9×9 ∂P/∂F. With the physical shape gradients g_I, h_I = F⁻ᵀ g_I,
+//! f_I = F g_I, and the law's scalars a, m (P = a F⁻ᵀ + m (F − ⅓ I1 F⁻ᵀ), I1 = tr C):
+//!
+//! - r_u(I) = ∫ P g_I = ∫ (a − ⅓ m I1) h_I + m f_I,
+//! - ∂r_u(I,i)/∂u(K,k) = ∫ c1 h_Ii h_Kk + c2 h_Ki h_Ik − ⅔ m (f_Ii h_Kk + h_Ii f_Kk)
+//!   \+ m δ_ik g_I·g_K, with c1 = K + 2⁄9 m I1 and c2 = ⅓ m I1 − a: the A_iJkL of
+//!   [`crate::material::ThermoElastic::stress`] contracted with g_I and g_K;
+//! - ∂r_u(I,i)/∂θ_K = −3 α K ∫ h_Ii N_K;
+//! - with Q = −J k C⁻¹ ∇θ, w = F⁻ᵀ ∇θ, v = C⁻¹ ∇θ = F⁻¹ w:
+//!   r_θ(I) = ∫ J k v·g_I, ∂r_θ(I)/∂θ_K = ∫ J k h_I·h_K, and
+//!   ∂r_θ(I)/∂u(K,k) = ∫ (k + J k') J (v·g_I) h_Kk − J k h_Ik (v·g_K) − J k w_k h_I·h_K.
+//!
+//! Results equal the one-cell kernel's to round-off (tested), which stays the reference with
+//! its finite-difference checks.
+#![allow(non_snake_case, clippy::needless_range_loop)]
+
+use super::{Active, CellMaterial, CellState, CellSummary, KernelError, Layout};
+use crate::element::RefElement;
+
+/// Cells per call.
+pub const W: usize = 4;
+
+/// One value per lane.
+#[derive(Clone, Copy, Debug, Default)]
+#[repr(align(32))]
+struct V([f64; W]);
+
+impl V {
+    #[inline(always)]
+    fn splat(x: f64) -> V {
+        V([x; W])
+    }
+    /// self · b + c, fused.
+    #[inline(always)]
+    fn mul_add(self, b: V, c: V) -> V {
+        let mut o = [0.0; W];
+        for l in 0..W {
+            o[l] = self.0[l].mul_add(b.0[l], c.0[l]);
+        }
+        V(o)
+    }
+}
+
+macro_rules! lane_op {
+    ($tr:ident, $f:ident, $op:tt) => {
+        impl std::ops::$tr for V {
+            type Output = V;
+            #[inline(always)]
+            fn $f(self, b: V) -> V {
+                let mut o = [0.0; W];
+                for l in 0..W {
+                    o[l] = self.0[l] $op b.0[l];
+                }
+                V(o)
+            }
+        }
+    };
+}
+lane_op!(Add, add, +);
+lane_op!(Sub, sub, -);
+lane_op!(Mul, mul, *);
+
+/// Whether this CPU runs the lane kernel (AVX2 and FMA; elsewhere the one-cell kernel runs).
+pub fn available() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
+/// Whether a block's cells can take the lane kernel: u (with θ or without), no regularization
+/// fields, and every equation of the cell wanted.
+pub fn eligible(mat: &CellMaterial, lay: &Layout, act: Active) -> bool {
+    lay.has_u
+        && lay.np == 0
+        && mat.reg.is_none()
+        && mat.reg_direct.is_none()
+        && act.mechanics
+        && (!lay.has_theta || act.heat)
+}
+
+/// Residuals and tangents of the `W` cells `s` (lane l's in `r[l nd..]` and `k[l nd²..]`,
+/// row-major, overwritten), and their summaries. On failure, the error and the lowest lane it
+/// occurred in. Call only where [`available`] and [`eligible`].
+pub fn bulk_lanes<const N: usize, const D: usize, E: RefElement<N, D>>(
+    mat: &CellMaterial,
+    lay: &Layout,
+    s: &[CellState<N>; W],
+    r: &mut [f64],
+    k: &mut [f64],
+) -> Result<[CellSummary; W], (KernelError, usize)> {
+    #[cfg(target_arch = "x86_64")]
+    {
+        assert!(available(), "the lane kernel needs AVX2 and FMA");
+        // SAFETY: the CPU has the features the function is compiled for (checked above)
+        unsafe { bulk_lanes_avx2::<N, D, E>(mat, lay, s, r, k) }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        let _ = (mat, lay, s, r, k);
+        unreachable!("the lane kernel is x86-64 only")
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn bulk_lanes_avx2<const N: usize, const D: usize, E: RefElement<N, D>>(
+    mat: &CellMaterial,
+    lay: &Layout,
+    s: &[CellState<N>; W],
+    r: &mut [f64],
+    k: &mut [f64],
+) -> Result<[CellSummary; W], (KernelError, usize)> {
+    body::<N, D, E>(mat, lay, s, r, k)
+}
+
+/// Lowest lane where `bad` holds.
+#[inline(always)]
+fn first_lane(v: V, bad: impl Fn(f64) -> bool) -> Option<usize> {
+    (0..W).find(|&l| bad(v.0[l]))
+}
+
+/// Determinant and inverse of a 3×3 matrix of lanes (by cofactors).
+#[inline(always)]
+fn det_inv(a: &[[V; 3]; 3]) -> (V, [[V; 3]; 3]) {
+    let cof = cofactors(a);
+    let det = a[0][0] * cof[0][0] + a[0][1] * cof[0][1] + a[0][2] * cof[0][2];
+    let mut one_over = [0.0; W];
+    for l in 0..W {
+        one_over[l] = 1.0 / det.0[l];
+    }
+    let one_over = V(one_over);
+    let mut inv = [[V::default(); 3]; 3];
+    for i in 0..3 {
+        for j in 0..3 {
+            inv[i][j] = cof[j][i] * one_over;
+        }
+    }
+    (det, inv)
+}
+
+/// cof[i][j] = ∂ det a / ∂a_ij.
+#[inline(always)]
+fn cofactors(a: &[[V; 3]; 3]) -> [[V; 3]; 3] {
+    let m =
+        |r0: usize, c0: usize, r1: usize, c1: usize| a[r0][c0] * a[r1][c1] - a[r0][c1] * a[r1][c0];
+    [
+        [m(1, 1, 2, 2), m(1, 2, 2, 0), m(1, 0, 2, 1)],
+        [m(2, 1, 0, 2), m(2, 2, 0, 0), m(2, 0, 0, 1)],
+        [m(0, 1, 1, 2), m(0, 2, 1, 0), m(0, 0, 1, 1)],
+    ]
+}
+
+#[inline(always)]
+fn body<const N: usize, const D: usize, E: RefElement<N, D>>(
+    mat: &CellMaterial,
+    lay: &Layout,
+    s: &[CellState<N>; W],
+    r: &mut [f64],
+    k: &mut [f64],
+) -> Result<[CellSummary; W], (KernelError, usize)> {
+    let nd = lay.ndof();
+    let law = &mat.law;
+    let thermal = lay.has_theta;
+    let zero = V::default();
+    // the cells' nodal data, lane by lane
+    let mut X = [[zero; 3]; N];
+    let mut U = [[zero; 3]; N];
+    let mut T = [zero; N];
+    for l in 0..W {
+        for I in 0..N {
+            for c in 0..D {
+                X[I][c].0[l] = s[l].X[I][c];
+                U[I][c].0[l] = s[l].u[I][c];
+            }
+            T[I].0[l] = s[l].theta[I];
+        }
+    }
+    // tangent blocks summed over the points: kuu[I][K] (K ≥ I) = ∂r_u(I)/∂u(K),
+    // kut[I][i][K] = ∂r_u(I,i)/∂θ_K, ktu[I][K][k] = ∂r_θ(I)/∂u(K,k), ktt[I][K] (K ≥ I)
+    let mut kuu = [[[[zero; 3]; 3]; N]; N];
+    let mut kut = [[[zero; N]; 3]; N];
+    let mut ktu = [[[zero; 3]; N]; N];
+    let mut ktt = [[zero; N]; N];
+    let mut ru = [[zero; 3]; N];
+    let mut rt = [zero; N];
+    let mut energy = zero;
+    let mut min_J = V::splat(f64::INFINITY);
+    let expansion = V::splat(-3.0 * law.alpha * law.K);
+    for (xi, w) in E::quadrature() {
+        let dN = E::grad(xi);
+        let Nv = E::shape(xi);
+        // ∂X/∂ξ, padded to 3×3 in 2D
+        let mut jac = [[zero; 3]; 3];
+        for c in D..3 {
+            jac[c][c] = V::splat(1.0);
+        }
+        for I in 0..N {
+            for i in 0..D {
+                for j in 0..D {
+                    jac[i][j] = X[I][i].mul_add(V::splat(dN[I][j]), jac[i][j]);
+                }
+            }
+        }
+        let (det, inv) = det_inv(&jac);
+        if let Some(l) = first_lane(det, |d| !(d > 0.0)) {
+            return Err((KernelError::BadGeometry, l));
+        }
+        let dV = det * V::splat(*w);
+        // physical gradients g[I][c] = Σ_j ∂N_I/∂ξ_j ∂ξ_j/∂X_c (zero beyond D)
+        let mut g = [[zero; 3]; N];
+        for I in 0..N {
+            for c in 0..D {
+                for j in 0..D {
+                    g[I][c] = V::splat(dN[I][j]).mul_add(inv[j][c], g[I][c]);
+                }
+            }
+        }
+        let mut F = [[zero; 3]; 3];
+        for c in 0..3 {
+            F[c][c] = V::splat(1.0);
+        }
+        let mut theta = V::splat(law.theta0);
+        let mut gt = [zero; 3];
+        for I in 0..N {
+            for i in 0..D {
+                for J in 0..D {
+                    F[i][J] = U[I][i].mul_add(g[I][J], F[i][J]);
+                }
+            }
+        }
+        if thermal {
+            theta = zero;
+            for I in 0..N {
+                theta = V::splat(Nv[I]).mul_add(T[I], theta);
+                for J in 0..D {
+                    gt[J] = T[I].mul_add(g[I][J], gt[J]);
+                }
+            }
+        }
+        let cof = cofactors(&F);
+        let J = F[0][0] * cof[0][0] + F[0][1] * cof[0][1] + F[0][2] * cof[0][2];
+        if let Some(l) = first_lane(J, |j| !(j > 0.0) || !j.is_finite()) {
+            return Err((KernelError::Inverted { J: J.0[l] }, l));
+        }
+        let mut I1 = zero;
+        for i in 0..3 {
+            for j in 0..3 {
+                I1 = F[i][j].mul_add(F[i][j], I1);
+            }
+        }
+        // the law's scalars and the conductivity, lane by lane
+        let (mut a, mut m, mut psi, mut kc, mut dk) = (zero, zero, zero, zero, zero);
+        for l in 0..W {
+            let sc = law.scalars(J.0[l], I1.0[l], theta.0[l]);
+            (a.0[l], m.0[l], psi.0[l]) = (sc.a, sc.m, sc.psi);
+            if thermal {
+                (kc.0[l], dk.0[l]) = mat.cond.eval(J.0[l]);
+            }
+        }
+        for l in 0..W {
+            min_J.0[l] = min_J.0[l].min(J.0[l]);
+        }
+        energy = psi.mul_add(dV, energy);
+        let mut Jinv = [0.0; W];
+        for l in 0..W {
+            Jinv[l] = 1.0 / J.0[l];
+        }
+        let Jinv = V(Jinv);
+        // H = F⁻ᵀ
+        let mut H = [[zero; 3]; 3];
+        for i in 0..3 {
+            for j in 0..3 {
+                H[i][j] = cof[i][j] * Jinv;
+            }
+        }
+        // h_I = H g_I, f_I = F g_I
+        let mut h = [[zero; 3]; N];
+        let mut f = [[zero; 3]; N];
+        for I in 0..N {
+            for c in 0..3 {
+                for L in 0..D {
+                    h[I][c] = H[c][L].mul_add(g[I][L], h[I][c]);
+                    f[I][c] = F[c][L].mul_add(g[I][L], f[I][c]);
+                }
+            }
+        }
+        let third_I1 = I1 * V::splat(1.0 / 3.0);
+        let mdV = m * dV;
+        let c_h = (a - m * third_I1) * dV;
+        for I in 0..N {
+            for i in 0..D {
+                ru[I][i] = c_h.mul_add(h[I][i], mdV.mul_add(f[I][i], ru[I][i]));
+            }
+        }
+        // ∂r_u/∂u: per node e_I = c1 h_I − ⅔ m f_I, q_I = c2 h_I, t_I = −⅔ m h_I (all × dV)
+        let c1 = (V::splat(law.K) + V::splat(2.0 / 3.0) * m * third_I1) * dV;
+        let c2 = (m * third_I1 - a) * dV;
+        let tw = V::splat(-2.0 / 3.0) * mdV;
+        let mut e = [[zero; 3]; N];
+        let mut q = [[zero; 3]; N];
+        let mut t = [[zero; 3]; N];
+        for I in 0..N {
+            for i in 0..3 {
+                e[I][i] = c1.mul_add(h[I][i], tw * f[I][i]);
+                q[I][i] = c2 * h[I][i];
+                t[I][i] = tw * h[I][i];
+            }
+        }
+        for I in 0..N {
+            for K in I..N {
+                let mut gg = zero;
+                for c in 0..D {
+                    gg = g[I][c].mul_add(g[K][c], gg);
+                }
+                let blk = &mut kuu[I][K];
+                for i in 0..D {
+                    for kk in 0..D {
+                        blk[i][kk] = e[I][i].mul_add(
+                            h[K][kk],
+                            q[K][i].mul_add(h[I][kk], t[I][i].mul_add(f[K][kk], blk[i][kk])),
+                        );
+                    }
+                    blk[i][i] = mdV.mul_add(gg, blk[i][i]);
+                }
+            }
+        }
+        if thermal {
+            // w = F⁻ᵀ ∇θ, v = F⁻¹ w = C⁻¹ ∇θ
+            let mut wv = [zero; 3];
+            for c in 0..3 {
+                for L in 0..D {
+                    wv[c] = H[c][L].mul_add(gt[L], wv[c]);
+                }
+            }
+            let mut v = [zero; 3];
+            for Jc in 0..3 {
+                for c in 0..3 {
+                    v[Jc] = H[c][Jc].mul_add(wv[c], v[Jc]);
+                }
+            }
+            let Jk = J * kc * dV;
+            let dJk = (kc + J * dk) * J * dV;
+            let mut sv = [zero; N];
+            for I in 0..N {
+                for c in 0..D {
+                    sv[I] = v[c].mul_add(g[I][c], sv[I]);
+                }
+                rt[I] = Jk.mul_add(sv[I], rt[I]);
+            }
+            let xdV = expansion * dV;
+            for I in 0..N {
+                for i in 0..D {
+                    let a_i = xdV * h[I][i];
+                    for K in 0..N {
+                        kut[I][i][K] = a_i.mul_add(V::splat(Nv[K]), kut[I][i][K]);
+                    }
+                }
+            }
+            let mut Jkw = [zero; 3];
+            for c in 0..D {
+                Jkw[c] = Jk * wv[c];
+            }
+            for I in 0..N {
+                let dJk_sv = dJk * sv[I];
+                for K in 0..N {
+                    let mut hh = zero;
+                    for c in 0..D {
+                        hh = h[I][c].mul_add(h[K][c], hh);
+                    }
+                    if K >= I {
+                        ktt[I][K] = Jk.mul_add(hh, ktt[I][K]);
+                    }
+                    let Jk_svK = Jk * sv[K];
+                    for kk in 0..D {
+                        ktu[I][K][kk] =
+                            ktu[I][K][kk] + dJk_sv * h[K][kk] - Jk_svK * h[I][kk] - Jkw[kk] * hh;
+                    }
+                }
+            }
+        }
+    }
+    // lanes back to the cells' row-major arrays; every entry is written
+    let th = |I: usize| lay.theta(I);
+    let mut out = [CellSummary {
+        min_J: 0.0,
+        energy: 0.0,
+    }; W];
+    for l in 0..W {
+        out[l] = CellSummary {
+            min_J: min_J.0[l],
+            energy: energy.0[l],
+        };
+        let (r, k) = (
+            &mut r[l * nd..(l + 1) * nd],
+            &mut k[l * nd * nd..(l + 1) * nd * nd],
+        );
+        for I in 0..N {
+            for i in 0..D {
+                r[lay.u(I, i)] = ru[I][i].0[l];
+            }
+            if thermal {
+                r[th(I)] = rt[I].0[l];
+            }
+        }
+        for I in 0..N {
+            for K in I..N {
+                let blk = &kuu[I][K];
+                for i in 0..D {
+                    let row = lay.u(I, i) * nd;
+                    for kk in 0..D {
+                        let v = blk[i][kk].0[l];
+                        k[row + lay.u(K, kk)] = v;
+                        k[lay.u(K, kk) * nd + lay.u(I, i)] = v;
+                    }
+                }
+            }
+        }
+        if thermal {
+            for I in 0..N {
+                for i in 0..D {
+                    let row = lay.u(I, i) * nd;
+                    for K in 0..N {
+                        k[row + th(K)] = kut[I][i][K].0[l];
+                    }
+                }
+                let row = th(I) * nd;
+                for K in 0..N {
+                    for kk in 0..D {
+                        k[row + lay.u(K, kk)] = ktu[I][K][kk].0[l];
+                    }
+                    k[row + th(K)] = if K >= I { ktt[I][K] } else { ktt[K][I] }.0[l];
+                }
+            }
+        }
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::element::{Hex8, Hex20, Hex27, Quad4, Quad9, Tet4, Tet10, Tri3};
+    use crate::kernel::bulk;
+    use crate::material::{Conductivity, ThermoElastic};
+
+    fn material(cond: Conductivity) -> CellMaterial {
+        CellMaterial {
+            law: ThermoElastic {
+                K: 20.0,
+                mu: 10.0,
+                alpha: 2e-3,
+                theta0: 10.0,
+            },
+            cond,
+            medium: false,
+            reg: None,
+            reg_direct: None,
+        }
+    }
+
+    /// Lane l's cell: a distorted, deformed and heated copy of the reference cell.
+    fn state<const N: usize, const D: usize, E: RefElement<N, D>>(l: usize) -> CellState<N> {
+        let mut s = CellState::<N> {
+            X: [[0.0; 3]; N],
+            u: [[0.0; 3]; N],
+            theta: [0.0; N],
+            p: [[0.0; 3]; N],
+        };
+        for (I, xi) in E::nodes().iter().enumerate() {
+            for d in 0..D {
+                s.X[I][d] =
+                    (0.5 + 0.1 * l as f64) * xi[d] + 0.07 * ((I * 7 + d * 3 + l) % 5) as f64 / 5.0;
+                s.u[I][d] = 0.08 * (((I * 3 + d * 5 + 2 * l) % 7) as f64 / 7.0 - 0.5);
+            }
+            s.theta[I] = 10.0 + 30.0 * ((I * 5 + l) % 4) as f64;
+        }
+        s
+    }
+
+    /// The lanes give each cell what the one-cell kernel gives it, to round-off.
+    fn same_as_one_cell<const N: usize, const D: usize, E: RefElement<N, D>>() {
+        if !available() {
+            return;
+        }
+        for cond in [
+            Conductivity::Constant(3.0),
+            Conductivity::Medium {
+                k_tm: 3.0,
+                k_max: 50.0,
+            },
+        ] {
+            let mat = material(cond);
+            for has_theta in [true, false] {
+                let lay = Layout {
+                    n: N,
+                    dim: D,
+                    has_u: true,
+                    has_theta,
+                    np: 0,
+                };
+                assert!(eligible(&mat, &lay, Active::ALL));
+                let nd = lay.ndof();
+                let s: [CellState<N>; W] = std::array::from_fn(state::<N, D, E>);
+                let (mut r, mut k) = (vec![f64::NAN; W * nd], vec![f64::NAN; W * nd * nd]);
+                let out = bulk_lanes::<N, D, E>(&mat, &lay, &s, &mut r, &mut k).unwrap();
+                for l in 0..W {
+                    let (mut r1, mut k1) = (vec![0.0; nd], vec![0.0; nd * nd]);
+                    let one =
+                        bulk::<N, D, E>(&mat, &lay, &s[l], Active::ALL, &mut r1, Some(&mut k1))
+                            .unwrap();
+                    let close = |a: &[f64], b: &[f64]| {
+                        let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                        for (i, (x, y)) in a.iter().zip(b).enumerate() {
+                            assert!(
+                                (x - y).abs() <= 1e-12 * scale,
+                                "{} lane {l} entry {i}: {x} vs {y}",
+                                std::any::type_name::<E>()
+                            );
+                        }
+                    };
+                    close(&r[l * nd..(l + 1) * nd], &r1);
+                    close(&k[l * nd * nd..(l + 1) * nd * nd], &k1);
+                    assert!((out[l].energy - one.energy).abs() <= 1e-12 * one.energy.abs());
+                    assert!((out[l].min_J - one.min_J).abs() <= 1e-14 * one.min_J);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn lanes_match_the_one_cell_kernel() {
+        same_as_one_cell::<3, 2, Tri3>();
+        same_as_one_cell::<4, 2, Quad4>();
+        same_as_one_cell::<9, 2, Quad9>();
+        same_as_one_cell::<4, 3, Tet4>();
+        same_as_one_cell::<8, 3, Hex8>();
+        same_as_one_cell::<10, 3, Tet10>();
+        same_as_one_cell::<20, 3, Hex20>();
+        same_as_one_cell::<27, 3, Hex27>();
+    }
+
+    #[test]
+    fn an_inverted_lane_is_reported() {
+        if !available() {
+            return;
+        }
+        let mat = material(Conductivity::Constant(1.0));
+        let lay = Layout {
+            n: 8,
+            dim: 3,
+            has_u: true,
+            has_theta: true,
+            np: 0,
+        };
+        let mut s: [CellState<8>; W] = std::array::from_fn(state::<8, 3, Hex8>);
+        // lane 2 squashed through itself along z
+        for I in 0..8 {
+            s[2].u[I][2] = -2.0 * s[2].X[I][2];
+        }
+        let nd = lay.ndof();
+        let (mut r, mut k) = (vec![0.0; W * nd], vec![0.0; W * nd * nd]);
+        match bulk_lanes::<8, 3, Hex8>(&mat, &lay, &s, &mut r, &mut k) {
+            Err((KernelError::Inverted { J }, 2)) => assert!(J <= 0.0),
+            other => panic!("{other:?}"),
+        }
+    }
+}
