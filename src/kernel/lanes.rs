@@ -16,6 +16,10 @@
 //!   r_θ(I) = ∫ J k v·g_I, ∂r_θ(I)/∂θ_K = ∫ J k h_I·h_K, and
 //!   ∂r_θ(I)/∂u(K,k) = ∫ (k + J k') J (v·g_I) h_Kk − J k h_Ik (v·g_K) − J k w_k h_I·h_K.
 //!
+//! - the regularization of eq. (20), per rotation plane (a, b): f = (F_ab − F_ba)/(F_aa + F_bb)
+//!   and its first and second derivatives are combinations of the gradients' a and b
+//!   components, so every u–u term is a 2 × 2 bilinear form in (g_Ia, g_Ib) ⊗ (g_Ka, g_Kb).
+//!
 //! Results equal the one-cell kernel's to round-off (tested), which stays the reference with
 //! its finite-difference checks.
 #![allow(non_snake_case, clippy::needless_range_loop)]
@@ -78,12 +82,11 @@ pub fn available() -> bool {
     }
 }
 
-/// Whether a block's cells can take the lane kernel: u (with θ or without), no regularization
-/// fields, and every equation of the cell wanted.
+/// Whether a block's cells can take the lane kernel: u (with θ or without, with the linear
+/// medium's regularization fields p or without), and every equation of the cell wanted.
 pub fn eligible(mat: &CellMaterial, lay: &Layout, act: Active) -> bool {
     lay.has_u
-        && lay.np == 0
-        && mat.reg.is_none()
+        && (lay.np == 0 || (mat.reg.is_some() && lay.np == lay.dim * (lay.dim - 1) / 2))
         && mat.reg_direct.is_none()
         && act.mechanics
         && (!lay.has_theta || act.heat)
@@ -177,6 +180,8 @@ fn body<const N: usize, const D: usize, E: RefElement<N, D>>(
     let mut X = [[zero; 3]; N];
     let mut U = [[zero; 3]; N];
     let mut T = [zero; N];
+    let np = lay.np;
+    let mut Pn = [[zero; 3]; N];
     for l in 0..W {
         for I in 0..N {
             for c in 0..D {
@@ -184,6 +189,9 @@ fn body<const N: usize, const D: usize, E: RefElement<N, D>>(
                 U[I][c].0[l] = s[l].u[I][c];
             }
             T[I].0[l] = s[l].theta[I];
+            for c in 0..np {
+                Pn[I][c].0[l] = s[l].p[I][c];
+            }
         }
     }
     // tangent blocks summed over the points: kuu[I][K] (K ≥ I) = ∂r_u(I)/∂u(K),
@@ -192,8 +200,13 @@ fn body<const N: usize, const D: usize, E: RefElement<N, D>>(
     let mut kut = [[[zero; N]; 3]; N];
     let mut ktu = [[[zero; 3]; N]; N];
     let mut ktt = [[zero; N]; N];
+    // regularization: kup[c][I][K][x] = ∂r_u(I, x-th component of plane c)/∂p(K, c),
+    // kpp[c][I][K] (K ≥ I)
+    let mut kup = [[[[zero; 2]; N]; N]; 3];
+    let mut kpp = [[[zero; N]; N]; 3];
     let mut ru = [[zero; 3]; N];
     let mut rt = [zero; N];
+    let mut rp = [[zero; 3]; N];
     let mut energy = zero;
     let mut min_J = V::splat(f64::INFINITY);
     let expansion = V::splat(-3.0 * law.alpha * law.K);
@@ -335,6 +348,120 @@ fn body<const N: usize, const D: usize, E: RefElement<N, D>>(
                 }
             }
         }
+        if np > 0 {
+            let reg = mat.reg.expect("a cell with p fields has a regularization");
+            let (b1, b2, id) = (V::splat(reg.beta1), V::splat(reg.beta2), 1.0 / reg.d);
+            for c in 0..np {
+                let (xa, xb) = crate::material::ROTATION_PLANES[c];
+                let n = F[xa][xb] - F[xb][xa];
+                let sden = F[xa][xa] + F[xb][xb];
+                if let Some(l) = first_lane(sden, |v| !(v.abs() > 1e-12)) {
+                    return Err((KernelError::Singular, l));
+                }
+                let mut is = [0.0; W];
+                for l in 0..W {
+                    is[l] = 1.0 / sden.0[l];
+                }
+                let is = V(is);
+                let f = n * is;
+                let is2 = is * is;
+                let cf = V::splat(2.0) * f * is2;
+                // p and ∇p of this component
+                let mut pv = zero;
+                let mut gp = [zero; 3];
+                for I in 0..N {
+                    pv = V::splat(Nv[I]).mul_add(Pn[I][c], pv);
+                    for J in 0..D {
+                        gp[J] = Pn[I][c].mul_add(g[I][J], gp[J]);
+                    }
+                }
+                // ψ = β1/2 e², e = f − p/d
+                let e = f - pv * V::splat(id);
+                let d1f = b1 * e * dV;
+                let d1p = V::splat(-id) * b1 * e * dV;
+                let d2ff = b1 * dV;
+                let d2fp = V::splat(-id) * b1 * dV;
+                let d2pp = V::splat(id * id) * b1 * dV;
+                let mut gp2 = zero;
+                for J in 0..D {
+                    gp2 = gp[J].mul_add(gp[J], gp2);
+                }
+                energy =
+                    (V::splat(0.5) * b1 * e * e + V::splat(0.5) * b2 * gp2).mul_add(dV, energy);
+                // ∂f/∂u(I, a) = is g_Ib − f is g_Ia, ∂f/∂u(I, b) = −is g_Ia − f is g_Ib:
+                // coefficients of (g_a, g_b)
+                let fis = f * is;
+                let bf = [[zero - fis, is], [zero - is, zero - fis]];
+                // the 2 × 2 bilinear forms M[x][y][u][v] (u: I's vector, v: K's vector) of
+                // d²ψ/df² ∂f ⊗ ∂f + dψ/df ∂²f
+                let (h, cc) = (is2, cf);
+                let hess = [
+                    [[cc, zero - h], [zero - h, zero]],
+                    [[h, cc], [zero, zero - h]],
+                ];
+                let hess_ba = [[h, zero], [cc, zero - h]];
+                let hess_bb = [[zero, h], [h, cc]];
+                let mut M = [[[[zero; 2]; 2]; 2]; 2];
+                for x in 0..2 {
+                    for y in 0..2 {
+                        let hm = match (x, y) {
+                            (0, _) => hess[y],
+                            (1, 0) => hess_ba,
+                            _ => hess_bb,
+                        };
+                        for u in 0..2 {
+                            for v in 0..2 {
+                                M[x][y][u][v] = (d2ff * bf[x][u]).mul_add(bf[y][v], d1f * hm[u][v]);
+                            }
+                        }
+                    }
+                }
+                let xs = [xa, xb];
+                let gab = |I: usize| [g[I][xa], g[I][xb]];
+                for I in 0..N {
+                    let gi = gab(I);
+                    // r_u, r_p
+                    for x in 0..2 {
+                        let dfdu = bf[x][0].mul_add(gi[0], bf[x][1] * gi[1]);
+                        ru[I][xs[x]] = d1f.mul_add(dfdu, ru[I][xs[x]]);
+                        for K in 0..N {
+                            kup[c][I][K][x] =
+                                (d2fp * dfdu).mul_add(V::splat(Nv[K]), kup[c][I][K][x]);
+                        }
+                    }
+                    let mut gpg = zero;
+                    for J in 0..D {
+                        gpg = gp[J].mul_add(g[I][J], gpg);
+                    }
+                    rp[I][c] = (b2 * dV).mul_add(gpg, d1p.mul_add(V::splat(Nv[I]), rp[I][c]));
+                    // A[x][y][v] = Σ_u M[x][y][u][v] g_I(u)
+                    let mut A = [[[zero; 2]; 2]; 2];
+                    for x in 0..2 {
+                        for y in 0..2 {
+                            for v in 0..2 {
+                                A[x][y][v] = M[x][y][0][v].mul_add(gi[0], M[x][y][1][v] * gi[1]);
+                            }
+                        }
+                    }
+                    for K in I..N {
+                        let gk = gab(K);
+                        let blk = &mut kuu[I][K];
+                        for x in 0..2 {
+                            for y in 0..2 {
+                                blk[xs[x]][xs[y]] = A[x][y][0]
+                                    .mul_add(gk[0], A[x][y][1].mul_add(gk[1], blk[xs[x]][xs[y]]));
+                            }
+                        }
+                        let mut gg = zero;
+                        for J in 0..D {
+                            gg = g[I][J].mul_add(g[K][J], gg);
+                        }
+                        kpp[c][I][K] = (d2pp * V::splat(Nv[I]))
+                            .mul_add(V::splat(Nv[K]), (b2 * dV).mul_add(gg, kpp[c][I][K]));
+                    }
+                }
+            }
+        }
         if thermal {
             // w = F⁻ᵀ ∇θ, v = F⁻¹ w = C⁻¹ ∇θ
             let mut wv = [zero; 3];
@@ -405,6 +532,25 @@ fn body<const N: usize, const D: usize, E: RefElement<N, D>>(
             &mut r[l * nd..(l + 1) * nd],
             &mut k[l * nd * nd..(l + 1) * nd * nd],
         );
+        if np > 0 {
+            // the p blocks are sparse (one plane's components, one p component each)
+            k.fill(0.0);
+            for c in 0..np {
+                let (xa, xb) = crate::material::ROTATION_PLANES[c];
+                for I in 0..N {
+                    r[lay.p(I, c)] = rp[I][c].0[l];
+                    for K in 0..N {
+                        for (x, comp) in [xa, xb].into_iter().enumerate() {
+                            let v = kup[c][I][K][x].0[l];
+                            k[lay.u(I, comp) * nd + lay.p(K, c)] = v;
+                            k[lay.p(K, c) * nd + lay.u(I, comp)] = v;
+                        }
+                        let v = if K >= I { kpp[c][I][K] } else { kpp[c][K][I] }.0[l];
+                        k[lay.p(I, c) * nd + lay.p(K, c)] = v;
+                    }
+                }
+            }
+        }
         for I in 0..N {
             for i in 0..D {
                 r[lay.u(I, i)] = ru[I][i].0[l];
@@ -452,7 +598,7 @@ mod tests {
     use super::*;
     use crate::element::{Hex8, Hex20, Hex27, Quad4, Quad9, Tet4, Tet10, Tri3};
     use crate::kernel::bulk;
-    use crate::material::{Conductivity, ThermoElastic};
+    use crate::material::{Conductivity, Regularization, ThermoElastic};
 
     fn material(cond: Conductivity) -> CellMaterial {
         CellMaterial {
@@ -484,6 +630,9 @@ mod tests {
                 s.u[I][d] = 0.08 * (((I * 3 + d * 5 + 2 * l) % 7) as f64 / 7.0 - 0.5);
             }
             s.theta[I] = 10.0 + 30.0 * ((I * 5 + l) % 4) as f64;
+            for c in 0..3 {
+                s.p[I][c] = 0.2 * (((I * 5 + c * 3 + l) % 7) as f64 / 7.0 - 0.5);
+            }
         }
         s
     }
@@ -493,21 +642,31 @@ mod tests {
         if !available() {
             return;
         }
-        for cond in [
-            Conductivity::Constant(3.0),
-            Conductivity::Medium {
-                k_tm: 3.0,
-                k_max: 50.0,
-            },
+        let medium = Conductivity::Medium {
+            k_tm: 3.0,
+            k_max: 50.0,
+        };
+        let regularized = CellMaterial {
+            reg: Some(Regularization {
+                beta1: 0.7,
+                beta2: 0.3,
+                d: 1.7,
+            }),
+            medium: true,
+            ..material(medium)
+        };
+        for (mat, np) in [
+            (material(Conductivity::Constant(3.0)), 0),
+            (material(medium), 0),
+            (regularized, D * (D - 1) / 2),
         ] {
-            let mat = material(cond);
             for has_theta in [true, false] {
                 let lay = Layout {
                     n: N,
                     dim: D,
                     has_u: true,
                     has_theta,
-                    np: 0,
+                    np,
                 };
                 assert!(eligible(&mat, &lay, Active::ALL));
                 let nd = lay.ndof();
