@@ -77,7 +77,7 @@ fn main() {
         let its = s["newton_iterations"].as_u64().unwrap();
         let kr = s["assembly_seconds"].as_f64().unwrap();
         println!(
-            "| {disc} | {plan} | {cells} | {} / {} ({}) | {}{} | {its} | {:.2e} | {:.1} | {:.1} | {:.0} | {paper} |",
+            "| {disc} | {plan} | {cells} | {} / {} ({}) | {}{} | {its} | {:.2e} | {:.1} | {:.2} | {:.1} | {paper} |",
             s["nodes"],
             s["dofs"]["total"],
             s["dofs"]["free"],
