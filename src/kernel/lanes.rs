@@ -72,14 +72,7 @@ lane_op!(Mul, mul, *);
 
 /// Whether this CPU runs the lane kernel (AVX2 and FMA; elsewhere the one-cell kernel runs).
 pub fn available() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    {
-        std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        false
-    }
+    super::avx2_fma()
 }
 
 /// Whether a block's cells can take the lane kernel: u (with θ or without, with the linear

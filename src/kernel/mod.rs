@@ -187,11 +187,24 @@ pub fn bulk<const N: usize, const D: usize, E: RefElement<N, D>>(
     k: Option<&mut [f64]>,
 ) -> Result<CellSummary, KernelError> {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+    if avx2_fma() {
         // SAFETY: the CPU has the features the function is compiled for (checked above)
         return unsafe { bulk_avx2::<N, D, E>(mat, lay, s, act, r, k) };
     }
     bulk_body::<N, D, E, Separate>(mat, lay, s, act, r, k)
+}
+
+/// Whether this CPU has AVX2 and FMA, the features the fast kernels are compiled for (the
+/// check is cached by the standard library).
+fn avx2_fma() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
 }
 
 /// [`bulk`] compiled for AVX2 and FMA: the node-block loops (eight or four unknowns wide)
