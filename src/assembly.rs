@@ -1,8 +1,8 @@
 //! Assembly: the sparsity pattern (built once per mesh) and the global residual and tangent.
 //!
-//! Parallel over cells without locks and without per-thread copies of the arrays: each block's
-//! cells are cut in two by recursive coordinate bisection (one level per doubling of the
-//! threads), and the two halves run at once. Of each half, only the cells that share a node
+//! Parallel over cells without locks and without per-thread copies of the arrays: the cells of
+//! all blocks together are cut in two by recursive coordinate bisection (one level per
+//! doubling of the threads), and the two halves run at once. Of each half, only the cells that share a node
 //! with the other half can add into the same entries; the left half runs its shared cells
 //! first, the right half its own last, after the left's are done. So no two cells that share
 //! a node ever run at once, every entry is summed in the same order whatever the scheduling,
