@@ -48,9 +48,6 @@ pub struct StepReport {
     /// Relative residual per field at each iteration.
     pub history: Vec<FieldNorms>,
     pub stats: AssemblyStats,
-    /// Seconds in assembly, factorisation and solves.
-    pub t_assembly: f64,
-    pub t_solve: f64,
     /// Krylov iterations over the step (0 with a direct solver).
     pub krylov: usize,
     /// Tangents not assembled: a step about to converge reuses its factorisation for the
@@ -98,8 +95,6 @@ impl StepReport {
                 min_J_medium: self.stats.min_J_medium.min(next.stats.min_J_medium),
                 energy: self.stats.energy + next.stats.energy,
             },
-            t_assembly: self.t_assembly + next.t_assembly,
-            t_solve: self.t_solve + next.t_solve,
             krylov: self.krylov + next.krylov,
             tangents_skipped: self.tangents_skipped + next.tangents_skipped,
         }
@@ -134,10 +129,26 @@ impl Part {
     }
 }
 
+/// Work done by all attempts of a run, rejected ones included.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Spent {
+    /// Seconds in assembly (residual and tangent).
+    pub assembly: f64,
+    /// Seconds in factorisations and linear solves.
+    pub solve: f64,
+    /// Newton iterations, counted as in [`StepReport::iterations`].
+    pub iterations: usize,
+    /// Newton updates, each one linear solve: one more than the iterations per attempt (the
+    /// first update applies the step's prescribed increments).
+    pub updates: usize,
+}
+
 /// Newton state carried across steps: references for the per-field residual scale.
 pub struct Newton {
     pub tol: f64,
     pub max_iter: usize,
+    /// Totals over every step attempt so far, converged or not.
+    pub spent: Spent,
     run_ref: FieldNorms,
     /// Field of each free equation.
     eq_field: Vec<Field>,
@@ -154,6 +165,7 @@ impl Newton {
         Newton {
             tol,
             max_iter,
+            spent: Spent::default(),
             run_ref: [0.0; 3],
             eq_field,
         }
@@ -228,8 +240,6 @@ impl Newton {
         let mut b_sub = vec![0.0; sub.as_ref().map_or(0, Vec::len)];
         let active: [bool; 3] = Field::ALL.map(|f| part.has(f));
         solver.take_krylov();
-        let mut t_asm = 0.0;
-        let mut t_sol = 0.0;
         // increment of the prescribed values still to apply, moved to the right-hand side
         let mut dx_p = vec![0.0; x.len()];
         let mut rhs = vec![0.0; n_eq];
@@ -272,6 +282,7 @@ impl Newton {
                     ) {
                         Ok(stats) => break (stats, pending),
                         Err(e) if first || halvings == MAX_HALVINGS || !e.is_inadmissible() => {
+                            self.spent.assembly += t0.elapsed().as_secs_f64();
                             return Err(StepFailure::Assembly(e));
                         }
                         Err(_) => {
@@ -316,7 +327,8 @@ impl Newton {
                 }
                 break (stats, pending, rel, residual_ok);
             };
-            t_asm += t0.elapsed().as_secs_f64();
+            let dt = t0.elapsed().as_secs_f64();
+            self.spent.assembly += dt;
             history.push(rel);
             if it >= self.max_iter && !residual_ok {
                 return Err(StepFailure::NotConverged {
@@ -325,21 +337,27 @@ impl Newton {
                 });
             }
             let t1 = std::time::Instant::now();
-            if !residual_ok || first {
-                solver.factor(&asm.values).map_err(StepFailure::Linear)?;
-            }
-            if let Some(sub) = &sub {
-                for (b, &e) in b_sub.iter_mut().zip(sub) {
-                    *b = rhs[e];
+            let solved = (|| {
+                if !residual_ok || first {
+                    solver.factor(&asm.values)?;
                 }
-                solver.solve(&mut b_sub).map_err(StepFailure::Linear)?;
-                for (b, &e) in b_sub.iter().zip(sub) {
-                    rhs[e] = *b;
+                if let Some(sub) = &sub {
+                    for (b, &e) in b_sub.iter_mut().zip(sub) {
+                        *b = rhs[e];
+                    }
+                    solver.solve(&mut b_sub)?;
+                    for (b, &e) in b_sub.iter().zip(sub) {
+                        rhs[e] = *b;
+                    }
+                    Ok(())
+                } else {
+                    solver.solve(&mut rhs)
                 }
-            } else {
-                solver.solve(&mut rhs).map_err(StepFailure::Linear)?;
-            }
-            t_sol += t1.elapsed().as_secs_f64();
+            })();
+            let dt = t1.elapsed().as_secs_f64();
+            self.spent.solve += dt;
+            solved.map_err(StepFailure::Linear)?;
+            self.spent.updates += 1;
             if !rhs.iter().all(|v| v.is_finite()) {
                 return Err(StepFailure::Assembly(AssemblyError::NotFinite));
             }
@@ -373,7 +391,8 @@ impl Newton {
                 let t2 = std::time::Instant::now();
                 asm.assemble_part(model, x, t, false, None, part.active())
                     .map_err(StepFailure::Assembly)?;
-                t_asm += t2.elapsed().as_secs_f64();
+                let dt = t2.elapsed().as_secs_f64();
+                self.spent.assembly += dt;
                 let mut r = vec![0.0; n_eq];
                 self.free_residual(model, part, &asm.r_full, &mut r);
                 let t = idx(Field::Theta);
@@ -386,6 +405,7 @@ impl Newton {
                     });
                 }
                 history.push([0.0, rel, 0.0]);
+                self.spent.iterations += 1;
                 Some(1)
             } else {
                 // an update is small against the step's largest one, or negligible against the
@@ -410,8 +430,6 @@ impl Newton {
                     halvings: cuts,
                     history,
                     stats,
-                    t_assembly: t_asm,
-                    t_solve: t_sol,
                     krylov: solver.take_krylov(),
                     tangents_skipped: usize::from(!tangent),
                 });
@@ -423,6 +441,7 @@ impl Newton {
                 });
             }
             it += 1;
+            self.spent.iterations += 1;
         }
     }
 }

@@ -7,7 +7,7 @@ use crate::linsolve::{LinearError, LinearKind, LinearSolver};
 use crate::mesh::gmsh::{GmshError, MeshOptions, mesh_geo};
 use crate::mesh::msh::{MshError, read_msh};
 use crate::model::{Model, Physics, build};
-use crate::newton::{Newton, Part, StepFailure, StepReport};
+use crate::newton::{Newton, Part, Spent, StepFailure, StepReport};
 use crate::output::{self, History, OutputError, StepFields};
 use crate::probe::{self, Probe};
 use crate::stepping::Controller;
@@ -75,9 +75,17 @@ pub struct Summary {
     pub time: f64,
     pub load_steps: usize,
     pub rejected_steps: usize,
+    /// Newton iterations of the accepted steps.
     pub newton_iterations: usize,
+    /// Newton iterations of the rejected attempts (their time is in the seconds below).
+    pub rejected_iterations: usize,
+    /// Newton updates (linear solves) of every attempt, accepted or rejected: a mechanical
+    /// step of n iterations makes n + 1. The count the assembly and solver seconds are spent on.
+    pub linear_solves: usize,
     pub wall_seconds: f64,
+    /// Assembly time of the whole run: every attempt, and the converged states' reactions.
     pub assembly_seconds: f64,
+    /// Factorisation and linear-solve time of every attempt.
     pub solver_seconds: f64,
     /// GMRES iterations over all accepted steps (0 with a direct solver).
     pub krylov_iterations: usize,
@@ -479,7 +487,8 @@ fn solve_model(
     };
     let mut total_iterations = 0;
     let mut total_krylov = 0;
-    let (mut t_asm, mut t_sol) = (0.0, 0.0);
+    // assembly of the converged states' reactions (Newton keeps the rest of the time)
+    let mut t_reactions = 0.0;
     let mut min_j = (f64::INFINITY, f64::INFINITY);
     let mut last_reactions = r0;
     let mut last_failure = String::new();
@@ -514,6 +523,8 @@ fn solve_model(
         load_steps: 0,
         rejected_steps: 0,
         newton_iterations: 0,
+        rejected_iterations: 0,
+        linear_solves: 0,
         wall_seconds: 0.0,
         assembly_seconds: 0.0,
         solver_seconds: 0.0,
@@ -537,8 +548,8 @@ fn solve_model(
                   ctl: &Controller,
                   its: usize,
                   mj: (f64, f64),
-                  ta: f64,
-                  ts: f64|
+                  spent: Spent,
+                  t_reactions: f64|
      -> Result<(), SolveError> {
         s.converged = converged;
         s.message = message;
@@ -547,9 +558,11 @@ fn solve_model(
         s.load_steps = ctl.accepted;
         s.rejected_steps = ctl.rejected;
         s.newton_iterations = its;
+        s.rejected_iterations = spent.iterations - its;
+        s.linear_solves = spent.updates;
         s.wall_seconds = start.elapsed().as_secs_f64();
-        s.assembly_seconds = ta;
-        s.solver_seconds = ts;
+        s.assembly_seconds = spent.assembly + t_reactions;
+        s.solver_seconds = spent.solve;
         s.peak_memory_mb = peak_memory_mb();
         s.probes = probes
             .iter()
@@ -585,15 +598,15 @@ fn solve_model(
                 let x_last = std::mem::replace(&mut x, trial);
                 ctl.accept(target, rep.iterations);
                 total_iterations += rep.iterations;
-                t_asm += rep.t_assembly;
-                t_sol += rep.t_solve;
                 min_j = (
                     min_j.0.min(rep.stats.min_J_solid),
                     min_j.1.min(rep.stats.min_J_medium),
                 );
                 // reactions at the converged state (the residual of the last assembly)
+                let t0 = Instant::now();
                 asm.assemble(&model, &x, target, false, None)
                     .map_err(|e| SolveError::Setup(format!("converged state is invalid: {e}")))?;
+                t_reactions += t0.elapsed().as_secs_f64();
                 last_reactions = reactions(&model, &asm.r_full);
                 let f_now = forces(&asm.r_full, target);
                 work += u_dofs
@@ -687,8 +700,8 @@ fn solve_model(
                         &ctl,
                         total_iterations,
                         min_j,
-                        t_asm,
-                        t_sol,
+                        newton.spent,
+                        t_reactions,
                     )?;
                     return Err(err);
                 }
@@ -713,8 +726,8 @@ fn solve_model(
         &ctl,
         total_iterations,
         min_j,
-        t_asm,
-        t_sol,
+        newton.spent,
+        t_reactions,
     )?;
     Ok(summary)
 }

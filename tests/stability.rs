@@ -28,6 +28,23 @@ fn solve_checked(h: &Hard) -> (Summary, Rows) {
         assert!(r[col("min_J_solid")] > 0.0 && r[col("min_J_medium")] > 0.0);
     }
     assert!(s.probes.values().all(|v| v.is_finite()));
+    // the rejected attempts' work is accounted: each got past its first update here
+    assert!(
+        s.rejected_iterations >= s.rejected_steps,
+        "{}: {} rejected attempts, {} iterations",
+        h.name,
+        s.rejected_steps,
+        s.rejected_iterations
+    );
+    // an accepted step's first update is no iteration; a rejected attempt stops before its
+    // last iteration's solve
+    assert!(
+        s.linear_solves >= s.newton_iterations + s.load_steps + s.rejected_iterations,
+        "{}: {} solves",
+        h.name,
+        s.linear_solves
+    );
+    assert!(s.assembly_seconds + s.solver_seconds <= s.wall_seconds);
     if let Some(tol) = h.energy_tol {
         let rel = (s.external_work - s.energy).abs() / s.energy;
         assert!(
@@ -46,9 +63,15 @@ fn solve_checked(h: &Hard) -> (Summary, Rows) {
         (
             again.load_steps,
             again.rejected_steps,
-            again.newton_iterations
+            again.newton_iterations,
+            again.rejected_iterations
         ),
-        (s.load_steps, s.rejected_steps, s.newton_iterations),
+        (
+            s.load_steps,
+            s.rejected_steps,
+            s.newton_iterations,
+            s.rejected_iterations
+        ),
         "{}: second run took another path",
         h.name
     );
