@@ -15,7 +15,7 @@
 
 use crate::dofs::NONE;
 use crate::element::RefElement;
-use crate::kernel::{Active, CellState, KernelError, bulk, lanes};
+use crate::kernel::{self, Active, CellState, KernelError, bulk, lanes};
 use crate::model::Model;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -557,6 +557,10 @@ impl Assembler {
         dx_prescribed: Option<&[f64]>,
         act: Active,
     ) -> Result<AssemblyStats, AssemblyError> {
+        if tangent {
+            // an update that inverted a cell costs this pass, not a whole assembly
+            check_inversion(model, x)?;
+        }
         self.r_full.fill(0.0);
         if tangent {
             zero(&mut self.values);
@@ -597,18 +601,7 @@ impl Assembler {
                     arrays,
                 };
                 let res = crate::with_cell!(kind, |N, D, E| job.run::<N, D, E>(these));
-                let region = || model.regions[info.region].0.clone();
-                let (min_j, energy) = res.map_err(|(e, cell)| match e {
-                    KernelError::Inverted { J } => AssemblyError::Inverted {
-                        region: region(),
-                        J,
-                    },
-                    KernelError::BadGeometry => AssemblyError::BadMesh {
-                        region: region(),
-                        cell,
-                    },
-                    KernelError::Singular => AssemblyError::Singular { region: region() },
-                })?;
+                let (min_j, energy) = res.map_err(|(e, cell)| cell_error(model, bi, e, cell))?;
                 if info.mat.medium {
                     stats.min_J_medium = stats.min_J_medium.min(min_j);
                 } else {
@@ -638,6 +631,49 @@ impl Assembler {
         }
         Ok(stats)
     }
+}
+
+/// The assembly error of a kernel's failure in cell `cell` of model block `bi`.
+fn cell_error(model: &Model, bi: usize, e: KernelError, cell: usize) -> AssemblyError {
+    let region = || model.regions[model.blocks[bi].region].0.clone();
+    match e {
+        KernelError::Inverted { J } => AssemblyError::Inverted {
+            region: region(),
+            J,
+        },
+        KernelError::BadGeometry => AssemblyError::BadMesh {
+            region: region(),
+            cell,
+        },
+        KernelError::Singular => AssemblyError::Singular { region: region() },
+    }
+}
+
+/// The first medium cell (in block and cell order, whatever the threads) that `x` inverts,
+/// as the assembly would report it. Only the medium: it is where updates invert cells, and
+/// it is a small part of the mesh (a whole-mesh look costs a quarter of an assembly); an
+/// inverted solid cell is still found by the assembly.
+pub fn check_inversion(model: &Model, x: &[f64]) -> Result<(), AssemblyError> {
+    for (bi, info) in model.blocks.iter().enumerate() {
+        if !info.layout.has_u || !info.mat.medium {
+            continue;
+        }
+        let blk = &model.mesh.cells[info.block];
+        let found = crate::with_cell!(blk.kind, |N, D, E| {
+            (0..blk.n_cells())
+                .into_par_iter()
+                .with_min_len(MIN_PART_CELLS)
+                .map(|c| {
+                    let s = crate::post::gather::<N>(model, blk.cell(c), x);
+                    kernel::inversion::<N, D, E>(&s).map_err(|e| (e, c))
+                })
+                .find_first(Result::is_err)
+        });
+        if let Some(Err((e, cell))) = found {
+            return Err(cell_error(model, bi, e, cell));
+        }
+    }
+    Ok(())
 }
 
 /// The global arrays the cells add into.

@@ -427,3 +427,47 @@ fn parallel_assembly_matches_one_thread() {
     close(&one.2, &eight.2);
     assert!((one.3 - eight.3).abs() <= 1e-13 * one.3.abs());
 }
+
+/// A medium cell flipped inside out is reported as inverted, in the medium: by the look
+/// before a tangent assembly, and by the kernels of a residual-only assembly (which skips it).
+#[test]
+fn an_inverted_medium_cell_is_reported_with_and_without_the_tangent() {
+    let (_, model) = model_with(
+        &medium_case(3),
+        "block-plate-3d.geo",
+        &[("n", 4.0), ("nb", 2.0), ("nm", 1.0), ("nq", 2.0)],
+        "inverted-medium",
+    );
+    let bi = model
+        .blocks
+        .iter()
+        .position(|b| b.mat.medium)
+        .expect("a medium block");
+    let cell = model.mesh.cells[model.blocks[bi].block].cell(0).to_vec();
+    let zc = cell.iter().map(|&n| model.mesh.coords[n][2]).sum::<f64>() / cell.len() as f64;
+    // mirror the cell's nodes in its mid-plane: J < 0 at every quadrature point
+    let mut x = model.initial_state();
+    for &n in &cell {
+        x[model.dofs.u[3 * n + 2] as usize] = -2.0 * (model.mesh.coords[n][2] - zc);
+    }
+    let look = tmc::assembly::check_inversion(&model, &x);
+    assert!(
+        matches!(&look, Err(tmc::assembly::AssemblyError::Inverted { region, J }) if region == "medium" && *J <= 0.0),
+        "{look:?}"
+    );
+    assert!(tmc::assembly::check_inversion(&model, &model.initial_state()).is_ok());
+    let mut asm = Assembler::new(&model);
+    for tangent in [true, false] {
+        match asm.assemble(&model, &x, 0.5, tangent, None) {
+            Err(tmc::assembly::AssemblyError::Inverted { region, J }) => {
+                assert_eq!(region, "medium", "tangent {tangent}");
+                assert!(J <= 0.0, "tangent {tangent}: J = {J}");
+            }
+            other => panic!("tangent {tangent}: {other:?}"),
+        }
+    }
+    assert!(
+        asm.assemble(&model, &model.initial_state(), 0.5, true, None)
+            .is_ok()
+    );
+}

@@ -172,6 +172,24 @@ impl Active {
     };
 }
 
+/// The inversion check of [`bulk`] alone, without the law: `Inverted` with the J of the
+/// first quadrature point where J ≤ 0 (or is not finite). Cheap enough to look before an
+/// assembly whether a Newton update left the admissible set.
+pub fn inversion<const N: usize, const D: usize, E: RefElement<N, D>>(
+    s: &CellState<N>,
+) -> Result<(), KernelError> {
+    for (xi, _) in E::quadrature() {
+        let (g, _) =
+            physical_gradients::<N, D>(&E::grad(xi), &s.X).ok_or(KernelError::BadGeometry)?;
+        let (F, _) = kinematics(&g, s, true);
+        let J = F.determinant();
+        if !(J > 0.0) || !J.is_finite() {
+            return Err(KernelError::Inverted { J });
+        }
+    }
+    Ok(())
+}
+
 /// Residual and (optionally) tangent of one cell of the bulk (solid or medium):
 ///
 /// r_u = ∫ P : ∇δu dV,  r_θ = ∫ −Q · ∇δθ dV  (eq. 5, 6, without external loads),
