@@ -121,7 +121,7 @@ pub enum AssemblyError {
     BadMesh { region: String, cell: usize },
     /// A regularization rotation measure is unbounded (a medium cell rotated by 90°).
     Singular { region: String },
-    /// NaN or infinity in the residual.
+    /// NaN or infinity in the residual or the tangent.
     NotFinite,
 }
 
@@ -257,6 +257,27 @@ impl Schedule {
         }
     }
 
+    /// All cells, in an order consistent with every order `run` may run them in: two cells
+    /// sharing a node come in the order they run in.
+    fn order(&self, out: &mut Vec<u32>) {
+        match self {
+            Schedule::Cells(c) => out.extend(c),
+            Schedule::Split {
+                first,
+                left,
+                right,
+                last,
+            } => {
+                // `first` runs before `left` and `last`; `last` after `right`; `left` shares no
+                // node with `right` or `last`, nor `first` with `right`
+                out.extend(first);
+                left.order(out);
+                right.order(out);
+                out.extend(last);
+            }
+        }
+    }
+
     /// Run `cells` on every part, halves at once; results combined in a fixed order.
     fn run<T: Send, E: Send>(
         &self,
@@ -305,6 +326,9 @@ pub struct Assembler {
     /// the blocks before it, from `first_cell[block]`).
     schedule: Schedule,
     first_cell: Vec<u32>,
+    /// Entries of `values` zeroed before each tangent assembly: those whose first writer
+    /// adds (see `Slots::flag_first`). Entries no cell writes stay at their initial zero.
+    zero_first: Vec<u32>,
     /// Tangent values (CSC, free equations).
     pub values: Vec<f64>,
     /// Internal-minus-external force on every dof (reactions on prescribed dofs).
@@ -330,11 +354,6 @@ impl Shared {
 /// Length of the pieces the whole-array passes below are cut into, one task each.
 const PASS_CHUNK: usize = 1 << 15;
 
-/// `v` ← 0, in parallel (the tangent's values are tens of MB on 3D meshes).
-fn zero(v: &mut [f64]) {
-    v.par_chunks_mut(PASS_CHUNK).for_each(|c| c.fill(0.0));
-}
-
 /// Whether every entry of `v` is finite, in parallel.
 fn all_finite(v: &[f64]) -> bool {
     v.par_chunks(PASS_CHUNK)
@@ -343,6 +362,9 @@ fn all_finite(v: &[f64]) -> bool {
 
 /// Marks a tangent entry that is not in the free system.
 const NO_SLOT: u32 = u32::MAX;
+/// Flag of a slot-map entry: this cell is the first to write the rows it writes there, so
+/// it stores instead of adding (the assembly needs no zeroing pass over the tangent).
+const FIRST: u32 = 1 << 31;
 
 /// The global dofs of a cell's local dofs, in the kernel's layout.
 fn local_dofs(model: &Model, bi: usize, nodes: &[usize], ld: &mut [u32]) {
@@ -374,7 +396,8 @@ struct Slots {
     /// Local dofs per cell.
     nd: usize,
     /// Per cell, `n × nd`, row-major: position in `values` of node A's first free row in the
-    /// column of local dof b, or `NO_SLOT` (b prescribed, or A without free dofs).
+    /// column of local dof b, with the flag `FIRST`; or `NO_SLOT` (b prescribed, or A without
+    /// free dofs).
     base: Vec<u32>,
     /// Per cell, `nd`: local row a's place among its node's free rows, or `NO_ROW` (prescribed).
     offset: Vec<u8>,
@@ -470,15 +493,18 @@ impl Slots {
         }
     }
 
-    /// Add the row-major `nd × nd` tangent `k` of cell `c` into `values`.
+    /// Add the row-major `nd × nd` tangent `k` of cell `c` into `values` (store, where the
+    /// cell writes first). Returns whether every entry it wrote is finite: an entry that ends
+    /// up not finite was not finite when last written, so this replaces a pass over `values`.
     ///
     /// # Safety
     /// No other thread may be adding at the same positions (another cell sharing a node).
     #[inline]
-    unsafe fn add(&self, c: usize, k: &[f64], values: Shared) {
+    unsafe fn add(&self, c: usize, k: &[f64], values: Shared) -> bool {
         let (n, nd) = (self.n, self.nd);
         let base = &self.base[c * n * nd..(c + 1) * n * nd];
         let offset = &self.offset[c * nd..(c + 1) * nd];
+        let mut finite = true;
         for (a, ka) in k.chunks_exact(nd).enumerate() {
             let o = offset[a];
             if o == NO_ROW {
@@ -488,7 +514,55 @@ impl Slots {
             for (&q, &v) in row.iter().zip(ka) {
                 if q != NO_SLOT {
                     // SAFETY: in bounds by construction; exclusive by the caller
-                    unsafe { *values.at(q as usize + o as usize) += v };
+                    let p = values.at((q & !FIRST) as usize + o as usize);
+                    let s = unsafe {
+                        let old = *p;
+                        let s = if q & FIRST != 0 { v } else { old + v };
+                        *p = s;
+                        s
+                    };
+                    finite &= s.is_finite();
+                }
+            }
+        }
+        finite
+    }
+
+    /// Flag each cell's first writes, visiting the cells in `order` (an order consistent with
+    /// every order the schedule may run them in): a node's rows in a column get `FIRST` in the
+    /// cell that writes all of them first. The entries a cell writes first without the flag
+    /// (a medium node's p rows, where a solid cell without p came first) are pushed to `zero`.
+    fn flag_first(slots: &mut [Slots], order: &[(usize, usize)], nnz: usize, zero: &mut Vec<u32>) {
+        let mut written = vec![false; nnz];
+        let mut rows = Vec::new();
+        for &(bi, c) in order {
+            let s = &mut slots[bi];
+            let (n, nd) = (s.n, s.nd);
+            let offset = &s.offset[c * nd..(c + 1) * nd];
+            for A in 0..n {
+                rows.clear();
+                rows.extend(
+                    (0..nd)
+                        .filter(|&a| s.node[a] == A && offset[a] != NO_ROW)
+                        .map(|a| offset[a] as usize),
+                );
+                for q in &mut s.base[(c * n + A) * nd..(c * n + A + 1) * nd] {
+                    if *q == NO_SLOT {
+                        continue;
+                    }
+                    let at = |o: &usize| *q as usize + o;
+                    let all_first = rows.iter().all(|o| !written[at(o)]);
+                    for o in &rows {
+                        if !written[at(o)] {
+                            written[at(o)] = true;
+                            if !all_first {
+                                zero.push(at(o) as u32);
+                            }
+                        }
+                    }
+                    if all_first {
+                        *q |= FIRST;
+                    }
                 }
             }
         }
@@ -499,10 +573,10 @@ impl Assembler {
     pub fn new(model: &Model) -> Assembler {
         let pattern = build_pattern(model);
         assert!(
-            pattern.nnz() < NO_SLOT as usize,
-            "more than 2³² − 1 tangent entries"
+            pattern.nnz() < FIRST as usize,
+            "more than 2³¹ tangent entries"
         );
-        let slots = (0..model.blocks.len())
+        let mut slots: Vec<Slots> = (0..model.blocks.len())
             .map(|bi| Slots::new(model, bi, &pattern))
             .collect();
         // one level of halves per doubling of the threads
@@ -522,7 +596,19 @@ impl Assembler {
         let cells = (0..*first_cell.last().unwrap()).collect();
         let (mut mark, mut stamp) = (vec![0u32; mesh.coords.len()], 0);
         let schedule = Schedule::build(&nodes, &mesh.coords, cells, depth, &mut mark, &mut stamp);
+        let mut order = Vec::new();
+        schedule.order(&mut order);
+        let order: Vec<(usize, usize)> = order
+            .into_iter()
+            .map(|g| {
+                let bi = first_cell.partition_point(|&f| f <= g) - 1;
+                (bi, (g - first_cell[bi]) as usize)
+            })
+            .collect();
+        let mut zero_first = Vec::new();
+        Slots::flag_first(&mut slots, &order, pattern.nnz(), &mut zero_first);
         Assembler {
+            zero_first,
             values: vec![0.0; pattern.nnz()],
             r_full: vec![0.0; model.dofs.n_dofs],
             lift: vec![0.0; pattern.n],
@@ -563,7 +649,9 @@ impl Assembler {
         }
         self.r_full.fill(0.0);
         if tangent {
-            zero(&mut self.values);
+            for &i in &self.zero_first {
+                self.values[i as usize] = 0.0;
+            }
         }
         self.lift.fill(0.0);
         let first_cell = &self.first_cell;
@@ -601,7 +689,11 @@ impl Assembler {
                     arrays,
                 };
                 let res = crate::with_cell!(kind, |N, D, E| job.run::<N, D, E>(these));
-                let (min_j, energy) = res.map_err(|(e, cell)| cell_error(model, bi, e, cell))?;
+                let (min_j, energy, finite) =
+                    res.map_err(|(e, cell)| cell_error(model, bi, e, cell))?;
+                if !finite {
+                    return Err(AssemblyError::NotFinite);
+                }
                 if info.mat.medium {
                     stats.min_J_medium = stats.min_J_medium.min(min_j);
                 } else {
@@ -618,9 +710,8 @@ impl Assembler {
                 min_J_medium: a.min_J_medium.min(b.min_J_medium),
                 energy: a.energy + b.energy,
             })?;
-        let finite = (!tangent || all_finite(&self.values))
-            && all_finite(&self.r_full)
-            && all_finite(&self.lift);
+        // the tangent's entries were checked as they were written
+        let finite = all_finite(&self.r_full) && all_finite(&self.lift);
         if !finite {
             return Err(AssemblyError::NotFinite);
         }
@@ -700,12 +791,13 @@ struct Cells<'a> {
 }
 
 impl Cells<'_> {
-    /// Add the cells `cells` (global numbers, all of this block). Returns (min J, energy), or
-    /// the kernel's error with the block's cell number.
+    /// Add the cells `cells` (global numbers, all of this block). Returns (min J, energy,
+    /// whether the tangent entries written are finite), or the kernel's error with the
+    /// block's cell number.
     fn run<const N: usize, const D: usize, E: RefElement<N, D>>(
         self,
         cells: &[u32],
-    ) -> Result<(f64, f64), (KernelError, usize)> {
+    ) -> Result<(f64, f64, bool), (KernelError, usize)> {
         let Cells {
             model,
             bi,
@@ -728,7 +820,7 @@ impl Cells<'_> {
         let nd = lay.ndof();
         let eq = &model.cons.eq;
         // add a cell's residual and tangent (row-major, nd × nd) into the global arrays
-        let add = |c: usize, ld: &[u32], r: &[f64], k: &[f64]| {
+        let add = |c: usize, ld: &[u32], r: &[f64], k: &[f64]| -> bool {
             // SAFETY: the schedule never runs two cells that share a node at once, and a
             // cell writes only at its own nodes' rows (in bounds by construction).
             unsafe {
@@ -736,9 +828,9 @@ impl Cells<'_> {
                     *r_full.at(ld[a] as usize) += r[a];
                 }
                 if !tangent {
-                    return;
+                    return true;
                 }
-                slots.add(c, k, values);
+                let finite = slots.add(c, k, values);
                 // prescribed columns: their increments lifted to the right-hand side
                 if let Some(dx) = dx_prescribed {
                     for b in 0..nd {
@@ -754,10 +846,11 @@ impl Cells<'_> {
                         }
                     }
                 }
+                finite
             }
         };
         let mut ld = vec![0u32; nd];
-        let (mut mj, mut en) = (f64::INFINITY, 0.0);
+        let (mut mj, mut en, mut finite) = (f64::INFINITY, 0.0, true);
         if tangent && lanes::available() && lanes::eligible(&info.mat, &lay, act) {
             // W cells per kernel call; a short last group repeats its last cell
             const W: usize = lanes::W;
@@ -774,7 +867,7 @@ impl Cells<'_> {
                     mj = mj.min(out[l].min_J);
                     en += out[l].energy;
                     local_dofs(model, bi, blk.cell(c), &mut ld);
-                    add(
+                    finite &= add(
                         c,
                         &ld,
                         &r[l * nd..(l + 1) * nd],
@@ -782,7 +875,7 @@ impl Cells<'_> {
                     );
                 }
             }
-            return Ok((mj, en));
+            return Ok((mj, en, finite));
         }
         let mut r = vec![0.0; nd];
         let mut k = vec![0.0; if tangent { nd * nd } else { 0 }];
@@ -802,9 +895,9 @@ impl Cells<'_> {
             .map_err(|e| (e, c))?;
             mj = mj.min(out.min_J);
             en += out.energy;
-            add(c, &ld, &r, &k);
+            finite &= add(c, &ld, &r, &k);
         }
-        Ok((mj, en))
+        Ok((mj, en, finite))
     }
 }
 
