@@ -98,7 +98,8 @@ fn time<const N: usize, const D: usize, E: RefElement<N, D>>(
     let four = [s; lanes::W];
     let lanes = (lanes::available() && lanes::eligible(mat, &lay, Active::ALL)).then(|| {
         repeat(&mut || {
-            lanes::bulk_lanes::<N, D, E>(mat, &lay, black_box(&four), &mut r, &mut k).unwrap();
+            lanes::bulk_lanes::<N, D, E>(mat, &lay, black_box(&four), &mut r, Some(&mut k))
+                .unwrap();
             black_box(&k);
         }) / lanes::W as f64
     });

@@ -851,16 +851,17 @@ impl Cells<'_> {
         };
         let mut ld = vec![0u32; nd];
         let (mut mj, mut en, mut finite) = (f64::INFINITY, 0.0, true);
-        if tangent && lanes::available() && lanes::eligible(&info.mat, &lay, act) {
+        if lanes::available() && lanes::eligible(&info.mat, &lay, act) {
             // W cells per kernel call; a short last group repeats its last cell
             const W: usize = lanes::W;
             let mut r = vec![0.0; W * nd];
-            let mut k = vec![0.0; W * nd * nd];
+            let mut k = vec![0.0; if tangent { W * nd * nd } else { 0 }];
             for group in cells.chunks(W) {
                 let cell = |l: usize| (group[l.min(group.len() - 1)] - first) as usize;
                 let s: [CellState<N>; W] =
                     std::array::from_fn(|l| crate::post::gather::<N>(model, blk.cell(cell(l)), x));
-                let out = lanes::bulk_lanes::<N, D, E>(&info.mat, &lay, &s, &mut r, &mut k)
+                let kl = if tangent { Some(&mut k[..]) } else { None };
+                let out = lanes::bulk_lanes::<N, D, E>(&info.mat, &lay, &s, &mut r, kl)
                     .map_err(|(e, l)| (e, cell(l)))?;
                 for l in 0..group.len() {
                     let c = cell(l);
@@ -871,7 +872,11 @@ impl Cells<'_> {
                         c,
                         &ld,
                         &r[l * nd..(l + 1) * nd],
-                        &k[l * nd * nd..(l + 1) * nd * nd],
+                        if tangent {
+                            &k[l * nd * nd..(l + 1) * nd * nd]
+                        } else {
+                            &[]
+                        },
                     );
                 }
             }

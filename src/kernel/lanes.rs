@@ -85,21 +85,26 @@ pub fn eligible(mat: &CellMaterial, lay: &Layout, act: Active) -> bool {
         && (!lay.has_theta || act.heat)
 }
 
-/// Residuals and tangents of the `W` cells `s` (lane l's in `r[l nd..]` and `k[l nd²..]`,
-/// row-major, overwritten), and their summaries. On failure, the error and the lowest lane it
-/// occurred in. Call only where [`available`] and [`eligible`].
+/// Residuals and, with `k`, tangents of the `W` cells `s` (lane l's in `r[l nd..]` and
+/// `k[l nd²..]`, row-major, overwritten), and their summaries. On failure, the error and the
+/// lowest lane it occurred in. Call only where [`available`] and [`eligible`].
 pub fn bulk_lanes<const N: usize, const D: usize, E: RefElement<N, D>>(
     mat: &CellMaterial,
     lay: &Layout,
     s: &[CellState<N>; W],
     r: &mut [f64],
-    k: &mut [f64],
+    k: Option<&mut [f64]>,
 ) -> Result<[CellSummary; W], (KernelError, usize)> {
     #[cfg(target_arch = "x86_64")]
     {
         assert!(available(), "the lane kernel needs AVX2 and FMA");
         // SAFETY: the CPU has the features the function is compiled for (checked above)
-        unsafe { bulk_lanes_avx2::<N, D, E>(mat, lay, s, r, k) }
+        unsafe {
+            match k {
+                Some(k) => bulk_lanes_avx2::<N, D, E, true>(mat, lay, s, r, k),
+                None => bulk_lanes_avx2::<N, D, E, false>(mat, lay, s, r, &mut []),
+            }
+        }
     }
     #[cfg(not(target_arch = "x86_64"))]
     {
@@ -110,14 +115,19 @@ pub fn bulk_lanes<const N: usize, const D: usize, E: RefElement<N, D>>(
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-unsafe fn bulk_lanes_avx2<const N: usize, const D: usize, E: RefElement<N, D>>(
+unsafe fn bulk_lanes_avx2<
+    const N: usize,
+    const D: usize,
+    E: RefElement<N, D>,
+    const TANGENT: bool,
+>(
     mat: &CellMaterial,
     lay: &Layout,
     s: &[CellState<N>; W],
     r: &mut [f64],
     k: &mut [f64],
 ) -> Result<[CellSummary; W], (KernelError, usize)> {
-    body::<N, D, E>(mat, lay, s, r, k)
+    body::<N, D, E, TANGENT>(mat, lay, s, r, k)
 }
 
 /// Lowest lane where `bad` holds.
@@ -158,7 +168,7 @@ fn cofactors(a: &[[V; 3]; 3]) -> [[V; 3]; 3] {
 }
 
 #[inline(always)]
-fn body<const N: usize, const D: usize, E: RefElement<N, D>>(
+fn body<const N: usize, const D: usize, E: RefElement<N, D>, const TANGENT: bool>(
     mat: &CellMaterial,
     lay: &Layout,
     s: &[CellState<N>; W],
@@ -309,35 +319,37 @@ fn body<const N: usize, const D: usize, E: RefElement<N, D>>(
                 ru[I][i] = c_h.mul_add(h[I][i], mdV.mul_add(f[I][i], ru[I][i]));
             }
         }
-        // ∂r_u/∂u: per node e_I = c1 h_I − ⅔ m f_I, q_I = c2 h_I, t_I = −⅔ m h_I (all × dV)
-        let c1 = (V::splat(law.K) + V::splat(2.0 / 3.0) * m * third_I1) * dV;
-        let c2 = (m * third_I1 - a) * dV;
-        let tw = V::splat(-2.0 / 3.0) * mdV;
-        let mut e = [[zero; 3]; N];
-        let mut q = [[zero; 3]; N];
-        let mut t = [[zero; 3]; N];
-        for I in 0..N {
-            for i in 0..3 {
-                e[I][i] = c1.mul_add(h[I][i], tw * f[I][i]);
-                q[I][i] = c2 * h[I][i];
-                t[I][i] = tw * h[I][i];
-            }
-        }
-        for I in 0..N {
-            for K in I..N {
-                let mut gg = zero;
-                for c in 0..D {
-                    gg = g[I][c].mul_add(g[K][c], gg);
+        if TANGENT {
+            // ∂r_u/∂u: per node e_I = c1 h_I − ⅔ m f_I, q_I = c2 h_I, t_I = −⅔ m h_I (all × dV)
+            let c1 = (V::splat(law.K) + V::splat(2.0 / 3.0) * m * third_I1) * dV;
+            let c2 = (m * third_I1 - a) * dV;
+            let tw = V::splat(-2.0 / 3.0) * mdV;
+            let mut e = [[zero; 3]; N];
+            let mut q = [[zero; 3]; N];
+            let mut t = [[zero; 3]; N];
+            for I in 0..N {
+                for i in 0..3 {
+                    e[I][i] = c1.mul_add(h[I][i], tw * f[I][i]);
+                    q[I][i] = c2 * h[I][i];
+                    t[I][i] = tw * h[I][i];
                 }
-                let blk = &mut kuu[I][K];
-                for i in 0..D {
-                    for kk in 0..D {
-                        blk[i][kk] = e[I][i].mul_add(
-                            h[K][kk],
-                            q[K][i].mul_add(h[I][kk], t[I][i].mul_add(f[K][kk], blk[i][kk])),
-                        );
+            }
+            for I in 0..N {
+                for K in I..N {
+                    let mut gg = zero;
+                    for c in 0..D {
+                        gg = g[I][c].mul_add(g[K][c], gg);
                     }
-                    blk[i][i] = mdV.mul_add(gg, blk[i][i]);
+                    let blk = &mut kuu[I][K];
+                    for i in 0..D {
+                        for kk in 0..D {
+                            blk[i][kk] = e[I][i].mul_add(
+                                h[K][kk],
+                                q[K][i].mul_add(h[I][kk], t[I][i].mul_add(f[K][kk], blk[i][kk])),
+                            );
+                        }
+                        blk[i][i] = mdV.mul_add(gg, blk[i][i]);
+                    }
                 }
             }
         }
@@ -417,9 +429,11 @@ fn body<const N: usize, const D: usize, E: RefElement<N, D>>(
                     for x in 0..2 {
                         let dfdu = bf[x][0].mul_add(gi[0], bf[x][1] * gi[1]);
                         ru[I][xs[x]] = d1f.mul_add(dfdu, ru[I][xs[x]]);
-                        for K in 0..N {
-                            kup[c][I][K][x] =
-                                (d2fp * dfdu).mul_add(V::splat(Nv[K]), kup[c][I][K][x]);
+                        if TANGENT {
+                            for K in 0..N {
+                                kup[c][I][K][x] =
+                                    (d2fp * dfdu).mul_add(V::splat(Nv[K]), kup[c][I][K][x]);
+                            }
                         }
                     }
                     let mut gpg = zero;
@@ -427,6 +441,9 @@ fn body<const N: usize, const D: usize, E: RefElement<N, D>>(
                         gpg = gp[J].mul_add(g[I][J], gpg);
                     }
                     rp[I][c] = (b2 * dV).mul_add(gpg, d1p.mul_add(V::splat(Nv[I]), rp[I][c]));
+                    if !TANGENT {
+                        continue;
+                    }
                     // A[x][y][v] = Σ_u M[x][y][u][v] g_I(u)
                     let mut A = [[[zero; 2]; 2]; 2];
                     for x in 0..2 {
@@ -478,6 +495,9 @@ fn body<const N: usize, const D: usize, E: RefElement<N, D>>(
                 }
                 rt[I] = Jk.mul_add(sv[I], rt[I]);
             }
+            if !TANGENT {
+                continue;
+            }
             let xdV = expansion * dV;
             for I in 0..N {
                 for i in 0..D {
@@ -521,17 +541,30 @@ fn body<const N: usize, const D: usize, E: RefElement<N, D>>(
             min_J: min_J.0[l],
             energy: energy.0[l],
         };
-        let (r, k) = (
-            &mut r[l * nd..(l + 1) * nd],
-            &mut k[l * nd * nd..(l + 1) * nd * nd],
-        );
+        let r = &mut r[l * nd..(l + 1) * nd];
+        for c in 0..np {
+            for I in 0..N {
+                r[lay.p(I, c)] = rp[I][c].0[l];
+            }
+        }
+        for I in 0..N {
+            for i in 0..D {
+                r[lay.u(I, i)] = ru[I][i].0[l];
+            }
+            if thermal {
+                r[th(I)] = rt[I].0[l];
+            }
+        }
+        if !TANGENT {
+            continue;
+        }
+        let k = &mut k[l * nd * nd..(l + 1) * nd * nd];
         if np > 0 {
             // the p blocks are sparse (one plane's components, one p component each)
             k.fill(0.0);
             for c in 0..np {
                 let (xa, xb) = crate::material::ROTATION_PLANES[c];
                 for I in 0..N {
-                    r[lay.p(I, c)] = rp[I][c].0[l];
                     for K in 0..N {
                         for (x, comp) in [xa, xb].into_iter().enumerate() {
                             let v = kup[c][I][K][x].0[l];
@@ -542,14 +575,6 @@ fn body<const N: usize, const D: usize, E: RefElement<N, D>>(
                         k[lay.p(I, c) * nd + lay.p(K, c)] = v;
                     }
                 }
-            }
-        }
-        for I in 0..N {
-            for i in 0..D {
-                r[lay.u(I, i)] = ru[I][i].0[l];
-            }
-            if thermal {
-                r[th(I)] = rt[I].0[l];
             }
         }
         for I in 0..N {
@@ -665,7 +690,15 @@ mod tests {
                 let nd = lay.ndof();
                 let s: [CellState<N>; W] = std::array::from_fn(state::<N, D, E>);
                 let (mut r, mut k) = (vec![f64::NAN; W * nd], vec![f64::NAN; W * nd * nd]);
-                let out = bulk_lanes::<N, D, E>(&mat, &lay, &s, &mut r, &mut k).unwrap();
+                let out = bulk_lanes::<N, D, E>(&mat, &lay, &s, &mut r, Some(&mut k)).unwrap();
+                // without the tangent: the same residuals and summaries
+                let mut r_only = vec![f64::NAN; W * nd];
+                let out_r = bulk_lanes::<N, D, E>(&mat, &lay, &s, &mut r_only, None).unwrap();
+                assert_eq!(r_only, r);
+                for l in 0..W {
+                    assert_eq!(out_r[l].energy, out[l].energy);
+                    assert_eq!(out_r[l].min_J, out[l].min_J);
+                }
                 for l in 0..W {
                     let (mut r1, mut k1) = (vec![0.0; nd], vec![0.0; nd * nd]);
                     let one =
@@ -722,7 +755,7 @@ mod tests {
         }
         let nd = lay.ndof();
         let (mut r, mut k) = (vec![0.0; W * nd], vec![0.0; W * nd * nd]);
-        match bulk_lanes::<8, 3, Hex8>(&mat, &lay, &s, &mut r, &mut k) {
+        match bulk_lanes::<8, 3, Hex8>(&mat, &lay, &s, &mut r, Some(&mut k)) {
             Err((KernelError::Inverted { J }, 2)) => assert!(J <= 0.0),
             other => panic!("{other:?}"),
         }
