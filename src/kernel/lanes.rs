@@ -127,7 +127,60 @@ unsafe fn bulk_lanes_avx2<
     r: &mut [f64],
     k: &mut [f64],
 ) -> Result<[CellSummary; W], (KernelError, usize)> {
-    body::<N, D, E, TANGENT>(mat, lay, s, r, k)
+    if !TANGENT {
+        return body::<N, D, E, TANGENT>(mat, lay, s, r, k);
+    }
+    // The body writes each tangent entry of the four cells with one store, lane-interleaved;
+    // 4 × 4 transposes then give each cell its row-major tangent. Cheaper than four scalar
+    // stores per entry.
+    thread_local! {
+        static INTERLEAVED: std::cell::Cell<Vec<f64>> = const { std::cell::Cell::new(Vec::new()) };
+    }
+    let mut kw = INTERLEAVED.take();
+    kw.resize(k.len(), 0.0);
+    let out = body::<N, D, E, TANGENT>(mat, lay, s, r, &mut kw);
+    if out.is_ok() {
+        // SAFETY: the CPU has AVX2 (this function's features)
+        unsafe { deinterleave(&kw, k) };
+    }
+    INTERLEAVED.set(kw);
+    out
+}
+
+/// `k[l n + i] = kw[W i + l]` for the `W` lanes and `n = kw.len() / W` entries, four entries
+/// of the four lanes at a time by a 4 × 4 transpose.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn deinterleave(kw: &[f64], k: &mut [f64]) {
+    use std::arch::x86_64::*;
+    assert!(W == 4 && kw.len() == k.len() && kw.len().is_multiple_of(W));
+    let n = kw.len() / W;
+    let tiles = n / 4;
+    let (src, dst) = (kw.as_ptr(), k.as_mut_ptr());
+    for t in 0..tiles {
+        let i = 4 * t;
+        // SAFETY: entries i..i + 4 of every lane are in bounds (i + 4 ≤ n)
+        unsafe {
+            // e_j: entry i + j of the four lanes
+            let e0 = _mm256_loadu_pd(src.add(W * i));
+            let e1 = _mm256_loadu_pd(src.add(W * (i + 1)));
+            let e2 = _mm256_loadu_pd(src.add(W * (i + 2)));
+            let e3 = _mm256_loadu_pd(src.add(W * (i + 3)));
+            let lo01 = _mm256_unpacklo_pd(e0, e1);
+            let hi01 = _mm256_unpackhi_pd(e0, e1);
+            let lo23 = _mm256_unpacklo_pd(e2, e3);
+            let hi23 = _mm256_unpackhi_pd(e2, e3);
+            _mm256_storeu_pd(dst.add(i), _mm256_permute2f128_pd(lo01, lo23, 0x20));
+            _mm256_storeu_pd(dst.add(n + i), _mm256_permute2f128_pd(hi01, hi23, 0x20));
+            _mm256_storeu_pd(dst.add(2 * n + i), _mm256_permute2f128_pd(lo01, lo23, 0x31));
+            _mm256_storeu_pd(dst.add(3 * n + i), _mm256_permute2f128_pd(hi01, hi23, 0x31));
+        }
+    }
+    for i in 4 * tiles..n {
+        for l in 0..W {
+            k[l * n + i] = kw[W * i + l];
+        }
+    }
 }
 
 /// Lowest lane where `bad` holds.
@@ -530,7 +583,8 @@ fn body<const N: usize, const D: usize, E: RefElement<N, D>, const TANGENT: bool
             }
         }
     }
-    // lanes back to the cells' row-major arrays; every entry is written
+    // lanes back to the cells' residuals; the tangent stays lane-interleaved: one store per
+    // entry for all four cells
     let th = |I: usize| lay.theta(I);
     let mut out = [CellSummary {
         min_J: 0.0,
@@ -555,56 +609,60 @@ fn body<const N: usize, const D: usize, E: RefElement<N, D>, const TANGENT: bool
                 r[th(I)] = rt[I].0[l];
             }
         }
-        if !TANGENT {
-            continue;
-        }
-        let k = &mut k[l * nd * nd..(l + 1) * nd * nd];
-        if np > 0 {
-            // the p blocks are sparse (one plane's components, one p component each)
-            k.fill(0.0);
-            for c in 0..np {
-                let (xa, xb) = crate::material::ROTATION_PLANES[c];
-                for I in 0..N {
-                    for K in 0..N {
-                        for (x, comp) in [xa, xb].into_iter().enumerate() {
-                            let v = kup[c][I][K][x].0[l];
-                            k[lay.u(I, comp) * nd + lay.p(K, c)] = v;
-                            k[lay.p(K, c) * nd + lay.u(I, comp)] = v;
-                        }
-                        let v = if K >= I { kpp[c][I][K] } else { kpp[c][K][I] }.0[l];
-                        k[lay.p(I, c) * nd + lay.p(K, c)] = v;
-                    }
-                }
+    }
+    if !TANGENT {
+        return Ok(out);
+    }
+    // entry (a, b) of lane l at k[(a nd + b) W + l]; every entry is written
+    let mut put = |a: usize, b: usize, v: V| {
+        let at = (a * nd + b) * W;
+        k[at..at + W].copy_from_slice(&v.0);
+    };
+    if np > 0 {
+        // the p blocks are sparse (one plane's components, one p component each)
+        for a in 0..nd {
+            for b in 0..nd {
+                put(a, b, zero);
             }
         }
-        for I in 0..N {
-            for K in I..N {
-                let blk = &kuu[I][K];
-                for i in 0..D {
-                    let row = lay.u(I, i) * nd;
-                    for kk in 0..D {
-                        let v = blk[i][kk].0[l];
-                        k[row + lay.u(K, kk)] = v;
-                        k[lay.u(K, kk) * nd + lay.u(I, i)] = v;
-                    }
-                }
-            }
-        }
-        if thermal {
+        for c in 0..np {
+            let (xa, xb) = crate::material::ROTATION_PLANES[c];
             for I in 0..N {
-                for i in 0..D {
-                    let row = lay.u(I, i) * nd;
-                    for K in 0..N {
-                        k[row + th(K)] = kut[I][i][K].0[l];
-                    }
-                }
-                let row = th(I) * nd;
                 for K in 0..N {
-                    for kk in 0..D {
-                        k[row + lay.u(K, kk)] = ktu[I][K][kk].0[l];
+                    for (x, comp) in [xa, xb].into_iter().enumerate() {
+                        let v = kup[c][I][K][x];
+                        put(lay.u(I, comp), lay.p(K, c), v);
+                        put(lay.p(K, c), lay.u(I, comp), v);
                     }
-                    k[row + th(K)] = if K >= I { ktt[I][K] } else { ktt[K][I] }.0[l];
+                    let v = if K >= I { kpp[c][I][K] } else { kpp[c][K][I] };
+                    put(lay.p(I, c), lay.p(K, c), v);
                 }
+            }
+        }
+    }
+    for I in 0..N {
+        for K in I..N {
+            let blk = &kuu[I][K];
+            for i in 0..D {
+                for kk in 0..D {
+                    put(lay.u(I, i), lay.u(K, kk), blk[i][kk]);
+                    put(lay.u(K, kk), lay.u(I, i), blk[i][kk]);
+                }
+            }
+        }
+    }
+    if thermal {
+        for I in 0..N {
+            for i in 0..D {
+                for K in 0..N {
+                    put(lay.u(I, i), th(K), kut[I][i][K]);
+                }
+            }
+            for K in 0..N {
+                for kk in 0..D {
+                    put(th(I), lay.u(K, kk), ktu[I][K][kk]);
+                }
+                put(th(I), th(K), if K >= I { ktt[I][K] } else { ktt[K][I] });
             }
         }
     }
