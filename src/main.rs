@@ -4,6 +4,7 @@ use clap::{Parser, Subcommand};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use tmc::mesh::gmsh::{MeshOptions, mesh_geo};
+use tmc::newton::IdleThreads;
 use tmc::solve::{SolveOptions, run};
 
 #[derive(Parser)]
@@ -199,10 +200,18 @@ fn main() -> ExitCode {
             quiet,
             verbose,
         } => {
+            let idle_threads = match IdleThreads::from_env() {
+                Ok(i) => i,
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    return ExitCode::FAILURE;
+                }
+            };
             let opts = SolveOptions {
                 out_dir: output,
                 quiet,
                 verbose,
+                idle_threads,
             };
             match run(&case, &opts) {
                 Ok(s) => {

@@ -7,7 +7,7 @@ use crate::linsolve::{LinearError, LinearKind, LinearSolver};
 use crate::mesh::gmsh::{GmshError, MeshOptions, mesh_geo};
 use crate::mesh::msh::{MshError, read_msh};
 use crate::model::{Model, Physics, build};
-use crate::newton::{Newton, Part, Spent, StepFailure, StepReport};
+use crate::newton::{IdleThreads, Newton, Part, Spent, StepFailure, StepReport};
 use crate::output::{self, History, OutputError, StepFields};
 use crate::probe::{self, Probe};
 use crate::stepping::Controller;
@@ -51,6 +51,8 @@ pub struct SolveOptions {
     pub quiet: bool,
     /// Print one line per step.
     pub verbose: bool,
+    /// What the other threads do during linear solves (`TMC_IDLE_THREADS` for `tmc solve`).
+    pub idle_threads: IdleThreads,
 }
 
 /// What `summary.json` holds (extend, never rename: users' scripts rely on it).
@@ -314,6 +316,7 @@ fn solve_model(
     let mut asm = Assembler::new(&model);
     let steps = &case.file.steps;
     let mut newton = Newton::new(&model, steps.tol, steps.max_iter);
+    newton.idle = opts.idle_threads;
     let structure = model.equation_structure();
     // one solver per part: the whole system, or mechanics and heat of a one-way scene
     let mut solvers: Vec<(Part, LinearSolver)> = match strategy {

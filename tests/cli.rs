@@ -145,6 +145,37 @@ fn good_case_runs() {
 }
 
 #[test]
+fn a_bad_idle_threads_setting_is_refused_and_the_good_ones_run() {
+    let (_, p) = case_with("idle", |t| t.to_string());
+    let out = p.parent().unwrap().join("out");
+    let with = |v: &str| {
+        Command::new(env!("CARGO_BIN_EXE_tmc"))
+            .args([
+                "solve",
+                p.to_str().unwrap(),
+                "-q",
+                "-o",
+                out.to_str().unwrap(),
+            ])
+            .env("TMC_IDLE_THREADS", v)
+            .current_dir(root())
+            .output()
+            .unwrap()
+    };
+    let o = with("nap");
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(
+        e.contains("TMC_IDLE_THREADS") && e.contains("\"nap\""),
+        "{e}"
+    );
+    for v in ["spin", "sleep"] {
+        let o = with(v);
+        assert!(o.status.success(), "{v}: {}", stderr(&o));
+    }
+}
+
+#[test]
 fn unknown_key_is_named_with_file_and_line() {
     let (o, p) = case_with("unknown", |t| t.replace("mu = 10.0", "mu = 10.0\nnu = 0.3"));
     assert!(!o.status.success());

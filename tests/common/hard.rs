@@ -3,6 +3,7 @@
 //! well under a minute on two cores.
 
 use std::path::{Path, PathBuf};
+use tmc::newton::IdleThreads;
 use tmc::solve::{SolveError, SolveOptions, Summary, run};
 
 /// One hard case: a scene from `geo/`, its mesh parameters and the case body.
@@ -156,18 +157,29 @@ pub fn solve(h: &Hard, dir: &Path) -> Result<Summary, SolveError> {
         cases_dir().join("../geo").join(h.geo).display(),
         h.params
     );
-    solve_text(&mesh, h, dir)
+    solve_text(&mesh, h, dir, IdleThreads::Spin)
 }
 
-/// As [`solve`], on the mesh `msh` (a run's `mesh.msh`). gmsh's unstructured meshers may give
+/// As [`solve`], on the mesh `msh` (a run's `mesh.msh`), with the pool's other threads doing
+/// `idle` during linear solves. gmsh's unstructured meshers may give
 /// another mesh of the same `.geo` in a process where other threads allocate meanwhile (they
 /// order elements by address), so a solver's reproducibility is checked on one mesh.
 #[allow(dead_code)] // the bench solves each case once
-pub fn solve_on_mesh(h: &Hard, dir: &Path, msh: &Path) -> Result<Summary, SolveError> {
-    solve_text(&format!("mesh = \"{}\"", msh.display()), h, dir)
+pub fn solve_on_mesh(
+    h: &Hard,
+    dir: &Path,
+    msh: &Path,
+    idle: IdleThreads,
+) -> Result<Summary, SolveError> {
+    solve_text(&format!("mesh = \"{}\"", msh.display()), h, dir, idle)
 }
 
-fn solve_text(mesh: &str, h: &Hard, dir: &Path) -> Result<Summary, SolveError> {
+fn solve_text(
+    mesh: &str,
+    h: &Hard,
+    dir: &Path,
+    idle_threads: IdleThreads,
+) -> Result<Summary, SolveError> {
     let _ = std::fs::remove_dir_all(dir);
     std::fs::create_dir_all(dir).unwrap();
     let text = format!("{mesh}\n{}", h.body);
@@ -179,6 +191,7 @@ fn solve_text(mesh: &str, h: &Hard, dir: &Path) -> Result<Summary, SolveError> {
             out_dir: Some(dir.join("out")),
             quiet: true,
             verbose: false,
+            idle_threads,
         },
     )
 }

@@ -31,6 +31,7 @@ pub fn solve_case(name: &str) -> (Summary, PathBuf) {
             out_dir: Some(out.clone()),
             quiet: true,
             verbose: false,
+            ..Default::default()
         },
     )
     .unwrap_or_else(|e| panic!("{name}: {e}"));
@@ -70,6 +71,7 @@ pub fn solve_text_opts(tag: &str, geo: &str, options: &str, case_text: &str) -> 
             out_dir: Some(out.clone()),
             quiet: true,
             verbose: false,
+            ..Default::default()
         },
     )
     .unwrap_or_else(|e| panic!("{tag}: {e}"));
