@@ -2,8 +2,8 @@
 //! linear H1 (p-field regularization, eq. 20) against quadratic H2 / H2S (direct
 //! regularization, eq. 18) — dofs, load steps, Newton iterations, gap, linear-solver time and
 //! assembly time, beside the paper's H1 rows (Pardiso on a 12-core M4 Pro). H1 32×32 (147k
-//! unknowns) only with TMC_BENCH_LARGE=1. The paper's rows run three times (32×32 once;
-//! TMC_BENCH_REPEAT=n to choose), and the time columns give medians.
+//! unknowns) only with TMC_BENCH_LARGE=1. The paper's rows run three times (32×32 once),
+//! the others once; TMC_BENCH_REPEAT=n runs every row n times. The time columns give medians.
 
 mod common;
 use common::{case_text, root, solve};

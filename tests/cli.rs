@@ -8,8 +8,14 @@ use std::path::Path;
 use std::process::{Command, Output};
 
 fn tmc(args: &[&str]) -> Output {
+    tmc_with(args, &[])
+}
+
+/// `tmc args` with the environment variables `vars` set.
+fn tmc_with(args: &[&str], vars: &[(&str, &str)]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_tmc"))
         .args(args)
+        .envs(vars.iter().copied())
         .current_dir(root())
         .output()
         .unwrap()
@@ -146,22 +152,18 @@ fn good_case_runs() {
 
 #[test]
 fn a_bad_idle_threads_setting_is_refused_and_the_good_ones_run() {
-    let (_, p) = case_with("idle", |t| t.to_string());
+    // unset: the default (spin)
+    let (o, p) = case_with("idle", |t| t.to_string());
+    assert!(o.status.success(), "unset: {}", stderr(&o));
     let out = p.parent().unwrap().join("out");
-    let with = |v: &str| {
-        Command::new(env!("CARGO_BIN_EXE_tmc"))
-            .args([
-                "solve",
-                p.to_str().unwrap(),
-                "-q",
-                "-o",
-                out.to_str().unwrap(),
-            ])
-            .env("TMC_IDLE_THREADS", v)
-            .current_dir(root())
-            .output()
-            .unwrap()
-    };
+    let args = [
+        "solve",
+        p.to_str().unwrap(),
+        "-q",
+        "-o",
+        out.to_str().unwrap(),
+    ];
+    let with = |v: &str| tmc_with(&args, &[("TMC_IDLE_THREADS", v)]);
     let o = with("nap");
     assert!(!o.status.success());
     let e = stderr(&o);
