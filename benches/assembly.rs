@@ -11,9 +11,9 @@ use common::{case_text, root};
 use std::time::Instant;
 use tmc::assembly::Assembler;
 use tmc::case::Case;
+use tmc::driver::mesh_for;
 use tmc::mesh::msh::read_msh;
 use tmc::model::build;
-use tmc::solve::mesh_for;
 
 fn main() {
     // (plan, mesh parameters, the paper's K & R seconds and Newton iterations)

@@ -5,8 +5,9 @@
 
 use std::hint::black_box;
 use std::time::Instant;
+use tmc::dofs::{CellState, Layout};
 use tmc::element::{Hex8, Hex27, Quad4, RefElement, Tet4, Tri3};
-use tmc::kernel::{Active, CellMaterial, CellState, Layout, bulk, lanes};
+use tmc::kernel::{Active, CellMaterial, bulk, lanes};
 use tmc::material::{Conductivity, Regularization, ThermoElastic};
 
 const SOLID: CellMaterial = CellMaterial {

@@ -1,9 +1,13 @@
 //! tmc: finite-strain thermo-mechanical contact with the third-medium method.
 //!
-//! Layers in pipeline order: [`mesh`] (gmsh → .msh → mesh) → [`dofs`] → [`element`] and
-//! [`material`] → [`kernel`] → [`assembly`] → [`linsolve`] → [`newton`] → [`stepping`] →
-//! [`output`]. [`case`] reads the case file, [`model`] builds the discrete problem from it,
-//! [`solve`] drives a run, [`study`] runs a scene over variants, [`plot`] draws charts.
+//! Layers in pipeline order, each a folder that owns one concept and imports only from the
+//! layers before it:
+//!
+//! [`mesh`] (gmsh → .msh → mesh) → [`element`] (reference elements) → [`dofs`] (numbering,
+//! constraints, local layout, sparsity) → [`material`] (pure laws) → [`kernel`] (local residual
+//! and tangent) → [`case`] and [`model`] (the discrete problem) → [`assembly`] → [`solver`]
+//! (linear, Newton, stepping) → [`output`] (VTU, history, probes) → [`driver`] (`tmc solve`) →
+//! [`study`] and [`plot`]. See docs/ARCHITECTURE.md.
 
 #![allow(non_snake_case)]
 // maths names: F, P, J, X, dP_dF
@@ -13,17 +17,13 @@
 pub mod assembly;
 pub mod case;
 pub mod dofs;
+pub mod driver;
 pub mod element;
 pub mod kernel;
-pub mod linsolve;
 pub mod material;
 pub mod mesh;
 pub mod model;
-pub mod newton;
 pub mod output;
 pub mod plot;
-pub mod post;
-pub mod probe;
-pub mod solve;
-pub mod stepping;
+pub mod solver;
 pub mod study;

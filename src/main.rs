@@ -3,9 +3,9 @@
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
 use std::process::ExitCode;
+use tmc::driver::{SolveOptions, run};
 use tmc::mesh::gmsh::{MeshOptions, mesh_geo};
-use tmc::newton::IdleThreads;
-use tmc::solve::{SolveOptions, run};
+use tmc::solver::idle::IdleThreads;
 
 #[derive(Parser)]
 #[command(

@@ -180,7 +180,7 @@ impl History {
 /// The columns `tmc plot` draws by default: probes, reactions, energy and work (those after
 /// the bookkeeping ones), skipping columns the scene does not have (NaN).
 pub fn default_columns(h: &History) -> Vec<String> {
-    use crate::solve::{HISTORY_SOLVER_COLUMNS, HISTORY_STEP_COLUMNS};
+    use crate::driver::{HISTORY_SOLVER_COLUMNS, HISTORY_STEP_COLUMNS};
     let bookkeeping =
         |c: &str| HISTORY_STEP_COLUMNS.contains(&c) || HISTORY_SOLVER_COLUMNS.contains(&c);
     h.columns

@@ -7,9 +7,9 @@ mod common;
 use common::*;
 use nalgebra::Matrix3;
 use tmc::assembly::Assembler;
-use tmc::linsolve::{LinearKind, LinearSolver};
 use tmc::material::ThermoElastic;
-use tmc::newton::{Newton, Part};
+use tmc::solver::linear::{LinearKind, LinearSolver};
+use tmc::solver::newton::{Newton, Part};
 
 const LAW: ThermoElastic = ThermoElastic {
     K: 20.0,
@@ -137,8 +137,12 @@ ux = 1.0
 "#;
     let (_, model) = model_from(text, "bar3d.geo", "newton-quadratic");
     let mut asm = Assembler::new(&model);
-    let mut solver =
-        LinearSolver::new(LinearKind::Ldlt, &asm.pattern, &model.equation_structure()).unwrap();
+    let mut solver = LinearSolver::new(
+        LinearKind::Ldlt,
+        &asm.pattern,
+        &tmc::dofs::equation_structure(&model.dofs, &model.cons),
+    )
+    .unwrap();
     let mut newton = Newton::new(&model, 1e-12, 20);
     let mut x = model.initial_state();
     let rep = newton

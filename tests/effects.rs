@@ -4,7 +4,7 @@
 mod common;
 use common::*;
 use tmc::dofs::Field;
-use tmc::solve::Strategy;
+use tmc::driver::Strategy;
 
 fn counts(model: &tmc::model::Model) -> [usize; 3] {
     [Field::U, Field::Theta, Field::P].map(|f| model.dofs.count(f))
@@ -77,7 +77,7 @@ fn one_way_path_matches_the_monolithic_one() {
     );
     assert_eq!(one.strategy, Strategy::OneWay);
     assert_eq!(mono.strategy, Strategy::Monolithic);
-    assert_eq!(one.linear_solver, tmc::linsolve::LinearKind::Ldlt);
+    assert_eq!(one.linear_solver, tmc::solver::linear::LinearKind::Ldlt);
     for (k, v) in &mono.probes {
         let w = one.probes[k];
         assert!((v - w).abs() <= 1e-8 * v.abs().max(1e-3), "{k}: {w} vs {v}");

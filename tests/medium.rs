@@ -130,7 +130,7 @@ fn a_free_medium_leaves_a_stretched_solid_unchanged() {
     let soft = with(1e-4, "free-medium-soft");
     let stiff = with(1.0, "free-medium-stiff");
     assert!(soft.converged && stiff.converged);
-    let f = |s: &tmc::solve::Summary, g: &str| s.reactions[g]["x"];
+    let f = |s: &tmc::driver::Summary, g: &str| s.reactions[g]["x"];
     let (f0, f_soft, f_stiff) = (
         f(&alone, "right"),
         f(&soft, "solid_right"),

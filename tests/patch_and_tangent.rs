@@ -8,9 +8,9 @@ mod common;
 use common::*;
 use tmc::assembly::Assembler;
 use tmc::dofs::NONE;
-use tmc::linsolve::{LinearKind, LinearSolver};
 use tmc::model::Model;
-use tmc::newton::{Newton, Part};
+use tmc::solver::linear::{LinearKind, LinearSolver};
+use tmc::solver::newton::{Newton, Part};
 
 fn case_text(dim: usize, alpha: f64) -> String {
     let comps = if dim == 2 {
@@ -64,8 +64,12 @@ fn patch(model: &mut Model) {
         }
     }
     let mut asm = Assembler::new(model);
-    let mut solver =
-        LinearSolver::new(LinearKind::Lu, &asm.pattern, &model.equation_structure()).unwrap();
+    let mut solver = LinearSolver::new(
+        LinearKind::Lu,
+        &asm.pattern,
+        &tmc::dofs::equation_structure(&model.dofs, &model.cons),
+    )
+    .unwrap();
     let mut newton = Newton::new(model, 1e-12, 30);
     let mut x = model.initial_state();
     for lambda in [0.25, 0.5, 0.75, 1.0] {

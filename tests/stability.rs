@@ -8,8 +8,8 @@ mod common;
 
 use common::hard::{self, Hard};
 use common::{history, root};
-use tmc::newton::IdleThreads;
-use tmc::solve::Summary;
+use tmc::driver::Summary;
+use tmc::solver::idle::IdleThreads;
 
 type Rows = (Vec<String>, Vec<Vec<f64>>);
 

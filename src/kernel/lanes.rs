@@ -24,7 +24,8 @@
 //! its finite-difference checks.
 #![allow(non_snake_case, clippy::needless_range_loop)]
 
-use super::{Active, CellMaterial, CellState, CellSummary, KernelError, Layout};
+use super::{Active, CellMaterial, CellSummary, KernelError};
+use crate::dofs::{CellState, Layout};
 use crate::element::RefElement;
 
 /// Cells per call.

@@ -3,8 +3,8 @@
 //! well under a minute on two cores.
 
 use std::path::{Path, PathBuf};
-use tmc::newton::IdleThreads;
-use tmc::solve::{SolveError, SolveOptions, Summary, run};
+use tmc::driver::{SolveError, SolveOptions, Summary, run};
+use tmc::solver::idle::IdleThreads;
 
 /// One hard case: a scene from `geo/`, its mesh parameters and the case body.
 pub struct Hard {

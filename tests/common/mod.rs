@@ -5,10 +5,10 @@ pub mod hard;
 
 use std::path::{Path, PathBuf};
 use tmc::case::Case;
+use tmc::driver::{SolveOptions, Summary, run};
 use tmc::mesh::gmsh::{MeshOptions, mesh_geo};
 use tmc::mesh::msh::read_msh;
 use tmc::model::{Model, build};
-use tmc::solve::{SolveOptions, Summary, run};
 
 pub fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))

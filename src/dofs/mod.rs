@@ -1,5 +1,12 @@
-//! Degrees of freedom: which fields live on which nodes, their global numbering, and the
-//! Dirichlet constraints that remove some of them from the system.
+//! Degrees of freedom: which fields live on which nodes, their global numbering, the
+//! Dirichlet constraints that remove some of them from the system, a cell's local view of
+//! them ([`local`]) and the sparsity pattern they couple in ([`pattern`]).
+
+pub mod local;
+pub mod pattern;
+
+pub use local::{CellState, Layout, gather};
+pub use pattern::{Pattern, Structure, build_pattern, equation_structure};
 
 use crate::mesh::Mesh;
 

@@ -1,17 +1,24 @@
 //! `tmc solve`: case → mesh → model → load stepping with Newton → VTU series, history, summary.
 
+pub mod records;
+pub mod strategy;
+
+pub use records::{HISTORY_SOLVER_COLUMNS, HISTORY_STEP_COLUMNS, Summary, reactions};
+pub use strategy::{Strategy, choose_linear, choose_strategy, describe};
+
 use crate::assembly::Assembler;
-use crate::case::{Case, CaseError, CouplingChoice, LinearChoice, RegionKind};
-use crate::dofs::{Field, NONE};
-use crate::linsolve::{LinearError, LinearKind, LinearSolver};
+use crate::case::{Case, CaseError, RegionKind};
+use crate::dofs::{Field, NONE, equation_structure};
 use crate::mesh::gmsh::{GmshError, MeshOptions, mesh_geo};
 use crate::mesh::msh::{MshError, read_msh};
-use crate::model::{Model, Physics, build};
-use crate::newton::{IdleThreads, Newton, Part, Spent, StepFailure, StepReport};
+use crate::model::{Model, build};
+use crate::output::probes::{self, Probe};
 use crate::output::{self, History, OutputError, StepFields};
-use crate::probe::{self, Probe};
-use crate::stepping::Controller;
-use serde::Serialize;
+use crate::solver::idle::IdleThreads;
+use crate::solver::linear::{LinearError, LinearKind, LinearSolver};
+use crate::solver::newton::{Newton, Part, Spent, StepFailure, StepReport};
+use crate::solver::stepping::Controller;
+use records::peak_memory_mb;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -55,79 +62,6 @@ pub struct SolveOptions {
     pub idle_threads: IdleThreads,
 }
 
-/// What `summary.json` holds (extend, never rename: users' scripts rely on it).
-#[derive(Clone, Debug, Serialize)]
-pub struct Summary {
-    pub case: String,
-    pub mesh: String,
-    pub dim: usize,
-    /// Mesh nodes (of cells).
-    pub nodes: usize,
-    pub cells: BTreeMap<String, usize>,
-    pub dofs: BTreeMap<String, usize>,
-    pub physics: Physics,
-    pub linear_solver: LinearKind,
-    /// How the coupled fields are solved: "single_field", "one_way" (mechanics, then heat on
-    /// the deformed state, each with a symmetric factorisation) or "monolithic".
-    pub strategy: Strategy,
-    pub converged: bool,
-    pub message: String,
-    pub lambda: f64,
-    /// Pseudo-time reached (equal to λ without a `[steps] path`).
-    pub time: f64,
-    pub load_steps: usize,
-    pub rejected_steps: usize,
-    /// Newton iterations of the accepted steps.
-    pub newton_iterations: usize,
-    /// Newton iterations of the rejected attempts (their time is in the seconds below).
-    pub rejected_iterations: usize,
-    /// Newton updates (linear solves) of every attempt, accepted or rejected: a mechanical
-    /// step of n iterations makes n + 1. The count the assembly and solver seconds are spent on.
-    pub linear_solves: usize,
-    pub wall_seconds: f64,
-    /// Assembly time of the whole run: every attempt, and the converged states' reactions.
-    pub assembly_seconds: f64,
-    /// Factorisation and linear-solve time of every attempt.
-    pub solver_seconds: f64,
-    /// GMRES iterations over all accepted steps (0 with a direct solver).
-    pub krylov_iterations: usize,
-    /// Accepted steps whose converging residual was assembled without the tangent (its
-    /// factorisation was reused for the last update).
-    pub tangents_skipped: usize,
-    /// Peak resident memory of the process so far, MB (Linux; null elsewhere).
-    pub peak_memory_mb: Option<f64>,
-    pub probes: BTreeMap<String, f64>,
-    pub reactions: BTreeMap<String, BTreeMap<String, f64>>,
-    /// Smallest J at any quadrature point of any accepted step (solids and medium).
-    pub min_J: f64,
-    pub min_J_solid: Option<f64>,
-    /// `null` without a medium.
-    pub min_J_medium: Option<f64>,
-    /// Stored energy of the last accepted state (elastic, medium and regularization).
-    pub energy: f64,
-    /// Work of the forces on the displacements, ∫ f·du summed by the trapezoidal rule over the
-    /// accepted steps. Equals `energy` for hyperelastic scenes without thermal strain.
-    pub external_work: f64,
-    pub output: String,
-}
-
-/// The leading columns of history.csv: the step's bookkeeping. Then come `energy`, the probes
-/// and the reactions, then [`HISTORY_SOLVER_COLUMNS`] and `work`.
-pub const HISTORY_STEP_COLUMNS: [&str; 9] = [
-    "step",
-    "lambda",
-    "dlambda",
-    "newton_iterations",
-    "res_u",
-    "res_theta",
-    "res_p",
-    "min_J_solid",
-    "min_J_medium",
-];
-
-/// The solver's counters and the pseudo-time, near the end of history.csv.
-pub const HISTORY_SOLVER_COLUMNS: [&str; 3] = ["krylov_iterations", "halvings", "time"];
-
 /// Mesh the case's `.geo` into `out_dir/mesh.msh`, or return its `.msh` path.
 pub fn mesh_for(case: &Case, out_dir: &Path) -> Result<PathBuf, SolveError> {
     let path = case.mesh_path();
@@ -158,36 +92,6 @@ pub fn mesh_for(case: &Case, out_dir: &Path) -> Result<PathBuf, SolveError> {
     }
 }
 
-/// Reactions per Dirichlet group: force components on the body and heat supplied to it.
-pub fn reactions(model: &Model, r_full: &[f64]) -> BTreeMap<String, BTreeMap<String, f64>> {
-    let mut out: BTreeMap<String, BTreeMap<String, f64>> = BTreeMap::new();
-    let d = model.dofs.dim;
-    let comp = ["x", "y", "z"];
-    for (n, _) in model.mesh.coords.iter().enumerate() {
-        if model.dofs.has(Field::U) {
-            for c in 0..d {
-                let dof = model.dofs.u[n * d + c] as usize;
-                if let Some(p) = model.cons.prescribed[dof] {
-                    *out.entry(model.bc_groups[p.bc].name.clone())
-                        .or_default()
-                        .entry(comp[c].into())
-                        .or_default() += r_full[dof];
-                }
-            }
-        }
-        if model.dofs.has(Field::Theta) {
-            let dof = model.dofs.theta[n] as usize;
-            if let Some(p) = model.cons.prescribed[dof] {
-                *out.entry(model.bc_groups[p.bc].name.clone())
-                    .or_default()
-                    .entry("heat".into())
-                    .or_default() += r_full[dof];
-            }
-        }
-    }
-    out
-}
-
 /// A line above the progress bar, or on stderr when the bar is hidden (not a terminal).
 fn say(pb: &indicatif::ProgressBar, line: &str) {
     if pb.is_hidden() {
@@ -210,90 +114,8 @@ pub fn run(case_path: &Path, opts: &SolveOptions) -> Result<Summary, SolveError>
     let mesh = read_msh(&msh)?;
     case.validate(&mesh)?;
     let model = build(&case, mesh)?;
-    let probes = probe::build(&case, &model.mesh)?;
+    let probes = probes::build(&case, &model.mesh)?;
     solve_model(&case, model, &probes, &out_dir, opts, start)
-}
-
-/// The process's peak resident set (VmHWM) in MB, where /proc tells it.
-fn peak_memory_mb() -> Option<f64> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
-    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb / 1024.0)
-}
-
-/// How the fields of a scene are solved.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Strategy {
-    /// One field only (mechanics or conduction): one symmetric system.
-    SingleField,
-    /// Mechanics drives conduction, not back: per step, Newton on (u, p), then the (linear)
-    /// conduction on the deformed state.
-    OneWay,
-    /// Newton on the whole coupled system.
-    Monolithic,
-}
-
-/// The strategy the physics allows, unless the case forces the monolithic one (or a
-/// whole-system linear solver).
-pub fn choose_strategy(solver: &crate::case::Solver, physics: &Physics) -> Strategy {
-    if !(physics.mechanics && physics.conduction) {
-        Strategy::SingleField
-    } else if physics.heat_to_mechanics
-        || solver.coupling == CouplingChoice::Monolithic
-        || matches!(solver.linear, LinearChoice::Lu | LinearChoice::Gmres)
-    {
-        Strategy::Monolithic
-    } else {
-        Strategy::OneWay
-    }
-}
-
-/// A line naming the active physics and the strategy.
-pub fn describe(physics: &Physics, strategy: Strategy) -> String {
-    let mut on = Vec::new();
-    if physics.mechanics {
-        on.push("mechanics");
-    }
-    if physics.conduction {
-        on.push("conduction");
-    }
-    if physics.medium {
-        on.push("third medium");
-    }
-    if physics.regularization {
-        on.push("regularization p");
-    }
-    let coupling = match (physics.mechanics_to_heat, physics.heat_to_mechanics) {
-        (true, true) => "two-way coupled",
-        (true, false) => "one-way coupled (deformation → heat)",
-        _ => "uncoupled",
-    };
-    let how = match strategy {
-        Strategy::SingleField => "one symmetric system",
-        Strategy::OneWay => "mechanics, then heat per step, symmetric factorisations",
-        Strategy::Monolithic => "monolithic Newton",
-    };
-    format!("physics: {}; {coupling}; {how}", on.join(" + "))
-}
-
-/// Choose the whole-system linear solver: LDLᵀ where the tangent is symmetric, GMRES with the
-/// block-triangular preconditioner where it is not (LU or LDLᵀ when the case asks).
-pub fn choose_linear(choice: LinearChoice, physics: &Physics) -> LinearKind {
-    let symmetric = !(physics.mechanics && physics.conduction);
-    match choice {
-        LinearChoice::Lu => LinearKind::Lu,
-        LinearChoice::Ldlt => LinearKind::Ldlt,
-        LinearChoice::Gmres => LinearKind::BlockGmres,
-        LinearChoice::Auto => {
-            if symmetric {
-                LinearKind::Ldlt
-            } else {
-                LinearKind::BlockGmres
-            }
-        }
-    }
 }
 
 fn solve_model(
@@ -317,7 +139,7 @@ fn solve_model(
     let steps = &case.file.steps;
     let mut newton = Newton::new(&model, steps.tol, steps.max_iter);
     newton.idle = opts.idle_threads;
-    let structure = model.equation_structure();
+    let structure = equation_structure(&model.dofs, &model.cons);
     // one solver per part: the whole system, or mechanics and heat of a one-way scene
     let mut solvers: Vec<(Part, LinearSolver)> = match strategy {
         Strategy::OneWay => vec![
@@ -394,7 +216,7 @@ fn solve_model(
                       pvd: &mut Vec<(f64, String)>,
                       lambda: f64|
      -> Result<(), SolveError> {
-        let cells = crate::post::all_cell_fields(&model, x)
+        let cells = output::fields::all_cell_fields(&model, x)
             .map_err(|e| SolveError::Setup(format!("post-processing failed: {e:?}")))?;
         let u: Vec<[f64; 3]> = (0..model.mesh.coords.len())
             .map(|n| {

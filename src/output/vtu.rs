@@ -1,40 +1,13 @@
-//! Output: one `.vtu` per converged step (vtkio), a `.pvd` collection, `history.csv` and
-//! `summary.json`. Every file is written to a temporary name and renamed, so a failure never
-//! leaves a half-written file.
+//! ParaView files: one `.vtu` (VTK XML unstructured grid) per step and the `.pvd` collection.
 
+use super::{OutputError, werr, write_atomic};
 use crate::kernel::CellFields;
 use crate::mesh::Mesh;
-use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use vtkio::model::{
     Attribute, Attributes, ByteOrder, CellType, Cells, DataSet, Piece, UnstructuredGridPiece,
     Version, VertexNumbers, Vtk,
 };
-
-#[derive(Debug, thiserror::Error)]
-pub enum OutputError {
-    #[error("cannot write {path}: {msg}")]
-    Write { path: PathBuf, msg: String },
-}
-
-fn werr(path: &Path, e: impl std::fmt::Display) -> OutputError {
-    OutputError::Write {
-        path: path.to_owned(),
-        msg: e.to_string(),
-    }
-}
-
-/// Write `bytes` to `path` atomically.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
-    let tmp = path.with_extension(format!(
-        "{}.part",
-        path.extension()
-            .map(|e| e.to_string_lossy().into_owned())
-            .unwrap_or_default()
-    ));
-    std::fs::write(&tmp, bytes).map_err(|e| werr(&tmp, e))?;
-    std::fs::rename(&tmp, path).map_err(|e| werr(path, e))
-}
 
 fn vtk_cell_type(id: u8) -> CellType {
     match id {
@@ -162,62 +135,4 @@ pub fn write_pvd(path: &Path, steps: &[(f64, String)]) -> Result<(), OutputError
     }
     s.push_str("  </Collection>\n</VTKFile>\n");
     write_atomic(path, s.as_bytes())
-}
-
-/// `history.csv`, one row per converged step, flushed after each row.
-pub struct History {
-    path: PathBuf,
-    text: String,
-}
-
-impl History {
-    pub fn new(path: &Path, columns: &[String]) -> History {
-        History {
-            path: path.to_owned(),
-            text: columns.join(",") + "\n",
-        }
-    }
-    pub fn row(&mut self, values: &[f64]) -> Result<(), OutputError> {
-        let row: Vec<String> = values
-            .iter()
-            .map(|&v| {
-                if !v.is_finite() {
-                    "NaN".to_string() // a field the scene does not simulate
-                } else if v == v.trunc() && v.abs() < 1e15 {
-                    format!("{}", v as i64)
-                } else {
-                    format!("{v:.12e}")
-                }
-            })
-            .collect();
-        self.text.push_str(&row.join(","));
-        self.text.push('\n');
-        write_atomic(&self.path, self.text.as_bytes())
-    }
-    pub fn flush_header(&self) -> Result<(), OutputError> {
-        write_atomic(&self.path, self.text.as_bytes())
-    }
-}
-
-/// Remove stale step files of an earlier run in `dir`.
-pub fn clean_dir(dir: &Path) -> Result<(), OutputError> {
-    std::fs::create_dir_all(dir).map_err(|e| werr(dir, e))?;
-    for entry in std::fs::read_dir(dir).map_err(|e| werr(dir, e))?.flatten() {
-        let name = entry.file_name().to_string_lossy().into_owned();
-        if (name.starts_with("step_") && name.ends_with(".vtu"))
-            || name == "history.csv"
-            || name == "summary.json"
-            || name.ends_with(".pvd")
-        {
-            std::fs::remove_file(entry.path()).map_err(|e| werr(&entry.path(), e))?;
-        }
-    }
-    Ok(())
-}
-
-/// Write a small text file (e.g. a log) atomically.
-pub fn write_text(path: &Path, text: &str) -> Result<(), OutputError> {
-    let mut buf = Vec::new();
-    buf.write_all(text.as_bytes()).map_err(|e| werr(path, e))?;
-    write_atomic(path, &buf)
 }

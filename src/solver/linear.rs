@@ -13,7 +13,7 @@
 //! - [`LinearKind::Lu`]: faer's sparse LU with partial pivoting of the whole system. It fills in
 //!   far more than LDLᵀ in 3D (see SOLVERS.md); a fallback for small systems.
 
-use crate::assembly::Pattern;
+use crate::dofs::{Pattern, Structure};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::solvers::Solve;
 use faer::perm::PermRef;
@@ -41,15 +41,6 @@ pub enum LinearError {
     Factor(String),
     #[error("GMRES did not converge in {iterations} iterations (relative residual {residual:.1e})")]
     Krylov { iterations: usize, residual: f64 },
-}
-
-/// What the solver needs to know about the equations besides the pattern.
-#[derive(Clone, Debug)]
-pub struct Structure {
-    /// Mesh node of each equation (for the nested-dissection ordering of the node graph).
-    pub node: Vec<u32>,
-    /// Per equation: `true` for temperature, `false` for mechanics (u and p).
-    pub thermal: Vec<bool>,
 }
 
 /// Relative residual at which GMRES stops, and its iteration budget.

@@ -1,0 +1,190 @@
+//! The cells of one block through their kernel, one cell or four (SIMD lanes) per call, their
+//! residuals and tangents added into the global arrays; and the inversion check before an
+//! assembly.
+#![allow(non_snake_case)]
+
+use super::scatter::{Shared, Slots, local_dofs};
+use super::{AssemblyError, MIN_PART_CELLS, cell_error};
+use crate::dofs::{CellState, NONE, gather};
+use crate::element::RefElement;
+use crate::kernel::{self, Active, KernelError, bulk, lanes};
+use crate::model::Model;
+use rayon::prelude::*;
+
+/// The first medium cell (in block and cell order, whatever the threads) that `x` inverts,
+/// as the assembly would report it. Only the medium: it is where updates invert cells, and
+/// it is a small part of the mesh (a whole-mesh look costs a quarter of an assembly); an
+/// inverted solid cell is still found by the assembly.
+pub fn check_inversion(model: &Model, x: &[f64]) -> Result<(), AssemblyError> {
+    for (bi, info) in model.blocks.iter().enumerate() {
+        if !info.layout.has_u || !info.mat.medium {
+            continue;
+        }
+        let blk = &model.mesh.cells[info.block];
+        let found = crate::with_cell!(blk.kind, |N, D, E| {
+            (0..blk.n_cells())
+                .into_par_iter()
+                .with_min_len(MIN_PART_CELLS)
+                .map(|c| {
+                    let s = gather::<N>(&model.mesh.coords, &model.dofs, blk.cell(c), x);
+                    kernel::inversion::<N, D, E>(&s).map_err(|e| (e, c))
+                })
+                .find_first(Result::is_err)
+        });
+        if let Some(Err((e, cell))) = found {
+            return Err(cell_error(model, bi, e, cell));
+        }
+    }
+    Ok(())
+}
+
+/// The global arrays the cells add into.
+#[derive(Clone, Copy)]
+pub(super) struct Arrays {
+    pub(super) values: Shared,
+    pub(super) r_full: Shared,
+    pub(super) lift: Shared,
+}
+
+/// What the cells of one model block need to add their part.
+#[derive(Clone, Copy)]
+pub(super) struct Cells<'a> {
+    pub(super) model: &'a Model,
+    pub(super) bi: usize,
+    /// Global number of the block's first cell.
+    pub(super) first: u32,
+    pub(super) slots: &'a Slots,
+    pub(super) x: &'a [f64],
+    pub(super) tangent: bool,
+    pub(super) dx_prescribed: Option<&'a [f64]>,
+    pub(super) act: Active,
+    pub(super) arrays: Arrays,
+    /// Prefetch each cell's scatter targets before its kernel runs.
+    pub(super) prefetch: bool,
+}
+
+impl Cells<'_> {
+    /// Add the cells `cells` (global numbers, all of this block). Returns (min J, energy,
+    /// whether the tangent entries written are finite), or the kernel's error with the
+    /// block's cell number.
+    pub(super) fn run<const N: usize, const D: usize, E: RefElement<N, D>>(
+        self,
+        cells: &[u32],
+    ) -> Result<(f64, f64, bool), (KernelError, usize)> {
+        let Cells {
+            model,
+            bi,
+            first,
+            slots,
+            x,
+            tangent,
+            dx_prescribed,
+            act,
+            arrays:
+                Arrays {
+                    values,
+                    r_full,
+                    lift,
+                },
+            prefetch,
+        } = self;
+        let info = &model.blocks[bi];
+        let blk = &model.mesh.cells[info.block];
+        let lay = info.layout;
+        let nd = lay.ndof();
+        let eq = &model.cons.eq;
+        // add a cell's residual and tangent (row-major, nd × nd) into the global arrays
+        let add = |c: usize, ld: &[u32], r: &[f64], k: &[f64]| -> bool {
+            // SAFETY: the schedule never runs two cells that share a node at once, and a
+            // cell writes only at its own nodes' rows (in bounds by construction).
+            unsafe {
+                for a in 0..nd {
+                    *r_full.at(ld[a] as usize) += r[a];
+                }
+                if !tangent {
+                    return true;
+                }
+                let finite = slots.add(c, k, values);
+                // prescribed columns: their increments lifted to the right-hand side
+                if let Some(dx) = dx_prescribed {
+                    for b in 0..nd {
+                        let gb = ld[b] as usize;
+                        if eq[gb] != NONE || dx[gb] == 0.0 {
+                            continue;
+                        }
+                        for a in 0..nd {
+                            let row = eq[ld[a] as usize];
+                            if row != NONE {
+                                *lift.at(row as usize) += k[a * nd + b] * dx[gb];
+                            }
+                        }
+                    }
+                }
+                finite
+            }
+        };
+        let mut ld = vec![0u32; nd];
+        let (mut mj, mut en, mut finite) = (f64::INFINITY, 0.0, true);
+        if lanes::available() && lanes::eligible(&info.mat, &lay, act) {
+            // W cells per kernel call; a short last group repeats its last cell
+            const W: usize = lanes::W;
+            let mut r = vec![0.0; W * nd];
+            let mut k = vec![0.0; if tangent { W * nd * nd } else { 0 }];
+            for group in cells.chunks(W) {
+                let cell = |l: usize| (group[l.min(group.len() - 1)] - first) as usize;
+                if prefetch {
+                    for l in 0..group.len() {
+                        slots.prefetch(cell(l), values);
+                    }
+                }
+                let s: [CellState<N>; W] = std::array::from_fn(|l| {
+                    gather::<N>(&model.mesh.coords, &model.dofs, blk.cell(cell(l)), x)
+                });
+                let kl = if tangent { Some(&mut k[..]) } else { None };
+                let out = lanes::bulk_lanes::<N, D, E>(&info.mat, &lay, &s, &mut r, kl)
+                    .map_err(|(e, l)| (e, cell(l)))?;
+                for l in 0..group.len() {
+                    let c = cell(l);
+                    mj = mj.min(out[l].min_J);
+                    en += out[l].energy;
+                    local_dofs(model, bi, blk.cell(c), &mut ld);
+                    finite &= add(
+                        c,
+                        &ld,
+                        &r[l * nd..(l + 1) * nd],
+                        if tangent {
+                            &k[l * nd * nd..(l + 1) * nd * nd]
+                        } else {
+                            &[]
+                        },
+                    );
+                }
+            }
+            return Ok((mj, en, finite));
+        }
+        let mut r = vec![0.0; nd];
+        let mut k = vec![0.0; if tangent { nd * nd } else { 0 }];
+        for &g in cells {
+            let c = (g - first) as usize;
+            let nodes = blk.cell(c);
+            if prefetch {
+                slots.prefetch(c, values);
+            }
+            let s = gather::<N>(&model.mesh.coords, &model.dofs, nodes, x);
+            local_dofs(model, bi, nodes, &mut ld);
+            let out = bulk::<N, D, E>(
+                &info.mat,
+                &lay,
+                &s,
+                act,
+                &mut r,
+                if tangent { Some(&mut k) } else { None },
+            )
+            .map_err(|e| (e, c))?;
+            mj = mj.min(out.min_J);
+            en += out.energy;
+            finite &= add(c, &ld, &r, &k);
+        }
+        Ok((mj, en, finite))
+    }
+}

@@ -1,0 +1,291 @@
+//! Assembly: the global residual and tangent from the cells' kernels. [`schedule`] decides
+//! which cells may run at once, [`scatter`] where each cell's entries go, [`cells`] runs the
+//! kernels over a block's cells.
+//!
+//! Parallel over cells without locks and without per-thread copies of the arrays: the cells of
+//! all blocks together are cut in two by recursive coordinate bisection (one level per
+//! doubling of the threads), and the two halves run at once. Of each half, only the cells that share a node
+//! with the other half can add into the same entries; the left half runs its shared cells
+//! first, the right half its own last, after the left's are done. So no two cells that share
+//! a node ever run at once, every entry is summed in the same order whatever the scheduling,
+//! and the arrays are written once, in place (copies per thread cost a zeroing and a
+//! summing pass over the tangent's tens of MB per assembly, more than the cells' scatter).
+//!
+//! The system is reduced to the free equations; a prescribed dof's column is moved to the
+//! right-hand side with its increment ("lifting"), so symmetric tangents stay symmetric.
+#![allow(non_snake_case)]
+
+mod cells;
+mod scatter;
+mod schedule;
+
+pub use cells::check_inversion;
+
+use crate::dofs::{Pattern, build_pattern};
+use crate::kernel::{Active, KernelError};
+use crate::model::Model;
+use cells::{Arrays, Cells};
+use rayon::prelude::*;
+use scatter::{FIRST, Shared, Slots};
+use schedule::Schedule;
+
+/// A block is not split into parts of fewer cells than this (a part's scheduling costs more
+/// than its cells save).
+pub(crate) const MIN_PART_CELLS: usize = 256;
+
+/// Failure found while assembling.
+#[derive(Clone, Debug, PartialEq)]
+pub enum AssemblyError {
+    /// J ≤ 0 at a quadrature point of a cell of `region`.
+    Inverted { region: String, J: f64 },
+    /// A cell of the undeformed mesh is inverted or degenerate.
+    BadMesh { region: String, cell: usize },
+    /// A regularization rotation measure is unbounded (a medium cell rotated by 90°).
+    Singular { region: String },
+    /// NaN or infinity in the residual or the tangent.
+    NotFinite,
+}
+
+impl std::fmt::Display for AssemblyError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            AssemblyError::Inverted { region, J } => {
+                write!(f, "J = {J:.3e} ≤ 0 in region \"{region}\"")
+            }
+            AssemblyError::BadMesh { region, cell } => {
+                write!(
+                    f,
+                    "cell {cell} of region \"{region}\" is inverted or degenerate in the undeformed mesh"
+                )
+            }
+            AssemblyError::Singular { region } => write!(
+                f,
+                "a cell of region \"{region}\" is rotated by 90° (regularization unbounded)"
+            ),
+            AssemblyError::NotFinite => write!(f, "the residual is not finite"),
+        }
+    }
+}
+
+impl AssemblyError {
+    /// The state is outside the admissible set (a shorter update may be fine), as opposed to a
+    /// broken mesh.
+    pub fn is_inadmissible(&self) -> bool {
+        !matches!(self, AssemblyError::BadMesh { .. })
+    }
+}
+
+/// Per-call results besides the arrays.
+#[derive(Clone, Copy, Debug)]
+pub struct AssemblyStats {
+    pub min_J_solid: f64,
+    pub min_J_medium: f64,
+    pub energy: f64,
+}
+
+/// Assembler state reused across calls: pattern, value and vector storage.
+pub struct Assembler {
+    pub pattern: Pattern,
+    /// Per model block, where its cells' tangent entries go (built once per mesh, so the
+    /// scatter is a load and an add per entry, not a search).
+    slots: Vec<Slots>,
+    /// The order the cells run in, by global number (a model block's cells follow those of
+    /// the blocks before it, from `first_cell[block]`).
+    schedule: Schedule,
+    first_cell: Vec<u32>,
+    /// Entries of `values` zeroed before each tangent assembly: those whose first writer
+    /// adds (see `Slots::flag_first`). Entries no cell writes stay at their initial zero.
+    zero_first: Vec<u32>,
+    /// Tangent values (CSC, free equations).
+    pub values: Vec<f64>,
+    /// Internal-minus-external force on every dof (reactions on prescribed dofs).
+    pub r_full: Vec<f64>,
+    /// Lifted right-hand side contribution Σ K_fd Δx_d on the free equations.
+    pub lift: Vec<f64>,
+    /// Ask for the cache lines each cell's tangent goes to before its kernel runs (on by
+    /// default; off only to measure what it saves).
+    pub prefetch: bool,
+}
+
+/// Length of the pieces the whole-array passes below are cut into, one task each.
+const PASS_CHUNK: usize = 1 << 15;
+
+/// Whether every entry of `v` is finite, in parallel.
+fn all_finite(v: &[f64]) -> bool {
+    v.par_chunks(PASS_CHUNK)
+        .all(|c| c.iter().fold(true, |ok, x| ok & x.is_finite()))
+}
+
+impl Assembler {
+    pub fn new(model: &Model) -> Assembler {
+        let pattern = build_pattern(&model.mesh, &model.dofs, &model.cons);
+        assert!(
+            pattern.nnz() < FIRST as usize,
+            "more than 2³¹ tangent entries"
+        );
+        let mut slots: Vec<Slots> = (0..model.blocks.len())
+            .map(|bi| Slots::new(model, bi, &pattern))
+            .collect();
+        // one level of halves per doubling of the threads
+        let depth = rayon::current_num_threads()
+            .next_power_of_two()
+            .trailing_zeros() as usize;
+        let mesh = &model.mesh;
+        let mut first_cell = vec![0u32];
+        for info in &model.blocks {
+            let n = mesh.cells[info.block].n_cells() as u32;
+            first_cell.push(first_cell.last().unwrap() + n);
+        }
+        let nodes = |g: u32| -> &[usize] {
+            let bi = first_cell.partition_point(|&f| f <= g) - 1;
+            mesh.cells[model.blocks[bi].block].cell((g - first_cell[bi]) as usize)
+        };
+        let cells = (0..*first_cell.last().unwrap()).collect();
+        let (mut mark, mut stamp) = (vec![0u32; mesh.coords.len()], 0);
+        let schedule = Schedule::build(&nodes, &mesh.coords, cells, depth, &mut mark, &mut stamp);
+        let mut order = Vec::new();
+        schedule.order(&mut order);
+        let order: Vec<(usize, usize)> = order
+            .into_iter()
+            .map(|g| {
+                let bi = first_cell.partition_point(|&f| f <= g) - 1;
+                (bi, (g - first_cell[bi]) as usize)
+            })
+            .collect();
+        let mut zero_first = Vec::new();
+        Slots::flag_first(&mut slots, &order, pattern.nnz(), &mut zero_first);
+        Assembler {
+            zero_first,
+            values: vec![0.0; pattern.nnz()],
+            r_full: vec![0.0; model.dofs.n_dofs],
+            lift: vec![0.0; pattern.n],
+            pattern,
+            slots,
+            schedule,
+            first_cell,
+            prefetch: true,
+        }
+    }
+
+    /// Assemble at the state `x` (all dofs) and pseudo-time `t` (see `LoadPath`). With `tangent`, fills
+    /// `values`; with `dx_prescribed`, also the lifting of those prescribed increments.
+    pub fn assemble(
+        &mut self,
+        model: &Model,
+        x: &[f64],
+        t: f64,
+        tangent: bool,
+        dx_prescribed: Option<&[f64]>,
+    ) -> Result<AssemblyStats, AssemblyError> {
+        self.assemble_part(model, x, t, tangent, dx_prescribed, Active::ALL)
+    }
+
+    /// As [`Assembler::assemble`], filling only the equations `act` names (the others' rows
+    /// and residuals are left at zero).
+    pub fn assemble_part(
+        &mut self,
+        model: &Model,
+        x: &[f64],
+        t: f64,
+        tangent: bool,
+        dx_prescribed: Option<&[f64]>,
+        act: Active,
+    ) -> Result<AssemblyStats, AssemblyError> {
+        if tangent {
+            // an update that inverted a cell costs this pass, not a whole assembly
+            check_inversion(model, x)?;
+        }
+        self.r_full.fill(0.0);
+        if tangent {
+            for &i in &self.zero_first {
+                self.values[i as usize] = 0.0;
+            }
+        }
+        self.lift.fill(0.0);
+        let first_cell = &self.first_cell;
+        let prefetch = tangent && self.prefetch;
+        let slots = &self.slots;
+        let arrays = Arrays {
+            values: Shared(self.values.as_mut_ptr()),
+            r_full: Shared(self.r_full.as_mut_ptr()),
+            lift: Shared(self.lift.as_mut_ptr()),
+        };
+        let empty = AssemblyStats {
+            min_J_solid: f64::INFINITY,
+            min_J_medium: f64::INFINITY,
+            energy: 0.0,
+        };
+        // a part's cells, sorted: runs of one model block each
+        let run = |cells: &[u32]| -> Result<AssemblyStats, AssemblyError> {
+            let mut stats = empty;
+            let mut rest = cells;
+            while let Some(&g) = rest.first() {
+                let bi = first_cell.partition_point(|&f| f <= g) - 1;
+                let len = rest.partition_point(|&h| h < first_cell[bi + 1]);
+                let (these, next) = rest.split_at(len);
+                rest = next;
+                let info = &model.blocks[bi];
+                let kind = model.mesh.cells[info.block].kind;
+                let job = Cells {
+                    model,
+                    bi,
+                    first: first_cell[bi],
+                    slots: &slots[bi],
+                    x,
+                    tangent,
+                    dx_prescribed,
+                    act,
+                    arrays,
+                    prefetch,
+                };
+                let res = crate::with_cell!(kind, |N, D, E| job.run::<N, D, E>(these));
+                let (min_j, energy, finite) =
+                    res.map_err(|(e, cell)| cell_error(model, bi, e, cell))?;
+                if !finite {
+                    return Err(AssemblyError::NotFinite);
+                }
+                if info.mat.medium {
+                    stats.min_J_medium = stats.min_J_medium.min(min_j);
+                } else {
+                    stats.min_J_solid = stats.min_J_solid.min(min_j);
+                }
+                stats.energy += energy;
+            }
+            Ok(stats)
+        };
+        let stats = self
+            .schedule
+            .run(&run, &|a: AssemblyStats, b: AssemblyStats| AssemblyStats {
+                min_J_solid: a.min_J_solid.min(b.min_J_solid),
+                min_J_medium: a.min_J_medium.min(b.min_J_medium),
+                energy: a.energy + b.energy,
+            })?;
+        // the tangent's entries were checked as they were written
+        let finite = all_finite(&self.r_full) && all_finite(&self.lift);
+        if !finite {
+            return Err(AssemblyError::NotFinite);
+        }
+        let mut fe = vec![0.0; model.dofs.n_dofs];
+        model.f_ext(t, &mut fe);
+        for (r, f) in self.r_full.iter_mut().zip(&fe) {
+            *r -= f;
+        }
+        Ok(stats)
+    }
+}
+
+/// The assembly error of a kernel's failure in cell `cell` of model block `bi`.
+pub(super) fn cell_error(model: &Model, bi: usize, e: KernelError, cell: usize) -> AssemblyError {
+    let region = || model.regions[model.blocks[bi].region].0.clone();
+    match e {
+        KernelError::Inverted { J } => AssemblyError::Inverted {
+            region: region(),
+            J,
+        },
+        KernelError::BadGeometry => AssemblyError::BadMesh {
+            region: region(),
+            cell,
+        },
+        KernelError::Singular => AssemblyError::Singular { region: region() },
+    }
+}

@@ -1,0 +1,82 @@
+//! A cell's local view of the unknowns: which fields it carries and in what order
+//! ([`Layout`]), and its nodal values gathered from the global vector ([`CellState`]).
+#![allow(non_snake_case)]
+
+use super::{DofMap, NONE};
+
+/// Which fields a cell carries locally.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Layout {
+    pub n: usize,
+    pub dim: usize,
+    pub has_u: bool,
+    pub has_theta: bool,
+    /// Regularization components on this cell's nodes (0 outside the medium).
+    pub np: usize,
+}
+
+impl Layout {
+    pub fn u(&self, node: usize, c: usize) -> usize {
+        node * self.dim + c
+    }
+    pub fn theta_off(&self) -> usize {
+        if self.has_u { self.n * self.dim } else { 0 }
+    }
+    pub fn theta(&self, node: usize) -> usize {
+        self.theta_off() + node
+    }
+    pub fn p_off(&self) -> usize {
+        self.theta_off() + if self.has_theta { self.n } else { 0 }
+    }
+    pub fn p(&self, node: usize, c: usize) -> usize {
+        self.p_off() + node * self.np + c
+    }
+    pub fn ndof(&self) -> usize {
+        self.p_off() + self.n * self.np
+    }
+}
+
+/// Nodal data of one cell.
+#[derive(Clone, Copy, Debug)]
+pub struct CellState<const N: usize> {
+    pub X: [[f64; 3]; N],
+    pub u: [[f64; 3]; N],
+    pub theta: [f64; N],
+    /// Regularization unknowns p_i per node (components beyond `Layout::np` unused).
+    pub p: [[f64; 3]; N],
+}
+
+/// Gather the nodal state of cell `nodes` from the global vector.
+pub fn gather<const N: usize>(
+    coords: &[[f64; 3]],
+    dofs: &DofMap,
+    nodes: &[usize],
+    x: &[f64],
+) -> CellState<N> {
+    let d = dofs.dim;
+    let mut s = CellState::<N> {
+        X: [[0.0; 3]; N],
+        u: [[0.0; 3]; N],
+        theta: [0.0; N],
+        p: [[0.0; 3]; N],
+    };
+    for (I, &n) in nodes.iter().enumerate() {
+        s.X[I] = coords[n];
+        if !dofs.u.is_empty() {
+            for i in 0..d {
+                s.u[I][i] = x[dofs.u[n * d + i] as usize];
+            }
+        }
+        if !dofs.theta.is_empty() {
+            s.theta[I] = x[dofs.theta[n] as usize];
+        }
+        let np = dofs.np;
+        for c in 0..np {
+            let dof = dofs.p[n * np + c];
+            if dof != NONE {
+                s.p[I][c] = x[dof as usize];
+            }
+        }
+    }
+    s
+}

@@ -1,0 +1,81 @@
+//! How a scene's fields are solved: one field, one-way (mechanics, then heat), or monolithic,
+//! and with which linear solver.
+
+use crate::case::{CouplingChoice, LinearChoice};
+use crate::model::Physics;
+use crate::solver::linear::LinearKind;
+use serde::Serialize;
+
+/// How the fields of a scene are solved.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Strategy {
+    /// One field only (mechanics or conduction): one symmetric system.
+    SingleField,
+    /// Mechanics drives conduction, not back: per step, Newton on (u, p), then the (linear)
+    /// conduction on the deformed state.
+    OneWay,
+    /// Newton on the whole coupled system.
+    Monolithic,
+}
+
+/// The strategy the physics allows, unless the case forces the monolithic one (or a
+/// whole-system linear solver).
+pub fn choose_strategy(solver: &crate::case::Solver, physics: &Physics) -> Strategy {
+    if !(physics.mechanics && physics.conduction) {
+        Strategy::SingleField
+    } else if physics.heat_to_mechanics
+        || solver.coupling == CouplingChoice::Monolithic
+        || matches!(solver.linear, LinearChoice::Lu | LinearChoice::Gmres)
+    {
+        Strategy::Monolithic
+    } else {
+        Strategy::OneWay
+    }
+}
+
+/// A line naming the active physics and the strategy.
+pub fn describe(physics: &Physics, strategy: Strategy) -> String {
+    let mut on = Vec::new();
+    if physics.mechanics {
+        on.push("mechanics");
+    }
+    if physics.conduction {
+        on.push("conduction");
+    }
+    if physics.medium {
+        on.push("third medium");
+    }
+    if physics.regularization {
+        on.push("regularization p");
+    }
+    let coupling = match (physics.mechanics_to_heat, physics.heat_to_mechanics) {
+        (true, true) => "two-way coupled",
+        (true, false) => "one-way coupled (deformation → heat)",
+        _ => "uncoupled",
+    };
+    let how = match strategy {
+        Strategy::SingleField => "one symmetric system",
+        Strategy::OneWay => "mechanics, then heat per step, symmetric factorisations",
+        Strategy::Monolithic => "monolithic Newton",
+    };
+    format!("physics: {}; {coupling}; {how}", on.join(" + "))
+}
+
+/// Choose the whole-system linear solver: LDLᵀ where the tangent is symmetric, GMRES with the
+/// block-triangular preconditioner where it is not (LU or LDLᵀ when the case asks).
+pub fn choose_linear(choice: LinearChoice, physics: &Physics) -> LinearKind {
+    let symmetric = !(physics.mechanics && physics.conduction);
+    match choice {
+        LinearChoice::Lu => LinearKind::Lu,
+        LinearChoice::Ldlt => LinearKind::Ldlt,
+        LinearChoice::Gmres => LinearKind::BlockGmres,
+        LinearChoice::Auto => {
+            if symmetric {
+                LinearKind::Ldlt
+            } else {
+                LinearKind::BlockGmres
+            }
+        }
+    }
+}

@@ -1,0 +1,172 @@
+//! Heat conduction: the Fourier law pulled back to the reference configuration (eq. 10) with
+//! a conductivity that may depend on the volume ratio J (the medium's, eq. 15 as SPEC reads it).
+#![allow(non_snake_case)]
+
+use super::Tensor3;
+use nalgebra::{Matrix3, Vector3};
+
+/// Conductivity as a function of the volume ratio J: k(J) and dk/dJ.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Conductivity {
+    /// Constant k (solids, eq. 10).
+    Constant(f64),
+    /// Third medium: k(J) = min(k_TM (1 + (ln J)²), k_max) — SPEC's reading of eq. (15).
+    Medium { k_tm: f64, k_max: f64 },
+}
+
+impl Conductivity {
+    /// (k, dk/dJ).
+    pub fn eval(&self, J: f64) -> (f64, f64) {
+        match *self {
+            Conductivity::Constant(k) => (k, 0.0),
+            Conductivity::Medium { k_tm, k_max } => {
+                let l = J.ln();
+                let k = k_tm * (1.0 + l * l);
+                if k >= k_max {
+                    (k_max, 0.0)
+                } else {
+                    (k, 2.0 * k_tm * l / J)
+                }
+            }
+        }
+    }
+}
+
+/// Heat flux response at one point.
+#[derive(Clone, Debug)]
+pub struct HeatResponse {
+    /// Nominal heat flux Q = −J k(J) C⁻¹ ∇_X θ (eq. 10, 14).
+    pub Q: Vector3<f64>,
+    /// ∂Q/∂(∇_X θ) = −J k C⁻¹.
+    pub dQ_dgrad: Matrix3<f64>,
+    /// ∂Q/∂F.
+    pub dQ_dF: Tensor3,
+    /// Effective conductivity k(J).
+    pub k: f64,
+}
+
+/// Pulled-back Fourier law Q = −J k(J) C⁻¹ ∇_X θ and its exact derivatives.
+#[inline(always)]
+pub fn fourier(
+    F: &Matrix3<f64>,
+    grad_theta: &Vector3<f64>,
+    law: &Conductivity,
+) -> Option<HeatResponse> {
+    let J = F.determinant();
+    if !(J > 0.0) || !J.is_finite() {
+        return None;
+    }
+    let Finv = F.try_inverse()?;
+    let Cinv = Finv * Finv.transpose();
+    let (k, dk_dJ) = law.eval(J);
+    let Jk = J * k;
+    let h = Cinv * grad_theta; // C⁻¹ g
+    let Q = -h * Jk;
+    let fg = Finv.transpose() * grad_theta; // F⁻ᵀ g
+    // d(J k)/dF_kL = (k + J dk/dJ) J F⁻ᵀ_kL
+    let dJk = (k + J * dk_dJ) * J;
+    let mut B = Tensor3::zeros();
+    for I in 0..3 {
+        for kk in 0..3 {
+            for L in 0..3 {
+                // d(C⁻¹ g)_I/dF_kL = −F⁻¹_Ik (C⁻¹g)_L − C⁻¹_IL (F⁻ᵀ g)_k
+                let dh = -Finv[(I, kk)] * h[L] - Cinv[(I, L)] * fg[kk];
+                B[(I, 3 * kk + L)] = -(dJk * Finv[(L, kk)] * h[I] + Jk * dh);
+            }
+        }
+    }
+    Some(HeatResponse {
+        Q,
+        dQ_dgrad: -Cinv * Jk,
+        dQ_dF: B,
+        k,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::material::sample_F;
+
+    #[test]
+    fn inverted_point_is_rejected() {
+        let F = Matrix3::new(-1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0);
+        assert!(fourier(&F, &Vector3::x(), &Conductivity::Constant(1.0)).is_none());
+    }
+
+    fn check_fourier(law: Conductivity, F: Matrix3<f64>) {
+        let g = Vector3::new(0.7, -1.3, 0.4);
+        let r = fourier(&F, &g, &law).unwrap();
+        // step relative to the smallest stretch, so a strongly compressed F is resolved
+        let h = 1e-6 * F.singular_values().min();
+        for k in 0..3 {
+            for l in 0..3 {
+                let (mut p, mut m) = (F, F);
+                p[(k, l)] += h;
+                m[(k, l)] -= h;
+                let dQ = (fourier(&p, &g, &law).unwrap().Q - fourier(&m, &g, &law).unwrap().Q)
+                    / (2.0 * h);
+                let scale = r.dQ_dF.amax();
+                for i in 0..3 {
+                    let b = r.dQ_dF[(i, 3 * k + l)];
+                    assert!(
+                        (dQ[i] - b).abs() < 1e-6 * scale,
+                        "B{i}{k}{l}: {} vs {b}",
+                        dQ[i]
+                    );
+                }
+            }
+        }
+        // Q is linear in ∇θ: a large step is exact up to round-off
+        let h = 1e-2;
+        for j in 0..3 {
+            let mut e = Vector3::zeros();
+            e[j] = h;
+            let dQ = (fourier(&F, &(g + e), &law).unwrap().Q
+                - fourier(&F, &(g - e), &law).unwrap().Q)
+                / (2.0 * h);
+            assert!((dQ - r.dQ_dgrad.column(j)).norm() < 1e-10 * r.dQ_dgrad.amax());
+        }
+        // the conduction tangent is symmetric and negative definite in ∇θ
+        assert!((r.dQ_dgrad - r.dQ_dgrad.transpose()).norm() < 1e-12);
+        assert!(r.dQ_dgrad.symmetric_eigenvalues().iter().all(|&v| v < 0.0));
+    }
+
+    #[test]
+    fn heat_flux_derivatives() {
+        for plane in [false, true] {
+            check_fourier(Conductivity::Constant(3.0), sample_F(plane));
+            check_fourier(
+                Conductivity::Medium {
+                    k_tm: 0.5,
+                    k_max: 100.0,
+                },
+                sample_F(plane),
+            );
+            // compressed medium at the cap: k = k_max, dk/dJ = 0
+            let F = Matrix3::from_diagonal(&Vector3::new(1.0, 1e-3, 1.0));
+            check_fourier(
+                Conductivity::Medium {
+                    k_tm: 0.5,
+                    k_max: 10.0,
+                },
+                F,
+            );
+        }
+    }
+
+    #[test]
+    fn medium_conductivity_rises_from_k_tm_to_k_max() {
+        let law = Conductivity::Medium {
+            k_tm: 1.0,
+            k_max: 100.0,
+        };
+        assert_eq!(law.eval(1.0).0, 1.0);
+        assert!(law.eval(0.1).0 > 1.0);
+        assert_eq!(law.eval(1e-6).0, 100.0);
+        let (k, dk) = law.eval(0.5);
+        let h = 1e-7;
+        let fd = (law.eval(0.5 + h).0 - law.eval(0.5 - h).0) / (2.0 * h);
+        assert!((fd - dk).abs() < 1e-6 && k > 1.0);
+    }
+}

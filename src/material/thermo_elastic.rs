@@ -1,0 +1,194 @@
+//! The thermo-elastic compressible Neo-Hooke law of eq. (12), shared by the solids and the
+//! third medium (eq. 13, K = μ = γ).
+#![allow(non_snake_case)]
+
+use super::Tensor4;
+use nalgebra::Matrix3;
+
+/// Thermo-elastic compressible Neo-Hooke law of eq. (12), mechanical part:
+///
+/// Ψ = K/2 (ln J)² + μ/2 (J^(−2/3) tr C − 3) − 3 α (θ − θ0) K ln J.
+///
+/// The third medium uses the same law with K = μ = γ (eq. 13).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ThermoElastic {
+    pub K: f64,
+    pub mu: f64,
+    pub alpha: f64,
+    pub theta0: f64,
+}
+
+/// Stress response at one point.
+#[derive(Clone, Debug)]
+pub struct StressResponse {
+    /// Ψ (the expansion term evaluated with θ held fixed)
+    pub psi: f64,
+    /// First Piola–Kirchhoff stress P = ∂Ψ/∂F.
+    pub P: Matrix3<f64>,
+    /// ∂P/∂F.
+    pub dP_dF: Tensor4,
+    /// ∂P/∂θ (thermal expansion coupling).
+    pub dP_dtheta: Matrix3<f64>,
+    pub J: f64,
+}
+
+/// The law's scalar functions of J, tr C and θ, from which its stress and tangent are built:
+/// P = a F⁻ᵀ + m (F − ⅓ tr C F⁻ᵀ), and ∂P/∂F as in [`ThermoElastic::stress`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Scalars {
+    pub psi: f64,
+    /// Coefficient of F⁻ᵀ from the volumetric and thermal parts: K ln J − 3 α (θ − θ0) K.
+    pub a: f64,
+    /// μ J^(−2/3).
+    pub m: f64,
+}
+
+impl ThermoElastic {
+    /// Ψ, a and m at J > 0, I1 = tr C and θ.
+    #[inline(always)]
+    pub fn scalars(&self, J: f64, I1: f64, theta: f64) -> Scalars {
+        let lnJ = J.ln();
+        let Jm23 = J.powf(-2.0 / 3.0);
+        let c = 3.0 * self.alpha * (theta - self.theta0) * self.K;
+        Scalars {
+            psi: 0.5 * self.K * lnJ * lnJ + 0.5 * self.mu * (Jm23 * I1 - 3.0) - c * lnJ,
+            a: self.K * lnJ - c,
+            m: self.mu * Jm23,
+        }
+    }
+
+    /// Energy, stress and tangents; `None` when J ≤ 0 or not finite.
+    #[inline(always)]
+    pub fn stress(&self, F: &Matrix3<f64>, theta: f64) -> Option<StressResponse> {
+        let J = F.determinant();
+        if !(J > 0.0) || !J.is_finite() {
+            return None;
+        }
+        let Finv = F.try_inverse()?;
+        let H = Finv.transpose(); // F⁻ᵀ = ∂J/∂F / J
+        let I1 = F.norm_squared(); // tr C
+        let Scalars { psi, a, m } = self.scalars(J, I1, theta);
+        let P = H * a + (F - H * (I1 / 3.0)) * m;
+        // A_iJkL = K H_kL H_iJ − a H_iL H_kJ
+        //        + m (δ_ik δ_JL − ⅔ H_kL dev_iJ − ⅔ F_kL H_iJ + ⅓ I1 H_iL H_kJ),
+        // dev = F − ⅓ I1 H, gathered as H_kL α_iJ + F_kL β_iJ + γ H_iL H_kJ + m δ_ik δ_JL
+        let alpha = (H * self.K) - (F - H * (I1 / 3.0)) * (2.0 / 3.0 * m);
+        let beta = H * (-2.0 / 3.0 * m);
+        let gamma = m * I1 / 3.0 - a;
+        let mut A = Tensor4::zeros();
+        for L in 0..3 {
+            for k in 0..3 {
+                let (hkl, fkl) = (H[(k, L)], F[(k, L)]);
+                let s = 3 * k + L;
+                for Jc in 0..3 {
+                    let ghkj = gamma * H[(k, Jc)];
+                    for i in 0..3 {
+                        A[(3 * i + Jc, s)] =
+                            hkl * alpha[(i, Jc)] + fkl * beta[(i, Jc)] + ghkj * H[(i, L)];
+                    }
+                }
+            }
+        }
+        for r in 0..9 {
+            A[(r, r)] += m;
+        }
+        let dP_dtheta = H * (-3.0 * self.alpha * self.K);
+        Some(StressResponse {
+            psi,
+            P,
+            dP_dF: A,
+            dP_dtheta,
+            J,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::material::sample_F;
+
+    const LAW: ThermoElastic = ThermoElastic {
+        K: 20.0,
+        mu: 10.0,
+        alpha: 1e-2,
+        theta0: 20.0,
+    };
+
+    #[test]
+    fn stress_is_derivative_of_energy() {
+        for plane in [false, true] {
+            let F = sample_F(plane);
+            let r = LAW.stress(&F, 70.0).unwrap();
+            let h = 1e-6;
+            for i in 0..3 {
+                for j in 0..3 {
+                    let (mut p, mut m) = (F, F);
+                    p[(i, j)] += h;
+                    m[(i, j)] -= h;
+                    let fd = (LAW.stress(&p, 70.0).unwrap().psi
+                        - LAW.stress(&m, 70.0).unwrap().psi)
+                        / (2.0 * h);
+                    assert!(
+                        (fd - r.P[(i, j)]).abs() < 1e-7 * (1.0 + fd.abs()),
+                        "P{i}{j}: {fd} vs {}",
+                        r.P[(i, j)]
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn tangent_is_derivative_of_stress() {
+        for plane in [false, true] {
+            let F = sample_F(plane);
+            let r = LAW.stress(&F, 70.0).unwrap();
+            let h = 1e-6;
+            for k in 0..3 {
+                for l in 0..3 {
+                    let (mut p, mut m) = (F, F);
+                    p[(k, l)] += h;
+                    m[(k, l)] -= h;
+                    let dP = (LAW.stress(&p, 70.0).unwrap().P - LAW.stress(&m, 70.0).unwrap().P)
+                        / (2.0 * h);
+                    for i in 0..3 {
+                        for j in 0..3 {
+                            let a = r.dP_dF[(3 * i + j, 3 * k + l)];
+                            assert!(
+                                (dP[(i, j)] - a).abs() < 1e-6 * (1.0 + a.abs()),
+                                "A{i}{j}{k}{l}"
+                            );
+                        }
+                    }
+                }
+            }
+            // major symmetry (hyperelastic)
+            assert!((r.dP_dF - r.dP_dF.transpose()).norm() < 1e-12);
+            // θ coupling
+            let h = 1e-4;
+            let dP = (LAW.stress(&F, 70.0 + h).unwrap().P - LAW.stress(&F, 70.0 - h).unwrap().P)
+                / (2.0 * h);
+            assert!((dP - r.dP_dtheta).norm() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn stress_free_reference_and_free_expansion() {
+        let r = LAW.stress(&Matrix3::identity(), LAW.theta0).unwrap();
+        assert!(r.P.norm() < 1e-14);
+        // free thermal expansion: F = J^(1/3) I with J = exp(3 α Δθ) has P = 0
+        let dtheta = 15.0;
+        let J: f64 = (3.0 * LAW.alpha * dtheta).exp();
+        let r = LAW
+            .stress(&(Matrix3::identity() * J.cbrt()), LAW.theta0 + dtheta)
+            .unwrap();
+        assert!(r.P.norm() < 1e-12, "{}", r.P);
+    }
+
+    #[test]
+    fn inverted_point_is_rejected() {
+        let F = Matrix3::new(-1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0);
+        assert!(LAW.stress(&F, 0.0).is_none());
+    }
+}

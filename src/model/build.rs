@@ -1,0 +1,367 @@
+//! The model from a validated case and its mesh, step by step: materials per region, cell
+//! blocks with their local layouts, dofs, Dirichlet constraints, external loads.
+#![allow(non_snake_case)]
+
+use super::{BcGroup, BlockInfo, LoadPath, Model, Physics, decide_physics, facet_weights};
+use crate::case::{Case, CaseError, RegionKind};
+use crate::dofs::{Constraints, DofMap, Field, Layout, NONE, Prescribed};
+use crate::kernel::CellMaterial;
+use crate::material::{Conductivity, Regularization, ThermoElastic};
+use crate::mesh::Mesh;
+
+/// Build the model. The case must already be validated against the mesh.
+pub fn build(case: &Case, mesh: Mesh) -> Result<Model, CaseError> {
+    let mut physics = decide_physics(case);
+    require_conductivities(case, &physics)?;
+    let d = mesh.extent();
+    let materials = region_materials(case, d);
+    check_one_order(case, &mesh)?;
+    // regularization: p fields (f1 in 2D, f1..f3 in 3D per node) on linear medium cells, the
+    // direct gradient regularization of eq. 18 on quadratic ones (no unknowns)
+    let linear = mesh.cells.iter().all(|b| b.kind.order() == 1);
+    physics.regularization &= linear;
+    let np = if physics.regularization {
+        if mesh.dim == 2 { 1 } else { 3 }
+    } else {
+        0
+    };
+    let (blocks, p_nodes) = cell_blocks(case, &mesh, &physics, &materials, np, d);
+    let dofs = DofMap::new(&mesh, physics.mechanics, physics.conduction, np, &p_nodes);
+    let theta_init = initial_temperatures(&mesh, &blocks);
+    let mut path = LoadPath {
+        lambda: case
+            .file
+            .steps
+            .path
+            .clone()
+            .unwrap_or_else(|| vec![0.0, 1.0]),
+        own: Vec::new(),
+    };
+    let (cons, bc_groups) = dirichlet(case, &mesh, &dofs, &theta_init, &mut path)?;
+    let (f_ramp, f_full) = external_loads(case, &mesh, &dofs, &blocks, &cons);
+    debug_assert!(cons.eq.iter().filter(|&&e| e != NONE).count() == cons.n_eq);
+    Ok(Model {
+        physics,
+        dofs,
+        cons,
+        blocks,
+        regions: case
+            .file
+            .region
+            .iter()
+            .map(|r| (r.group.get_ref().clone(), r.kind))
+            .collect(),
+        path,
+        f_ramp,
+        f_full,
+        bc_groups,
+        d,
+        theta_init,
+        mesh,
+    })
+}
+
+/// A scene that conducts heat needs `k` in every region.
+fn require_conductivities(case: &Case, physics: &Physics) -> Result<(), CaseError> {
+    if !physics.conduction {
+        return Ok(());
+    }
+    match case.file.region.iter().find(|r| r.k.is_none()) {
+        Some(r) => case.error(
+            r.group.span(),
+            format!(
+                "region \"{}\": the scene conducts heat, so `k` is required",
+                r.group.get_ref()
+            ),
+        ),
+        None => Ok(()),
+    }
+}
+
+/// The material of each `[[region]]`, in case order; `d` is the mesh's extent (eq. 21).
+fn region_materials(case: &Case, d: f64) -> Vec<CellMaterial> {
+    let f = &case.file;
+    let k_max_default = f
+        .region
+        .iter()
+        .filter(|r| r.kind == RegionKind::Solid)
+        .filter_map(|r| r.k.as_ref().map(|k| *k.get_ref()))
+        .fold(0.0f64, f64::max);
+    f.region
+        .iter()
+        .map(|r| {
+            let k = r.k.as_ref().map(|k| *k.get_ref()).unwrap_or(1.0);
+            match r.kind {
+                RegionKind::Solid => CellMaterial {
+                    law: ThermoElastic {
+                        K: *r.K.as_ref().expect("checked").get_ref(),
+                        mu: *r.mu.as_ref().expect("checked").get_ref(),
+                        alpha: r.alpha,
+                        theta0: r.theta0,
+                    },
+                    cond: Conductivity::Constant(k),
+                    medium: false,
+                    reg: None,
+                    reg_direct: None,
+                },
+                RegionKind::Medium => {
+                    let gamma = *r.gamma.as_ref().expect("checked").get_ref();
+                    let k_max = r
+                        .k_max
+                        .as_ref()
+                        .map(|v| *v.get_ref())
+                        .unwrap_or(k_max_default.max(k));
+                    CellMaterial {
+                        law: ThermoElastic {
+                            K: gamma,
+                            mu: gamma,
+                            alpha: r.alpha,
+                            theta0: r.theta0,
+                        },
+                        cond: Conductivity::Medium { k_tm: k, k_max },
+                        medium: true,
+                        reg: Some(Regularization {
+                            beta1: r.beta1.as_ref().map(|v| *v.get_ref()).unwrap_or(1.0),
+                            beta2: r.beta2.as_ref().map(|v| *v.get_ref()).unwrap_or(1e-2),
+                            d,
+                        }),
+                        reg_direct: None,
+                    }
+                }
+            }
+        })
+        .collect()
+}
+
+/// Element orders must agree: a linear cell next to a quadratic one is not conforming.
+fn check_one_order(case: &Case, mesh: &Mesh) -> Result<(), CaseError> {
+    let orders: std::collections::BTreeSet<usize> =
+        mesh.cells.iter().map(|b| b.kind.order()).collect();
+    if orders.len() > 1 {
+        let kinds: Vec<&str> = mesh.cells.iter().map(|b| b.kind.name()).collect();
+        return case.error(
+            case.file.mesh.span(),
+            format!(
+                "the mesh mixes linear and quadratic cells ({}), which do not conform; mesh all with one order",
+                kinds.join(", ")
+            ),
+        );
+    }
+    Ok(())
+}
+
+/// Each mesh cell block with its region's material and its local layout (`np` regularization
+/// components on medium cells), and the nodes that carry p.
+fn cell_blocks(
+    case: &Case,
+    mesh: &Mesh,
+    physics: &Physics,
+    materials: &[CellMaterial],
+    np: usize,
+    d: f64,
+) -> (Vec<BlockInfo>, Vec<bool>) {
+    let f = &case.file;
+    let region_of_group = |g: usize| {
+        f.region
+            .iter()
+            .position(|r| mesh.group(r.group.get_ref()) == Some(g))
+    };
+    let mut blocks = Vec::new();
+    let mut p_nodes = vec![false; mesh.coords.len()];
+    for (bi, b) in mesh.cells.iter().enumerate() {
+        let region = b
+            .groups
+            .iter()
+            .find_map(|&g| region_of_group(g))
+            .expect("validated");
+        let mut mat = materials[region];
+        let medium = mat.medium;
+        if medium && np > 0 {
+            for &n in &b.conn {
+                p_nodes[n] = true;
+            }
+        }
+        if medium && b.kind.order() == 2 && physics.mechanics {
+            // γ α_r: given, or β2 d² so that it weighs |∇f|² like eq. 20 with p = d f
+            let r = &f.region[region];
+            let gamma = *r.gamma.as_ref().expect("checked").get_ref();
+            let beta2 = mat.reg.map_or(1e-2, |g| g.beta2);
+            mat.reg_direct = Some(
+                r.alpha_r
+                    .as_ref()
+                    .map_or(beta2 * d * d, |a| gamma * *a.get_ref()),
+            );
+            mat.reg = None;
+        }
+        blocks.push(BlockInfo {
+            block: bi,
+            region,
+            mat,
+            layout: Layout {
+                n: b.kind.n_nodes(),
+                dim: mesh.dim,
+                has_u: physics.mechanics,
+                has_theta: physics.conduction,
+                np: if medium { np } else { 0 },
+            },
+        });
+    }
+    (blocks, p_nodes)
+}
+
+/// Initial temperature of each node: θ0 of its region (the last region listed wins on shared
+/// nodes).
+fn initial_temperatures(mesh: &Mesh, blocks: &[BlockInfo]) -> Vec<f64> {
+    let mut theta_init = vec![0.0; mesh.coords.len()];
+    for info in blocks {
+        for &n in &mesh.cells[info.block].conn {
+            theta_init[n] = info.mat.law.theta0;
+        }
+    }
+    theta_init
+}
+
+/// The prescribed dofs of every `[[bc]]` with prescribed components, and those groups (for
+/// reactions). Groups with their own amplitude add it to `path`.
+fn dirichlet(
+    case: &Case,
+    mesh: &Mesh,
+    dofs: &DofMap,
+    theta_init: &[f64],
+    path: &mut LoadPath,
+) -> Result<(Constraints, Vec<BcGroup>), CaseError> {
+    let mut prescribed: Vec<Option<Prescribed>> = vec![None; dofs.n_dofs];
+    let mut bc_groups: Vec<BcGroup> = Vec::new();
+    for bc in &case.file.bc {
+        let comps: Vec<(&'static str, f64, Field, usize)> = [
+            ("ux", bc.ux, Field::U, 0),
+            ("uy", bc.uy, Field::U, 1),
+            ("uz", bc.uz, Field::U, 2),
+            ("theta", bc.theta, Field::Theta, 0),
+        ]
+        .into_iter()
+        .filter_map(|(n, v, fl, c)| v.map(|v| (n, v, fl, c)))
+        .collect();
+        if comps.is_empty() {
+            continue;
+        }
+        let g = mesh.group(bc.group.get_ref()).expect("validated");
+        let nodes = mesh.group_nodes(g);
+        let index = bc_groups.len();
+        let amp = match (&bc.path, bc.ramp) {
+            (Some(own), _) => {
+                path.own.push(own.get_ref().clone());
+                LoadPath::RAMPED + path.own.len()
+            }
+            (None, true) => LoadPath::RAMPED,
+            (None, false) => LoadPath::HELD,
+        };
+        bc_groups.push(BcGroup {
+            name: bc.group.get_ref().clone(),
+            fields: comps.iter().map(|c| c.0).collect(),
+        });
+        for &(name, value, field, c) in &comps {
+            if !dofs.has(field) {
+                continue; // e.g. ux = 0 in a pure conduction scene: nothing to hold
+            }
+            for &n in &nodes {
+                let dof = match field {
+                    Field::U => dofs.u[n * dofs.dim + c],
+                    _ => dofs.theta[n],
+                } as usize;
+                let new = Prescribed {
+                    value,
+                    start: match field {
+                        Field::Theta => theta_init[n],
+                        _ => 0.0,
+                    },
+                    amp,
+                    bc: index,
+                };
+                if let Some(old) = prescribed[dof] {
+                    if old.value != new.value || old.amp != new.amp {
+                        let other = &bc_groups[old.bc].name;
+                        return case.error(
+                            bc.group.span(),
+                            format!(
+                                "groups \"{other}\" and \"{}\" share a node at {:?} but prescribe different {name} ({} and {})",
+                                bc.group.get_ref(),
+                                mesh.coords[n],
+                                old.value,
+                                new.value
+                            ),
+                        );
+                    }
+                    continue;
+                }
+                prescribed[dof] = Some(new);
+            }
+        }
+    }
+    Ok((Constraints::new(prescribed), bc_groups))
+}
+
+/// Nodal external loads from tractions, heat fluxes, body forces and heat sources:
+/// (ramped by λ, held at full value). Zero on prescribed dofs.
+fn external_loads(
+    case: &Case,
+    mesh: &Mesh,
+    dofs: &DofMap,
+    blocks: &[BlockInfo],
+    cons: &Constraints,
+) -> (Vec<f64>, Vec<f64>) {
+    let f = &case.file;
+    let mut f_ramp = vec![0.0; dofs.n_dofs];
+    let mut f_full = vec![0.0; dofs.n_dofs];
+    for bc in &f.bc {
+        if bc.traction.is_none() && bc.heat_flux.is_none() {
+            continue;
+        }
+        let g = mesh.group(bc.group.get_ref()).expect("validated");
+        let target = if bc.ramp { &mut f_ramp } else { &mut f_full };
+        for b in mesh.facets.iter().filter(|b| b.groups.contains(&g)) {
+            for c in 0..b.n_cells() {
+                let nodes = b.cell(c);
+                // ∫ N_I dA for each facet node
+                let w = facet_weights(b.kind, nodes, mesh);
+                for (&n, wi) in nodes.iter().zip(&w) {
+                    if let (Some(t), true) = (&bc.traction, dofs.has(Field::U)) {
+                        for (i, ti) in t.get_ref().iter().enumerate() {
+                            target[dofs.u[n * dofs.dim + i] as usize] += ti * wi;
+                        }
+                    }
+                    if let (Some(q), true) = (bc.heat_flux, dofs.has(Field::Theta)) {
+                        target[dofs.theta[n] as usize] += q * wi;
+                    }
+                }
+            }
+        }
+    }
+    for (bi, b) in mesh.cells.iter().enumerate() {
+        let r = &f.region[blocks[bi].region];
+        if r.body_force.is_none() && r.heat_source.is_none() {
+            continue;
+        }
+        for c in 0..b.n_cells() {
+            let nodes = b.cell(c);
+            let w = facet_weights(b.kind, nodes, mesh);
+            for (&n, wi) in nodes.iter().zip(&w) {
+                if let (Some(bf), true) = (&r.body_force, dofs.has(Field::U)) {
+                    for (i, bi) in bf.iter().enumerate() {
+                        f_ramp[dofs.u[n * dofs.dim + i] as usize] += bi * wi;
+                    }
+                }
+                if let (Some(q), true) = (r.heat_source, dofs.has(Field::Theta)) {
+                    f_ramp[dofs.theta[n] as usize] += q * wi;
+                }
+            }
+        }
+    }
+    for (dof, p) in cons.prescribed.iter().enumerate() {
+        if p.is_some() {
+            f_ramp[dof] = 0.0;
+            f_full[dof] = 0.0;
+        }
+    }
+    (f_ramp, f_full)
+}

@@ -1,0 +1,79 @@
+//! The discrete problem built from a case and its mesh: active physics ([`physics`]),
+//! materials per cell block, dof numbering, constraints and external loads ([`loads`]), put
+//! together by [`build`]. Nothing here changes during a solve.
+
+pub mod build;
+pub mod loads;
+pub mod physics;
+
+pub use build::build;
+pub use loads::{LoadPath, facet_weights};
+pub use physics::{Physics, decide_physics};
+
+use crate::case::RegionKind;
+use crate::dofs::{Constraints, DofMap, Field, Layout};
+use crate::kernel::CellMaterial;
+use crate::mesh::Mesh;
+
+/// One cell block of the mesh with its material and local layout.
+#[derive(Clone, Debug)]
+pub struct BlockInfo {
+    /// Index into `mesh.cells`.
+    pub block: usize,
+    /// Index into the case's regions.
+    pub region: usize,
+    pub mat: CellMaterial,
+    pub layout: Layout,
+}
+
+/// A Dirichlet group, for reactions.
+#[derive(Clone, Debug)]
+pub struct BcGroup {
+    pub name: String,
+    /// Components prescribed here ("ux", "theta", ...).
+    pub fields: Vec<&'static str>,
+}
+
+/// The discrete problem.
+#[derive(Debug)]
+pub struct Model {
+    pub mesh: Mesh,
+    pub physics: Physics,
+    pub dofs: DofMap,
+    pub cons: Constraints,
+    pub blocks: Vec<BlockInfo>,
+    /// Region names and kinds, in case order.
+    pub regions: Vec<(String, RegionKind)>,
+    /// The load factor and the groups' own amplitudes over pseudo-time.
+    pub path: LoadPath,
+    /// External loads on all dofs: f_ext(t) = λ(t) f_ramp + f_full.
+    pub f_ramp: Vec<f64>,
+    pub f_full: Vec<f64>,
+    /// Dirichlet groups, indexed by `Prescribed::bc`.
+    pub bc_groups: Vec<BcGroup>,
+    /// Largest undeformed extent d (eq. 21).
+    pub d: f64,
+    /// Initial temperature per node (θ0 of its region).
+    pub theta_init: Vec<f64>,
+}
+
+impl Model {
+    /// The state at λ = 0: zero displacement, θ = θ0, prescribed values that are not ramped.
+    pub fn initial_state(&self) -> Vec<f64> {
+        let mut x = vec![0.0; self.dofs.n_dofs];
+        if self.dofs.has(Field::Theta) {
+            for (n, &t) in self.theta_init.iter().enumerate() {
+                x[self.dofs.theta[n] as usize] = t;
+            }
+        }
+        x
+    }
+
+    /// External loads at pseudo-time `t`.
+    pub fn f_ext(&self, t: f64, out: &mut [f64]) {
+        let lambda = self.path.lambda(t);
+        for ((o, r), f) in out.iter_mut().zip(&self.f_ramp).zip(&self.f_full) {
+            *o = lambda * r + f;
+        }
+    }
+}

@@ -1,0 +1,8 @@
+//! Solving the discrete problem: sparse linear solvers ([`linear`]), Newton–Raphson for one
+//! load step ([`newton`]), the step controller ([`stepping`]) and what idle threads do during
+//! linear solves ([`idle`]).
+
+pub mod idle;
+pub mod linear;
+pub mod newton;
+pub mod stepping;
