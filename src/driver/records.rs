@@ -2,11 +2,13 @@
 //! reactions per Dirichlet group.
 
 use super::strategy::Strategy;
+use crate::case::Case;
 use crate::dofs::Field;
 use crate::model::{Model, Physics};
 use crate::solver::linear::LinearKind;
 use serde::Serialize;
 use std::collections::BTreeMap;
+use std::path::Path;
 
 /// What `summary.json` holds (extend, never rename: users' scripts rely on it).
 #[derive(Clone, Debug, Serialize)]
@@ -64,6 +66,62 @@ pub struct Summary {
     pub output: String,
 }
 
+impl Summary {
+    /// The summary of a run that has not stepped yet: what the case and the model are.
+    pub fn start(
+        case: &Case,
+        model: &Model,
+        linear_solver: LinearKind,
+        strategy: Strategy,
+        out_dir: &Path,
+    ) -> Summary {
+        let mut cells = BTreeMap::new();
+        for b in &model.mesh.cells {
+            *cells.entry(b.kind.name().to_string()).or_default() += b.n_cells();
+        }
+        let mut dofs = BTreeMap::new();
+        for f in Field::ALL {
+            dofs.insert(f.name().to_string(), model.dofs.count(f));
+        }
+        dofs.insert("total".into(), model.dofs.n_dofs);
+        dofs.insert("free".into(), model.cons.n_eq);
+        Summary {
+            case: case.path.display().to_string(),
+            mesh: model.mesh.source.display().to_string(),
+            dim: model.mesh.dim,
+            nodes: model.mesh.coords.len(),
+            cells,
+            dofs,
+            physics: model.physics,
+            linear_solver,
+            strategy,
+            converged: false,
+            message: String::new(),
+            lambda: 0.0,
+            time: 0.0,
+            load_steps: 0,
+            rejected_steps: 0,
+            newton_iterations: 0,
+            rejected_iterations: 0,
+            linear_solves: 0,
+            wall_seconds: 0.0,
+            assembly_seconds: 0.0,
+            solver_seconds: 0.0,
+            krylov_iterations: 0,
+            tangents_skipped: 0,
+            peak_memory_mb: None,
+            probes: BTreeMap::new(),
+            reactions: BTreeMap::new(),
+            min_J: 1.0,
+            min_J_solid: None,
+            min_J_medium: None,
+            energy: 0.0,
+            external_work: 0.0,
+            output: out_dir.display().to_string(),
+        }
+    }
+}
+
 /// The leading columns of history.csv: the step's bookkeeping. Then come `energy`, the probes
 /// and the reactions, then [`HISTORY_SOLVER_COLUMNS`] and `work`.
 pub const HISTORY_STEP_COLUMNS: [&str; 9] = [
@@ -82,7 +140,7 @@ pub const HISTORY_STEP_COLUMNS: [&str; 9] = [
 pub const HISTORY_SOLVER_COLUMNS: [&str; 3] = ["krylov_iterations", "halvings", "time"];
 
 /// Reactions per Dirichlet group: force components on the body and heat supplied to it.
-pub fn reactions(model: &Model, r_full: &[f64]) -> BTreeMap<String, BTreeMap<String, f64>> {
+pub fn reactions(model: &Model, r_full: &[f64]) -> Reactions {
     let mut out: BTreeMap<String, BTreeMap<String, f64>> = BTreeMap::new();
     let d = model.dofs.dim;
     let comp = ["x", "y", "z"];
@@ -117,4 +175,89 @@ pub(super) fn peak_memory_mb() -> Option<f64> {
     let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
     let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
     Some(kb / 1024.0)
+}
+
+/// Reactions and heat flows per group: group name → component ("x", "y", "z", "heat") → value.
+pub type Reactions = BTreeMap<String, BTreeMap<String, f64>>;
+
+/// One accepted step's numbers for its history row, besides probes and reactions.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct StepRow {
+    pub step: usize,
+    pub lambda: f64,
+    pub dlambda: f64,
+    pub iterations: usize,
+    /// Last relative residual of u, θ and p.
+    pub residuals: [f64; 3],
+    pub min_J_solid: f64,
+    pub min_J_medium: f64,
+    pub energy: f64,
+    pub krylov: usize,
+    pub halvings: usize,
+    pub time: f64,
+    pub work: f64,
+}
+
+/// The columns of one model's `history.csv`: the step columns, `energy`, the probes, the
+/// reactions (`R_group_x`, `Q_group`), the solver columns and `work`.
+pub struct HistoryLayout {
+    pub columns: Vec<String>,
+    /// (group, component) of each reaction column.
+    reactions: Vec<(String, String)>,
+}
+
+impl HistoryLayout {
+    pub fn new(model: &Model, probe_names: &[String]) -> HistoryLayout {
+        let mut reactions: Vec<(String, String)> = Vec::new();
+        for g in &model.bc_groups {
+            for f in &g.fields {
+                let (has, key) = match *f {
+                    "theta" => (model.dofs.has(Field::Theta), "heat"),
+                    c => (model.dofs.has(Field::U), &c[1..]),
+                };
+                if has {
+                    reactions.push((g.name.clone(), key.to_string()));
+                }
+            }
+        }
+        let mut columns: Vec<String> = HISTORY_STEP_COLUMNS.map(String::from).to_vec();
+        columns.push("energy".into());
+        columns.extend(probe_names.iter().cloned());
+        columns.extend(reactions.iter().map(|(g, k)| {
+            if k == "heat" {
+                format!("Q_{g}")
+            } else {
+                format!("R_{g}_{k}")
+            }
+        }));
+        columns.extend(HISTORY_SOLVER_COLUMNS.map(String::from));
+        columns.push("work".into());
+        HistoryLayout { columns, reactions }
+    }
+
+    /// The row of one step, in column order.
+    pub fn row(&self, s: &StepRow, probes: &[f64], reactions: &Reactions) -> Vec<f64> {
+        let mut row = vec![
+            s.step as f64,
+            s.lambda,
+            s.dlambda,
+            s.iterations as f64,
+            s.residuals[0],
+            s.residuals[1],
+            s.residuals[2],
+            s.min_J_solid,
+            s.min_J_medium,
+            s.energy,
+        ];
+        row.extend_from_slice(probes);
+        row.extend(self.reactions.iter().map(|(g, k)| {
+            reactions
+                .get(g)
+                .and_then(|m| m.get(k))
+                .copied()
+                .unwrap_or(0.0)
+        }));
+        row.extend([s.krylov as f64, s.halvings as f64, s.time, s.work]);
+        row
+    }
 }

@@ -6,9 +6,11 @@
 pub mod fields;
 pub mod history;
 pub mod probes;
+pub mod series;
 pub mod vtu;
 
 pub use history::History;
+pub use series::Series;
 pub use vtu::{StepFields, write_pvd, write_vtu};
 
 use std::io::Write;
@@ -18,6 +20,8 @@ use std::path::{Path, PathBuf};
 pub enum OutputError {
     #[error("cannot write {path}: {msg}")]
     Write { path: PathBuf, msg: String },
+    #[error("post-processing failed at step {step}: {msg}")]
+    Fields { step: usize, msg: String },
 }
 
 pub(crate) fn werr(path: &Path, e: impl std::fmt::Display) -> OutputError {

@@ -1,0 +1,407 @@
+//! One run of `tmc solve` on a built model: the solvers the strategy calls for, the step
+//! controller, and what each accepted step records (history row, VTU, reactions, work).
+//! [`super::solve_model`] drives it: attempt a step, then accept or reject it, until done.
+
+use super::records::{HistoryLayout, Reactions, StepRow, Summary, peak_memory_mb, reactions};
+use super::strategy::{Strategy, choose_linear, choose_strategy, describe};
+use super::{SolveError, SolveOptions};
+use crate::assembly::Assembler;
+use crate::case::Case;
+use crate::dofs::{Field, equation_structure};
+use crate::model::Model;
+use crate::output::probes::Probe;
+use crate::output::{History, Series, write_atomic};
+use crate::solver::linear::{LinearKind, LinearSolver};
+use crate::solver::newton::{Newton, Part, StepFailure, StepReport};
+use crate::solver::stepping::Controller;
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::time::Instant;
+
+/// What the run has done so far, beyond the controller's counts.
+#[derive(Clone, Debug)]
+struct Totals {
+    /// Newton iterations of the accepted steps.
+    iterations: usize,
+    krylov: usize,
+    /// Assembly seconds of the converged states' reactions (Newton keeps the rest).
+    t_reactions: f64,
+    /// Smallest J over the accepted steps: (solids, medium).
+    min_J: (f64, f64),
+    /// Work of the forces on the displacements, and the forces of the last accepted state.
+    work: f64,
+    f_last: Vec<f64>,
+    reactions: Reactions,
+    /// The last failed attempt's reason.
+    last_failure: String,
+}
+
+pub(super) struct Run<'a> {
+    model: &'a Model,
+    probes: &'a [Probe],
+    opts: &'a SolveOptions,
+    out_dir: &'a Path,
+    start: Instant,
+    asm: Assembler,
+    newton: Newton,
+    /// One solver per part: the whole system, or mechanics and heat of a one-way scene.
+    solvers: Vec<(Part, LinearSolver)>,
+    pub(super) ctl: Controller,
+    /// The last accepted state.
+    x: Vec<f64>,
+    /// The displacement dofs, whose forces do work.
+    u_dofs: Vec<usize>,
+    series: Series,
+    layout: HistoryLayout,
+    history: History,
+    totals: Totals,
+    summary: Summary,
+    pb: indicatif::ProgressBar,
+}
+
+impl<'a> Run<'a> {
+    /// Choose strategy and solvers, and set up the records; nothing is written yet.
+    pub(super) fn new(
+        case: &'a Case,
+        model: &'a Model,
+        probes: &'a [Probe],
+        out_dir: &'a Path,
+        opts: &'a SolveOptions,
+        start: Instant,
+    ) -> Result<Run<'a>, SolveError> {
+        let kind = choose_linear(case.file.solver.linear, &model.physics);
+        if kind == LinearKind::Ldlt && model.physics.mechanics && model.physics.conduction {
+            let span = case.file.mesh.span();
+            return Err(case
+                .error::<()>(span, "[solver] linear = \"ldlt\" needs a symmetric tangent, but this scene couples mechanics and conduction")
+                .unwrap_err()
+                .into());
+        }
+        let strategy = choose_strategy(&case.file.solver, &model.physics);
+        let asm = Assembler::new(model);
+        let steps = &case.file.steps;
+        let mut newton = Newton::new(model, steps.tol, steps.max_iter);
+        newton.idle = opts.idle_threads;
+        let solvers = Self::solvers(model, &asm, &newton, strategy, kind)?;
+        if !opts.quiet {
+            eprintln!("{}", describe(&model.physics, strategy));
+        }
+        let mut ctl = Controller::new(steps, model.path.end());
+        if !model.physics.mechanics {
+            // conduction on the undeformed body is linear: one step (per path segment), one solve
+            ctl.dt = 1.0;
+        }
+        let probe_names: Vec<String> = probes.iter().map(|p| p.name.clone()).collect();
+        let layout = HistoryLayout::new(model, &probe_names);
+        let history = History::new(&out_dir.join("history.csv"), &layout.columns);
+        let summary = Summary::start(case, model, solvers[0].1.kind, strategy, out_dir);
+        Ok(Run {
+            model,
+            probes,
+            opts,
+            out_dir,
+            start,
+            asm,
+            newton,
+            solvers,
+            ctl,
+            x: model.initial_state(),
+            u_dofs: (0..model.dofs.n_dofs)
+                .filter(|&d| model.dofs.field[d] == Field::U)
+                .collect(),
+            series: Series::new(out_dir, &case.name(), model),
+            layout,
+            history,
+            totals: Totals {
+                iterations: 0,
+                krylov: 0,
+                t_reactions: 0.0,
+                min_J: (f64::INFINITY, f64::INFINITY),
+                work: 0.0,
+                f_last: Vec::new(),
+                reactions: BTreeMap::new(),
+                last_failure: String::new(),
+            },
+            summary,
+            pb: progress_bar(opts.quiet),
+        })
+    }
+
+    /// The linear solvers of `strategy`: one for the whole system of `kind`, or symmetric block
+    /// factorisations for mechanics and for heat.
+    fn solvers(
+        model: &Model,
+        asm: &Assembler,
+        newton: &Newton,
+        strategy: Strategy,
+        kind: LinearKind,
+    ) -> Result<Vec<(Part, LinearSolver)>, SolveError> {
+        let structure = equation_structure(&model.dofs, &model.cons);
+        Ok(match strategy {
+            Strategy::OneWay => {
+                let part = |p: Part| -> Result<(Part, LinearSolver), SolveError> {
+                    let eqs = newton.equations(p);
+                    Ok((p, LinearSolver::block_ldlt(&asm.pattern, &structure, &eqs)?))
+                };
+                vec![part(Part::Mechanics)?, part(Part::Heat)?]
+            }
+            _ => vec![(
+                Part::All,
+                LinearSolver::new(kind, &asm.pattern, &structure)?,
+            )],
+        })
+    }
+
+    /// Record the initial state: step 0 of the series and of the history, and the forces the
+    /// work is counted from.
+    pub(super) fn record_initial(&mut self) -> Result<(), SolveError> {
+        self.series.write(self.model, 0, &self.x, 0.0)?;
+        let stats0 = self
+            .asm
+            .assemble(self.model, &self.x, 0.0, false, None)
+            .map_err(|e| SolveError::Setup(format!("the initial state is invalid: {e}")))?;
+        self.summary.energy = stats0.energy;
+        let r0 = reactions(self.model, &self.asm.r_full);
+        let row = StepRow {
+            min_J_solid: stats0.min_J_solid,
+            min_J_medium: stats0.min_J_medium,
+            energy: stats0.energy,
+            ..StepRow::default()
+        };
+        self.history
+            .row(&self.layout.row(&row, &self.probe_values(), &r0))?;
+        self.totals.reactions = r0;
+        self.totals.f_last = self.forces(0.0);
+        Ok(())
+    }
+
+    /// The probes at the last accepted state.
+    fn probe_values(&self) -> Vec<f64> {
+        self.probes
+            .iter()
+            .map(|p| p.eval(&self.model.mesh, &self.model.dofs, &self.x))
+            .collect()
+    }
+
+    /// The forces on the displacement dofs, f_int = r + f_ext, from the last assembly at `t`.
+    fn forces(&self, t: f64) -> Vec<f64> {
+        let mut fe = vec![0.0; self.model.dofs.n_dofs];
+        self.model.f_ext(t, &mut fe);
+        self.u_dofs
+            .iter()
+            .map(|&d| self.asm.r_full[d] + fe[d])
+            .collect()
+    }
+
+    /// Solve the step to pseudo-time `target` from the last accepted state, part by part;
+    /// the trial state is returned with the report.
+    pub(super) fn attempt(&mut self, target: f64) -> Result<(Vec<f64>, StepReport), StepFailure> {
+        let mut trial = self.x.clone();
+        let mut report: Option<StepReport> = None;
+        for (part, solver) in self.solvers.iter_mut() {
+            let rep =
+                self.newton
+                    .step(self.model, &mut self.asm, solver, &mut trial, target, *part)?;
+            report = Some(match report {
+                None => rep,
+                Some(a) => a.then(rep),
+            });
+        }
+        Ok((trial, report.expect("at least one part")))
+    }
+
+    /// Take a converged step: its reactions, work, history row, VTU and progress line.
+    pub(super) fn accept(
+        &mut self,
+        target: f64,
+        trial: Vec<f64>,
+        rep: StepReport,
+    ) -> Result<(), SolveError> {
+        let model = self.model;
+        let lambda = model.path.lambda(target);
+        let dl = lambda - model.path.lambda(self.ctl.t);
+        let x_last = std::mem::replace(&mut self.x, trial);
+        self.ctl.accept(target, rep.iterations);
+        let tot = &mut self.totals;
+        tot.iterations += rep.iterations;
+        tot.krylov += rep.krylov;
+        tot.min_J = (
+            tot.min_J.0.min(rep.stats.min_J_solid),
+            tot.min_J.1.min(rep.stats.min_J_medium),
+        );
+        // reactions at the converged state (the residual of the last assembly)
+        let t0 = Instant::now();
+        self.asm
+            .assemble(model, &self.x, target, false, None)
+            .map_err(|e| SolveError::Setup(format!("converged state is invalid: {e}")))?;
+        self.totals.t_reactions += t0.elapsed().as_secs_f64();
+        self.totals.reactions = reactions(model, &self.asm.r_full);
+        let f_now = self.forces(target);
+        let tot = &mut self.totals;
+        tot.work += self
+            .u_dofs
+            .iter()
+            .zip(tot.f_last.iter().zip(&f_now))
+            .map(|(&d, (a, b))| 0.5 * (a + b) * (self.x[d] - x_last[d]))
+            .sum::<f64>();
+        tot.f_last = f_now;
+        self.summary.energy = rep.stats.energy;
+        self.summary.external_work = tot.work;
+        self.summary.krylov_iterations = tot.krylov;
+        self.summary.tangents_skipped += rep.tangents_skipped;
+        let row = StepRow {
+            step: self.ctl.accepted,
+            lambda,
+            dlambda: dl,
+            iterations: rep.iterations,
+            residuals: rep.history.last().copied().unwrap_or([0.0; 3]),
+            min_J_solid: rep.stats.min_J_solid,
+            min_J_medium: rep.stats.min_J_medium,
+            energy: rep.stats.energy,
+            krylov: rep.krylov,
+            halvings: rep.halvings,
+            time: target,
+            work: self.totals.work,
+        };
+        let values = self
+            .layout
+            .row(&row, &self.probe_values(), &self.totals.reactions);
+        self.history.row(&values)?;
+        self.series
+            .write(model, self.ctl.accepted, &self.x, target)?;
+        self.report_step(&row, &rep);
+        Ok(())
+    }
+
+    /// The step's line (with `--verbose`, the Newton table too) and the progress bar.
+    fn report_step(&self, row: &StepRow, rep: &StepReport) {
+        let fmt_j = |j: f64| {
+            if j.is_finite() {
+                format!("{j:.3e}")
+            } else {
+                "-".into()
+            }
+        };
+        if self.opts.verbose {
+            let line = format!(
+                "step {:3}  λ {:.4}  Δλ {:.2e}  its {:2}  min J solid {} medium {}",
+                row.step,
+                row.lambda,
+                row.dlambda,
+                row.iterations,
+                fmt_j(row.min_J_solid),
+                fmt_j(row.min_J_medium)
+            );
+            // the Newton table: largest relative field residual per iteration
+            let table: Vec<String> = rep
+                .history
+                .iter()
+                .map(|h| format!("{:.0e}", h.iter().fold(0.0f64, |a, &b| a.max(b))))
+                .collect();
+            self.say(&format!("{line}  [{}]", table.join(" ")));
+        }
+        self.pb
+            .set_position((row.time / self.ctl.end * 1000.0) as u64);
+        self.pb.set_message(format!(
+            "step {} its {}",
+            self.ctl.accepted, self.totals.iterations
+        ));
+    }
+
+    /// A failed attempt: cut the step, or end the run below the minimum step (its summary
+    /// written, the error returned).
+    pub(super) fn reject(&mut self, target: f64, failure: StepFailure) -> Result<(), SolveError> {
+        self.totals.last_failure = failure.to_string();
+        if self.opts.verbose {
+            let lambda = self.model.path.lambda(target);
+            self.say(&format!(
+                "  step to λ {lambda:.4} failed: {}; cutting the step",
+                self.totals.last_failure
+            ));
+        }
+        if let Err(dl) = self.ctl.reject() {
+            self.pb.finish_and_clear();
+            let err = SolveError::StepTooSmall {
+                lambda: self.model.path.lambda(self.ctl.t),
+                dlambda: dl,
+                reason: self.totals.last_failure.clone(),
+                steps: self.ctl.accepted,
+                dir: self.out_dir.to_owned(),
+            };
+            self.finish(false, err.to_string())?;
+            return Err(err);
+        }
+        Ok(())
+    }
+
+    /// The run reached its end: write the summary and return it.
+    pub(super) fn complete(mut self) -> Result<Summary, SolveError> {
+        self.pb.finish_and_clear();
+        let msg = if self.ctl.rejected > 0 {
+            format!(
+                "converged ({} rejected attempts; last: {})",
+                self.ctl.rejected, self.totals.last_failure
+            )
+        } else {
+            "converged".into()
+        };
+        self.finish(true, msg)?;
+        Ok(self.summary)
+    }
+
+    /// Fill the summary from the run's state and write `summary.json`.
+    fn finish(&mut self, converged: bool, message: String) -> Result<(), SolveError> {
+        let (model, ctl, tot, spent) = (self.model, &self.ctl, &self.totals, self.newton.spent);
+        let s = &mut self.summary;
+        s.converged = converged;
+        s.message = message;
+        s.lambda = model.path.lambda(ctl.t);
+        s.time = ctl.t;
+        s.load_steps = ctl.accepted;
+        s.rejected_steps = ctl.rejected;
+        s.newton_iterations = tot.iterations;
+        s.rejected_iterations = spent.iterations - tot.iterations;
+        s.linear_solves = spent.updates;
+        s.wall_seconds = self.start.elapsed().as_secs_f64();
+        s.assembly_seconds = spent.assembly + tot.t_reactions;
+        s.solver_seconds = spent.solve;
+        s.peak_memory_mb = peak_memory_mb();
+        s.probes = self
+            .probes
+            .iter()
+            .map(|p| (p.name.clone(), p.eval(&model.mesh, &model.dofs, &self.x)))
+            .collect();
+        s.reactions = tot.reactions.clone();
+        let finite = |v: f64| v.is_finite().then_some(v);
+        s.min_J_solid = finite(tot.min_J.0);
+        s.min_J_medium = finite(tot.min_J.1);
+        s.min_J = finite(tot.min_J.0.min(tot.min_J.1)).unwrap_or(1.0);
+        let json = serde_json::to_string_pretty(&*s).expect("serialisable");
+        write_atomic(&self.out_dir.join("summary.json"), json.as_bytes())?;
+        Ok(())
+    }
+
+    /// A line above the progress bar, or on stderr when the bar is hidden (not a terminal).
+    fn say(&self, line: &str) {
+        if self.pb.is_hidden() {
+            eprintln!("{line}");
+        } else {
+            self.pb.println(line);
+        }
+    }
+}
+
+/// The progress bar over the run's (pseudo-)time, hidden with `--quiet`.
+fn progress_bar(quiet: bool) -> indicatif::ProgressBar {
+    if quiet {
+        return indicatif::ProgressBar::hidden();
+    }
+    let pb = indicatif::ProgressBar::new(1000);
+    pb.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{spinner} λ {bar:30} {percent:>3}%  {msg}  [{elapsed_precise}]",
+        )
+        .expect("valid template"),
+    );
+    pb
+}
