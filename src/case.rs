@@ -79,6 +79,11 @@ pub struct Bc {
     pub traction: Option<Spanned<Vec<f64>>>,
     /// Heat supplied per reference area (positive = into the body).
     pub heat_flux: Option<f64>,
+    /// Convection: heat transfer coefficient h ≥ 0, heat leaving per unit current area and
+    /// degree, h (θ − θ∞). Acts in full from the start (not scaled by λ). Needs `theta_inf`.
+    pub h: Option<Spanned<f64>>,
+    /// Ambient temperature θ∞ of the convection.
+    pub theta_inf: Option<Spanned<f64>>,
     /// Scale by the load factor λ (true) or hold at full value from the start (false).
     #[serde(default = "yes")]
     pub ramp: bool,
@@ -362,12 +367,15 @@ impl Case {
                     format!("bc on \"{g}\": `path` needs {n_path} finite values (one per value of [steps] path), the first 0"),
                 );
             }
-            if bc.traction.is_some() || bc.heat_flux.is_some() || !bc.ramp {
+            if bc.traction.is_some() || bc.heat_flux.is_some() || bc.h.is_some() || !bc.ramp {
                 return self.error(
                     own.span(),
-                    format!("bc on \"{g}\": `path` applies to prescribed values (ux, uy, uz, theta) only, not to `traction`, `heat_flux` or `ramp = false`"),
+                    format!("bc on \"{g}\": `path` applies to prescribed values (ux, uy, uz, theta) only, not to `traction`, `heat_flux`, `h` or `ramp = false`"),
                 );
             }
+        }
+        for bc in &f.bc {
+            self.check_convection(bc)?;
         }
         for p in &f.probe {
             let field = p.field.get_ref().as_str();
@@ -428,6 +436,45 @@ impl Case {
             );
         }
         Ok(())
+    }
+
+    /// A convection condition has both `h` (finite, ≥ 0) and `theta_inf` (finite), and no
+    /// prescribed θ on the same group.
+    fn check_convection(&self, bc: &Bc) -> Result<(), CaseError> {
+        let g = bc.group.get_ref();
+        match (&bc.h, &bc.theta_inf) {
+            (None, None) => Ok(()),
+            (Some(h), None) => self.error(
+                h.span(),
+                format!("bc on \"{g}\": convection `h` needs `theta_inf`, the ambient temperature"),
+            ),
+            (None, Some(t)) => self.error(
+                t.span(),
+                format!("bc on \"{g}\": `theta_inf` is the ambient temperature of a convection; give `h` too"),
+            ),
+            (Some(h), Some(t)) => {
+                let hv = *h.get_ref();
+                if !(hv >= 0.0) || !hv.is_finite() {
+                    return self.error(
+                        h.span(),
+                        format!("bc on \"{g}\": `h` must be finite and ≥ 0, got {hv}"),
+                    );
+                }
+                if !t.get_ref().is_finite() {
+                    return self.error(
+                        t.span(),
+                        format!("bc on \"{g}\": `theta_inf` must be finite, got {}", t.get_ref()),
+                    );
+                }
+                if bc.theta.is_some() {
+                    return self.error(
+                        h.span(),
+                        format!("bc on \"{g}\": a group with a prescribed `theta` cannot also convect (`h`)"),
+                    );
+                }
+                Ok(())
+            }
+        }
     }
 
     /// Checks against the mesh: groups exist and have the right dimension, every cell has a
@@ -536,6 +583,14 @@ impl Case {
                     format!("bc[{i}] (\"{name}\"): traction and heat_flux need a {}D boundary group, this one is {gdim}D", mesh.dim - 1),
                 );
             }
+            if let Some(h) = &bc.h
+                && gdim + 1 != mesh.dim
+            {
+                return self.error(
+                    h.span(),
+                    format!("bc[{i}] (\"{name}\"): convection `h` needs a {}D boundary group, this one is {gdim}D", mesh.dim - 1),
+                );
+            }
             if let Some(t) = &bc.traction
                 && t.get_ref().len() != mesh.dim
             {
@@ -548,6 +603,7 @@ impl Case {
                 || bc.uy.is_some()
                 || bc.uz.is_some()
                 || bc.theta.is_some()
+                || bc.h.is_some()
                 || natural;
             if !any {
                 return self.error(

@@ -100,6 +100,39 @@ fn steady_conduction_through_a_slab() {
 }
 
 #[test]
+fn convection_bar_matches_the_closed_form_end_temperature() {
+    let (s, dir) = solve_case("slab-convection");
+    assert!(!s.physics.mechanics && s.physics.conduction);
+    // θ_R = (k θ_L / L + h θ∞) / (k / L + h) = 60, linear in between
+    assert!((s.probes["theta_right"] - 60.0).abs() < 1e-10);
+    assert!((s.probes["theta_mid"] - 80.0).abs() < 1e-10);
+    // h (θ_R − θ∞) H = 100 in through the left and out through the convecting right
+    assert!((s.reactions["left"]["heat"] - 100.0).abs() < 1e-9);
+    assert!((s.reactions["right"]["heat"] + 100.0).abs() < 1e-9);
+    let (cols, rows) = history(&dir);
+    let q = cols
+        .iter()
+        .position(|c| c == "Q_right")
+        .expect("Q_right column");
+    assert!((rows.last().unwrap()[q] + 100.0).abs() < 1e-9);
+}
+
+#[test]
+fn convection_leaves_through_the_current_area_of_a_stretched_slab() {
+    let (s, _) = solve_case("slab-convection-stretched");
+    assert!(s.physics.mechanics_to_heat && !s.physics.heat_to_mechanics);
+    // θ_R = (k θ_L / (l L) + h θ∞) / (k / (l L) + h) with l = 1.5
+    let theta_r = s.probes["theta_right"];
+    assert!((theta_r - 52.0).abs() < 1e-9, "θ_R {theta_r}");
+    // heat flow h (θ_R − θ∞) t H through the current right face, t H its current length
+    let t = 1.0 + s.probes["uy_top_right"];
+    assert!(t < 0.95, "the stretch contracts the slab laterally: {t}");
+    let q = 2.5 * (52.0 - 20.0) * t;
+    assert!((s.reactions["left"]["heat"] - q).abs() < 1e-9 * q);
+    assert!((s.reactions["right"]["heat"] + q).abs() < 1e-9 * q);
+}
+
+#[test]
 fn compressed_slab_conducts_through_its_current_geometry() {
     let (s, _) = solve_case("slab-compressed-conduction");
     assert!(s.physics.mechanics_to_heat && !s.physics.heat_to_mechanics);

@@ -244,6 +244,51 @@ fn non_positive_moduli_are_refused() {
 }
 
 #[test]
+fn bad_convection_conditions_are_refused_with_file_line_and_key() {
+    for (tag, extra, words) in [
+        (
+            "h-negative",
+            "h = -1.0\ntheta_inf = 20.0",
+            "`h` must be finite and ≥ 0",
+        ),
+        (
+            "h-nan",
+            "h = nan\ntheta_inf = 20.0",
+            "`h` must be finite and ≥ 0",
+        ),
+        ("h-alone", "h = 2.0", "needs `theta_inf`"),
+        ("ambient-alone", "theta_inf = 2.0", "give `h` too"),
+        (
+            "ambient-inf",
+            "h = 1.0\ntheta_inf = inf",
+            "`theta_inf` must be finite",
+        ),
+        (
+            "h-and-theta",
+            "theta = 5.0\nh = 1.0\ntheta_inf = 0.0",
+            "cannot also convect",
+        ),
+    ] {
+        let (o, p) = case_with(tag, |t| format!("{t}\n[[bc]]\ngroup = \"top\"\n{extra}\n"));
+        let e = stderr(&o);
+        let file = p.file_name().unwrap().to_str().unwrap();
+        assert!(
+            !o.status.success() && e.contains(words) && e.contains(&format!("{file}:2")),
+            "{tag}: {e}"
+        );
+    }
+    // a point group cannot convect in 2D: it needs a curve
+    let (o, _) = case_with("h-on-point", |t| {
+        format!("{t}\n[[bc]]\ngroup = \"origin\"\nh = 1.0\ntheta_inf = 0.0\n")
+    });
+    let e = stderr(&o);
+    assert!(
+        !o.status.success() && e.contains("convection `h` needs a 1D boundary group"),
+        "{e}"
+    );
+}
+
+#[test]
 fn conflicting_dirichlet_values_on_a_shared_node_are_refused() {
     // "bottom" and "left" share the origin; they disagree on ux there
     let (o, _) = case_with("conflict", |t| {

@@ -227,6 +227,21 @@ fn assembled_tangent_hex8() {
     tangent_check(&model);
 }
 
+#[test]
+fn assembled_tangent_hex8_with_convecting_faces() {
+    // convection on deformed faces through the same scatter as the cells: ∂r_θ/∂θ and the
+    // area's ∂(da)/∂u in the assembled tangent
+    let mut text = case_text(3, 1e-3).replace("\"boundary\"", "\"x0\"");
+    for g in ["x1", "y1", "z1"] {
+        text.push_str(&format!(
+            "[[bc]]\ngroup = \"{g}\"\nh = 3.0\ntheta_inf = -5.0\n"
+        ));
+    }
+    let (_, model) = model_from(&text, "bar3d.geo", "tangent-hex-convection");
+    assert_eq!(model.facet_blocks.len(), 3);
+    tangent_check(&model);
+}
+
 /// A medium region with its regularization next to a solid, two-way coupled, for the
 /// assembled check: `groups` are (solid, medium, clamped boundary).
 fn medium_case(dim: usize) -> String {

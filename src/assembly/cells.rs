@@ -5,9 +5,11 @@
 
 use super::scatter::{Shared, Slots, local_dofs};
 use super::{AssemblyError, MIN_PART_CELLS, cell_error};
-use crate::dofs::{CellState, NONE, gather};
+use crate::dofs::{CellState, Layout, NONE, gather};
 use crate::element::RefElement;
-use crate::kernel::{self, Active, KernelError, bulk, lanes};
+use crate::kernel::{self, Active, CellMaterial, KernelError, bulk, facet, lanes};
+use crate::material::Convection;
+use crate::mesh::Block;
 use crate::model::Model;
 use rayon::prelude::*;
 
@@ -46,11 +48,13 @@ pub(super) struct Arrays {
     pub(super) lift: Shared,
 }
 
-/// What the cells of one model block need to add their part.
+/// What the cells (or facets) of one assembler block need to add their part.
 #[derive(Clone, Copy)]
 pub(super) struct Cells<'a> {
     pub(super) model: &'a Model,
-    pub(super) bi: usize,
+    /// The block's connectivity and local layout.
+    pub(super) blk: &'a Block,
+    pub(super) lay: Layout,
     /// Global number of the block's first cell.
     pub(super) first: u32,
     pub(super) slots: &'a Slots,
@@ -64,100 +68,93 @@ pub(super) struct Cells<'a> {
 }
 
 impl Cells<'_> {
-    /// Add the cells `cells` (global numbers, all of this block). Returns (min J, energy,
-    /// whether the tangent entries written are finite), or the kernel's error with the
-    /// block's cell number.
-    pub(super) fn run<const N: usize, const D: usize, E: RefElement<N, D>>(
-        self,
-        cells: &[u32],
-    ) -> Result<(f64, f64, bool), (KernelError, usize)> {
-        let Cells {
-            model,
-            bi,
-            first,
-            slots,
-            x,
-            tangent,
-            dx_prescribed,
-            act,
-            arrays:
-                Arrays {
-                    values,
-                    r_full,
-                    lift,
-                },
-            prefetch,
-        } = self;
-        let info = &model.blocks[bi];
-        let blk = &model.mesh.cells[info.block];
-        let lay = info.layout;
-        let nd = lay.ndof();
-        let eq = &model.cons.eq;
-        // add a cell's residual and tangent (row-major, nd × nd) into the global arrays
-        let add = |c: usize, ld: &[u32], r: &[f64], k: &[f64]| -> bool {
-            // SAFETY: the schedule never runs two cells that share a node at once, and a
-            // cell writes only at its own nodes' rows (in bounds by construction).
-            unsafe {
-                for a in 0..nd {
-                    *r_full.at(ld[a] as usize) += r[a];
-                }
-                if !tangent {
-                    return true;
-                }
-                let finite = slots.add(c, k, values);
-                // prescribed columns: their increments lifted to the right-hand side
-                if let Some(dx) = dx_prescribed {
-                    for b in 0..nd {
-                        let gb = ld[b] as usize;
-                        if eq[gb] != NONE || dx[gb] == 0.0 {
-                            continue;
-                        }
-                        for a in 0..nd {
-                            let row = eq[ld[a] as usize];
-                            if row != NONE {
-                                *lift.at(row as usize) += k[a * nd + b] * dx[gb];
-                            }
+    /// Add cell `c`'s residual `r` and tangent `k` (row-major, nd × nd; ignored without
+    /// `tangent`) at its global dofs `ld`, and the lifting of prescribed increments. Returns
+    /// whether the tangent entries written are finite.
+    ///
+    /// # Safety
+    /// No other thread may be adding at this cell's nodes (the schedule's promise).
+    #[inline]
+    unsafe fn add(&self, c: usize, ld: &[u32], r: &[f64], k: &[f64]) -> bool {
+        let nd = self.lay.ndof();
+        let eq = &self.model.cons.eq;
+        let Arrays {
+            values,
+            r_full,
+            lift,
+        } = self.arrays;
+        // SAFETY: the schedule never runs two cells that share a node at once, and a cell
+        // writes only at its own nodes' rows (in bounds by construction).
+        unsafe {
+            for a in 0..nd {
+                *r_full.at(ld[a] as usize) += r[a];
+            }
+            if !self.tangent {
+                return true;
+            }
+            let finite = self.slots.add(c, k, values);
+            // prescribed columns: their increments lifted to the right-hand side
+            if let Some(dx) = self.dx_prescribed {
+                for b in 0..nd {
+                    let gb = ld[b] as usize;
+                    if eq[gb] != NONE || dx[gb] == 0.0 {
+                        continue;
+                    }
+                    for a in 0..nd {
+                        let row = eq[ld[a] as usize];
+                        if row != NONE {
+                            *lift.at(row as usize) += k[a * nd + b] * dx[gb];
                         }
                     }
                 }
-                finite
             }
-        };
+            finite
+        }
+    }
+
+    /// Add the cells `cells` (global numbers, all of this block) of material `mat`. Returns
+    /// (min J, energy, whether the tangent entries written are finite), or the kernel's error
+    /// with the block's cell number.
+    pub(super) fn run<const N: usize, const D: usize, E: RefElement<N, D>>(
+        self,
+        mat: &CellMaterial,
+        cells: &[u32],
+    ) -> Result<(f64, f64, bool), (KernelError, usize)> {
+        let (model, blk, lay, first, x) = (self.model, self.blk, self.lay, self.first, self.x);
+        let (tangent, values) = (self.tangent, self.arrays.values);
+        let nd = lay.ndof();
         let mut ld = vec![0u32; nd];
         let (mut mj, mut en, mut finite) = (f64::INFINITY, 0.0, true);
-        if lanes::available() && lanes::eligible(&info.mat, &lay, act) {
+        if lanes::available() && lanes::eligible(mat, &lay, self.act) {
             // W cells per kernel call; a short last group repeats its last cell
             const W: usize = lanes::W;
             let mut r = vec![0.0; W * nd];
             let mut k = vec![0.0; if tangent { W * nd * nd } else { 0 }];
             for group in cells.chunks(W) {
                 let cell = |l: usize| (group[l.min(group.len() - 1)] - first) as usize;
-                if prefetch {
+                if self.prefetch {
                     for l in 0..group.len() {
-                        slots.prefetch(cell(l), values);
+                        self.slots.prefetch(cell(l), values);
                     }
                 }
                 let s: [CellState<N>; W] = std::array::from_fn(|l| {
                     gather::<N>(&model.mesh.coords, &model.dofs, blk.cell(cell(l)), x)
                 });
                 let kl = if tangent { Some(&mut k[..]) } else { None };
-                let out = lanes::bulk_lanes::<N, D, E>(&info.mat, &lay, &s, &mut r, kl)
+                let out = lanes::bulk_lanes::<N, D, E>(mat, &lay, &s, &mut r, kl)
                     .map_err(|(e, l)| (e, cell(l)))?;
                 for l in 0..group.len() {
                     let c = cell(l);
                     mj = mj.min(out[l].min_J);
                     en += out[l].energy;
-                    local_dofs(model, bi, blk.cell(c), &mut ld);
-                    finite &= add(
-                        c,
-                        &ld,
-                        &r[l * nd..(l + 1) * nd],
-                        if tangent {
-                            &k[l * nd * nd..(l + 1) * nd * nd]
-                        } else {
-                            &[]
-                        },
-                    );
+                    local_dofs(&model.dofs, &lay, blk.cell(c), &mut ld);
+                    let kc = if tangent {
+                        &k[l * nd * nd..(l + 1) * nd * nd]
+                    } else {
+                        &[]
+                    };
+                    // SAFETY: the schedule's promise (see `add`)
+                    finite &= unsafe { self.add(c, &ld, &r[l * nd..(l + 1) * nd], kc) };
                 }
             }
             return Ok((mj, en, finite));
@@ -167,24 +164,51 @@ impl Cells<'_> {
         for &g in cells {
             let c = (g - first) as usize;
             let nodes = blk.cell(c);
-            if prefetch {
-                slots.prefetch(c, values);
+            if self.prefetch {
+                self.slots.prefetch(c, values);
             }
             let s = gather::<N>(&model.mesh.coords, &model.dofs, nodes, x);
-            local_dofs(model, bi, nodes, &mut ld);
+            local_dofs(&model.dofs, &lay, nodes, &mut ld);
             let out = bulk::<N, D, E>(
-                &info.mat,
+                mat,
                 &lay,
                 &s,
-                act,
+                self.act,
                 &mut r,
                 if tangent { Some(&mut k) } else { None },
             )
             .map_err(|e| (e, c))?;
             mj = mj.min(out.min_J);
             en += out.energy;
-            finite &= add(c, &ld, &r, &k);
+            // SAFETY: the schedule's promise (see `add`)
+            finite &= unsafe { self.add(c, &ld, &r, &k) };
         }
         Ok((mj, en, finite))
+    }
+
+    /// Add the facets `cells` (global numbers, all of this block) with convection `law`.
+    /// Returns whether the tangent entries written are finite, or the kernel's error with the
+    /// block's facet number.
+    pub(super) fn run_facets<const N: usize, const D: usize, E: RefElement<N, D>>(
+        self,
+        law: &Convection,
+        cells: &[u32],
+    ) -> Result<bool, (KernelError, usize)> {
+        let nd = self.lay.ndof();
+        let (mut ld, mut r) = (vec![0u32; nd], vec![0.0; nd]);
+        let mut k = vec![0.0; if self.tangent { nd * nd } else { 0 }];
+        let mut finite = true;
+        for &g in cells {
+            let c = (g - self.first) as usize;
+            let nodes = self.blk.cell(c);
+            let s = gather::<N>(&self.model.mesh.coords, &self.model.dofs, nodes, self.x);
+            local_dofs(&self.model.dofs, &self.lay, nodes, &mut ld);
+            let kc = if self.tangent { Some(&mut k[..]) } else { None };
+            facet::convection::<N, D, E>(law, &self.lay, &s, self.act, &mut r, kc)
+                .map_err(|e| (e, c))?;
+            // SAFETY: the schedule's promise (see `add`)
+            finite &= unsafe { self.add(c, &ld, &r, &k) };
+        }
+        Ok(finite)
     }
 }

@@ -21,9 +21,10 @@ mod schedule;
 
 pub use cells::check_inversion;
 
-use crate::dofs::{Pattern, build_pattern};
+use crate::dofs::{Layout, Pattern, build_pattern};
 use crate::kernel::{Active, KernelError};
-use crate::model::Model;
+use crate::mesh::Block;
+use crate::model::{FacetBlock, Model};
 use cells::{Arrays, Cells};
 use rayon::prelude::*;
 use scatter::{FIRST, Shared, Slots};
@@ -42,6 +43,8 @@ pub enum AssemblyError {
     BadMesh { region: String, cell: usize },
     /// A regularization rotation measure is unbounded (a medium cell rotated by 90°).
     Singular { region: String },
+    /// A boundary facet of `group` has collapsed to zero area (or was degenerate).
+    BadFacet { group: String, facet: usize },
     /// NaN or infinity in the residual or the tangent.
     NotFinite,
 }
@@ -61,6 +64,10 @@ impl std::fmt::Display for AssemblyError {
             AssemblyError::Singular { region } => write!(
                 f,
                 "a cell of region \"{region}\" is rotated by 90° (regularization unbounded)"
+            ),
+            AssemblyError::BadFacet { group, facet } => write!(
+                f,
+                "facet {facet} of boundary group \"{group}\" has no area (degenerate or collapsed)"
             ),
             AssemblyError::NotFinite => write!(f, "the residual is not finite"),
         }
@@ -123,8 +130,8 @@ impl Assembler {
             pattern.nnz() < FIRST as usize,
             "more than 2³¹ tangent entries"
         );
-        let mut slots: Vec<Slots> = (0..model.blocks.len())
-            .map(|bi| Slots::new(model, bi, &pattern))
+        let mut slots: Vec<Slots> = (0..n_blocks(model))
+            .map(|bi| Slots::new(model, conn(model, bi), layout(model, bi), &pattern))
             .collect();
         // one level of halves per doubling of the threads
         let depth = rayon::current_num_threads()
@@ -132,13 +139,13 @@ impl Assembler {
             .trailing_zeros() as usize;
         let mesh = &model.mesh;
         let mut first_cell = vec![0u32];
-        for info in &model.blocks {
-            let n = mesh.cells[info.block].n_cells() as u32;
+        for bi in 0..n_blocks(model) {
+            let n = conn(model, bi).n_cells() as u32;
             first_cell.push(first_cell.last().unwrap() + n);
         }
         let nodes = |g: u32| -> &[usize] {
             let bi = first_cell.partition_point(|&f| f <= g) - 1;
-            mesh.cells[model.blocks[bi].block].cell((g - first_cell[bi]) as usize)
+            conn(model, bi).cell((g - first_cell[bi]) as usize)
         };
         let cells = (0..*first_cell.last().unwrap()).collect();
         let (mut mark, mut stamp) = (vec![0u32; mesh.coords.len()], 0);
@@ -224,11 +231,11 @@ impl Assembler {
                 let len = rest.partition_point(|&h| h < first_cell[bi + 1]);
                 let (these, next) = rest.split_at(len);
                 rest = next;
-                let info = &model.blocks[bi];
-                let kind = model.mesh.cells[info.block].kind;
+                let blk = conn(model, bi);
                 let job = Cells {
                     model,
-                    bi,
+                    blk,
+                    lay: layout(model, bi),
                     first: first_cell[bi],
                     slots: &slots[bi],
                     x,
@@ -238,7 +245,18 @@ impl Assembler {
                     arrays,
                     prefetch,
                 };
-                let res = crate::with_cell!(kind, |N, D, E| job.run::<N, D, E>(these));
+                let Some(info) = model.blocks.get(bi) else {
+                    let fb = &model.facet_blocks[bi - model.blocks.len()];
+                    let res = crate::with_element!(blk.kind, |N, D, E| job
+                        .run_facets::<N, D, E>(&fb.law, these));
+                    let finite = res.map_err(|(e, facet)| facet_error(model, fb, e, facet))?;
+                    if !finite {
+                        return Err(AssemblyError::NotFinite);
+                    }
+                    continue;
+                };
+                let res =
+                    crate::with_cell!(blk.kind, |N, D, E| job.run::<N, D, E>(&info.mat, these));
                 let (min_j, energy, finite) =
                     res.map_err(|(e, cell)| cell_error(model, bi, e, cell))?;
                 if !finite {
@@ -274,6 +292,36 @@ impl Assembler {
     }
 }
 
+/// Blocks the assembler runs: the model's cell blocks, then its facet blocks.
+fn n_blocks(model: &Model) -> usize {
+    model.blocks.len() + model.facet_blocks.len()
+}
+
+/// Connectivity of assembler block `bi` (see [`n_blocks`]).
+fn conn(model: &Model, bi: usize) -> &Block {
+    match model.blocks.get(bi) {
+        Some(info) => &model.mesh.cells[info.block],
+        None => &model.mesh.facets[model.facet_blocks[bi - model.blocks.len()].block],
+    }
+}
+
+/// Local layout of assembler block `bi`.
+fn layout(model: &Model, bi: usize) -> Layout {
+    match model.blocks.get(bi) {
+        Some(info) => info.layout,
+        None => model.facet_blocks[bi - model.blocks.len()].layout,
+    }
+}
+
+/// The assembly error of a facet kernel's failure.
+fn facet_error(model: &Model, fb: &FacetBlock, e: KernelError, facet: usize) -> AssemblyError {
+    let group = model.flux_groups[fb.group].name.clone();
+    match e {
+        KernelError::BadGeometry => AssemblyError::BadFacet { group, facet },
+        _ => AssemblyError::NotFinite,
+    }
+}
+
 /// The assembly error of a kernel's failure in cell `cell` of model block `bi`.
 pub(super) fn cell_error(model: &Model, bi: usize, e: KernelError, cell: usize) -> AssemblyError {
     let region = || model.regions[model.blocks[bi].region].0.clone();
@@ -288,4 +336,38 @@ pub(super) fn cell_error(model: &Model, bi: usize, e: KernelError, cell: usize) 
         },
         KernelError::Singular => AssemblyError::Singular { region: region() },
     }
+}
+
+/// Heat supplied to the body through each convecting group at the state `x`, indexed like
+/// `model.flux_groups`: −Σ of the convection residual over the group's free θ dofs (at a node
+/// shared with a prescribed θ, the heat is in that group's reaction).
+pub fn convection_heat(model: &Model, x: &[f64]) -> Result<Vec<f64>, AssemblyError> {
+    let mut heat = vec![0.0; model.flux_groups.len()];
+    for fb in &model.facet_blocks {
+        let blk = &model.mesh.facets[fb.block];
+        let lay = fb.layout;
+        let mut r = vec![0.0; lay.ndof()];
+        for c in 0..blk.n_cells() {
+            let nodes = blk.cell(c);
+            crate::with_element!(blk.kind, |N, D, E| {
+                let s = crate::dofs::gather::<N>(&model.mesh.coords, &model.dofs, nodes, x);
+                crate::kernel::facet::convection::<N, D, E>(
+                    &fb.law,
+                    &lay,
+                    &s,
+                    Active::ALL,
+                    &mut r,
+                    None,
+                )
+                .map_err(|e| facet_error(model, fb, e, c))?;
+            });
+            for (I, &n) in nodes.iter().enumerate() {
+                let dof = model.dofs.theta[n] as usize;
+                if model.cons.prescribed[dof].is_none() {
+                    heat[fb.group] -= r[lay.theta(I)];
+                }
+            }
+        }
+    }
+    Ok(heat)
 }

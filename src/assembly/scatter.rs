@@ -2,7 +2,8 @@
 //! scatter is a load and an add (or a store, for the first writer) per entry.
 #![allow(non_snake_case)]
 
-use crate::dofs::{NONE, Pattern};
+use crate::dofs::{DofMap, Layout, NONE, Pattern};
+use crate::mesh::Block;
 use crate::model::Model;
 use rayon::prelude::*;
 
@@ -27,9 +28,8 @@ pub(super) const NO_SLOT: u32 = u32::MAX;
 pub(super) const FIRST: u32 = 1 << 31;
 
 /// The global dofs of a cell's local dofs, in the kernel's layout.
-pub(super) fn local_dofs(model: &Model, bi: usize, nodes: &[usize], ld: &mut [u32]) {
-    let lay = model.blocks[bi].layout;
-    let (dofs, D) = (&model.dofs, lay.dim);
+pub(super) fn local_dofs(dofs: &DofMap, lay: &Layout, nodes: &[usize], ld: &mut [u32]) {
+    let D = lay.dim;
     for (I, &n) in nodes.iter().enumerate() {
         if lay.has_u {
             for i in 0..D {
@@ -69,10 +69,9 @@ pub(super) struct Slots {
 const NO_ROW: u8 = u8::MAX;
 
 impl Slots {
-    pub(super) fn new(model: &Model, bi: usize, pattern: &Pattern) -> Slots {
+    /// The slots of block `blk` (cells or facets) with local layout `lay`.
+    pub(super) fn new(model: &Model, blk: &Block, lay: Layout, pattern: &Pattern) -> Slots {
         let eq = &model.cons.eq;
-        let blk = &model.mesh.cells[model.blocks[bi].block];
-        let lay = model.blocks[bi].layout;
         let (n, nd) = (blk.kind.n_nodes(), lay.ndof());
         let mut node = vec![0; nd];
         for I in 0..n {
@@ -98,7 +97,7 @@ impl Slots {
                 .for_each_init(
                     || (vec![0u32; nd], vec![NONE; n]),
                     |(ld, first), (c, (base, offset))| {
-                        local_dofs(model, bi, blk.cell(c), ld);
+                        local_dofs(&model.dofs, &lay, blk.cell(c), ld);
                         // each node's first free equation
                         first.fill(NONE);
                         for a in 0..nd {

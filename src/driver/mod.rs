@@ -4,7 +4,7 @@ pub mod records;
 mod run;
 pub mod strategy;
 
-pub use records::{HISTORY_SOLVER_COLUMNS, HISTORY_STEP_COLUMNS, Summary, reactions};
+pub use records::{HISTORY_SOLVER_COLUMNS, HISTORY_STEP_COLUMNS, Summary, group_flows, reactions};
 pub use strategy::{Strategy, choose_linear, choose_strategy, describe};
 
 use crate::case::{Case, CaseError};

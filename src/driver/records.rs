@@ -2,6 +2,7 @@
 //! reactions per Dirichlet group.
 
 use super::strategy::Strategy;
+use crate::assembly::{AssemblyError, convection_heat};
 use crate::case::Case;
 use crate::dofs::Field;
 use crate::model::{Model, Physics};
@@ -139,6 +140,31 @@ pub const HISTORY_STEP_COLUMNS: [&str; 9] = [
 /// The solver's counters and the pseudo-time, near the end of history.csv.
 pub const HISTORY_SOLVER_COLUMNS: [&str; 3] = ["krylov_iterations", "halvings", "time"];
 
+/// Force and heat on the body through every group: the Dirichlet groups' reactions (from the
+/// residual `r_full` of the state `x`), plus the loads of the groups with flux conditions at
+/// (pseudo-)time `t` (traction, heat flux, and the heat convection exchanges).
+pub fn group_flows(
+    model: &Model,
+    r_full: &[f64],
+    x: &[f64],
+    t: f64,
+) -> Result<Reactions, AssemblyError> {
+    let mut out = reactions(model, r_full);
+    let lambda = model.path.lambda(t);
+    let convected = convection_heat(model, x)?;
+    for (g, group) in model.flux_groups.iter().enumerate() {
+        let amp = if group.ramped { lambda } else { 1.0 };
+        let entry = out.entry(group.name.clone()).or_default();
+        for &(_, key, value) in &group.loads {
+            *entry.entry(key.into()).or_default() += amp * value;
+        }
+        if group.convects {
+            *entry.entry("heat".into()).or_default() += convected[g];
+        }
+    }
+    Ok(out)
+}
+
 /// Reactions per Dirichlet group: force components on the body and heat supplied to it.
 pub fn reactions(model: &Model, r_full: &[f64]) -> Reactions {
     let mut out: BTreeMap<String, BTreeMap<String, f64>> = BTreeMap::new();
@@ -217,6 +243,19 @@ impl HistoryLayout {
                 };
                 if has {
                     reactions.push((g.name.clone(), key.to_string()));
+                }
+            }
+        }
+        // then the groups with flux conditions, in component order, unless already there
+        for g in &model.flux_groups {
+            let mut keys: Vec<&str> = g.loads.iter().map(|l| l.1).collect();
+            if g.convects {
+                keys.push("heat");
+            }
+            for key in ["x", "y", "z", "heat"] {
+                let col = (g.name.clone(), key.to_string());
+                if keys.contains(&key) && !reactions.contains(&col) {
+                    reactions.push(col);
                 }
             }
         }

@@ -2,7 +2,7 @@
 //! controller, and what each accepted step records (history row, VTU, reactions, work).
 //! [`super::solve_model`] drives it: attempt a step, then accept or reject it, until done.
 
-use super::records::{HistoryLayout, Reactions, StepRow, Summary, peak_memory_mb, reactions};
+use super::records::{HistoryLayout, Reactions, StepRow, Summary, group_flows, peak_memory_mb};
 use super::strategy::{Strategy, choose_linear, choose_strategy, describe};
 use super::{SolveError, SolveOptions};
 use crate::assembly::Assembler;
@@ -161,7 +161,8 @@ impl<'a> Run<'a> {
             .assemble(self.model, &self.x, 0.0, false, None)
             .map_err(|e| SolveError::Setup(format!("the initial state is invalid: {e}")))?;
         self.summary.energy = stats0.energy;
-        let r0 = reactions(self.model, &self.asm.r_full);
+        let r0 = group_flows(self.model, &self.asm.r_full, &self.x, 0.0)
+            .map_err(|e| SolveError::Setup(format!("the initial state is invalid: {e}")))?;
         let row = StepRow {
             min_J_solid: stats0.min_J_solid,
             min_J_medium: stats0.min_J_medium,
@@ -235,7 +236,8 @@ impl<'a> Run<'a> {
             .assemble(model, &self.x, target, false, None)
             .map_err(|e| SolveError::Setup(format!("converged state is invalid: {e}")))?;
         self.totals.t_reactions += t0.elapsed().as_secs_f64();
-        self.totals.reactions = reactions(model, &self.asm.r_full);
+        self.totals.reactions = group_flows(model, &self.asm.r_full, &self.x, target)
+            .map_err(|e| SolveError::Setup(format!("converged state is invalid: {e}")))?;
         let f_now = self.forces(target);
         let tot = &mut self.totals;
         tot.work += self

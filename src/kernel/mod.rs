@@ -6,6 +6,7 @@
 //! - [`lanes`]: the same for four cells at once, one per SIMD lane;
 //! - [`regularization`]: the medium's regularization terms, with p fields (eq. 20) or direct
 //!   (eq. 18);
+//! - [`facet`]: integrals over boundary facets (convection);
 //! - [`fields`]: cell averages for output (σ, q, J, k).
 //!
 //! Local dof order is field-blocked: u (node-major, `D` components), then θ, then p
@@ -13,6 +14,7 @@
 #![allow(non_snake_case)]
 
 pub mod bulk;
+pub mod facet;
 pub mod fields;
 pub mod lanes;
 mod point;

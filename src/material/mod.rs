@@ -1,17 +1,20 @@
 //! Pure material laws: functions of a point's kinematics returning stresses, fluxes and their
 //! exact derivatives. They know nothing of meshes or dofs. One file per law family:
 //! [`thermo_elastic`] (the solid's and the medium's stress), [`conduction`] (the pulled-back
-//! Fourier law), [`regularization`] (the medium's rotation measures and their penalty).
+//! Fourier law), [`regularization`] (the medium's rotation measures and their penalty),
+//! [`convection`] (heat lost through a boundary).
 //!
 //! Tensors are 3×3 even in 2D (plane strain: F33 = 1, 3D invariants). Fourth-order tangents
 //! are stored as 9×9 matrices with the index pair (i, J) ↦ 3 i + J.
 #![allow(non_snake_case)]
 
 pub mod conduction;
+pub mod convection;
 pub mod regularization;
 pub mod thermo_elastic;
 
 pub use conduction::{Conductivity, HeatResponse, fourier};
+pub use convection::Convection;
 pub use regularization::{
     ROTATION_PLANES, Regularization, RotationMeasure, rotation_measure, rotation_measure_d3,
 };

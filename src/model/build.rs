@@ -2,11 +2,14 @@
 //! blocks with their local layouts, dofs, Dirichlet constraints, external loads.
 #![allow(non_snake_case)]
 
-use super::{BcGroup, BlockInfo, LoadPath, Model, Physics, decide_physics, facet_weights};
+use super::{
+    BcGroup, BlockInfo, FacetBlock, FluxGroup, LoadPath, Model, Physics, decide_physics,
+    facet_weights,
+};
 use crate::case::{Case, CaseError, RegionKind};
 use crate::dofs::{Constraints, DofMap, Field, Layout, NONE, Prescribed};
 use crate::kernel::CellMaterial;
-use crate::material::{Conductivity, Regularization, ThermoElastic};
+use crate::material::{Conductivity, Convection, Regularization, ThermoElastic};
 use crate::mesh::Mesh;
 
 /// Build the model. The case must already be validated against the mesh.
@@ -38,13 +41,16 @@ pub fn build(case: &Case, mesh: Mesh) -> Result<Model, CaseError> {
         own: Vec::new(),
     };
     let (cons, bc_groups) = dirichlet(case, &mesh, &dofs, &theta_init, &mut path)?;
-    let (f_ramp, f_full) = external_loads(case, &mesh, &dofs, &blocks, &cons);
+    let (f_ramp, f_full, mut flux_groups) = external_loads(case, &mesh, &dofs, &blocks, &cons);
+    let facet_blocks = convection_blocks(case, &mesh, &physics, &mut flux_groups);
     debug_assert!(cons.eq.iter().filter(|&&e| e != NONE).count() == cons.n_eq);
     Ok(Model {
         physics,
         dofs,
         cons,
         blocks,
+        facet_blocks,
+        flux_groups,
         regions: case
             .file
             .region
@@ -302,23 +308,27 @@ fn dirichlet(
 }
 
 /// Nodal external loads from tractions, heat fluxes, body forces and heat sources:
-/// (ramped by λ, held at full value). Zero on prescribed dofs.
+/// (ramped by λ, held at full value), zero on prescribed dofs; and the groups with flux
+/// conditions, with their loads on free dofs.
 fn external_loads(
     case: &Case,
     mesh: &Mesh,
     dofs: &DofMap,
     blocks: &[BlockInfo],
     cons: &Constraints,
-) -> (Vec<f64>, Vec<f64>) {
+) -> (Vec<f64>, Vec<f64>, Vec<FluxGroup>) {
+    const AXES: [&str; 3] = ["x", "y", "z"];
     let f = &case.file;
     let mut f_ramp = vec![0.0; dofs.n_dofs];
     let mut f_full = vec![0.0; dofs.n_dofs];
+    let mut groups = Vec::new();
     for bc in &f.bc {
-        if bc.traction.is_none() && bc.heat_flux.is_none() {
+        if bc.traction.is_none() && bc.heat_flux.is_none() && bc.h.is_none() {
             continue;
         }
         let g = mesh.group(bc.group.get_ref()).expect("validated");
         let target = if bc.ramp { &mut f_ramp } else { &mut f_full };
+        let mut loads: Vec<(usize, &'static str, f64)> = Vec::new();
         for b in mesh.facets.iter().filter(|b| b.groups.contains(&g)) {
             for c in 0..b.n_cells() {
                 let nodes = b.cell(c);
@@ -327,15 +337,26 @@ fn external_loads(
                 for (&n, wi) in nodes.iter().zip(&w) {
                     if let (Some(t), true) = (&bc.traction, dofs.has(Field::U)) {
                         for (i, ti) in t.get_ref().iter().enumerate() {
-                            target[dofs.u[n * dofs.dim + i] as usize] += ti * wi;
+                            let dof = dofs.u[n * dofs.dim + i] as usize;
+                            target[dof] += ti * wi;
+                            loads.push((dof, AXES[i], ti * wi));
                         }
                     }
                     if let (Some(q), true) = (bc.heat_flux, dofs.has(Field::Theta)) {
-                        target[dofs.theta[n] as usize] += q * wi;
+                        let dof = dofs.theta[n] as usize;
+                        target[dof] += q * wi;
+                        loads.push((dof, "heat", q * wi));
                     }
                 }
             }
         }
+        loads.retain(|&(dof, _, _)| cons.prescribed[dof].is_none());
+        groups.push(FluxGroup {
+            name: bc.group.get_ref().clone(),
+            loads,
+            ramped: bc.ramp,
+            convects: bc.h.is_some() && dofs.has(Field::Theta),
+        });
     }
     for (bi, b) in mesh.cells.iter().enumerate() {
         let r = &f.region[blocks[bi].region];
@@ -363,5 +384,53 @@ fn external_loads(
             f_full[dof] = 0.0;
         }
     }
-    (f_ramp, f_full)
+    (f_ramp, f_full, groups)
+}
+
+/// The facet blocks of the convecting groups (`flux_groups` as [`external_loads`] lists them:
+/// one per `[[bc]]` with a flux condition, in case order).
+fn convection_blocks(
+    case: &Case,
+    mesh: &Mesh,
+    physics: &Physics,
+    flux_groups: &mut [FluxGroup],
+) -> Vec<FacetBlock> {
+    let mut out = Vec::new();
+    let with_flux = case
+        .file
+        .bc
+        .iter()
+        .filter(|bc| bc.traction.is_some() || bc.heat_flux.is_some() || bc.h.is_some());
+    for (gi, bc) in with_flux.enumerate() {
+        let (Some(h), Some(theta_inf)) = (&bc.h, &bc.theta_inf) else {
+            continue;
+        };
+        if !physics.conduction {
+            continue;
+        }
+        let law = Convection {
+            h: *h.get_ref(),
+            theta_inf: *theta_inf.get_ref(),
+        };
+        let g = mesh.group(bc.group.get_ref()).expect("validated");
+        for (fb, b) in mesh.facets.iter().enumerate() {
+            if !b.groups.contains(&g) {
+                continue;
+            }
+            out.push(FacetBlock {
+                block: fb,
+                group: gi,
+                law,
+                layout: Layout {
+                    n: b.kind.n_nodes(),
+                    dim: mesh.dim,
+                    has_u: physics.mechanics,
+                    has_theta: true,
+                    np: 0,
+                },
+            });
+        }
+        debug_assert!(flux_groups[gi].convects);
+    }
+    out
 }

@@ -13,6 +13,7 @@ pub use physics::{Physics, decide_physics};
 use crate::case::RegionKind;
 use crate::dofs::{Constraints, DofMap, Field, Layout};
 use crate::kernel::CellMaterial;
+use crate::material::Convection;
 use crate::mesh::Mesh;
 
 /// One cell block of the mesh with its material and local layout.
@@ -34,6 +35,30 @@ pub struct BcGroup {
     pub fields: Vec<&'static str>,
 }
 
+/// A block of boundary facets that carries a facet law (convection), with its local layout.
+#[derive(Clone, Debug)]
+pub struct FacetBlock {
+    /// Index into `mesh.facets`.
+    pub block: usize,
+    /// Index into `Model::flux_groups`.
+    pub group: usize,
+    pub law: Convection,
+    pub layout: Layout,
+}
+
+/// A boundary group with a flux condition (traction, heat flux, convection): its force and
+/// heat on the body are reported with the Dirichlet groups' reactions.
+#[derive(Clone, Debug)]
+pub struct FluxGroup {
+    pub name: String,
+    /// Prescribed loads on free dofs: (dof, component "x", "y", "z" or "heat", value at full
+    /// load), scaled by λ when `ramped`.
+    pub loads: Vec<(usize, &'static str, f64)>,
+    pub ramped: bool,
+    /// Whether facet blocks of this group convect (their heat is assembled, not prescribed).
+    pub convects: bool,
+}
+
 /// The discrete problem.
 #[derive(Debug)]
 pub struct Model {
@@ -42,6 +67,10 @@ pub struct Model {
     pub dofs: DofMap,
     pub cons: Constraints,
     pub blocks: Vec<BlockInfo>,
+    /// Boundary facets with a facet law, after the cell blocks in the assembly.
+    pub facet_blocks: Vec<FacetBlock>,
+    /// Groups with flux conditions, for reporting.
+    pub flux_groups: Vec<FluxGroup>,
     /// Region names and kinds, in case order.
     pub regions: Vec<(String, RegionKind)>,
     /// The load factor and the groups' own amplitudes over pseudo-time.

@@ -26,15 +26,19 @@ pub fn decide_physics(case: &Case) -> Physics {
     let f = &case.file;
     let conduction =
         f.bc.iter()
-            .any(|b| b.theta.is_some() || b.heat_flux.is_some())
+            .any(|b| b.theta.is_some() || b.heat_flux.is_some() || b.h.is_some())
             || f.region
                 .iter()
                 .any(|r| r.heat_source.is_some_and(|q| q != 0.0));
-    // θ can differ from θ0 somewhere only if some prescribed θ or supplied heat is non-trivial
+    // θ can differ from θ0 somewhere only if some prescribed θ, ambient temperature or supplied
+    // heat is non-trivial
     let theta0s: Vec<f64> = f.region.iter().map(|r| r.theta0).collect();
+    let differs = |t: f64| theta0s.iter().any(|&t0| t != t0);
     let theta_varies = f.bc.iter().any(|b| {
-        b.theta.is_some_and(|t| theta0s.iter().any(|&t0| t != t0))
+        b.theta.is_some_and(differs)
             || b.heat_flux.is_some_and(|q| q != 0.0)
+            || (b.h.as_ref().is_some_and(|h| *h.get_ref() > 0.0)
+                && b.theta_inf.as_ref().is_some_and(|t| differs(*t.get_ref())))
     }) || f
         .region
         .iter()
