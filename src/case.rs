@@ -64,6 +64,9 @@ pub struct Region {
     pub body_force: Option<Vec<f64>>,
     /// Heat source per reference volume (ramped).
     pub heat_source: Option<f64>,
+    /// Heat capacity ρc per reference volume: with `[time]`, the region stores heat
+    /// (ρc θ̇ by backward Euler); without, it is stationary.
+    pub rho_c: Option<Spanned<f64>>,
 }
 
 /// `[[bc]]`: conditions on one physical group of the boundary (or of points).
@@ -138,6 +141,59 @@ impl Default for Steps {
     }
 }
 
+/// `[time]`: physical time t ∈ [0, end] replaces the load parameter as what the steps
+/// advance; loads follow λ(t).
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Time {
+    /// End time, > 0.
+    pub end: Spanned<f64>,
+    /// Step size Δt: steps are cut after a failure and grow back, never beyond Δt.
+    pub dt: Option<Spanned<f64>>,
+    /// Times that are steps of their own (and written), increasing in (0, end].
+    pub times: Option<Spanned<Vec<f64>>>,
+    /// The load factor over time as [[t, λ], …], piecewise linear, t increasing from 0
+    /// (default `[[0, 0], [end, 1]]`).
+    pub lambda: Option<Spanned<Vec<[f64; 2]>>>,
+}
+
+impl Time {
+    /// The times every run of this case steps onto: the `times`, the vertices of `lambda`
+    /// inside (0, end), and `end`.
+    pub fn vertices(&self) -> Vec<f64> {
+        let end = *self.end.get_ref();
+        let mut v: Vec<f64> = self
+            .times
+            .as_ref()
+            .map_or(Vec::new(), |t| t.get_ref().clone());
+        if let Some(l) = &self.lambda {
+            v.extend(l.get_ref().iter().map(|r| r[0]));
+        }
+        v.push(end);
+        v.retain(|&t| t > 0.0 && t <= end);
+        v.sort_by(f64::total_cmp);
+        v.dedup();
+        v
+    }
+
+    /// The largest step: `dt`, or the longest interval between vertices.
+    pub fn dt_max(&self) -> f64 {
+        match &self.dt {
+            Some(dt) => *dt.get_ref(),
+            None => {
+                let v = self.vertices();
+                let mut last = 0.0;
+                let mut m = 0.0f64;
+                for t in v {
+                    m = m.max(t - last);
+                    last = t;
+                }
+                m
+            }
+        }
+    }
+}
+
 /// `[solver]`: linear solver choice.
 #[derive(Clone, Debug, Deserialize, Default)]
 #[serde(deny_unknown_fields, default)]
@@ -204,6 +260,7 @@ pub struct CaseFile {
     pub bc: Vec<Bc>,
     #[serde(default)]
     pub steps: Steps,
+    pub time: Option<Time>,
     #[serde(default)]
     pub solver: Solver,
     #[serde(default)]
@@ -302,6 +359,17 @@ impl Case {
                 }
                 positive_if_given(key, v)
             };
+            if let Some(v) = &r.rho_c
+                && !(*v.get_ref() > 0.0 && v.get_ref().is_finite())
+            {
+                return self.error(
+                    v.span(),
+                    format!(
+                        "region[{i}] (\"{name}\"): `rho_c` must be positive and finite, got {}",
+                        v.get_ref()
+                    ),
+                );
+            }
             match r.kind {
                 RegionKind::Solid => {
                     need("K", &r.K)?;
@@ -349,13 +417,23 @@ impl Case {
         if !(s.grow >= 1.0 && s.cut > 0.0 && s.cut < 1.0) {
             bad("need grow >= 1 and 0 < cut < 1")?;
         }
-        let n_path = match &s.path {
-            Some(p) if p.len() < 2 || p[0] != 0.0 || p.iter().any(|v| !v.is_finite()) => {
+        let n_path = match (&s.path, &f.time) {
+            (Some(_), Some(_)) => {
+                bad(
+                    "`path` is over pseudo-time; with [time], give the load factor as [time] lambda = [[t, λ], …]",
+                )?;
+                0
+            }
+            (Some(p), None) if p.len() < 2 || p[0] != 0.0 || p.iter().any(|v| !v.is_finite()) => {
                 bad("path needs at least two finite values, the first 0 (the unloaded state)")?;
                 0
             }
-            Some(p) => p.len(),
-            None => 2,
+            (Some(p), None) => p.len(),
+            (None, Some(t)) => {
+                self.check_time(t)?;
+                t.lambda.as_ref().map_or(2, |l| l.get_ref().len())
+            }
+            (None, None) => 2,
         };
         for bc in &f.bc {
             let Some(own) = &bc.path else { continue };
@@ -364,7 +442,7 @@ impl Case {
             if v.len() != n_path || v[0] != 0.0 || v.iter().any(|v| !v.is_finite()) {
                 return self.error(
                     own.span(),
-                    format!("bc on \"{g}\": `path` needs {n_path} finite values (one per value of [steps] path), the first 0"),
+                    format!("bc on \"{g}\": `path` needs {n_path} finite values (one per value of [steps] path, or per row of [time] lambda), the first 0"),
                 );
             }
             if bc.traction.is_some() || bc.heat_flux.is_some() || bc.h.is_some() || !bc.ramp {
@@ -434,6 +512,57 @@ impl Case {
                 p.name.span(),
                 format!("probe name \"{}\" is used twice", w[0]),
             );
+        }
+        Ok(())
+    }
+
+    /// `[time]`: a positive end, steps (`dt` or `times`) inside it, and a load table that
+    /// starts at t = 0 and increases.
+    fn check_time(&self, t: &Time) -> Result<(), CaseError> {
+        let end = *t.end.get_ref();
+        if !(end > 0.0 && end.is_finite()) {
+            return self.error(
+                t.end.span(),
+                format!("[time]: `end` must be positive and finite, got {end}"),
+            );
+        }
+        if t.dt.is_none() && t.times.is_none() {
+            return self.error(
+                t.end.span(),
+                "[time]: no steps; give the step size `dt` or the step times `times`",
+            );
+        }
+        if let Some(dt) = &t.dt {
+            let v = *dt.get_ref();
+            if !(v > 0.0 && v <= end) {
+                return self.error(
+                    dt.span(),
+                    format!("[time]: `dt` must be positive and at most `end` ({end}), got {v}"),
+                );
+            }
+        }
+        if let Some(times) = &t.times {
+            let v = times.get_ref();
+            let increasing = v.windows(2).all(|w| w[0] < w[1]);
+            if v.is_empty() || !increasing || !(v[0] > 0.0) || !(v[v.len() - 1] <= end) {
+                return self.error(
+                    times.span(),
+                    format!("[time]: `times` must increase within (0, end = {end}]"),
+                );
+            }
+        }
+        if let Some(l) = &t.lambda {
+            let v = l.get_ref();
+            let ok = v.len() >= 2
+                && v[0][0] == 0.0
+                && v.windows(2).all(|w| w[0][0] < w[1][0])
+                && v.iter().flatten().all(|x| x.is_finite());
+            if !ok {
+                return self.error(
+                    l.span(),
+                    "[time]: `lambda` needs at least two finite [t, λ] rows, t increasing from 0",
+                );
+            }
         }
         Ok(())
     }

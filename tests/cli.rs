@@ -289,6 +289,72 @@ fn bad_convection_conditions_are_refused_with_file_line_and_key() {
 }
 
 #[test]
+fn bad_heat_capacities_and_time_sections_are_refused_with_file_line_and_key() {
+    type Edit = dyn Fn(&str) -> String;
+    let cases: [(&str, &Edit, &str); 9] = [
+        (
+            "rho-c-zero",
+            &|t| t.replace("mu = 10.0", "mu = 10.0\nrho_c = 0.0"),
+            "`rho_c` must be positive and finite",
+        ),
+        (
+            "rho-c-negative",
+            &|t| t.replace("mu = 10.0", "mu = 10.0\nrho_c = -3.0"),
+            "`rho_c` must be positive and finite",
+        ),
+        (
+            "rho-c-inf",
+            &|t| t.replace("mu = 10.0", "mu = 10.0\nrho_c = inf"),
+            "`rho_c` must be positive and finite",
+        ),
+        (
+            "time-no-steps",
+            &|t| format!("{t}\n[time]\nend = 1.0\n"),
+            "[time]: no steps",
+        ),
+        (
+            "time-bad-end",
+            &|t| format!("{t}\n[time]\nend = -1.0\ndt = 0.1\n"),
+            "`end` must be positive",
+        ),
+        (
+            "time-bad-dt",
+            &|t| format!("{t}\n[time]\nend = 1.0\ndt = 2.0\n"),
+            "`dt` must be positive and at most `end`",
+        ),
+        (
+            "time-bad-times",
+            &|t| format!("{t}\n[time]\nend = 1.0\ntimes = [0.5, 0.2]\n"),
+            "`times` must increase",
+        ),
+        (
+            "time-bad-lambda",
+            &|t| format!("{t}\n[time]\nend = 1.0\ndt = 0.5\nlambda = [[0.5, 0.0], [1.0, 1.0]]\n"),
+            "`lambda` needs at least two",
+        ),
+        (
+            "time-and-path",
+            &|t| format!("{t}\n[steps]\npath = [0.0, 1.0]\n[time]\nend = 1.0\ndt = 0.5\n"),
+            "with [time], give the load factor as [time] lambda",
+        ),
+    ];
+    for (tag, edit, words) in cases {
+        let (o, p) = case_with(tag, edit);
+        let e = stderr(&o);
+        let file = p.file_name().unwrap().to_str().unwrap();
+        assert!(
+            !o.status.success() && e.contains(words) && e.contains(&format!("{file}:")),
+            "{tag}: {e}"
+        );
+        // refused before anything is solved
+        assert!(
+            !p.parent().unwrap().join("out/summary.json").exists(),
+            "{tag}"
+        );
+    }
+}
+
+#[test]
 fn conflicting_dirichlet_values_on_a_shared_node_are_refused() {
     // "bottom" and "left" share the origin; they disagree on ux there
     let (o, _) = case_with("conflict", |t| {

@@ -7,7 +7,7 @@ use super::scatter::{Shared, Slots, local_dofs};
 use super::{AssemblyError, MIN_PART_CELLS, cell_error};
 use crate::dofs::{CellState, Layout, NONE, gather};
 use crate::element::RefElement;
-use crate::kernel::{self, Active, CellMaterial, KernelError, bulk, facet, lanes};
+use crate::kernel::{self, Active, CellMaterial, KernelError, bulk, capacity, facet, lanes};
 use crate::material::Convection;
 use crate::mesh::Block;
 use crate::model::Model;
@@ -46,6 +46,15 @@ pub(super) struct Arrays {
     pub(super) values: Shared,
     pub(super) r_full: Shared,
     pub(super) lift: Shared,
+}
+
+/// One block's history during an assembly: read the committed values, write the trial ones
+/// (each cell only its own `width` values).
+#[derive(Clone, Copy)]
+pub(super) struct SlabView<'a> {
+    pub(super) width: usize,
+    pub(super) committed: &'a [f64],
+    pub(super) trial: Shared,
 }
 
 /// What the cells (or facets) of one assembler block need to add their part.
@@ -208,6 +217,40 @@ impl Cells<'_> {
                 .map_err(|e| (e, c))?;
             // SAFETY: the schedule's promise (see `add`)
             finite &= unsafe { self.add(c, &ld, &r, &k) };
+        }
+        Ok(finite)
+    }
+
+    /// Add the capacity term of the cells `cells` (global numbers, all of this block) with
+    /// `c = ρc/Δt` and the block's history. Returns whether the tangent entries written are
+    /// finite, or the kernel's error with the block's cell number.
+    pub(super) fn run_capacity<const N: usize, const D: usize, E: RefElement<N, D>>(
+        self,
+        c: f64,
+        slab: &SlabView,
+        cells: &[u32],
+    ) -> Result<bool, (KernelError, usize)> {
+        let nd = self.lay.ndof();
+        let w = slab.width;
+        let (mut ld, mut r) = (vec![0u32; nd], vec![0.0; nd]);
+        let mut k = vec![0.0; if self.tangent { nd * nd } else { 0 }];
+        let mut finite = true;
+        for &g in cells {
+            let cell = (g - self.first) as usize;
+            let nodes = self.blk.cell(cell);
+            let s = gather::<N>(&self.model.mesh.coords, &self.model.dofs, nodes, self.x);
+            local_dofs(&self.model.dofs, &self.lay, nodes, &mut ld);
+            let theta_n = &slab.committed[cell * w..(cell + 1) * w];
+            // SAFETY: each cell writes only its own values of the trial history, and a cell
+            // runs once per assembly
+            let theta_now = unsafe { std::slice::from_raw_parts_mut(slab.trial.at(cell * w), w) };
+            let kc = if self.tangent { Some(&mut k[..]) } else { None };
+            capacity::capacity::<N, D, E>(
+                c, &self.lay, &s, theta_n, theta_now, self.act, &mut r, kc,
+            )
+            .map_err(|e| (e, cell))?;
+            // SAFETY: the schedule's promise (see `add`)
+            finite &= unsafe { self.add(cell, &ld, &r, &k) };
         }
         Ok(finite)
     }

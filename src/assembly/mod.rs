@@ -16,16 +16,19 @@
 #![allow(non_snake_case)]
 
 mod cells;
+pub mod history;
 mod scatter;
 mod schedule;
 
 pub use cells::check_inversion;
 
 use crate::dofs::{Layout, Pattern, build_pattern};
+use crate::element::RefElement;
 use crate::kernel::{Active, KernelError};
 use crate::mesh::Block;
 use crate::model::{FacetBlock, Model};
-use cells::{Arrays, Cells};
+use cells::{Arrays, Cells, SlabView};
+use history::{PointHistory, Slab};
 use rayon::prelude::*;
 use scatter::{FIRST, Shared, Slots};
 use schedule::Schedule;
@@ -112,6 +115,10 @@ pub struct Assembler {
     /// Ask for the cache lines each cell's tangent goes to before its kernel runs (on by
     /// default; off only to measure what it saves).
     pub prefetch: bool,
+    /// History per quadrature point, one slab per capacity block (θₙ at its points).
+    pub history: PointHistory,
+    /// Time of the last accepted (committed) state: a step to t is Δt = t − this long.
+    t_committed: f64,
 }
 
 /// Length of the pieces the whole-array passes below are cut into, one task each.
@@ -161,7 +168,10 @@ impl Assembler {
             .collect();
         let mut zero_first = Vec::new();
         Slots::flag_first(&mut slots, &order, pattern.nnz(), &mut zero_first);
+        let history = initial_history(model);
         Assembler {
+            history,
+            t_committed: 0.0,
             zero_first,
             values: vec![0.0; pattern.nnz()],
             r_full: vec![0.0; model.dofs.n_dofs],
@@ -174,7 +184,19 @@ impl Assembler {
         }
     }
 
-    /// Assemble at the state `x` (all dofs) and pseudo-time `t` (see `LoadPath`). With `tangent`, fills
+    /// A step to time `t` was accepted at the state last assembled: its history becomes the
+    /// one the next step starts from.
+    pub fn commit(&mut self, t: f64) {
+        self.history.commit();
+        self.t_committed = t;
+    }
+
+    /// A step was rejected: whatever its attempts wrote into the history is discarded.
+    pub fn restore(&mut self) {
+        self.history.restore();
+    }
+
+    /// Assemble at the state `x` (all dofs) and time `t` (see `LoadPath`). With `tangent`, fills
     /// `values`; with `dx_prescribed`, also the lifting of those prescribed increments.
     pub fn assemble(
         &mut self,
@@ -211,6 +233,20 @@ impl Assembler {
         self.lift.fill(0.0);
         let first_cell = &self.first_cell;
         let prefetch = tangent && self.prefetch;
+        // no time elapsed (the committed state itself): no heat stored over the step
+        let dt = t - self.t_committed;
+        let inv_dt = if dt > 0.0 { 1.0 / dt } else { 0.0 };
+        let history: Vec<SlabView> = self
+            .history
+            .slabs
+            .iter_mut()
+            .map(|s| SlabView {
+                width: s.width,
+                committed: &s.committed,
+                trial: Shared(s.trial.as_mut_ptr()),
+            })
+            .collect();
+        let history = &history;
         let slots = &self.slots;
         let arrays = Arrays {
             values: Shared(self.values.as_mut_ptr()),
@@ -223,54 +259,69 @@ impl Assembler {
             energy: 0.0,
         };
         // a part's cells, sorted: runs of one model block each
-        let run = |cells: &[u32]| -> Result<AssemblyStats, AssemblyError> {
-            let mut stats = empty;
-            let mut rest = cells;
-            while let Some(&g) = rest.first() {
-                let bi = first_cell.partition_point(|&f| f <= g) - 1;
-                let len = rest.partition_point(|&h| h < first_cell[bi + 1]);
-                let (these, next) = rest.split_at(len);
-                rest = next;
-                let blk = conn(model, bi);
-                let job = Cells {
-                    model,
-                    blk,
-                    lay: layout(model, bi),
-                    first: first_cell[bi],
-                    slots: &slots[bi],
-                    x,
-                    tangent,
-                    dx_prescribed,
-                    act,
-                    arrays,
-                    prefetch,
-                };
-                let Some(info) = model.blocks.get(bi) else {
-                    let fb = &model.facet_blocks[bi - model.blocks.len()];
-                    let res = crate::with_element!(blk.kind, |N, D, E| job
-                        .run_facets::<N, D, E>(&fb.law, these));
-                    let finite = res.map_err(|(e, facet)| facet_error(model, fb, e, facet))?;
+        let run =
+            |cells: &[u32]| -> Result<AssemblyStats, AssemblyError> {
+                let mut stats = empty;
+                let mut rest = cells;
+                while let Some(&g) = rest.first() {
+                    let bi = first_cell.partition_point(|&f| f <= g) - 1;
+                    let len = rest.partition_point(|&h| h < first_cell[bi + 1]);
+                    let (these, next) = rest.split_at(len);
+                    rest = next;
+                    let blk = conn(model, bi);
+                    let job = Cells {
+                        model,
+                        blk,
+                        lay: layout(model, bi),
+                        first: first_cell[bi],
+                        slots: &slots[bi],
+                        x,
+                        tangent,
+                        dx_prescribed,
+                        act,
+                        arrays,
+                        prefetch,
+                    };
+                    if let Some(ci) = capacity_index(model, bi) {
+                        let cb = &model.capacity_blocks[ci];
+                        let slab = &history[ci];
+                        let res = crate::with_cell!(blk.kind, |N, D, E| job
+                            .run_capacity::<N, D, E>(cb.rho_c * inv_dt, slab, these));
+                        let finite = res.map_err(|(e, cell)| AssemblyError::BadMesh {
+                            region: format!("{} ({e:?})", model.regions[cb.region].0),
+                            cell,
+                        })?;
+                        if !finite {
+                            return Err(AssemblyError::NotFinite);
+                        }
+                        continue;
+                    }
+                    let Some(info) = model.blocks.get(bi) else {
+                        let fb = &model.facet_blocks[bi - model.blocks.len()];
+                        let res = crate::with_element!(blk.kind, |N, D, E| job
+                            .run_facets::<N, D, E>(&fb.law, these));
+                        let finite = res.map_err(|(e, facet)| facet_error(model, fb, e, facet))?;
+                        if !finite {
+                            return Err(AssemblyError::NotFinite);
+                        }
+                        continue;
+                    };
+                    let res =
+                        crate::with_cell!(blk.kind, |N, D, E| job.run::<N, D, E>(&info.mat, these));
+                    let (min_j, energy, finite) =
+                        res.map_err(|(e, cell)| cell_error(model, bi, e, cell))?;
                     if !finite {
                         return Err(AssemblyError::NotFinite);
                     }
-                    continue;
-                };
-                let res =
-                    crate::with_cell!(blk.kind, |N, D, E| job.run::<N, D, E>(&info.mat, these));
-                let (min_j, energy, finite) =
-                    res.map_err(|(e, cell)| cell_error(model, bi, e, cell))?;
-                if !finite {
-                    return Err(AssemblyError::NotFinite);
+                    if info.mat.medium {
+                        stats.min_J_medium = stats.min_J_medium.min(min_j);
+                    } else {
+                        stats.min_J_solid = stats.min_J_solid.min(min_j);
+                    }
+                    stats.energy += energy;
                 }
-                if info.mat.medium {
-                    stats.min_J_medium = stats.min_J_medium.min(min_j);
-                } else {
-                    stats.min_J_solid = stats.min_J_solid.min(min_j);
-                }
-                stats.energy += energy;
-            }
-            Ok(stats)
-        };
+                Ok(stats)
+            };
         let stats = self
             .schedule
             .run(&run, &|a: AssemblyStats, b: AssemblyStats| AssemblyStats {
@@ -292,13 +343,22 @@ impl Assembler {
     }
 }
 
-/// Blocks the assembler runs: the model's cell blocks, then its facet blocks.
+/// Blocks the assembler runs: the model's cell blocks, its facet blocks, then its capacity
+/// blocks (the cells that store heat, once more for that term).
 fn n_blocks(model: &Model) -> usize {
-    model.blocks.len() + model.facet_blocks.len()
+    model.blocks.len() + model.facet_blocks.len() + model.capacity_blocks.len()
+}
+
+/// The capacity block of assembler block `bi`, if it is one.
+fn capacity_index(model: &Model, bi: usize) -> Option<usize> {
+    bi.checked_sub(model.blocks.len() + model.facet_blocks.len())
 }
 
 /// Connectivity of assembler block `bi` (see [`n_blocks`]).
 fn conn(model: &Model, bi: usize) -> &Block {
+    if let Some(ci) = capacity_index(model, bi) {
+        return &model.mesh.cells[model.capacity_blocks[ci].block];
+    }
     match model.blocks.get(bi) {
         Some(info) => &model.mesh.cells[info.block],
         None => &model.mesh.facets[model.facet_blocks[bi - model.blocks.len()].block],
@@ -307,10 +367,63 @@ fn conn(model: &Model, bi: usize) -> &Block {
 
 /// Local layout of assembler block `bi`.
 fn layout(model: &Model, bi: usize) -> Layout {
+    if let Some(ci) = capacity_index(model, bi) {
+        return model.capacity_blocks[ci].layout;
+    }
     match model.blocks.get(bi) {
         Some(info) => info.layout,
         None => model.facet_blocks[bi - model.blocks.len()].layout,
     }
+}
+
+/// The history of the capacity blocks at the initial state: θ0 at every point.
+fn initial_history(model: &Model) -> PointHistory {
+    let x0 = model.initial_state();
+    let slabs = model
+        .capacity_blocks
+        .iter()
+        .map(|cb| {
+            let blk = &model.mesh.cells[cb.block];
+            let width =
+                crate::with_cell!(blk.kind, |N, D, E| <E as RefElement<N, D>>::quadrature()
+                    .len());
+            let mut slab = Slab::new(blk.n_cells(), width, 0.0);
+            for c in 0..blk.n_cells() {
+                let nodes = blk.cell(c);
+                crate::with_cell!(blk.kind, |N, D, E| {
+                    let s = crate::dofs::gather::<N>(&model.mesh.coords, &model.dofs, nodes, &x0);
+                    for (q, (xi, _)) in <E as RefElement<N, D>>::quadrature().iter().enumerate() {
+                        let Nv = <E as RefElement<N, D>>::shape(xi);
+                        slab.committed[c * width + q] =
+                            Nv.iter().zip(&s.theta).map(|(a, b)| a * b).sum();
+                    }
+                });
+            }
+            slab.trial.copy_from_slice(&slab.committed);
+            slab
+        })
+        .collect();
+    PointHistory { slabs }
+}
+
+/// Heat stored in the capacity blocks at the state `x`: Σ ∫ ρc (θ − θ0) dV.
+pub fn heat_stored(model: &Model, x: &[f64]) -> Result<f64, AssemblyError> {
+    let mut e = 0.0;
+    for cb in &model.capacity_blocks {
+        let blk = &model.mesh.cells[cb.block];
+        for c in 0..blk.n_cells() {
+            let nodes = blk.cell(c);
+            e += crate::with_cell!(blk.kind, |N, D, E| {
+                let s = crate::dofs::gather::<N>(&model.mesh.coords, &model.dofs, nodes, x);
+                crate::kernel::capacity::stored_heat::<N, D, E>(cb.rho_c, cb.theta_ref, &s)
+            })
+            .map_err(|_| AssemblyError::BadMesh {
+                region: model.regions[cb.region].0.clone(),
+                cell: c,
+            })?;
+        }
+    }
+    Ok(e)
 }
 
 /// The assembly error of a facet kernel's failure.

@@ -64,6 +64,11 @@ pub struct Summary {
     /// Work of the forces on the displacements, ∫ f·du summed by the trapezoidal rule over the
     /// accepted steps. Equals `energy` for hyperelastic scenes without thermal strain.
     pub external_work: f64,
+    /// Transient scenes: heat stored at the end, ∫ ρc (θ − θ0) dV (`null` otherwise).
+    pub heat_stored: Option<f64>,
+    /// Transient scenes: heat supplied over the run through every group and source, less what
+    /// convected out, Σ Δt × rate by backward Euler. Equals `heat_stored` (the balance).
+    pub heat_in: Option<f64>,
     pub output: String,
 }
 
@@ -118,6 +123,8 @@ impl Summary {
             min_J_medium: None,
             energy: 0.0,
             external_work: 0.0,
+            heat_stored: None,
+            heat_in: None,
             output: out_dir.display().to_string(),
         }
     }
@@ -222,12 +229,16 @@ pub struct StepRow {
     pub halvings: usize,
     pub time: f64,
     pub work: f64,
+    /// Transient scenes: (heat stored, heat supplied so far).
+    pub heat: Option<(f64, f64)>,
 }
 
 /// The columns of one model's `history.csv`: the step columns, `energy`, the probes, the
-/// reactions (`R_group_x`, `Q_group`), the solver columns and `work`.
+/// reactions (`R_group_x`, `Q_group`), the solver columns and `work`; in transient scenes
+/// then `heat_stored` and `heat_in`.
 pub struct HistoryLayout {
     pub columns: Vec<String>,
+    transient: bool,
     /// (group, component) of each reaction column.
     reactions: Vec<(String, String)>,
 }
@@ -271,7 +282,15 @@ impl HistoryLayout {
         }));
         columns.extend(HISTORY_SOLVER_COLUMNS.map(String::from));
         columns.push("work".into());
-        HistoryLayout { columns, reactions }
+        let transient = model.physics.transient;
+        if transient {
+            columns.extend(["heat_stored".into(), "heat_in".into()]);
+        }
+        HistoryLayout {
+            columns,
+            transient,
+            reactions,
+        }
     }
 
     /// The row of one step, in column order.
@@ -297,6 +316,10 @@ impl HistoryLayout {
                 .unwrap_or(0.0)
         }));
         row.extend([s.krylov as f64, s.halvings as f64, s.time, s.work]);
+        if self.transient {
+            let (stored, supplied) = s.heat.unwrap_or((0.0, 0.0));
+            row.extend([stored, supplied]);
+        }
         row
     }
 }

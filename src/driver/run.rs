@@ -5,7 +5,7 @@
 use super::records::{HistoryLayout, Reactions, StepRow, Summary, group_flows, peak_memory_mb};
 use super::strategy::{Strategy, choose_linear, choose_strategy, describe};
 use super::{SolveError, SolveOptions};
-use crate::assembly::Assembler;
+use crate::assembly::{Assembler, AssemblyError, convection_heat, heat_stored};
 use crate::case::Case;
 use crate::dofs::{Field, equation_structure};
 use crate::model::Model;
@@ -34,6 +34,8 @@ struct Totals {
     reactions: Reactions,
     /// The last failed attempt's reason.
     last_failure: String,
+    /// Heat supplied over the run (transient scenes).
+    heat_in: f64,
 }
 
 pub(super) struct Run<'a> {
@@ -86,11 +88,7 @@ impl<'a> Run<'a> {
         if !opts.quiet {
             eprintln!("{}", describe(&model.physics, strategy));
         }
-        let mut ctl = Controller::new(steps, model.path.end());
-        if !model.physics.mechanics {
-            // conduction on the undeformed body is linear: one step (per path segment), one solve
-            ctl.dt = 1.0;
-        }
+        let ctl = controller(case, model);
         let probe_names: Vec<String> = probes.iter().map(|p| p.name.clone()).collect();
         let layout = HistoryLayout::new(model, &probe_names);
         let history = History::new(&out_dir.join("history.csv"), &layout.columns);
@@ -121,6 +119,7 @@ impl<'a> Run<'a> {
                 f_last: Vec::new(),
                 reactions: BTreeMap::new(),
                 last_failure: String::new(),
+                heat_in: 0.0,
             },
             summary,
             pb: progress_bar(opts.quiet),
@@ -222,6 +221,7 @@ impl<'a> Run<'a> {
         let lambda = model.path.lambda(target);
         let dl = lambda - model.path.lambda(self.ctl.t);
         let x_last = std::mem::replace(&mut self.x, trial);
+        let dt = target - self.ctl.t;
         self.ctl.accept(target, rep.iterations);
         let tot = &mut self.totals;
         tot.iterations += rep.iterations;
@@ -238,6 +238,11 @@ impl<'a> Run<'a> {
         self.totals.t_reactions += t0.elapsed().as_secs_f64();
         self.totals.reactions = group_flows(model, &self.asm.r_full, &self.x, target)
             .map_err(|e| SolveError::Setup(format!("converged state is invalid: {e}")))?;
+        // the history of the converged state (just assembled) is what the next step starts from
+        self.asm.commit(target);
+        if model.physics.transient {
+            self.account_heat(target, dt)?;
+        }
         let f_now = self.forces(target);
         let tot = &mut self.totals;
         tot.work += self
@@ -264,6 +269,7 @@ impl<'a> Run<'a> {
             halvings: rep.halvings,
             time: target,
             work: self.totals.work,
+            heat: self.summary.heat_stored.zip(self.summary.heat_in),
         };
         let values = self
             .layout
@@ -272,6 +278,34 @@ impl<'a> Run<'a> {
         self.series
             .write(model, self.ctl.accepted, &self.x, target)?;
         self.report_step(&row, &rep);
+        Ok(())
+    }
+
+    /// Heat balance of a transient scene after an accepted step of length `dt` to `t`: the heat
+    /// stored, and the heat supplied over the run, Σ Δt × (rate at the step's end) as backward
+    /// Euler takes it. The rate is Σ over θ dofs of the reactions and the external heat, less
+    /// what convects out: at convergence, exactly the rate of the stored heat.
+    fn account_heat(&mut self, t: f64, dt: f64) -> Result<(), SolveError> {
+        let model = self.model;
+        let invalid =
+            |e: AssemblyError| SolveError::Setup(format!("converged state is invalid: {e}"));
+        let mut fe = vec![0.0; model.dofs.n_dofs];
+        model.f_ext(t, &mut fe);
+        let mut rate = 0.0;
+        for &d in &model.dofs.theta {
+            let d = d as usize;
+            rate += fe[d];
+            if model.cons.prescribed[d].is_some() {
+                rate += self.asm.r_full[d];
+            }
+        }
+        rate += convection_heat(model, &self.x)
+            .map_err(invalid)?
+            .iter()
+            .sum::<f64>();
+        self.totals.heat_in += dt * rate;
+        self.summary.heat_in = Some(self.totals.heat_in);
+        self.summary.heat_stored = Some(heat_stored(model, &self.x).map_err(invalid)?);
         Ok(())
     }
 
@@ -321,6 +355,8 @@ impl<'a> Run<'a> {
                 self.totals.last_failure
             ));
         }
+        // whatever the attempts wrote into the history goes
+        self.asm.restore();
         if let Err(dl) = self.ctl.reject() {
             self.pb.finish_and_clear();
             let err = SolveError::StepTooSmall {
@@ -389,6 +425,27 @@ impl<'a> Run<'a> {
             eprintln!("{line}");
         } else {
             self.pb.println(line);
+        }
+    }
+}
+
+/// The step controller: over physical time with `[time]` (steps of at most `dt`, onto every
+/// listed time), else over pseudo-time as `[steps]` says.
+fn controller(case: &Case, model: &Model) -> Controller {
+    let steps = &case.file.steps;
+    match &case.file.time {
+        Some(time) => {
+            let dt = time.dt_max();
+            Controller::with_vertices(steps, time.vertices(), dt, dt * steps.min, dt)
+        }
+        None => {
+            let mut ctl = Controller::new(steps, model.path.end());
+            if !model.physics.mechanics {
+                // conduction on the undeformed body is linear: one step (per path segment), one
+                // solve
+                ctl.dt = 1.0;
+            }
+            ctl
         }
     }
 }

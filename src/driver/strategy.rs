@@ -41,7 +41,11 @@ pub fn describe(physics: &Physics, strategy: Strategy) -> String {
         on.push("mechanics");
     }
     if physics.conduction {
-        on.push("conduction");
+        on.push(if physics.transient {
+            "transient conduction"
+        } else {
+            "conduction"
+        });
     }
     if physics.medium {
         on.push("third medium");

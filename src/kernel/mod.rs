@@ -6,6 +6,7 @@
 //! - [`lanes`]: the same for four cells at once, one per SIMD lane;
 //! - [`regularization`]: the medium's regularization terms, with p fields (eq. 20) or direct
 //!   (eq. 18);
+//! - [`capacity`]: heat storage of transient conduction (backward Euler);
 //! - [`facet`]: integrals over boundary facets (convection);
 //! - [`fields`]: cell averages for output (σ, q, J, k).
 //!
@@ -14,6 +15,7 @@
 #![allow(non_snake_case)]
 
 pub mod bulk;
+pub mod capacity;
 pub mod facet;
 pub mod fields;
 pub mod lanes;

@@ -3,8 +3,8 @@
 #![allow(non_snake_case)]
 
 use super::{
-    BcGroup, BlockInfo, FacetBlock, FluxGroup, LoadPath, Model, Physics, decide_physics,
-    facet_weights,
+    BcGroup, BlockInfo, CapacityBlock, FacetBlock, FluxGroup, LoadPath, Model, Physics,
+    decide_physics, facet_weights,
 };
 use crate::case::{Case, CaseError, RegionKind};
 use crate::dofs::{Constraints, DofMap, Field, Layout, NONE, Prescribed};
@@ -31,18 +31,11 @@ pub fn build(case: &Case, mesh: Mesh) -> Result<Model, CaseError> {
     let (blocks, p_nodes) = cell_blocks(case, &mesh, &physics, &materials, np, d);
     let dofs = DofMap::new(&mesh, physics.mechanics, physics.conduction, np, &p_nodes);
     let theta_init = initial_temperatures(&mesh, &blocks);
-    let mut path = LoadPath {
-        lambda: case
-            .file
-            .steps
-            .path
-            .clone()
-            .unwrap_or_else(|| vec![0.0, 1.0]),
-        own: Vec::new(),
-    };
+    let mut path = load_path(case);
     let (cons, bc_groups) = dirichlet(case, &mesh, &dofs, &theta_init, &mut path)?;
     let (f_ramp, f_full, mut flux_groups) = external_loads(case, &mesh, &dofs, &blocks, &cons);
     let facet_blocks = convection_blocks(case, &mesh, &physics, &mut flux_groups);
+    let capacity_blocks = capacity_blocks(case, &mesh, &physics, &blocks);
     debug_assert!(cons.eq.iter().filter(|&&e| e != NONE).count() == cons.n_eq);
     Ok(Model {
         physics,
@@ -51,6 +44,7 @@ pub fn build(case: &Case, mesh: Mesh) -> Result<Model, CaseError> {
         blocks,
         facet_blocks,
         flux_groups,
+        capacity_blocks,
         regions: case
             .file
             .region
@@ -65,6 +59,33 @@ pub fn build(case: &Case, mesh: Mesh) -> Result<Model, CaseError> {
         theta_init,
         mesh,
     })
+}
+
+/// The load factor over time: `[time] lambda` (default: from 0 at t = 0 to 1 at the end), or
+/// `[steps] path` over pseudo-time (default `[0, 1]`).
+fn load_path(case: &Case) -> LoadPath {
+    match &case.file.time {
+        Some(time) => {
+            let end = *time.end.get_ref();
+            let table = time
+                .lambda
+                .as_ref()
+                .map(|l| l.get_ref().clone())
+                .unwrap_or_else(|| vec![[0.0, 0.0], [end, 1.0]]);
+            LoadPath {
+                times: table.iter().map(|v| v[0]).collect(),
+                lambda: table.iter().map(|v| v[1]).collect(),
+                own: Vec::new(),
+            }
+        }
+        None => LoadPath::pseudo(
+            case.file
+                .steps
+                .path
+                .clone()
+                .unwrap_or_else(|| vec![0.0, 1.0]),
+        ),
+    }
 }
 
 /// A scene that conducts heat needs `k` in every region.
@@ -385,6 +406,38 @@ fn external_loads(
         }
     }
     (f_ramp, f_full, groups)
+}
+
+/// The cell blocks of the regions with `rho_c`, in a transient scene.
+fn capacity_blocks(
+    case: &Case,
+    mesh: &Mesh,
+    physics: &Physics,
+    blocks: &[BlockInfo],
+) -> Vec<CapacityBlock> {
+    if !physics.transient {
+        return Vec::new();
+    }
+    blocks
+        .iter()
+        .filter_map(|info| {
+            let r = &case.file.region[info.region];
+            let rho_c = *r.rho_c.as_ref()?.get_ref();
+            Some(CapacityBlock {
+                block: info.block,
+                region: info.region,
+                rho_c,
+                theta_ref: r.theta0,
+                layout: Layout {
+                    n: mesh.cells[info.block].kind.n_nodes(),
+                    dim: mesh.dim,
+                    has_u: false,
+                    has_theta: true,
+                    np: 0,
+                },
+            })
+        })
+        .collect()
 }
 
 /// The facet blocks of the convecting groups (`flux_groups` as [`external_loads`] lists them:

@@ -5,22 +5,22 @@
 use crate::element::{RefElement, facet_measure};
 use crate::mesh::{CellKind, Mesh};
 
-/// Loads over pseudo-time t ∈ [0, T]: the load factor λ(t) and the amplitudes of groups with
-/// their own `path`, each piecewise linear between the values given at t = 0, 1, …, T.
+/// Loads over time t ∈ [0, T]: the load factor λ(t) and the amplitudes of groups with their
+/// own `path`, each piecewise linear between its values at the vertices `times`. Pseudo-time
+/// (no `[time]`) has vertices t = 0, 1, …, T; physical time those of `[time] lambda`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LoadPath {
-    /// λ at t = 0, 1, …, T (default `[0, 1]`: t = λ).
+    /// Vertex times, increasing from 0.
+    pub times: Vec<f64>,
+    /// λ at the vertices (default `[0, 1]` at t = 0, 1: t = λ).
     pub lambda: Vec<f64>,
-    /// Amplitudes of groups with their own path, at the same times.
+    /// Amplitudes of groups with their own path, at the same vertices.
     pub own: Vec<Vec<f64>>,
 }
 
 impl Default for LoadPath {
     fn default() -> Self {
-        LoadPath {
-            lambda: vec![0.0, 1.0],
-            own: Vec::new(),
-        }
+        LoadPath::pseudo(vec![0.0, 1.0])
     }
 }
 
@@ -30,30 +30,41 @@ impl LoadPath {
     /// Amplitude index of values scaled by λ.
     pub const RAMPED: usize = 1;
 
-    /// The end of pseudo-time, T.
-    pub fn end(&self) -> f64 {
-        (self.lambda.len() - 1) as f64
+    /// λ given at pseudo-times 0, 1, …, T.
+    pub fn pseudo(lambda: Vec<f64>) -> LoadPath {
+        LoadPath {
+            times: (0..lambda.len()).map(|i| i as f64).collect(),
+            lambda,
+            own: Vec::new(),
+        }
     }
 
-    fn interp(v: &[f64], t: f64) -> f64 {
-        let t = t.clamp(0.0, (v.len() - 1) as f64);
-        if t.fract() == 0.0 {
-            return v[t as usize]; // a vertex: exactly its value
+    /// The end of time, T.
+    pub fn end(&self) -> f64 {
+        *self.times.last().expect("a path has vertices")
+    }
+
+    fn interp(&self, v: &[f64], t: f64) -> f64 {
+        let t = t.clamp(0.0, self.end());
+        // the first vertex at or after t
+        let i = self.times.partition_point(|&s| s < t);
+        if self.times[i] == t {
+            return v[i]; // a vertex: exactly its value
         }
-        let i = t.floor() as usize;
-        let s = t - i as f64;
-        v[i] + s * (v[i + 1] - v[i])
+        let (t0, t1) = (self.times[i - 1], self.times[i]);
+        let s = (t - t0) / (t1 - t0);
+        v[i - 1] + s * (v[i] - v[i - 1])
     }
 
     /// The load factor λ(t).
     pub fn lambda(&self, t: f64) -> f64 {
-        Self::interp(&self.lambda, t)
+        self.interp(&self.lambda, t)
     }
 
     /// All amplitudes at t: [1, λ(t), own paths…], indexed by `Prescribed::amp`.
     pub fn amplitudes(&self, t: f64) -> Vec<f64> {
         let mut a = vec![1.0, self.lambda(t)];
-        a.extend(self.own.iter().map(|v| Self::interp(v, t)));
+        a.extend(self.own.iter().map(|v| self.interp(v, t)));
         a
     }
 }
@@ -76,4 +87,28 @@ pub fn facet_weights(kind: CellKind, nodes: &[usize], mesh: &Mesh) -> Vec<f64> {
         w
     }
     crate::with_element!(kind, |N, D, E| integrate::<N, D, E>(nodes, mesh))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn paths_interpolate_between_their_vertices() {
+        let p = LoadPath::pseudo(vec![0.0, 1.0, 0.2]);
+        assert_eq!(p.end(), 2.0);
+        assert_eq!(p.lambda(1.0), 1.0);
+        assert!((p.lambda(1.5) - 0.6).abs() < 1e-15);
+        assert_eq!(p.lambda(7.0), 0.2);
+        let t = LoadPath {
+            times: vec![0.0, 0.1, 2.5],
+            lambda: vec![0.0, 1.0, 1.0],
+            own: vec![vec![0.0, 0.5, -1.0]],
+        };
+        assert!((t.lambda(0.05) - 0.5).abs() < 1e-15);
+        assert_eq!(t.lambda(1.0), 1.0);
+        let a = t.amplitudes(1.3);
+        assert_eq!(a[..2], [1.0, 1.0]);
+        assert!((a[2] - (0.5 - 1.5 * 0.5)).abs() < 1e-15);
+    }
 }

@@ -46,6 +46,21 @@ pub struct FacetBlock {
     pub layout: Layout,
 }
 
+/// The cells of a region that stores heat, for the capacity term ρc (θ − θₙ)/Δt, with the
+/// θ-only local layout of that term.
+#[derive(Clone, Debug)]
+pub struct CapacityBlock {
+    /// Index into `mesh.cells`.
+    pub block: usize,
+    /// Index into the case's regions.
+    pub region: usize,
+    /// Heat capacity per reference volume.
+    pub rho_c: f64,
+    /// The region's θ0: stored heat is counted from it.
+    pub theta_ref: f64,
+    pub layout: Layout,
+}
+
 /// A boundary group with a flux condition (traction, heat flux, convection): its force and
 /// heat on the body are reported with the Dirichlet groups' reactions.
 #[derive(Clone, Debug)]
@@ -71,6 +86,8 @@ pub struct Model {
     pub facet_blocks: Vec<FacetBlock>,
     /// Groups with flux conditions, for reporting.
     pub flux_groups: Vec<FluxGroup>,
+    /// Cells that store heat (transient scenes only), after the facets in the assembly.
+    pub capacity_blocks: Vec<CapacityBlock>,
     /// Region names and kinds, in case order.
     pub regions: Vec<(String, RegionKind)>,
     /// The load factor and the groups' own amplitudes over pseudo-time.

@@ -19,6 +19,8 @@ pub struct Physics {
     pub medium: bool,
     /// Regularization fields p_i exist (linear medium elements).
     pub regularization: bool,
+    /// Heat is stored (ρc θ̇): the case has `[time]`, conducts, and some region has `rho_c`.
+    pub transient: bool,
 }
 
 /// Decide the active physics from the case.
@@ -62,5 +64,6 @@ pub fn decide_physics(case: &Case) -> Physics {
         medium,
         // every medium element is linear so far, and p only regularizes a deforming medium
         regularization: medium && mechanics,
+        transient: f.time.is_some() && conduction && f.region.iter().any(|r| r.rho_c.is_some()),
     }
 }

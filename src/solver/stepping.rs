@@ -1,30 +1,52 @@
-//! Adaptive load stepping, separate from Newton: it proposes the next pseudo-time t (equal to
-//! the load factor λ unless the case gives a load path), grows Δt after easy steps, cuts it
-//! after a failed one, and gives up below the minimum. It never accepts a failed step, and
-//! every integer t (a vertex of the load path) is reached by a step of its own.
+//! Adaptive stepping, separate from Newton: it proposes the next time t (pseudo-time, equal to
+//! the load factor λ unless the case gives a load path; or physical time with `[time]`), grows
+//! Δt after easy steps, cuts it after a failed one, and gives up below the minimum. It never
+//! accepts a failed step, and every vertex (of the load path, or a listed time) is reached by
+//! a step of its own.
 
 use crate::case::Steps;
 
 #[derive(Clone, Debug)]
 pub struct Controller {
-    /// Pseudo-time of the last accepted step.
+    /// Time of the last accepted step.
     pub t: f64,
     /// Next increment Δt.
     pub dt: f64,
-    /// End of pseudo-time.
+    /// End of time.
     pub end: f64,
+    /// Times that must be steps, increasing, the last one `end`.
+    vertices: Vec<f64>,
+    /// Smallest and largest Δt.
+    min: f64,
+    max: f64,
     cfg: Steps,
     pub accepted: usize,
     pub rejected: usize,
 }
 
 impl Controller {
-    /// A controller over t ∈ [0, end].
+    /// A controller over pseudo-time t ∈ [0, end], vertices at every integer, Δt as `cfg` says.
     pub fn new(cfg: &Steps, end: f64) -> Controller {
+        let vertices = (1..=end.round() as usize).map(|i| i as f64).collect();
+        Controller::with_vertices(cfg, vertices, cfg.initial, cfg.min, cfg.max)
+    }
+
+    /// A controller over t ∈ [0, last vertex] that steps onto every vertex, starting with Δt =
+    /// `initial`, within [`min`, `max`]; growth, cuts and what makes a step easy from `cfg`.
+    pub fn with_vertices(
+        cfg: &Steps,
+        vertices: Vec<f64>,
+        initial: f64,
+        min: f64,
+        max: f64,
+    ) -> Controller {
         Controller {
             t: 0.0,
-            dt: cfg.initial,
-            end,
+            dt: initial,
+            end: *vertices.last().expect("at least the end"),
+            vertices,
+            min,
+            max,
             cfg: cfg.clone(),
             accepted: 0,
             rejected: 0,
@@ -35,12 +57,24 @@ impl Controller {
         self.t >= self.end
     }
 
-    /// Target pseudo-time of the next attempt: never past the next path vertex, and no sliver
-    /// left before it.
+    /// Tolerance of "at a vertex", relative to the time scale.
+    fn eps(&self) -> f64 {
+        1e-9 * self.end.max(1e-300)
+    }
+
+    /// The first vertex after the last accepted time.
+    fn next_vertex(&self) -> f64 {
+        let eps = self.eps();
+        let i = self.vertices.partition_point(|&v| v <= self.t + eps);
+        self.vertices.get(i).copied().unwrap_or(self.end)
+    }
+
+    /// Target time of the next attempt: never past the next vertex, and no sliver left
+    /// before it.
     pub fn target(&self) -> f64 {
-        let vertex = (self.t + 1e-9).floor() + 1.0;
+        let vertex = self.next_vertex();
         let t = self.t + self.dt;
-        if t > vertex - 1e-9 || vertex - t < 0.2 * self.dt {
+        if t > vertex - self.eps() || vertex - t < 0.2 * self.dt {
             vertex
         } else {
             t
@@ -50,8 +84,9 @@ impl Controller {
     /// Record a converged step that took `iterations` Newton iterations.
     pub fn accept(&mut self, target: f64, iterations: usize) {
         let taken = target - self.t;
-        // a step cut short to land on a path vertex says nothing about the step size
-        if !(target.fract() == 0.0 && taken < self.dt) {
+        // a step cut short to land on a vertex says nothing about the step size
+        let at_vertex = self.vertices.contains(&target);
+        if !(at_vertex && taken < self.dt) {
             self.dt = taken;
         }
         self.t = target;
@@ -61,15 +96,15 @@ impl Controller {
         } else if iterations * 4 >= self.cfg.max_iter * 3 {
             self.dt *= 0.7; // hard step: be careful next time
         }
-        self.dt = self.dt.clamp(self.cfg.min, self.cfg.max);
+        self.dt = self.dt.clamp(self.min, self.max);
     }
 
-    /// Record a failed attempt; `Err` with the Δλ that failed when it is below the minimum.
+    /// Record a failed attempt; `Err` with the Δt that failed when it is below the minimum.
     pub fn reject(&mut self) -> Result<(), f64> {
         self.rejected += 1;
         let failed = self.dt.min(self.target() - self.t);
         self.dt = failed * self.cfg.cut;
-        if self.dt < self.cfg.min {
+        if self.dt < self.min {
             return Err(failed);
         }
         Ok(())
@@ -127,5 +162,25 @@ mod tests {
         // a step shortened to reach a vertex does not shrink the next one
         let i = seen.iter().position(|&t| t == 1.0).unwrap();
         assert!(seen[i + 1] - 1.0 >= seen[i] - seen[i - 1] - 1e-12);
+    }
+
+    #[test]
+    fn fixed_time_steps_land_on_listed_times_and_never_exceed_dt() {
+        let cfg = Steps::default();
+        let (dt, vertices) = (0.1, vec![0.25, 0.5, 1.0]);
+        let mut c = Controller::with_vertices(&cfg, vertices.clone(), dt, dt * 1e-3, dt);
+        let mut seen = Vec::new();
+        while !c.done() {
+            let t = c.target();
+            assert!(t - c.t <= dt + 1e-12, "step {} > dt", t - c.t);
+            c.accept(t, 1);
+            seen.push(t);
+        }
+        for v in vertices {
+            assert!(seen.contains(&v), "{v} missed: {seen:?}");
+        }
+        assert_eq!(c.t, 1.0);
+        // 0.1, 0.2, 0.25, 0.35, 0.45, 0.5, 0.6, … 1.0
+        assert_eq!(seen.len(), 3 + 5 + 3);
     }
 }
