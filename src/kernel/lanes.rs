@@ -88,7 +88,9 @@ pub fn eligible(mat: &CellMaterial, lay: &Layout, act: Active) -> bool {
 
 /// Residuals and, with `k`, tangents of the `W` cells `s` (lane l's in `r[l nd..]` and
 /// `k[l nd²..]`, row-major, overwritten), and their summaries. On failure, the error and the
-/// lowest lane it occurred in. Call only where [`available`] and [`eligible`].
+/// lowest lane it occurred in. Call only where [`eligible`]. Compiled for AVX2 and FMA where
+/// the CPU has them ([`available`]: the assembly uses the lanes only there), portable
+/// elsewhere.
 pub fn bulk_lanes<const N: usize, const D: usize, E: RefElement<N, D>>(
     mat: &CellMaterial,
     lay: &Layout,
@@ -97,21 +99,39 @@ pub fn bulk_lanes<const N: usize, const D: usize, E: RefElement<N, D>>(
     k: Option<&mut [f64]>,
 ) -> Result<[CellSummary; W], (KernelError, usize)> {
     #[cfg(target_arch = "x86_64")]
-    {
-        assert!(available(), "the lane kernel needs AVX2 and FMA");
+    if available() {
         // SAFETY: the CPU has the features the function is compiled for (checked above)
-        unsafe {
+        return unsafe {
             match k {
                 Some(k) => bulk_lanes_avx2::<N, D, E, true>(mat, lay, s, r, k),
                 None => bulk_lanes_avx2::<N, D, E, false>(mat, lay, s, r, &mut []),
             }
+        };
+    }
+    bulk_lanes_portable::<N, D, E>(mat, lay, s, r, k)
+}
+
+/// [`bulk_lanes`] without instruction-set features: the same lane code, compiled for any CPU,
+/// with a plain transpose of the interleaved tangent.
+pub fn bulk_lanes_portable<const N: usize, const D: usize, E: RefElement<N, D>>(
+    mat: &CellMaterial,
+    lay: &Layout,
+    s: &[CellState<N>; W],
+    r: &mut [f64],
+    k: Option<&mut [f64]>,
+) -> Result<[CellSummary; W], (KernelError, usize)> {
+    let Some(k) = k else {
+        return body::<N, D, E, false>(mat, lay, s, r, &mut []);
+    };
+    let mut kw = vec![0.0; k.len()];
+    let out = body::<N, D, E, true>(mat, lay, s, r, &mut kw)?;
+    let n = kw.len() / W;
+    for i in 0..n {
+        for l in 0..W {
+            k[l * n + i] = kw[W * i + l];
         }
     }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        let _ = (mat, lay, s, r, k);
-        unreachable!("the lane kernel is x86-64 only")
-    }
+    Ok(out)
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -714,11 +734,26 @@ mod tests {
         s
     }
 
-    /// The lanes give each cell what the one-cell kernel gives it, to round-off.
+    /// The lanes give each cell what the one-cell kernel gives it, to round-off: the portable
+    /// build on every CPU, and the AVX2 build where the CPU has it.
     fn same_as_one_cell<const N: usize, const D: usize, E: RefElement<N, D>>() {
-        if !available() {
-            return;
+        same_as_one_cell_with::<N, D, E>(bulk_lanes_portable::<N, D, E>);
+        if available() {
+            same_as_one_cell_with::<N, D, E>(bulk_lanes::<N, D, E>);
         }
+    }
+
+    type LaneKernel<const N: usize> = fn(
+        &CellMaterial,
+        &Layout,
+        &[CellState<N>; W],
+        &mut [f64],
+        Option<&mut [f64]>,
+    ) -> Result<[CellSummary; W], (KernelError, usize)>;
+
+    fn same_as_one_cell_with<const N: usize, const D: usize, E: RefElement<N, D>>(
+        lanes: LaneKernel<N>,
+    ) {
         let medium = Conductivity::Medium {
             k_tm: 3.0,
             k_max: 50.0,
@@ -749,10 +784,10 @@ mod tests {
                 let nd = lay.ndof();
                 let s: [CellState<N>; W] = std::array::from_fn(state::<N, D, E>);
                 let (mut r, mut k) = (vec![f64::NAN; W * nd], vec![f64::NAN; W * nd * nd]);
-                let out = bulk_lanes::<N, D, E>(&mat, &lay, &s, &mut r, Some(&mut k)).unwrap();
+                let out = lanes(&mat, &lay, &s, &mut r, Some(&mut k)).unwrap();
                 // without the tangent: the same residuals and summaries
                 let mut r_only = vec![f64::NAN; W * nd];
-                let out_r = bulk_lanes::<N, D, E>(&mat, &lay, &s, &mut r_only, None).unwrap();
+                let out_r = lanes(&mat, &lay, &s, &mut r_only, None).unwrap();
                 assert_eq!(r_only, r);
                 for l in 0..W {
                     assert_eq!(out_r[l].energy, out[l].energy);
@@ -796,9 +831,6 @@ mod tests {
 
     #[test]
     fn an_inverted_lane_is_reported() {
-        if !available() {
-            return;
-        }
         let mat = material(Conductivity::Constant(1.0));
         let lay = Layout {
             n: 8,
@@ -814,9 +846,11 @@ mod tests {
         }
         let nd = lay.ndof();
         let (mut r, mut k) = (vec![0.0; W * nd], vec![0.0; W * nd * nd]);
-        match bulk_lanes::<8, 3, Hex8>(&mat, &lay, &s, &mut r, Some(&mut k)) {
-            Err((KernelError::Inverted { J }, 2)) => assert!(J <= 0.0),
-            other => panic!("{other:?}"),
+        for lanes in [bulk_lanes::<8, 3, Hex8>, bulk_lanes_portable::<8, 3, Hex8>] {
+            match lanes(&mat, &lay, &s, &mut r, Some(&mut k)) {
+                Err((KernelError::Inverted { J }, 2)) => assert!(J <= 0.0),
+                other => panic!("{other:?}"),
+            }
         }
     }
 }
