@@ -97,10 +97,10 @@ fn time<const N: usize, const D: usize, E: RefElement<N, D>>(
         black_box(&k);
     });
     let four = [s; lanes::W];
-    let lanes = (lanes::available() && lanes::eligible(mat, &lay, Active::ALL)).then(|| {
+    let block = lanes::LaneBlock::new(mat, &lay, Active::ALL).filter(|_| lanes::available());
+    let lanes = block.map(|b| {
         repeat(&mut || {
-            lanes::bulk_lanes::<N, D, E>(mat, &lay, black_box(&four), &mut r, Some(&mut k))
-                .unwrap();
+            lanes::bulk_lanes::<N, D, E>(&b, black_box(&four), &mut r, Some(&mut k)).unwrap();
             black_box(&k);
         }) / lanes::W as f64
     });

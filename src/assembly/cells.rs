@@ -134,7 +134,8 @@ impl Cells<'_> {
         let nd = lay.ndof();
         let mut ld = vec![0u32; nd];
         let (mut mj, mut en, mut finite) = (f64::INFINITY, 0.0, true);
-        if lanes::available() && lanes::eligible(mat, &lay, self.act) {
+        let lane_block = lanes::LaneBlock::new(mat, &lay, self.act);
+        if let Some(lane_block) = lane_block.filter(|_| lanes::available()) {
             // W cells per kernel call; a short last group repeats its last cell
             const W: usize = lanes::W;
             let mut r = vec![0.0; W * nd];
@@ -150,7 +151,7 @@ impl Cells<'_> {
                     gather::<N>(&model.mesh.coords, &model.dofs, blk.cell(cell(l)), x)
                 });
                 let kl = if tangent { Some(&mut k[..]) } else { None };
-                let out = lanes::bulk_lanes::<N, D, E>(mat, &lay, &s, &mut r, kl)
+                let out = lanes::bulk_lanes::<N, D, E>(&lane_block, &s, &mut r, kl)
                     .map_err(|(e, l)| (e, cell(l)))?;
                 for l in 0..group.len() {
                     let c = cell(l);

@@ -1,32 +1,37 @@
 //! The bulk kernel of [`super::bulk`] for four cells at once, one per SIMD lane (AVX2: four
-//! doubles), for the cells that carry u (and θ) but no regularization: the solids, which are
-//! most of a mesh.
+//! doubles): the solids and the linear medium with its p fields, most of a mesh.
 //!
-//! Lanes make every operation full width (the one-cell kernel's node loops are 8 or 4 wide
-//! with tails, and its point-wise algebra is scalar), and the tangent is built from the law's
-//! structure instead of a 9×9 ∂P/∂F. With the physical shape gradients g_I, h_I = F⁻ᵀ g_I,
-//! f_I = F g_I, and the law's scalars a, m (P = a F⁻ᵀ + m (F − ⅓ I1 F⁻ᵀ), I1 = tr C):
+//! The laws are not here: they are `material`'s, evaluated in the lane type `V` (which
+//! implements `material::Real`), the same code the one-cell kernel runs in `f64` —
+//! `ThermoElastic::scalars` and `coefficients`, `Conductivity::conductance`,
+//! `rotation_measure_of` and `Regularization::penalty`. What this file does is move data: the
+//! four cells' nodal values into lanes, the kinematics per point, the contraction of the
+//! laws' coefficients with the shape gradients, and the lanes back into each cell's r and K.
+//! With g_I the physical shape gradients, h_I = F⁻ᵀ g_I and f_I = F g_I:
 //!
-//! - r_u(I) = ∫ P g_I = ∫ (a − ⅓ m I1) h_I + m f_I,
-//! - ∂r_u(I,i)/∂u(K,k) = ∫ c1 h_Ii h_Kk + c2 h_Ki h_Ik − ⅔ m (f_Ii h_Kk + h_Ii f_Kk)
-//!   \+ m δ_ik g_I·g_K, with c1 = K + 2⁄9 m I1 and c2 = ⅓ m I1 − a: the A_iJkL of
-//!   [`crate::material::ThermoElastic::stress`] contracted with g_I and g_K;
-//! - ∂r_u(I,i)/∂θ_K = −3 α K ∫ h_Ii N_K;
-//! - with Q = −J k C⁻¹ ∇θ, w = F⁻ᵀ ∇θ, v = C⁻¹ ∇θ = F⁻¹ w:
+//! - r_u(I) = ∫ P g_I = ∫ c_H h_I + m f_I,
+//! - ∂r_u(I,i)/∂u(K,k) = ∫ c1 h_Ii h_Kk + c2 h_Ki h_Ik + t (f_Ii h_Kk + h_Ii f_Kk)
+//!   \+ m δ_ik g_I·g_K (the law's ∂P/∂F contracted with g_I and g_K),
+//! - ∂r_u(I,i)/∂θ_K = ∫ e h_Ii N_K,
+//! - with Q = −(J k) C⁻¹ ∇θ, w = F⁻ᵀ ∇θ, v = C⁻¹ ∇θ = F⁻¹ w:
 //!   r_θ(I) = ∫ J k v·g_I, ∂r_θ(I)/∂θ_K = ∫ J k h_I·h_K, and
-//!   ∂r_θ(I)/∂u(K,k) = ∫ (k + J k') J (v·g_I) h_Kk − J k h_Ik (v·g_K) − J k w_k h_I·h_K.
+//!   ∂r_θ(I)/∂u(K,k) = ∫ (k + J k') J (v·g_I) h_Kk − J k h_Ik (v·g_K) − J k w_k h_I·h_K;
+//! - the regularization of eq. (20) per rotation plane (a, b): f and its derivatives involve
+//!   only the gradients' a and b components, so every u–u term is a 2 × 2 bilinear form in
+//!   (g_Ia, g_Ib) ⊗ (g_Ka, g_Kb).
 //!
-//! - the regularization of eq. (20), per rotation plane (a, b): f = (F_ab − F_ba)/(F_aa + F_bb)
-//!   and its first and second derivatives are combinations of the gradients' a and b
-//!   components, so every u–u term is a 2 × 2 bilinear form in (g_Ia, g_Ib) ⊗ (g_Ka, g_Kb).
-//!
-//! Results equal the one-cell kernel's to round-off (tested), which stays the reference with
-//! its finite-difference checks.
+//! Which blocks may run here is decided once, by [`LaneBlock::new`]: there is no other way
+//! in. Results equal the one-cell kernel's to round-off, on every CPU (the portable build is
+//! tested where AVX2 is missing); the one-cell kernel stays the reference with its
+//! finite-difference checks. The point loop is long on purpose: split into functions it
+//! would pass its lane arrays (kilobytes per point) through memory.
 #![allow(non_snake_case, clippy::needless_range_loop)]
 
 use super::{Active, CellMaterial, CellSummary, KernelError};
 use crate::dofs::{CellState, Layout};
 use crate::element::RefElement;
+use crate::material::Real;
+use crate::material::regularization::{rotation_denominator, rotation_measure_of};
 
 /// Cells per call.
 pub const W: usize = 4;
@@ -70,34 +75,88 @@ macro_rules! lane_op {
 lane_op!(Add, add, +);
 lane_op!(Sub, sub, -);
 lane_op!(Mul, mul, *);
+lane_op!(Div, div, /);
+
+impl std::ops::Neg for V {
+    type Output = V;
+    #[inline(always)]
+    fn neg(self) -> V {
+        V(self.0.map(|x| -x))
+    }
+}
+
+/// The laws evaluate four cells at once in this type (`material::Real`).
+impl Real for V {
+    #[inline(always)]
+    fn splat(x: f64) -> V {
+        V([x; W])
+    }
+    #[inline(always)]
+    fn ln(self) -> V {
+        V(self.0.map(f64::ln))
+    }
+    #[inline(always)]
+    fn powf(self, e: f64) -> V {
+        V(self.0.map(|x| x.powf(e)))
+    }
+    #[inline(always)]
+    fn mul_add(self, b: V, c: V) -> V {
+        V::mul_add(self, b, c)
+    }
+    #[inline(always)]
+    fn select_ge(self, bound: V, a: V, b: V) -> V {
+        V(std::array::from_fn(|l| {
+            if self.0[l] >= bound.0[l] {
+                a.0[l]
+            } else {
+                b.0[l]
+            }
+        }))
+    }
+}
 
 /// Whether this CPU runs the lane kernel (AVX2 and FMA; elsewhere the one-cell kernel runs).
 pub fn available() -> bool {
     super::avx2_fma()
 }
 
-/// Whether a block's cells can take the lane kernel: u (with θ or without, with the linear
-/// medium's regularization fields p or without), and every equation of the cell wanted.
-pub fn eligible(mat: &CellMaterial, lay: &Layout, act: Active) -> bool {
-    lay.has_u
-        && (lay.np == 0 || (mat.reg.is_some() && lay.np == lay.dim * (lay.dim - 1) / 2))
-        && mat.reg_direct.is_none()
-        && act.mechanics
-        && (!lay.has_theta || act.heat)
+/// A block of cells the lane kernel can run, and the only way to call it: u (with θ or
+/// without, with the linear medium's p fields or without), no direct regularization, and
+/// every equation of the cell wanted. The laws themselves are the one-cell kernel's
+/// (`material`, generic over the scalar), so any law a material holds is computed right.
+#[derive(Clone, Copy, Debug)]
+pub struct LaneBlock {
+    mat: CellMaterial,
+    lay: Layout,
+}
+
+impl LaneBlock {
+    /// `Some` where the lanes can compute the block's cells with equations `act`.
+    pub fn new(mat: &CellMaterial, lay: &Layout, act: Active) -> Option<LaneBlock> {
+        let ok = lay.has_u
+            && (lay.np == 0 || (mat.reg.is_some() && lay.np == lay.dim * (lay.dim - 1) / 2))
+            && mat.reg_direct.is_none()
+            && act.mechanics
+            && (!lay.has_theta || act.heat);
+        ok.then_some(LaneBlock {
+            mat: *mat,
+            lay: *lay,
+        })
+    }
 }
 
 /// Residuals and, with `k`, tangents of the `W` cells `s` (lane l's in `r[l nd..]` and
 /// `k[l nd²..]`, row-major, overwritten), and their summaries. On failure, the error and the
-/// lowest lane it occurred in. Call only where [`eligible`]. Compiled for AVX2 and FMA where
+/// lowest lane it occurred in. Compiled for AVX2 and FMA where
 /// the CPU has them ([`available`]: the assembly uses the lanes only there), portable
 /// elsewhere.
 pub fn bulk_lanes<const N: usize, const D: usize, E: RefElement<N, D>>(
-    mat: &CellMaterial,
-    lay: &Layout,
+    blk: &LaneBlock,
     s: &[CellState<N>; W],
     r: &mut [f64],
     k: Option<&mut [f64]>,
 ) -> Result<[CellSummary; W], (KernelError, usize)> {
+    let (mat, lay) = (&blk.mat, &blk.lay);
     #[cfg(target_arch = "x86_64")]
     if available() {
         // SAFETY: the CPU has the features the function is compiled for (checked above)
@@ -108,18 +167,18 @@ pub fn bulk_lanes<const N: usize, const D: usize, E: RefElement<N, D>>(
             }
         };
     }
-    bulk_lanes_portable::<N, D, E>(mat, lay, s, r, k)
+    bulk_lanes_portable::<N, D, E>(blk, s, r, k)
 }
 
 /// [`bulk_lanes`] without instruction-set features: the same lane code, compiled for any CPU,
 /// with a plain transpose of the interleaved tangent.
 pub fn bulk_lanes_portable<const N: usize, const D: usize, E: RefElement<N, D>>(
-    mat: &CellMaterial,
-    lay: &Layout,
+    blk: &LaneBlock,
     s: &[CellState<N>; W],
     r: &mut [f64],
     k: Option<&mut [f64]>,
 ) -> Result<[CellSummary; W], (KernelError, usize)> {
+    let (mat, lay) = (&blk.mat, &blk.lay);
     let Some(k) = k else {
         return body::<N, D, E, false>(mat, lay, s, r, &mut []);
     };
@@ -286,7 +345,6 @@ fn body<const N: usize, const D: usize, E: RefElement<N, D>, const TANGENT: bool
     let mut rp = [[zero; 3]; N];
     let mut energy = zero;
     let mut min_J = V::splat(f64::INFINITY);
-    let expansion = V::splat(-3.0 * law.alpha * law.K);
     for (xi, w) in E::quadrature() {
         let dN = E::grad(xi);
         let Nv = E::shape(xi);
@@ -350,18 +408,13 @@ fn body<const N: usize, const D: usize, E: RefElement<N, D>, const TANGENT: bool
             }
         }
         // the law's scalars and the conductivity, lane by lane
-        let (mut a, mut m, mut psi, mut kc, mut dk) = (zero, zero, zero, zero, zero);
-        for l in 0..W {
-            let sc = law.scalars(J.0[l], I1.0[l], theta.0[l]);
-            (a.0[l], m.0[l], psi.0[l]) = (sc.a, sc.m, sc.psi);
-            if thermal {
-                (kc.0[l], dk.0[l]) = mat.cond.eval(J.0[l]);
-            }
-        }
+        // the laws, evaluated for the four cells at once
+        let sc = law.scalars(J, I1, theta);
+        let co = law.coefficients(&sc, I1);
         for l in 0..W {
             min_J.0[l] = min_J.0[l].min(J.0[l]);
         }
-        energy = psi.mul_add(dV, energy);
+        energy = sc.psi.mul_add(dV, energy);
         let mut Jinv = [0.0; W];
         for l in 0..W {
             Jinv[l] = 1.0 / J.0[l];
@@ -385,19 +438,19 @@ fn body<const N: usize, const D: usize, E: RefElement<N, D>, const TANGENT: bool
                 }
             }
         }
-        let third_I1 = I1 * V::splat(1.0 / 3.0);
-        let mdV = m * dV;
-        let c_h = (a - m * third_I1) * dV;
+        // P g_I = c_H h_I + m f_I
+        let mdV = co.m * dV;
+        let c_h = co.c_H * dV;
         for I in 0..N {
             for i in 0..D {
                 ru[I][i] = c_h.mul_add(h[I][i], mdV.mul_add(f[I][i], ru[I][i]));
             }
         }
         if TANGENT {
-            // ∂r_u/∂u: per node e_I = c1 h_I − ⅔ m f_I, q_I = c2 h_I, t_I = −⅔ m h_I (all × dV)
-            let c1 = (V::splat(law.K) + V::splat(2.0 / 3.0) * m * third_I1) * dV;
-            let c2 = (m * third_I1 - a) * dV;
-            let tw = V::splat(-2.0 / 3.0) * mdV;
+            // ∂r_u/∂u: per node e_I = c1 h_I + t f_I, q_I = c2 h_I, t_I = t h_I (all × dV)
+            let c1 = co.c1 * dV;
+            let c2 = co.c2 * dV;
+            let tw = co.t * dV;
             let mut e = [[zero; 3]; N];
             let mut q = [[zero; 3]; N];
             let mut t = [[zero; 3]; N];
@@ -429,22 +482,14 @@ fn body<const N: usize, const D: usize, E: RefElement<N, D>, const TANGENT: bool
         }
         if np > 0 {
             let reg = mat.reg.expect("a cell with p fields has a regularization");
-            let (b1, b2, id) = (V::splat(reg.beta1), V::splat(reg.beta2), 1.0 / reg.d);
+            let b2 = V::splat(reg.beta2);
             for c in 0..np {
                 let (xa, xb) = crate::material::ROTATION_PLANES[c];
-                let n = F[xa][xb] - F[xb][xa];
-                let sden = F[xa][xa] + F[xb][xb];
+                let sden = rotation_denominator(&F, c);
                 if let Some(l) = first_lane(sden, |v| !(v.abs() > 1e-12)) {
                     return Err((KernelError::Singular, l));
                 }
-                let mut is = [0.0; W];
-                for l in 0..W {
-                    is[l] = 1.0 / sden.0[l];
-                }
-                let is = V(is);
-                let f = n * is;
-                let is2 = is * is;
-                let cf = V::splat(2.0) * f * is2;
+                let rm = rotation_measure_of(&F, c);
                 // p and ∇p of this component
                 let mut pv = zero;
                 let mut gp = [zero; 3];
@@ -454,43 +499,29 @@ fn body<const N: usize, const D: usize, E: RefElement<N, D>, const TANGENT: bool
                         gp[J] = Pn[I][c].mul_add(g[I][J], gp[J]);
                     }
                 }
-                // ψ = β1/2 e², e = f − p/d
-                let e = f - pv * V::splat(id);
-                let d1f = b1 * e * dV;
-                let d1p = V::splat(-id) * b1 * e * dV;
-                let d2ff = b1 * dV;
-                let d2fp = V::splat(-id) * b1 * dV;
-                let d2pp = V::splat(id * id) * b1 * dV;
+                let (psi, d1, d2) = reg.penalty(rm.f, pv);
+                let (d1f, d1p) = (d1[0] * dV, d1[1] * dV);
+                let (d2ff, d2fp, d2pp) = (d2[0][0] * dV, d2[0][1] * dV, d2[1][1] * dV);
                 let mut gp2 = zero;
                 for J in 0..D {
                     gp2 = gp[J].mul_add(gp[J], gp2);
                 }
-                energy =
-                    (V::splat(0.5) * b1 * e * e + V::splat(0.5) * b2 * gp2).mul_add(dV, energy);
-                // ∂f/∂u(I, a) = is g_Ib − f is g_Ia, ∂f/∂u(I, b) = −is g_Ia − f is g_Ib:
-                // coefficients of (g_a, g_b)
-                let fis = f * is;
-                let bf = [[zero - fis, is], [zero - is, zero - fis]];
+                energy = (psi + V::splat(0.5) * b2 * gp2).mul_add(dV, energy);
+                // the measure's entries of F by (component x of the plane, gradient
+                // component u): row (a, b)[x], column (a, b)[u]; ∂f/∂u(I, x) = Σ_u
+                // bf[x][u] g_I(u), and ∂²f is read from the same entries
+                const AT: [[usize; 2]; 2] = [[2, 0], [1, 3]];
+                let bf: [[V; 2]; 2] =
+                    std::array::from_fn(|x| std::array::from_fn(|u| rm.grad[AT[x][u]]));
                 // the 2 × 2 bilinear forms M[x][y][u][v] (u: I's vector, v: K's vector) of
                 // d²ψ/df² ∂f ⊗ ∂f + dψ/df ∂²f
-                let (h, cc) = (is2, cf);
-                let hess = [
-                    [[cc, zero - h], [zero - h, zero]],
-                    [[h, cc], [zero, zero - h]],
-                ];
-                let hess_ba = [[h, zero], [cc, zero - h]];
-                let hess_bb = [[zero, h], [h, cc]];
                 let mut M = [[[[zero; 2]; 2]; 2]; 2];
                 for x in 0..2 {
                     for y in 0..2 {
-                        let hm = match (x, y) {
-                            (0, _) => hess[y],
-                            (1, 0) => hess_ba,
-                            _ => hess_bb,
-                        };
                         for u in 0..2 {
                             for v in 0..2 {
-                                M[x][y][u][v] = (d2ff * bf[x][u]).mul_add(bf[y][v], d1f * hm[u][v]);
+                                let h2 = rm.hess[AT[x][u]][AT[y][v]];
+                                M[x][y][u][v] = (d2ff * bf[x][u]).mul_add(bf[y][v], d1f * h2);
                             }
                         }
                     }
@@ -560,8 +591,8 @@ fn body<const N: usize, const D: usize, E: RefElement<N, D>, const TANGENT: bool
                     v[Jc] = H[c][Jc].mul_add(wv[c], v[Jc]);
                 }
             }
-            let Jk = J * kc * dV;
-            let dJk = (kc + J * dk) * J * dV;
+            let (_, Jk, dJk) = mat.cond.conductance(J);
+            let (Jk, dJk) = (Jk * dV, dJk * dV);
             let mut sv = [zero; N];
             for I in 0..N {
                 for c in 0..D {
@@ -572,7 +603,7 @@ fn body<const N: usize, const D: usize, E: RefElement<N, D>, const TANGENT: bool
             if !TANGENT {
                 continue;
             }
-            let xdV = expansion * dV;
+            let xdV = co.e * dV;
             for I in 0..N {
                 for i in 0..D {
                     let a_i = xdV * h[I][i];
@@ -744,8 +775,7 @@ mod tests {
     }
 
     type LaneKernel<const N: usize> = fn(
-        &CellMaterial,
-        &Layout,
+        &LaneBlock,
         &[CellState<N>; W],
         &mut [f64],
         Option<&mut [f64]>,
@@ -780,14 +810,29 @@ mod tests {
                     has_theta,
                     np,
                 };
-                assert!(eligible(&mat, &lay, Active::ALL));
+                let blk = LaneBlock::new(&mat, &lay, Active::ALL).expect("lanes run it");
+                for part in [
+                    Active {
+                        mechanics: true,
+                        heat: false,
+                    },
+                    Active {
+                        mechanics: false,
+                        heat: true,
+                    },
+                ] {
+                    assert_eq!(
+                        LaneBlock::new(&mat, &lay, part).is_some(),
+                        !has_theta && part.mechanics
+                    );
+                }
                 let nd = lay.ndof();
                 let s: [CellState<N>; W] = std::array::from_fn(state::<N, D, E>);
                 let (mut r, mut k) = (vec![f64::NAN; W * nd], vec![f64::NAN; W * nd * nd]);
-                let out = lanes(&mat, &lay, &s, &mut r, Some(&mut k)).unwrap();
+                let out = lanes(&blk, &s, &mut r, Some(&mut k)).unwrap();
                 // without the tangent: the same residuals and summaries
                 let mut r_only = vec![f64::NAN; W * nd];
-                let out_r = lanes(&mat, &lay, &s, &mut r_only, None).unwrap();
+                let out_r = lanes(&blk, &s, &mut r_only, None).unwrap();
                 assert_eq!(r_only, r);
                 for l in 0..W {
                     assert_eq!(out_r[l].energy, out[l].energy);
@@ -847,7 +892,8 @@ mod tests {
         let nd = lay.ndof();
         let (mut r, mut k) = (vec![0.0; W * nd], vec![0.0; W * nd * nd]);
         for lanes in [bulk_lanes::<8, 3, Hex8>, bulk_lanes_portable::<8, 3, Hex8>] {
-            match lanes(&mat, &lay, &s, &mut r, Some(&mut k)) {
+            let blk = LaneBlock::new(&mat, &lay, Active::ALL).unwrap();
+            match lanes(&blk, &s, &mut r, Some(&mut k)) {
                 Err((KernelError::Inverted { J }, 2)) => assert!(J <= 0.0),
                 other => panic!("{other:?}"),
             }

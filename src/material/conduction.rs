@@ -2,7 +2,7 @@
 //! a conductivity that may depend on the volume ratio J (the medium's, eq. 15 as SPEC reads it).
 #![allow(non_snake_case)]
 
-use super::Tensor3;
+use super::{Real, Tensor3};
 use nalgebra::{Matrix3, Vector3};
 
 /// Conductivity as a function of the volume ratio J: k(J) and dk/dJ.
@@ -16,19 +16,28 @@ pub enum Conductivity {
 
 impl Conductivity {
     /// (k, dk/dJ).
-    pub fn eval(&self, J: f64) -> (f64, f64) {
+    #[inline(always)]
+    pub fn eval<S: Real>(&self, J: S) -> (S, S) {
         match *self {
-            Conductivity::Constant(k) => (k, 0.0),
+            Conductivity::Constant(k) => (S::splat(k), S::splat(0.0)),
             Conductivity::Medium { k_tm, k_max } => {
                 let l = J.ln();
-                let k = k_tm * (1.0 + l * l);
-                if k >= k_max {
-                    (k_max, 0.0)
-                } else {
-                    (k, 2.0 * k_tm * l / J)
-                }
+                let k = S::splat(k_tm) * (S::splat(1.0) + l * l);
+                let cap = S::splat(k_max);
+                (
+                    k.select_ge(cap, cap, k),
+                    k.select_ge(cap, S::splat(0.0), S::splat(2.0 * k_tm) * l / J),
+                )
             }
         }
+    }
+
+    /// The pulled-back conductance of Q = −(J k) C⁻¹ ∇_X θ: (k, J k, (k + J k') J), the last
+    /// being the factor of ∂(J k)/∂F = (k + J k') J F⁻ᵀ.
+    #[inline(always)]
+    pub fn conductance<S: Real>(&self, J: S) -> (S, S, S) {
+        let (k, dk) = self.eval(J);
+        (k, J * k, (k + J * dk) * J)
     }
 }
 
@@ -58,13 +67,11 @@ pub fn fourier(
     }
     let Finv = F.try_inverse()?;
     let Cinv = Finv * Finv.transpose();
-    let (k, dk_dJ) = law.eval(J);
-    let Jk = J * k;
+    let (k, Jk, dJk) = law.conductance(J);
     let h = Cinv * grad_theta; // C⁻¹ g
     let Q = -h * Jk;
     let fg = Finv.transpose() * grad_theta; // F⁻ᵀ g
-    // d(J k)/dF_kL = (k + J dk/dJ) J F⁻ᵀ_kL
-    let dJk = (k + J * dk_dJ) * J;
+    // d(J k)/dF_kL = dJk F⁻ᵀ_kL
     let mut B = Tensor3::zeros();
     for I in 0..3 {
         for kk in 0..3 {

@@ -10,15 +10,17 @@
 
 pub mod conduction;
 pub mod convection;
+pub mod real;
 pub mod regularization;
 pub mod thermo_elastic;
 
 pub use conduction::{Conductivity, HeatResponse, fourier};
 pub use convection::Convection;
+pub use real::Real;
 pub use regularization::{
     ROTATION_PLANES, Regularization, RotationMeasure, rotation_measure, rotation_measure_d3,
 };
-pub use thermo_elastic::{Scalars, StressResponse, ThermoElastic};
+pub use thermo_elastic::{Coefficients, Scalars, StressResponse, ThermoElastic};
 
 use nalgebra::SMatrix;
 

@@ -2,6 +2,7 @@
 //! derivatives, and the penalty of the linear elements' auxiliary fields (eq. 20).
 #![allow(non_snake_case)]
 
+use super::Real;
 use nalgebra::Matrix3;
 
 /// Planes (a, b) of the rotation measures of eq. (16)–(17): f1 about z, f2 about y, f3 about x.
@@ -10,39 +11,57 @@ pub const ROTATION_PLANES: [(usize, usize); 3] = [(0, 1), (0, 2), (1, 2)];
 /// A rotation measure f = (F_ab − F_ba)/(F_aa + F_bb) (= tan φ for a pure rotation in the
 /// plane (a, b)) with its derivatives with respect to the four entries of F it depends on.
 #[derive(Clone, Copy, Debug)]
-pub struct RotationMeasure {
-    pub f: f64,
+pub struct RotationMeasure<S = f64> {
+    pub f: S,
     /// Entries (row, column) of F in the order ab, ba, aa, bb.
     pub entries: [(usize, usize); 4],
     /// ∂f/∂F at those entries.
-    pub grad: [f64; 4],
+    pub grad: [S; 4],
     /// ∂²f/∂F∂F at those entries.
-    pub hess: [[f64; 4]; 4],
+    pub hess: [[S; 4]; 4],
+}
+
+/// The denominator F_aa + F_bb of rotation measure `i`: the measure is unbounded where it
+/// vanishes (a rotation by 90° in that plane).
+#[inline(always)]
+pub fn rotation_denominator<S: Real>(F: &[[S; 3]; 3], i: usize) -> S {
+    let (a, b) = ROTATION_PLANES[i];
+    F[a][a] + F[b][b]
+}
+
+/// The rotation measure of plane `ROTATION_PLANES[i]` with its derivatives, for any scalar;
+/// check [`rotation_denominator`] first.
+#[inline(always)]
+pub fn rotation_measure_of<S: Real>(F: &[[S; 3]; 3], i: usize) -> RotationMeasure<S> {
+    let (a, b) = ROTATION_PLANES[i];
+    let n = F[a][b] - F[b][a];
+    let s = F[a][a] + F[b][b];
+    let is = S::splat(1.0) / s;
+    let f = n * is;
+    let is2 = is * is;
+    let c = S::splat(2.0) * f * is2; // ∂²f/∂s² = 2 n / s³
+    let z = S::splat(0.0);
+    RotationMeasure {
+        f,
+        entries: [(a, b), (b, a), (a, a), (b, b)],
+        grad: [is, -is, -f * is, -f * is],
+        hess: [
+            [z, z, -is2, -is2],
+            [z, z, is2, is2],
+            [-is2, is2, c, c],
+            [-is2, is2, c, c],
+        ],
+    }
 }
 
 /// The rotation measure of plane `ROTATION_PLANES[i]`; `None` when F_aa + F_bb = 0 (a rotation
 /// of 90° in that plane, where tan φ is unbounded).
 pub fn rotation_measure(F: &Matrix3<f64>, i: usize) -> Option<RotationMeasure> {
-    let (a, b) = ROTATION_PLANES[i];
-    let n = F[(a, b)] - F[(b, a)];
-    let s = F[(a, a)] + F[(b, b)];
-    if !(s.abs() > 1e-12) {
+    let F: [[f64; 3]; 3] = std::array::from_fn(|r| std::array::from_fn(|c| F[(r, c)]));
+    if !(rotation_denominator(&F, i).abs() > 1e-12) {
         return None;
     }
-    let f = n / s;
-    let (is, is2) = (1.0 / s, 1.0 / (s * s));
-    let c = 2.0 * f * is2; // ∂²f/∂s² = 2 n / s³
-    Some(RotationMeasure {
-        f,
-        entries: [(a, b), (b, a), (a, a), (b, b)],
-        grad: [is, -is, -f * is, -f * is],
-        hess: [
-            [0.0, 0.0, -is2, -is2],
-            [0.0, 0.0, is2, is2],
-            [-is2, is2, c, c],
-            [-is2, is2, c, c],
-        ],
-    })
+    Some(rotation_measure_of(&F, i))
 }
 
 /// Third derivatives of the rotation measure `i` with respect to its four entries of F (in
@@ -85,14 +104,17 @@ impl Regularization {
     /// Energy density of one component and its first and second derivatives with respect to
     /// (f, p): returns (ψ, [∂ψ/∂f, ∂ψ/∂p], [[∂²ψ/∂f², ∂²ψ/∂f∂p], [·, ∂²ψ/∂p²]]) for the
     /// penalty part; the gradient part β2/2 |∇p|² is quadratic and handled by the caller.
-    pub fn penalty(&self, f: f64, p: f64) -> (f64, [f64; 2], [[f64; 2]; 2]) {
+    #[inline(always)]
+    #[allow(clippy::type_complexity)]
+    pub fn penalty<S: Real>(&self, f: S, p: S) -> (S, [S; 2], [[S; 2]; 2]) {
         let id = 1.0 / self.d;
-        let e = f - p * id;
-        let b = self.beta1;
+        let e = f - p * S::splat(id);
+        let b = S::splat(self.beta1);
+        let (bid, bid2) = (S::splat(self.beta1 * id), S::splat(self.beta1 * id * id));
         (
-            0.5 * b * e * e,
-            [b * e, -b * e * id],
-            [[b, -b * id], [-b * id, b * id * id]],
+            S::splat(0.5) * b * e * e,
+            [b * e, -(bid * e)],
+            [[b, -bid], [-bid, bid2]],
         )
     }
 }

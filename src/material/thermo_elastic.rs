@@ -2,7 +2,7 @@
 //! third medium (eq. 13, K = μ = γ).
 #![allow(non_snake_case)]
 
-use super::Tensor4;
+use super::{Real, Tensor4};
 use nalgebra::Matrix3;
 
 /// Thermo-elastic compressible Neo-Hooke law of eq. (12), mechanical part:
@@ -32,28 +32,69 @@ pub struct StressResponse {
     pub J: f64,
 }
 
-/// The law's scalar functions of J, tr C and θ, from which its stress and tangent are built:
-/// P = a F⁻ᵀ + m (F − ⅓ tr C F⁻ᵀ), and ∂P/∂F as in [`ThermoElastic::stress`].
+/// The law's scalar functions of J, tr C and θ, from which its stress and tangent are built
+/// (see [`Coefficients`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Scalars {
-    pub psi: f64,
+pub struct Scalars<S = f64> {
+    pub psi: S,
     /// Coefficient of F⁻ᵀ from the volumetric and thermal parts: K ln J − 3 α (θ − θ0) K.
-    pub a: f64,
+    pub a: S,
     /// μ J^(−2/3).
-    pub m: f64,
+    pub m: S,
+}
+
+/// The stress and its derivatives as combinations of H = F⁻ᵀ and F, I1 = tr C:
+///
+/// P = c_H H + m F,
+/// ∂P_iJ/∂F_kL = c1 H_iJ H_kL + c2 H_iL H_kJ + t (F_iJ H_kL + H_iJ F_kL) + m δ_ik δ_JL,
+/// ∂P/∂θ = e H.
+///
+/// The one-cell kernel builds the 9 × 9 ∂P/∂F from them ([`ThermoElastic::stress`]); the lane
+/// kernel contracts them with the shape gradients directly.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Coefficients<S = f64> {
+    /// a − ⅓ m I1.
+    pub c_H: S,
+    /// μ J^(−2/3).
+    pub m: S,
+    /// K + 2⁄9 m I1.
+    pub c1: S,
+    /// ⅓ m I1 − a.
+    pub c2: S,
+    /// −⅔ m.
+    pub t: S,
+    /// −3 α K.
+    pub e: S,
 }
 
 impl ThermoElastic {
     /// Ψ, a and m at J > 0, I1 = tr C and θ.
     #[inline(always)]
-    pub fn scalars(&self, J: f64, I1: f64, theta: f64) -> Scalars {
+    pub fn scalars<S: Real>(&self, J: S, I1: S, theta: S) -> Scalars<S> {
         let lnJ = J.ln();
         let Jm23 = J.powf(-2.0 / 3.0);
-        let c = 3.0 * self.alpha * (theta - self.theta0) * self.K;
+        let c = S::splat(3.0 * self.alpha) * (theta - S::splat(self.theta0)) * S::splat(self.K);
+        let (K, mu) = (S::splat(self.K), S::splat(self.mu));
         Scalars {
-            psi: 0.5 * self.K * lnJ * lnJ + 0.5 * self.mu * (Jm23 * I1 - 3.0) - c * lnJ,
-            a: self.K * lnJ - c,
-            m: self.mu * Jm23,
+            psi: S::splat(0.5 * self.K) * lnJ * lnJ
+                + S::splat(0.5 * self.mu) * (Jm23 * I1 - S::splat(3.0))
+                - c * lnJ,
+            a: K * lnJ - c,
+            m: mu * Jm23,
+        }
+    }
+
+    /// The coefficients of the stress and its derivatives from the scalars at I1 = tr C.
+    #[inline(always)]
+    pub fn coefficients<S: Real>(&self, sc: &Scalars<S>, I1: S) -> Coefficients<S> {
+        let third = I1 * S::splat(1.0 / 3.0);
+        Coefficients {
+            c_H: sc.a - sc.m * third,
+            m: sc.m,
+            c1: S::splat(self.K) + S::splat(2.0 / 3.0) * sc.m * third,
+            c2: sc.m * third - sc.a,
+            t: S::splat(-2.0 / 3.0) * sc.m,
+            e: S::splat(-3.0 * self.alpha * self.K),
         }
     }
 
@@ -67,14 +108,21 @@ impl ThermoElastic {
         let Finv = F.try_inverse()?;
         let H = Finv.transpose(); // F⁻ᵀ = ∂J/∂F / J
         let I1 = F.norm_squared(); // tr C
-        let Scalars { psi, a, m } = self.scalars(J, I1, theta);
-        let P = H * a + (F - H * (I1 / 3.0)) * m;
-        // A_iJkL = K H_kL H_iJ − a H_iL H_kJ
-        //        + m (δ_ik δ_JL − ⅔ H_kL dev_iJ − ⅔ F_kL H_iJ + ⅓ I1 H_iL H_kJ),
-        // dev = F − ⅓ I1 H, gathered as H_kL α_iJ + F_kL β_iJ + γ H_iL H_kJ + m δ_ik δ_JL
-        let alpha = (H * self.K) - (F - H * (I1 / 3.0)) * (2.0 / 3.0 * m);
-        let beta = H * (-2.0 / 3.0 * m);
-        let gamma = m * I1 / 3.0 - a;
+        let sc = self.scalars(J, I1, theta);
+        let Coefficients {
+            c_H,
+            m,
+            c1,
+            c2,
+            t,
+            e,
+        } = self.coefficients(&sc, I1);
+        let P = H * c_H + F * m;
+        // A_iJkL = H_kL α_iJ + F_kL β_iJ + c2 H_iL H_kJ + m δ_ik δ_JL with α = c1 H + t F and
+        // β = t H
+        let alpha = H * c1 + F * t;
+        let beta = H * t;
+        let gamma = c2;
         let mut A = Tensor4::zeros();
         for L in 0..3 {
             for k in 0..3 {
@@ -92,7 +140,8 @@ impl ThermoElastic {
         for r in 0..9 {
             A[(r, r)] += m;
         }
-        let dP_dtheta = H * (-3.0 * self.alpha * self.K);
+        let dP_dtheta = H * e;
+        let psi = sc.psi;
         Some(StressResponse {
             psi,
             P,
