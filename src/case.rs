@@ -333,6 +333,15 @@ impl Case {
 
     /// Checks that need no mesh: moduli, steps, probes.
     fn check_values(&self) -> Result<(), CaseError> {
+        self.check_regions()?;
+        let n_path = self.check_steps()?;
+        self.check_bc_values(n_path)?;
+        self.check_probes()
+    }
+
+    /// Every region: its kind's required moduli positive, no key of the other kind, a
+    /// positive finite `rho_c`.
+    fn check_regions(&self) -> Result<(), CaseError> {
         let f = &self.file;
         for (i, r) in f.region.iter().enumerate() {
             let at = r.group.span();
@@ -402,6 +411,12 @@ impl Case {
                 }
             }
         }
+        Ok(())
+    }
+
+    /// `[steps]` and `[time]`; returns how many values a group's own `path` needs.
+    fn check_steps(&self) -> Result<usize, CaseError> {
+        let f = &self.file;
         let s = &f.steps;
         let steps_at = self.text.find("[steps]").unwrap_or(0);
         let bad = |msg: &str| self.error::<()>(steps_at..steps_at, format!("[steps]: {msg}"));
@@ -435,6 +450,12 @@ impl Case {
             }
             (None, None) => 2,
         };
+        Ok(n_path)
+    }
+
+    /// Each `[[bc]]`'s own `path` (`n_path` values) and convection.
+    fn check_bc_values(&self, n_path: usize) -> Result<(), CaseError> {
+        let f = &self.file;
         for bc in &f.bc {
             let Some(own) = &bc.path else { continue };
             let g = bc.group.get_ref();
@@ -455,6 +476,12 @@ impl Case {
         for bc in &f.bc {
             self.check_convection(bc)?;
         }
+        Ok(())
+    }
+
+    /// Probes: a known field with the points it needs, names used once.
+    fn check_probes(&self) -> Result<(), CaseError> {
+        let f = &self.file;
         for p in &f.probe {
             let field = p.field.get_ref().as_str();
             match field {
@@ -609,19 +636,30 @@ impl Case {
     /// Checks against the mesh: groups exist and have the right dimension, every cell has a
     /// material, prescribed components exist in this dimension.
     pub fn validate(&self, mesh: &Mesh) -> Result<(), CaseError> {
-        let available = |dim_ok: &dyn Fn(usize) -> bool| -> String {
-            let names: Vec<String> = mesh
-                .groups
-                .iter()
-                .filter(|g| dim_ok(g.dim))
-                .map(|g| format!("\"{}\"", g.name))
-                .collect();
-            if names.is_empty() {
-                "none".into()
-            } else {
-                names.join(", ")
-            }
-        };
+        let region_groups = self.validate_regions(mesh)?;
+        self.validate_cells(mesh, &region_groups)?;
+        self.validate_bcs(mesh)?;
+        self.validate_sizes(mesh)
+    }
+
+    /// The groups of `mesh` of a dimension `dim_ok` accepts, quoted, for error messages.
+    fn groups_of(mesh: &Mesh, dim_ok: &dyn Fn(usize) -> bool) -> String {
+        let names: Vec<String> = mesh
+            .groups
+            .iter()
+            .filter(|g| dim_ok(g.dim))
+            .map(|g| format!("\"{}\"", g.name))
+            .collect();
+        if names.is_empty() {
+            "none".into()
+        } else {
+            names.join(", ")
+        }
+    }
+
+    /// Every region names a group of cells of the mesh, once; returns those groups.
+    fn validate_regions(&self, mesh: &Mesh) -> Result<Vec<usize>, CaseError> {
+        let available = |dim_ok: &dyn Fn(usize) -> bool| Self::groups_of(mesh, dim_ok);
         let mut region_groups = Vec::new();
         for (i, r) in self.file.region.iter().enumerate() {
             let name = r.group.get_ref();
@@ -653,6 +691,11 @@ impl Case {
             }
             region_groups.push(g);
         }
+        Ok(region_groups)
+    }
+
+    /// Every block of cells belongs to exactly one region.
+    fn validate_cells(&self, mesh: &Mesh, region_groups: &[usize]) -> Result<(), CaseError> {
         for b in &mesh.cells {
             let n = b
                 .groups
@@ -680,6 +723,12 @@ impl Case {
                 );
             }
         }
+        Ok(())
+    }
+
+    /// Every `[[bc]]` names a boundary group of a dimension its conditions can act on.
+    fn validate_bcs(&self, mesh: &Mesh) -> Result<(), CaseError> {
+        let available = |dim_ok: &dyn Fn(usize) -> bool| Self::groups_of(mesh, dim_ok);
         for (i, bc) in self.file.bc.iter().enumerate() {
             let name = bc.group.get_ref();
             let Some(g) = mesh.group(name) else {
@@ -741,6 +790,11 @@ impl Case {
                 );
             }
         }
+        Ok(())
+    }
+
+    /// Vectors and points have the mesh's dimension.
+    fn validate_sizes(&self, mesh: &Mesh) -> Result<(), CaseError> {
         for r in &self.file.region {
             if let Some(b) = &r.body_force
                 && b.len() != mesh.dim

@@ -109,45 +109,7 @@ fn main() -> ExitCode {
             study,
             output,
             quiet,
-        } => {
-            let exe = match std::env::current_exe() {
-                Ok(e) => e,
-                Err(e) => {
-                    eprintln!("error: cannot find the tmc executable: {e}");
-                    return ExitCode::FAILURE;
-                }
-            };
-            let opts = tmc::study::StudyOptions {
-                out_dir: output,
-                exe,
-                quiet,
-            };
-            match tmc::study::run_study(&study, &opts) {
-                Ok(r) => {
-                    let failed = r.outcomes.iter().filter(|o| !o.converged).count();
-                    println!(
-                        "study {}: {} variants ({failed} failed); wrote {}",
-                        r.name,
-                        r.outcomes.len(),
-                        r.files
-                            .iter()
-                            .map(|f| f.display().to_string())
-                            .collect::<Vec<_>>()
-                            .join(", ")
-                    );
-                    // the report names the failures; the exit status tells scripts
-                    if failed == 0 {
-                        ExitCode::SUCCESS
-                    } else {
-                        ExitCode::FAILURE
-                    }
-                }
-                Err(e) => {
-                    print_chain(&e);
-                    ExitCode::FAILURE
-                }
-            }
-        }
+        } => study_command(&study, output, quiet),
         Command::Plot {
             results,
             columns,
@@ -199,47 +161,96 @@ fn main() -> ExitCode {
             output,
             quiet,
             verbose,
-        } => {
-            let idle_threads = match IdleThreads::from_env() {
-                Ok(i) => i,
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    return ExitCode::FAILURE;
-                }
-            };
-            let opts = SolveOptions {
-                out_dir: output,
-                quiet,
-                verbose,
-                idle_threads,
-            };
-            match run(&case, &opts) {
-                Ok(s) => {
-                    if !quiet {
-                        let probes: Vec<String> = s
-                            .probes
-                            .iter()
-                            .map(|(k, v)| format!("{k} = {v:.6e}"))
-                            .collect();
-                        println!(
-                            "{}: {} dofs, {} load steps, {} Newton iterations, {:.2} s{}{}",
-                            s.case,
-                            s.dofs["total"],
-                            s.load_steps,
-                            s.newton_iterations,
-                            s.wall_seconds,
-                            if probes.is_empty() { "" } else { "; " },
-                            probes.join(", ")
-                        );
-                        println!("results in {}", s.output);
-                    }
-                    ExitCode::SUCCESS
-                }
-                Err(e) => {
-                    print_chain(&e);
-                    ExitCode::FAILURE
-                }
+        } => solve_command(&case, output, quiet, verbose),
+    }
+}
+
+/// `tmc study`: every variant, then the tables and plots; fails if any variant failed.
+fn study_command(study: &std::path::Path, output: Option<PathBuf>, quiet: bool) -> ExitCode {
+    let exe = match std::env::current_exe() {
+        Ok(e) => e,
+        Err(e) => {
+            eprintln!("error: cannot find the tmc executable: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let opts = tmc::study::StudyOptions {
+        out_dir: output,
+        exe,
+        quiet,
+    };
+    match tmc::study::run_study(study, &opts) {
+        Ok(r) => {
+            let failed = r.outcomes.iter().filter(|o| !o.converged).count();
+            println!(
+                "study {}: {} variants ({failed} failed); wrote {}",
+                r.name,
+                r.outcomes.len(),
+                r.files
+                    .iter()
+                    .map(|f| f.display().to_string())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+            // the report names the failures; the exit status tells scripts
+            if failed == 0 {
+                ExitCode::SUCCESS
+            } else {
+                ExitCode::FAILURE
             }
+        }
+        Err(e) => {
+            print_chain(&e);
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// `tmc solve`: one case, with a line of results unless `quiet`.
+fn solve_command(
+    case: &std::path::Path,
+    output: Option<PathBuf>,
+    quiet: bool,
+    verbose: bool,
+) -> ExitCode {
+    let idle_threads = match IdleThreads::from_env() {
+        Ok(i) => i,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let opts = SolveOptions {
+        out_dir: output,
+        quiet,
+        verbose,
+        idle_threads,
+    };
+    match run(case, &opts) {
+        Ok(s) => {
+            if !quiet {
+                let probes: Vec<String> = s
+                    .probes
+                    .iter()
+                    .map(|(k, v)| format!("{k} = {v:.6e}"))
+                    .collect();
+                println!(
+                    "{}: {} dofs, {} load steps, {} Newton iterations, {:.2} s{}{}",
+                    s.case,
+                    s.dofs["total"],
+                    s.load_steps,
+                    s.newton_iterations,
+                    s.wall_seconds,
+                    if probes.is_empty() { "" } else { "; " },
+                    probes.join(", ")
+                );
+                println!("results in {}", s.output);
+            }
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            print_chain(&e);
+            ExitCode::FAILURE
         }
     }
 }

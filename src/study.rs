@@ -247,6 +247,55 @@ pub struct StudyOptions {
 
 /// Run a study file end to end.
 pub fn run_study(path: &Path, opts: &StudyOptions) -> Result<StudyReport, StudyError> {
+    let (study, name) = read_study(path)?;
+    // every variant's case is built (and refused) before anything runs
+    let cases = variant_cases(path, &study)?;
+    let out = opts
+        .out_dir
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("results").join(&name));
+    let runs = out.join("runs");
+    std::fs::create_dir_all(&runs).map_err(|source| StudyError::Io {
+        path: runs.clone(),
+        source,
+    })?;
+    let mut outcomes = Vec::new();
+    for (i, (v, case)) in study.variant.iter().zip(&cases).enumerate() {
+        if !opts.quiet {
+            eprintln!("[{}/{}] {} ...", i + 1, study.variant.len(), v.name);
+        }
+        let o = run_variant(&study, v, case, &runs.join(slug(&v.name)), opts)?;
+        if !opts.quiet {
+            eprintln!(
+                "      {}: {:.0} dofs, {:.0} steps, {:.0} its, {:.2} s",
+                o.message, o.dofs, o.load_steps, o.newton_iterations, o.total_s
+            );
+        }
+        outcomes.push(o);
+    }
+    let reference_text = set_errors(&study, &mut outcomes);
+    let mut files = Vec::new();
+    files.push(write_csv(&out, &study, &outcomes)?);
+    files.push(write_markdown(
+        &out,
+        &name,
+        path,
+        &study,
+        &outcomes,
+        &reference_text,
+    )?);
+    files.extend(write_plots(&out, &name, &study, &outcomes)?);
+    Ok(StudyReport {
+        name,
+        out,
+        outcomes,
+        files,
+    })
+}
+
+/// The study file, checked (variants, measures, unique names, a known reference), and its
+/// name.
+fn read_study(path: &Path) -> Result<(StudyFile, String), StudyError> {
     let text = std::fs::read_to_string(path).map_err(|source| StudyError::Io {
         path: path.to_owned(),
         source,
@@ -280,6 +329,11 @@ pub fn run_study(path: &Path, opts: &StudyOptions) -> Result<StudyReport, StudyE
             format!("reference \"{r}\" is neither \"last\" nor a variant's name"),
         ));
     }
+    Ok((study, name))
+}
+
+/// The case text of every variant: the study's case with the variant's settings.
+fn variant_cases(path: &Path, study: &StudyFile) -> Result<Vec<String>, StudyError> {
     let study_dir = path.parent().unwrap_or(Path::new("."));
     let case_path = study_dir.join(&study.case);
     let case_text = std::fs::read_to_string(&case_path).map_err(|source| StudyError::Io {
@@ -297,116 +351,99 @@ pub fn run_study(path: &Path, opts: &StudyOptions) -> Result<StudyReport, StudyE
         .parent()
         .unwrap_or(Path::new("/"))
         .to_owned();
-    // every variant's case is built (and refused) before anything runs
-    let cases: Vec<String> = study
+    study
         .variant
         .iter()
         .map(|v| {
             variant_case(&base, &case_dir, v)
                 .map_err(|m| invalid(path, format!("variant \"{}\": {m}", v.name)))
         })
-        .collect::<Result<_, _>>()?;
-    let out = opts
-        .out_dir
-        .clone()
-        .unwrap_or_else(|| PathBuf::from("results").join(&name));
-    let runs = out.join("runs");
-    std::fs::create_dir_all(&runs).map_err(|source| StudyError::Io {
-        path: runs.clone(),
-        source,
-    })?;
+        .collect()
+}
 
-    let mut outcomes = Vec::new();
-    for (i, (v, case)) in study.variant.iter().zip(&cases).enumerate() {
-        let dir = runs.join(slug(&v.name));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).map_err(|source| StudyError::Io {
-            path: dir.clone(),
-            source,
-        })?;
-        let case_file = dir.join("case.toml");
-        std::fs::write(&case_file, case).map_err(|source| StudyError::Io {
-            path: case_file.clone(),
-            source,
-        })?;
-        let res = dir.join("out");
-        if !opts.quiet {
-            eprintln!("[{}/{}] {} ...", i + 1, study.variant.len(), v.name);
-        }
-        let t0 = Instant::now();
-        let proc = std::process::Command::new(&opts.exe)
-            .arg("solve")
-            .arg(&case_file)
-            .arg("-o")
-            .arg(&res)
-            .arg("-q")
-            .output()
-            .map_err(|source| StudyError::Io {
-                path: opts.exe.clone(),
-                source,
-            })?;
-        let wall = t0.elapsed().as_secs_f64();
-        let summary: serde_json::Value = std::fs::read_to_string(res.join("summary.json"))
-            .ok()
-            .and_then(|t| serde_json::from_str(&t).ok())
-            .unwrap_or(serde_json::Value::Null);
-        let num = |k: &str| summary[k].as_f64().unwrap_or(f64::NAN);
-        let converged = proc.status.success() && summary["converged"].as_bool() == Some(true);
-        let quantities = |qs: &[String]| -> Vec<f64> {
-            qs.iter()
-                .map(|q| {
-                    if converged {
-                        measured(&summary, q)
-                    } else {
-                        f64::NAN
-                    }
-                })
-                .collect()
-        };
-        let message = if converged {
-            "converged".to_string()
+/// Solve one variant's `case` with `tmc solve` in `dir`, and read what it measured.
+fn run_variant(
+    study: &StudyFile,
+    v: &Variant,
+    case: &str,
+    dir: &Path,
+    opts: &StudyOptions,
+) -> Result<Outcome, StudyError> {
+    let io = |path: &Path| {
+        let path = path.to_owned();
+        move |source| StudyError::Io { path, source }
+    };
+    let _ = std::fs::remove_dir_all(dir);
+    std::fs::create_dir_all(dir).map_err(io(dir))?;
+    let case_file = dir.join("case.toml");
+    std::fs::write(&case_file, case).map_err(io(&case_file))?;
+    let res = dir.join("out");
+    let t0 = Instant::now();
+    let proc = std::process::Command::new(&opts.exe)
+        .arg("solve")
+        .arg(&case_file)
+        .arg("-o")
+        .arg(&res)
+        .arg("-q")
+        .output()
+        .map_err(io(&opts.exe))?;
+    let wall = t0.elapsed().as_secs_f64();
+    let summary: serde_json::Value = std::fs::read_to_string(res.join("summary.json"))
+        .ok()
+        .and_then(|t| serde_json::from_str(&t).ok())
+        .unwrap_or(serde_json::Value::Null);
+    let num = |k: &str| summary[k].as_f64().unwrap_or(f64::NAN);
+    let converged = proc.status.success() && summary["converged"].as_bool() == Some(true);
+    let quantities = |qs: &[String]| -> Vec<f64> {
+        qs.iter()
+            .map(|q| {
+                if converged {
+                    measured(&summary, q)
+                } else {
+                    f64::NAN
+                }
+            })
+            .collect()
+    };
+    let message = if converged {
+        "converged".to_string()
+    } else {
+        let err = String::from_utf8_lossy(&proc.stderr);
+        err.lines()
+            .find(|l| l.starts_with("error"))
+            .unwrap_or(err.trim())
+            .to_string()
+    };
+    Ok(Outcome {
+        variant: v.clone(),
+        dir: res,
+        converged,
+        message,
+        dofs: summary["dofs"]["total"].as_f64().unwrap_or(f64::NAN),
+        free_dofs: summary["dofs"]["free"].as_f64().unwrap_or(f64::NAN),
+        cells: summary["cells"]
+            .as_object()
+            .map(|m| m.values().filter_map(|v| v.as_f64()).sum())
+            .unwrap_or(f64::NAN),
+        load_steps: num("load_steps"),
+        newton_iterations: num("newton_iterations"),
+        assembly_s: num("assembly_seconds"),
+        solver_s: num("solver_seconds"),
+        total_s: if summary.is_null() {
+            wall
         } else {
-            let err = String::from_utf8_lossy(&proc.stderr);
-            err.lines()
-                .find(|l| l.starts_with("error"))
-                .unwrap_or(err.trim())
-                .to_string()
-        };
-        let o = Outcome {
-            variant: v.clone(),
-            dir: res,
-            converged,
-            message,
-            dofs: summary["dofs"]["total"].as_f64().unwrap_or(f64::NAN),
-            free_dofs: summary["dofs"]["free"].as_f64().unwrap_or(f64::NAN),
-            cells: summary["cells"]
-                .as_object()
-                .map(|m| m.values().filter_map(|v| v.as_f64()).sum())
-                .unwrap_or(f64::NAN),
-            load_steps: num("load_steps"),
-            newton_iterations: num("newton_iterations"),
-            assembly_s: num("assembly_seconds"),
-            solver_s: num("solver_seconds"),
-            total_s: if summary.is_null() {
-                wall
-            } else {
-                num("wall_seconds")
-            },
-            peak_memory_mb: num("peak_memory_mb"),
-            values: quantities(&study.measure),
-            errors: Vec::new(),
-            shown: quantities(&study.show),
-        };
-        if !opts.quiet {
-            eprintln!(
-                "      {}: {:.0} dofs, {:.0} steps, {:.0} its, {:.2} s",
-                o.message, o.dofs, o.load_steps, o.newton_iterations, o.total_s
-            );
-        }
-        outcomes.push(o);
-    }
+            num("wall_seconds")
+        },
+        peak_memory_mb: num("peak_memory_mb"),
+        values: quantities(&study.measure),
+        errors: Vec::new(),
+        shown: quantities(&study.show),
+    })
+}
 
-    // errors against the reference
+/// The relative errors of every outcome against the study's reference; returns the
+/// reference, in words.
+fn set_errors(study: &StudyFile, outcomes: &mut [Outcome]) -> String {
     let reference: Vec<f64> = match &study.reference {
         Reference::Values(m) => study
             .measure
@@ -422,7 +459,7 @@ pub fn run_study(path: &Path, opts: &StudyOptions) -> Result<StudyReport, StudyE
             o.map(|o| o.values.clone()).unwrap_or_default()
         }
     };
-    for o in &mut outcomes {
+    for o in outcomes.iter_mut() {
         o.errors = o
             .values
             .iter()
@@ -430,7 +467,7 @@ pub fn run_study(path: &Path, opts: &StudyOptions) -> Result<StudyReport, StudyE
             .map(|(v, r)| (v - r).abs() / r.abs())
             .collect();
     }
-    let reference_text = match &study.reference {
+    match &study.reference {
         Reference::Values(m) => format!(
             "known values: {}",
             m.iter()
@@ -443,25 +480,7 @@ pub fn run_study(path: &Path, opts: &StudyOptions) -> Result<StudyReport, StudyE
             study.variant.last().map(|v| v.name.as_str()).unwrap_or("")
         ),
         Reference::Variant(r) => format!("the variant \"{r}\""),
-    };
-
-    let mut files = Vec::new();
-    files.push(write_csv(&out, &study, &outcomes)?);
-    files.push(write_markdown(
-        &out,
-        &name,
-        path,
-        &study,
-        &outcomes,
-        &reference_text,
-    )?);
-    files.extend(write_plots(&out, &name, &study, &outcomes)?);
-    Ok(StudyReport {
-        name,
-        out,
-        outcomes,
-        files,
-    })
+    }
 }
 
 const COLUMNS: [&str; 11] = [

@@ -67,6 +67,10 @@ unsafe fn bulk_avx2<const N: usize, const D: usize, E: RefElement<N, D>>(
     bulk_body::<N, D, E, Fused>(mat, lay, s, act, r, k)
 }
 
+/// The body of [`bulk`]: per quadrature point the law, then the residual and the tangent
+/// blocks, summed over the points in node-by-node arrays and added to `k` at the end. One
+/// long function on purpose: the blocks (kilobytes for a hex) stay in registers and cache
+/// across the point loop instead of passing through memory between functions.
 #[inline(always)]
 fn bulk_body<const N: usize, const D: usize, E: RefElement<N, D>, M: MulAdd>(
     mat: &CellMaterial,

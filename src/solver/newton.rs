@@ -237,23 +237,8 @@ impl Newton {
         t: f64,
         part: Part,
     ) -> Result<StepReport, StepFailure> {
-        let amps = model.path.amplitudes(t);
-        let n_eq = model.cons.n_eq;
-        let eq = &model.cons.eq;
-        let sub = (part != Part::All).then(|| self.equations(part));
-        let mut b_sub = vec![0.0; sub.as_ref().map_or(0, Vec::len)];
-        let active: [bool; 3] = Field::ALL.map(|f| part.has(f));
+        let mut st = StepState::new(self, model, x.len(), t, part);
         solver.take_krylov();
-        // increment of the prescribed values still to apply, moved to the right-hand side
-        let mut dx_p = vec![0.0; x.len()];
-        let mut rhs = vec![0.0; n_eq];
-        // the update applied last (all dofs), halved on overshoot
-        let mut applied = vec![0.0; x.len()];
-        let mut history = Vec::new();
-        let mut step_ref = [0.0; 3];
-        let mut du_ref = [0.0; 3];
-        let mut last_update: FieldNorms;
-        let mut cuts = 0;
         let mut it = 0;
         // the last update was small: the step most likely ends at the next residual
         let mut expect_converged = false;
@@ -265,65 +250,15 @@ impl Newton {
             // the tangent only if the residual turns out not converged after all.
             let mut tangent = first || !expect_converged;
             let (stats, pending, rel, residual_ok) = loop {
-                // Safeguard: an update that leaves the admissible set (J ≤ 0, an unbounded
-                // regularization, NaN) is halved until the state is admissible again.
-                let mut halvings = 0;
-                let (stats, pending) = loop {
-                    let mut pending = false;
-                    for (d, p) in model.cons.prescribed.iter().enumerate() {
-                        if let Some(p) = p.filter(|_| part.has(model.dofs.field[d])) {
-                            dx_p[d] = p.at(&amps) - x[d];
-                            pending |= dx_p[d] != 0.0;
-                        }
-                    }
-                    match asm.assemble_part(
-                        model,
-                        x,
-                        t,
-                        tangent,
-                        pending.then_some(&dx_p[..]),
-                        part.active(),
-                    ) {
-                        Ok(stats) => break (stats, pending),
-                        Err(e) if first || halvings == MAX_HALVINGS || !e.is_inadmissible() => {
+                let (stats, pending) =
+                    match self.assemble_admissible(&mut st, model, asm, x, t, tangent, first) {
+                        Ok(a) => a,
+                        Err(e) => {
                             self.spent.assembly += t0.elapsed().as_secs_f64();
-                            return Err(StepFailure::Assembly(e));
+                            return Err(e);
                         }
-                        Err(_) => {
-                            halvings += 1;
-                            for (xi, a) in x.iter_mut().zip(applied.iter_mut()) {
-                                *a *= 0.5;
-                                *xi -= *a;
-                            }
-                        }
-                    }
-                };
-                cuts += halvings;
-                self.free_residual(model, part, &asm.r_full, &mut rhs);
-                if pending {
-                    for ((r, l), f) in rhs.iter_mut().zip(&asm.lift).zip(&self.eq_field) {
-                        if part.has(*f) {
-                            *r -= l;
-                        }
-                    }
-                }
-                let res = self.norms(&rhs);
-                let reac = Self::reaction_norms(model, &asm.r_full);
-                for f in (0..3).filter(|&f| active[f]) {
-                    if first {
-                        step_ref[f] = res[f];
-                    }
-                    step_ref[f] = step_ref[f].max(reac[f]);
-                    self.run_ref[f] = self.run_ref[f].max(step_ref[f]);
-                }
-                let rel: FieldNorms = std::array::from_fn(|f| {
-                    let r = same_units(f, |g| step_ref[g].max(self.run_ref[g]));
-                    if r > 0.0 && active[f] {
-                        res[f] / r
-                    } else {
-                        0.0
-                    }
-                });
+                    };
+                let rel = self.relative_residual(&mut st, model, asm, pending, first);
                 let residual_ok = rel.iter().all(|&r| r <= self.tol);
                 if !tangent && (!residual_ok || pending) {
                     tangent = true;
@@ -331,108 +266,41 @@ impl Newton {
                 }
                 break (stats, pending, rel, residual_ok);
             };
-            let dt = t0.elapsed().as_secs_f64();
-            self.spent.assembly += dt;
-            history.push(rel);
+            self.spent.assembly += t0.elapsed().as_secs_f64();
+            st.history.push(rel);
             if it >= self.max_iter && !residual_ok {
                 return Err(StepFailure::NotConverged {
                     iterations: it,
                     last: rel,
                 });
             }
-            let t1 = std::time::Instant::now();
-            let solved = self.idle.run(|| {
-                if !residual_ok || first {
-                    solver.factor(&asm.values)?;
-                }
-                if let Some(sub) = &sub {
-                    for (b, &e) in b_sub.iter_mut().zip(sub) {
-                        *b = rhs[e];
-                    }
-                    solver.solve(&mut b_sub)?;
-                    for (b, &e) in b_sub.iter().zip(sub) {
-                        rhs[e] = *b;
-                    }
-                    Ok(())
-                } else {
-                    solver.solve(&mut rhs)
-                }
-            });
-            let dt = t1.elapsed().as_secs_f64();
-            self.spent.solve += dt;
-            solved.map_err(StepFailure::Linear)?;
-            self.spent.updates += 1;
-            if !rhs.iter().all(|v| v.is_finite()) {
-                return Err(StepFailure::Assembly(AssemblyError::NotFinite));
-            }
-            last_update = self.norms(&rhs);
-            for (d, &e) in eq.iter().enumerate() {
-                applied[d] = if e != NONE {
-                    rhs[e as usize]
-                } else if pending {
-                    dx_p[d]
-                } else {
-                    0.0
-                };
-                x[d] += applied[d];
-            }
+            self.solve_update(&mut st, solver, asm, residual_ok && !first)?;
+            let last_update = self.norms(&st.rhs);
+            st.apply(model, x, pending);
             if first {
-                let pres = {
-                    let mut n = [0.0; 3];
-                    for (d, v) in dx_p.iter().enumerate() {
-                        n[idx(model.dofs.field[d])] += v * v;
-                    }
-                    n.map(f64::sqrt)
-                };
-                du_ref = pres;
+                // the prescribed increments are the step's first update
+                let mut n = [0.0; 3];
+                for (d, v) in st.dx_p.iter().enumerate() {
+                    n[idx(model.dofs.field[d])] += v * v;
+                }
+                st.du_ref = n.map(f64::sqrt);
             }
             for f in 0..3 {
-                du_ref[f] = du_ref[f].max(last_update[f]);
+                st.du_ref[f] = st.du_ref[f].max(last_update[f]);
             }
             let converged_after = if part == Part::Heat {
-                // conduction on a fixed deformed state is linear in θ (k depends on J only):
-                // the direct solve is the solution; a residual-only assembly reports it
-                let t2 = std::time::Instant::now();
-                asm.assemble_part(model, x, t, false, None, part.active())
-                    .map_err(StepFailure::Assembly)?;
-                let dt = t2.elapsed().as_secs_f64();
-                self.spent.assembly += dt;
-                let mut r = vec![0.0; n_eq];
-                self.free_residual(model, part, &asm.r_full, &mut r);
-                let t = idx(Field::Theta);
-                let rel =
-                    self.norms(&r)[t] / step_ref[t].max(self.run_ref[t]).max(f64::MIN_POSITIVE);
-                if !(rel <= self.tol) {
-                    return Err(StepFailure::NotConverged {
-                        iterations: 1,
-                        last: [0.0, rel, 0.0],
-                    });
-                }
-                history.push([0.0, rel, 0.0]);
-                self.spent.iterations += 1;
-                Some(1)
+                Some(self.heat_converged(&mut st, model, asm, x, t)?)
             } else {
-                // an update is small against the step's largest one, or negligible against the
-                // field itself (a field the step hardly changes has round-off updates only)
-                let size = self.norms_of_state(model, x);
-                let update_ok = (0..3).filter(|&f| active[f]).all(|f| {
-                    last_update[f] <= self.tol.sqrt() * same_units(f, |g| du_ref[g])
-                        || last_update[f] <= 1e-10 * same_units(f, |g| size[g])
-                });
-                // and the residual, falling at its last rate, would be below tolerance
-                let worst = |h: &FieldNorms| h.iter().fold(0.0f64, |a, &v| a.max(v));
-                let falling = match history.as_slice() {
-                    [.., a, b] => worst(b) * worst(b) <= self.tol * worst(a),
-                    _ => false,
-                };
-                expect_converged = update_ok && falling;
-                (residual_ok && !first && update_ok).then_some(it)
+                let (done, expect) =
+                    self.converged(&st, model, x, &last_update, residual_ok, first);
+                expect_converged = expect;
+                done.then_some(it)
             };
             if let Some(iterations) = converged_after {
                 return Ok(StepReport {
                     iterations,
-                    halvings: cuts,
-                    history,
+                    halvings: st.cuts,
+                    history: st.history,
                     stats,
                     krylov: solver.take_krylov(),
                     tangents_skipped: usize::from(!tangent),
@@ -446,6 +314,251 @@ impl Newton {
             }
             it += 1;
             self.spent.iterations += 1;
+        }
+    }
+
+    /// Assemble at `x`, the prescribed increments still to apply lifted to the right-hand
+    /// side. Safeguard: an update that leaves the admissible set (J ≤ 0, an unbounded
+    /// regularization, NaN) is halved until the state is admissible again. Returns the
+    /// statistics and whether prescribed increments are pending.
+    #[allow(clippy::too_many_arguments)]
+    fn assemble_admissible(
+        &mut self,
+        st: &mut StepState,
+        model: &Model,
+        asm: &mut Assembler,
+        x: &mut [f64],
+        t: f64,
+        tangent: bool,
+        first: bool,
+    ) -> Result<(AssemblyStats, bool), StepFailure> {
+        let part = st.part;
+        let mut halvings = 0;
+        loop {
+            let mut pending = false;
+            for (d, p) in model.cons.prescribed.iter().enumerate() {
+                if let Some(p) = p.filter(|_| part.has(model.dofs.field[d])) {
+                    st.dx_p[d] = p.at(&st.amps) - x[d];
+                    pending |= st.dx_p[d] != 0.0;
+                }
+            }
+            match asm.assemble_part(
+                model,
+                x,
+                t,
+                tangent,
+                pending.then_some(&st.dx_p[..]),
+                part.active(),
+            ) {
+                Ok(stats) => {
+                    st.cuts += halvings;
+                    return Ok((stats, pending));
+                }
+                Err(e) if first || halvings == MAX_HALVINGS || !e.is_inadmissible() => {
+                    return Err(StepFailure::Assembly(e));
+                }
+                Err(_) => {
+                    halvings += 1;
+                    for (xi, a) in x.iter_mut().zip(st.applied.iter_mut()) {
+                        *a *= 0.5;
+                        *xi -= *a;
+                    }
+                }
+            }
+        }
+    }
+
+    /// −r on the free equations into `st.rhs` (less the lifting where increments are
+    /// pending), the references updated, and the residual of each active field relative to
+    /// its reference.
+    fn relative_residual(
+        &mut self,
+        st: &mut StepState,
+        model: &Model,
+        asm: &Assembler,
+        pending: bool,
+        first: bool,
+    ) -> FieldNorms {
+        let part = st.part;
+        self.free_residual(model, part, &asm.r_full, &mut st.rhs);
+        if pending {
+            for ((r, l), f) in st.rhs.iter_mut().zip(&asm.lift).zip(&self.eq_field) {
+                if part.has(*f) {
+                    *r -= l;
+                }
+            }
+        }
+        let res = self.norms(&st.rhs);
+        let reac = Self::reaction_norms(model, &asm.r_full);
+        for f in (0..3).filter(|&f| st.active[f]) {
+            if first {
+                st.step_ref[f] = res[f];
+            }
+            st.step_ref[f] = st.step_ref[f].max(reac[f]);
+            self.run_ref[f] = self.run_ref[f].max(st.step_ref[f]);
+        }
+        std::array::from_fn(|f| {
+            let r = same_units(f, |g| st.step_ref[g].max(self.run_ref[g]));
+            if r > 0.0 && st.active[f] {
+                res[f] / r
+            } else {
+                0.0
+            }
+        })
+    }
+
+    /// Solve for the update into `st.rhs`, with a new factorisation unless `reuse` allows the
+    /// last one (a converged residual after the first iteration).
+    fn solve_update(
+        &mut self,
+        st: &mut StepState,
+        solver: &mut LinearSolver,
+        asm: &Assembler,
+        reuse: bool,
+    ) -> Result<(), StepFailure> {
+        let t1 = std::time::Instant::now();
+        let (rhs, b_sub, sub) = (&mut st.rhs, &mut st.b_sub, &st.sub);
+        let solved = self.idle.run(|| {
+            if !reuse {
+                solver.factor(&asm.values)?;
+            }
+            if let Some(sub) = sub {
+                for (b, &e) in b_sub.iter_mut().zip(sub) {
+                    *b = rhs[e];
+                }
+                solver.solve(b_sub)?;
+                for (b, &e) in b_sub.iter().zip(sub) {
+                    rhs[e] = *b;
+                }
+                Ok(())
+            } else {
+                solver.solve(rhs)
+            }
+        });
+        self.spent.solve += t1.elapsed().as_secs_f64();
+        solved.map_err(StepFailure::Linear)?;
+        self.spent.updates += 1;
+        if !st.rhs.iter().all(|v| v.is_finite()) {
+            return Err(StepFailure::Assembly(AssemblyError::NotFinite));
+        }
+        Ok(())
+    }
+
+    /// Conduction on a fixed deformed state is linear in θ (k depends on J only): the direct
+    /// solve is the solution, and a residual-only assembly reports it. One iteration.
+    fn heat_converged(
+        &mut self,
+        st: &mut StepState,
+        model: &Model,
+        asm: &mut Assembler,
+        x: &[f64],
+        t: f64,
+    ) -> Result<usize, StepFailure> {
+        let t2 = std::time::Instant::now();
+        asm.assemble_part(model, x, t, false, None, st.part.active())
+            .map_err(StepFailure::Assembly)?;
+        self.spent.assembly += t2.elapsed().as_secs_f64();
+        let mut r = vec![0.0; model.cons.n_eq];
+        self.free_residual(model, st.part, &asm.r_full, &mut r);
+        let th = idx(Field::Theta);
+        let rel = self.norms(&r)[th] / st.step_ref[th].max(self.run_ref[th]).max(f64::MIN_POSITIVE);
+        if !(rel <= self.tol) {
+            return Err(StepFailure::NotConverged {
+                iterations: 1,
+                last: [0.0, rel, 0.0],
+            });
+        }
+        st.history.push([0.0, rel, 0.0]);
+        self.spent.iterations += 1;
+        Ok(1)
+    }
+
+    /// Whether the step has converged after the update `last_update` (residual below
+    /// tolerance before it, not the first iteration, and the update small), and whether the
+    /// next residual is expected to converge (the update small and the residual falling
+    /// quadratically).
+    fn converged(
+        &self,
+        st: &StepState,
+        model: &Model,
+        x: &[f64],
+        last_update: &FieldNorms,
+        residual_ok: bool,
+        first: bool,
+    ) -> (bool, bool) {
+        // an update is small against the step's largest one, or negligible against the field
+        // itself (a field the step hardly changes has round-off updates only)
+        let size = self.norms_of_state(model, x);
+        let update_ok = (0..3).filter(|&f| st.active[f]).all(|f| {
+            last_update[f] <= self.tol.sqrt() * same_units(f, |g| st.du_ref[g])
+                || last_update[f] <= 1e-10 * same_units(f, |g| size[g])
+        });
+        // and the residual, falling at its last rate, would be below tolerance
+        let worst = |h: &FieldNorms| h.iter().fold(0.0f64, |a, &v| a.max(v));
+        let falling = match st.history.as_slice() {
+            [.., a, b] => worst(b) * worst(b) <= self.tol * worst(a),
+            _ => false,
+        };
+        (residual_ok && !first && update_ok, update_ok && falling)
+    }
+}
+
+/// What one step's Newton iterations carry from one to the next.
+struct StepState {
+    part: Part,
+    /// The amplitudes of the prescribed values at the step's time.
+    amps: Vec<f64>,
+    /// Fields the part iterates on.
+    active: [bool; 3],
+    /// The free equations of the part, when it is not the whole system, and their values.
+    sub: Option<Vec<usize>>,
+    b_sub: Vec<f64>,
+    /// Increment of the prescribed values still to apply, moved to the right-hand side.
+    dx_p: Vec<f64>,
+    /// −r on the free equations, then the update.
+    rhs: Vec<f64>,
+    /// The update applied last (all dofs), halved on overshoot.
+    applied: Vec<f64>,
+    /// Relative residual per field at each iteration.
+    history: Vec<FieldNorms>,
+    /// The step's residual references and largest updates per field.
+    step_ref: FieldNorms,
+    du_ref: FieldNorms,
+    /// Halvings over the step.
+    cuts: usize,
+}
+
+impl StepState {
+    fn new(newton: &Newton, model: &Model, n_dofs: usize, t: f64, part: Part) -> StepState {
+        let sub = (part != Part::All).then(|| newton.equations(part));
+        StepState {
+            part,
+            amps: model.path.amplitudes(t),
+            active: Field::ALL.map(|f| part.has(f)),
+            b_sub: vec![0.0; sub.as_ref().map_or(0, Vec::len)],
+            sub,
+            dx_p: vec![0.0; n_dofs],
+            rhs: vec![0.0; model.cons.n_eq],
+            applied: vec![0.0; n_dofs],
+            history: Vec::new(),
+            step_ref: [0.0; 3],
+            du_ref: [0.0; 3],
+            cuts: 0,
+        }
+    }
+
+    /// Apply the update in `rhs` (free equations) and the pending prescribed increments to
+    /// `x`, and keep it as the update applied last.
+    fn apply(&mut self, model: &Model, x: &mut [f64], pending: bool) {
+        for (d, &e) in model.cons.eq.iter().enumerate() {
+            self.applied[d] = if e != NONE {
+                self.rhs[e as usize]
+            } else if pending {
+                self.dx_p[d]
+            } else {
+                0.0
+            };
+            x[d] += self.applied[d];
         }
     }
 }
