@@ -54,12 +54,7 @@ fn time<const N: usize, const D: usize, E: RefElement<N, D>>(
     } else {
         0
     };
-    let mut s = CellState::<N> {
-        X: [[0.0; 3]; N],
-        u: [[0.0; 3]; N],
-        theta: [0.0; N],
-        p: [[0.0; 3]; N],
-    };
+    let mut s = CellState::<N>::zero();
     for (a, xi) in E::nodes().iter().enumerate() {
         for (d, x) in xi.iter().enumerate() {
             s.X[a][d] = 0.5 * x + 0.05 * ((a * 7 + d * 3) % 5) as f64 / 5.0;

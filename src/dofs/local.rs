@@ -46,6 +46,18 @@ pub struct CellState<const N: usize> {
     pub p: [[f64; 3]; N],
 }
 
+impl<const N: usize> CellState<N> {
+    /// All zero: at the origin, undeformed, at θ = 0.
+    pub fn zero() -> CellState<N> {
+        CellState {
+            X: [[0.0; 3]; N],
+            u: [[0.0; 3]; N],
+            theta: [0.0; N],
+            p: [[0.0; 3]; N],
+        }
+    }
+}
+
 /// Gather the nodal state of cell `nodes` from the global vector.
 pub fn gather<const N: usize>(
     coords: &[[f64; 3]],
@@ -54,12 +66,7 @@ pub fn gather<const N: usize>(
     x: &[f64],
 ) -> CellState<N> {
     let d = dofs.dim;
-    let mut s = CellState::<N> {
-        X: [[0.0; 3]; N],
-        u: [[0.0; 3]; N],
-        theta: [0.0; N],
-        p: [[0.0; 3]; N],
-    };
+    let mut s = CellState::<N>::zero();
     for (I, &n) in nodes.iter().enumerate() {
         s.X[I] = coords[n];
         if !dofs.u.is_empty() {

@@ -365,12 +365,7 @@ mod tests {
         } else {
             0
         };
-        let mut s = CellState::<N> {
-            X: [[0.0; 3]; N],
-            u: [[0.0; 3]; N],
-            theta: [0.0; N],
-            p: [[0.0; 3]; N],
-        };
+        let mut s = CellState::<N>::zero();
         for (I, xi) in E::nodes().iter().enumerate() {
             for d in 0..D {
                 // distorted but valid geometry
@@ -477,12 +472,7 @@ mod tests {
             has_theta: false,
             np: 0,
         };
-        let mut st = CellState::<9> {
-            X: [[0.0; 3]; 9],
-            u: [[0.0; 3]; 9],
-            theta: [0.0; 9],
-            p: [[0.0; 3]; 9],
-        };
+        let mut st = CellState::<9>::zero();
         for (I, xi) in Quad9::nodes().iter().enumerate() {
             st.X[I] = [xi[0], xi[1], 0.0];
             st.u[I][1] = 0.1 * xi[0] * xi[0]; // bending: ∇F ≠ 0

@@ -85,12 +85,7 @@ mod tests {
             has_theta: true,
             np: 0,
         };
-        let mut s = CellState::<N> {
-            X: [[0.0; 3]; N],
-            u: [[0.0; 3]; N],
-            theta: [0.0; N],
-            p: [[0.0; 3]; N],
-        };
+        let mut s = CellState::<N>::zero();
         for (I, xi) in E::nodes().iter().enumerate() {
             for d in 0..D {
                 s.X[I][d] = 0.6 * xi[d] + 0.05 * ((I * 7 + d * 3) % 5) as f64 / 5.0;

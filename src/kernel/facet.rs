@@ -128,12 +128,7 @@ mod tests {
 
     /// A facet of a `dim`-D mesh: distorted, displaced, at varied temperatures.
     fn state<const N: usize, const D: usize, E: RefElement<N, D>>(dim: usize) -> CellState<N> {
-        let mut s = CellState::<N> {
-            X: [[0.0; 3]; N],
-            u: [[0.0; 3]; N],
-            theta: [0.0; N],
-            p: [[0.0; 3]; N],
-        };
+        let mut s = CellState::<N>::zero();
         for (I, xi) in E::nodes().iter().enumerate() {
             for d in 0..D {
                 s.X[I][d] = 0.7 * xi[d] + 0.05 * ((I * 3 + d) % 4) as f64;

@@ -745,12 +745,7 @@ mod tests {
 
     /// Lane l's cell: a distorted, deformed and heated copy of the reference cell.
     fn state<const N: usize, const D: usize, E: RefElement<N, D>>(l: usize) -> CellState<N> {
-        let mut s = CellState::<N> {
-            X: [[0.0; 3]; N],
-            u: [[0.0; 3]; N],
-            theta: [0.0; N],
-            p: [[0.0; 3]; N],
-        };
+        let mut s = CellState::<N>::zero();
         for (I, xi) in E::nodes().iter().enumerate() {
             for d in 0..D {
                 s.X[I][d] =
