@@ -30,29 +30,70 @@ pub fn read_msh(path: &Path) -> Result<Mesh, MshError> {
         path: path.to_owned(),
         msg,
     };
-    let names = physical_names(&bytes).map_err(invalid)?;
+    let groups = physical_names(&bytes).map_err(invalid)?;
     let msh = mshio::parse_msh_bytes(&bytes).map_err(|e| MshError::Parse {
         path: path.to_owned(),
         msg: first_line(&format!("{e}")),
     })?;
-    let invalid = |msg: String| MshError::Invalid {
-        path: path.to_owned(),
-        msg,
-    };
-    if names.is_empty() {
+    if groups.is_empty() {
         return Err(invalid(
             "the mesh has no named physical groups; tag solids, medium and boundaries with \
              Physical Surface/Volume/Curve(\"name\") in the .geo"
                 .into(),
         ));
     }
-
     let entities = msh
         .data
         .entities
         .as_ref()
         .ok_or_else(|| invalid("no $Entities section".into()))?;
-    // (dim, entity tag) -> physical tags
+    let nodes = msh
+        .data
+        .nodes
+        .as_ref()
+        .ok_or_else(|| invalid("no $Nodes section".into()))?;
+    let elements = msh
+        .data
+        .elements
+        .as_ref()
+        .ok_or_else(|| invalid("no $Elements section".into()))?;
+    let (node_index, raw_coords) = read_nodes(nodes);
+    let dim = elements
+        .element_blocks
+        .iter()
+        .map(|b| b.entity_dim)
+        .max()
+        .unwrap_or(0);
+    if dim < 2 {
+        return Err(invalid("the mesh has no 2D or 3D cells".into()));
+    }
+    let physicals = entity_physicals(entities);
+    let (mut cells, mut facets) =
+        read_blocks(elements, dim, &physicals, &groups, &node_index).map_err(invalid)?;
+    let coords = renumber(&mut cells, &mut facets, &raw_coords, &groups, dim).map_err(invalid)?;
+    if dim == 2
+        && let Some(x) = coords
+            .iter()
+            .find(|x| x[2].abs() > 1e-12 * (1.0 + x[0].abs() + x[1].abs()))
+    {
+        return Err(invalid(format!(
+            "2D mesh must lie in the plane z = 0; node at {x:?}"
+        )));
+    }
+    let mut mesh = Mesh {
+        dim: dim as usize,
+        coords,
+        cells,
+        facets,
+        groups,
+        source: path.to_owned(),
+    };
+    orient_cells(&mut mesh);
+    Ok(mesh)
+}
+
+/// (dim, entity tag) → the entity's physical tags.
+fn entity_physicals(entities: &mshio::Entities<i32, f64>) -> HashMap<(i32, i32), Vec<i32>> {
     let mut entity_phys: HashMap<(i32, i32), Vec<i32>> = HashMap::new();
     for p in &entities.points {
         entity_phys.insert((0, p.tag), p.physical_tags.clone());
@@ -66,13 +107,11 @@ pub fn read_msh(path: &Path) -> Result<Mesh, MshError> {
     for v in &entities.volumes {
         entity_phys.insert((3, v.tag), v.physical_tags.clone());
     }
+    entity_phys
+}
 
-    // nodes: tag -> coordinates
-    let nodes = msh
-        .data
-        .nodes
-        .as_ref()
-        .ok_or_else(|| invalid("no $Nodes section".into()))?;
+/// Node tag → index, and the coordinates in file order.
+fn read_nodes(nodes: &mshio::Nodes<u64, i32, f64>) -> (HashMap<u64, usize>, Vec<[f64; 3]>) {
     let mut node_index: HashMap<u64, usize> = HashMap::new();
     let mut raw_coords: Vec<[f64; 3]> = Vec::new();
     let mut next_tag = nodes.min_node_tag;
@@ -98,27 +137,24 @@ pub fn read_msh(path: &Path) -> Result<Mesh, MshError> {
         }
     }
 
-    let elements = msh
-        .data
-        .elements
-        .as_ref()
-        .ok_or_else(|| invalid("no $Elements section".into()))?;
-    let dim = elements
-        .element_blocks
-        .iter()
-        .map(|b| b.entity_dim)
-        .max()
-        .unwrap_or(0);
-    if dim < 2 {
-        return Err(invalid("the mesh has no 2D or 3D cells".into()));
-    }
-    let groups: Vec<PhysicalGroup> = names.clone();
+    (node_index, raw_coords)
+}
+
+/// The element blocks as cell blocks (of dimension `dim`) and facet blocks (lower, tagged),
+/// their nodes as indices into the file's nodes.
+fn read_blocks(
+    elements: &mshio::Elements<u64, i32>,
+    dim: i32,
+    entity_phys: &HashMap<(i32, i32), Vec<i32>>,
+    groups: &[PhysicalGroup],
+    node_index: &HashMap<u64, usize>,
+) -> Result<(Vec<Block>, Vec<Block>), String> {
+    let invalid = |msg: String| msg;
     let group_of = |d: i32, tag: i32| {
         groups
             .iter()
             .position(|g| g.dim as i32 == d && g.tag == tag)
     };
-
     let mut cells = Vec::new();
     let mut facets = Vec::new();
     for block in &elements.element_blocks {
@@ -180,10 +216,21 @@ pub fn read_msh(path: &Path) -> Result<Mesh, MshError> {
         }
     }
 
-    // keep only nodes that belong to a cell, numbered in order of first use
+    Ok((cells, facets))
+}
+
+/// Keep only the nodes that belong to a cell, numbered in order of first use; every facet
+/// node must be one of them. Returns the coordinates.
+fn renumber(
+    cells: &mut [Block],
+    facets: &mut [Block],
+    raw_coords: &[[f64; 3]],
+    groups: &[PhysicalGroup],
+    dim: i32,
+) -> Result<Vec<[f64; 3]>, String> {
     let mut new_index = vec![usize::MAX; raw_coords.len()];
     let mut coords = Vec::new();
-    for b in &mut cells {
+    for b in cells.iter_mut() {
         for n in &mut b.conn {
             if new_index[*n] == usize::MAX {
                 new_index[*n] = coords.len();
@@ -192,7 +239,7 @@ pub fn read_msh(path: &Path) -> Result<Mesh, MshError> {
             *n = new_index[*n];
         }
     }
-    for b in &mut facets {
+    for b in facets.iter_mut() {
         for n in &mut b.conn {
             if new_index[*n] == usize::MAX {
                 let g = b
@@ -200,33 +247,15 @@ pub fn read_msh(path: &Path) -> Result<Mesh, MshError> {
                     .first()
                     .map(|&g| groups[g].name.as_str())
                     .unwrap_or("?");
-                return Err(invalid(format!(
+                return Err(format!(
                     "physical group \"{g}\" has a node at {:?} that belongs to no {dim}D cell",
                     raw_coords[*n]
-                )));
+                ));
             }
             *n = new_index[*n];
         }
     }
-    if dim == 2
-        && let Some(x) = coords
-            .iter()
-            .find(|x| x[2].abs() > 1e-12 * (1.0 + x[0].abs() + x[1].abs()))
-    {
-        return Err(invalid(format!(
-            "2D mesh must lie in the plane z = 0; node at {x:?}"
-        )));
-    }
-    let mut mesh = Mesh {
-        dim: dim as usize,
-        coords,
-        cells,
-        facets,
-        groups,
-        source: path.to_owned(),
-    };
-    orient_cells(&mut mesh);
-    Ok(mesh)
+    Ok(coords)
 }
 
 /// gmsh may write 2D cells clockwise (e.g. surfaces whose normal points along −z); flip them so
