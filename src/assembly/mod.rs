@@ -93,6 +93,15 @@ pub struct AssemblyStats {
     pub energy: f64,
 }
 
+impl AssemblyStats {
+    /// Nothing assembled yet.
+    pub const EMPTY: AssemblyStats = AssemblyStats {
+        min_J_solid: f64::INFINITY,
+        min_J_medium: f64::INFINITY,
+        energy: 0.0,
+    };
+}
+
 /// Assembler state reused across calls: pattern, value and vector storage.
 pub struct Assembler {
     pub pattern: Pattern,
@@ -253,82 +262,35 @@ impl Assembler {
             r_full: Shared(self.r_full.as_mut_ptr()),
             lift: Shared(self.lift.as_mut_ptr()),
         };
-        let empty = AssemblyStats {
-            min_J_solid: f64::INFINITY,
-            min_J_medium: f64::INFINITY,
-            energy: 0.0,
-        };
         // a part's cells, sorted: runs of one model block each
-        let run =
-            |cells: &[u32]| -> Result<AssemblyStats, AssemblyError> {
-                let mut stats = empty;
-                let mut rest = cells;
-                while let Some(&g) = rest.first() {
-                    let bi = first_cell.partition_point(|&f| f <= g) - 1;
-                    let len = rest.partition_point(|&h| h < first_cell[bi + 1]);
-                    let (these, next) = rest.split_at(len);
-                    rest = next;
-                    let blk = conn(model, bi);
-                    let job = Cells {
-                        model,
-                        blk,
-                        lay: layout(model, bi),
-                        first: first_cell[bi],
-                        slots: &slots[bi],
-                        x,
-                        tangent,
-                        dx_prescribed,
-                        act,
-                        arrays,
-                        prefetch,
-                    };
-                    if let Some(ci) = capacity_index(model, bi) {
-                        let cb = &model.capacity_blocks[ci];
-                        let slab = &history[ci];
-                        let res = crate::with_cell!(blk.kind, |N, D, E| job
-                            .run_capacity::<N, D, E>(cb.rho_c * inv_dt, slab, these));
-                        let finite = res.map_err(|(e, cell)| AssemblyError::BadMesh {
-                            region: format!("{} ({e:?})", model.regions[cb.region].0),
-                            cell,
-                        })?;
-                        if !finite {
-                            return Err(AssemblyError::NotFinite);
-                        }
-                        continue;
-                    }
-                    let Some(info) = model.blocks.get(bi) else {
-                        let fb = &model.facet_blocks[bi - model.blocks.len()];
-                        let res = crate::with_element!(blk.kind, |N, D, E| job
-                            .run_facets::<N, D, E>(&fb.law, these));
-                        let finite = res.map_err(|(e, facet)| facet_error(model, fb, e, facet))?;
-                        if !finite {
-                            return Err(AssemblyError::NotFinite);
-                        }
-                        continue;
-                    };
-                    let res =
-                        crate::with_cell!(blk.kind, |N, D, E| job.run::<N, D, E>(&info.mat, these));
-                    let (min_j, energy, finite) =
-                        res.map_err(|(e, cell)| cell_error(model, bi, e, cell))?;
-                    if !finite {
-                        return Err(AssemblyError::NotFinite);
-                    }
-                    if info.mat.medium {
-                        stats.min_J_medium = stats.min_J_medium.min(min_j);
-                    } else {
-                        stats.min_J_solid = stats.min_J_solid.min(min_j);
-                    }
-                    stats.energy += energy;
-                }
-                Ok(stats)
-            };
-        let stats = self
-            .schedule
-            .run(&run, &|a: AssemblyStats, b: AssemblyStats| AssemblyStats {
-                min_J_solid: a.min_J_solid.min(b.min_J_solid),
-                min_J_medium: a.min_J_medium.min(b.min_J_medium),
-                energy: a.energy + b.energy,
-            })?;
+        let run = |cells: &[u32]| -> Result<AssemblyStats, AssemblyError> {
+            let mut stats = AssemblyStats::EMPTY;
+            let mut rest = cells;
+            while let Some(&g) = rest.first() {
+                let bi = first_cell.partition_point(|&f| f <= g) - 1;
+                let len = rest.partition_point(|&h| h < first_cell[bi + 1]);
+                let (these, next) = rest.split_at(len);
+                rest = next;
+                let blk = conn(model, bi);
+                let job = Cells {
+                    model,
+                    blk,
+                    lay: layout(model, bi),
+                    first: first_cell[bi],
+                    slots: &slots[bi],
+                    x,
+                    tangent,
+                    dx_prescribed,
+                    act,
+                    arrays,
+                    prefetch,
+                };
+                let part = run_block(job, bi, these, history, inv_dt)?;
+                stats = combine(stats, part);
+            }
+            Ok(stats)
+        };
+        let stats = self.schedule.run(&run, &combine)?;
         // the tangent's entries were checked as they were written
         let finite = all_finite(&self.r_full) && all_finite(&self.lift);
         if !finite {
@@ -341,6 +303,67 @@ impl Assembler {
         }
         Ok(stats)
     }
+}
+
+/// Statistics of two parts together.
+fn combine(a: AssemblyStats, b: AssemblyStats) -> AssemblyStats {
+    AssemblyStats {
+        min_J_solid: a.min_J_solid.min(b.min_J_solid),
+        min_J_medium: a.min_J_medium.min(b.min_J_medium),
+        energy: a.energy + b.energy,
+    }
+}
+
+/// Run the cells `these` of assembler block `bi` through its kernel: the bulk for a cell
+/// block, convection for a facet block, the capacity term (ρc/Δt = `rho_c` × `inv_dt`) for a
+/// capacity block.
+fn run_block(
+    job: Cells,
+    bi: usize,
+    these: &[u32],
+    history: &[SlabView],
+    inv_dt: f64,
+) -> Result<AssemblyStats, AssemblyError> {
+    let (model, blk) = (job.model, job.blk);
+    let finite = |f: bool| {
+        if f {
+            Ok(())
+        } else {
+            Err(AssemblyError::NotFinite)
+        }
+    };
+    if let Some(ci) = capacity_index(model, bi) {
+        let cb = &model.capacity_blocks[ci];
+        let res = crate::with_cell!(blk.kind, |N, D, E| job.run_capacity::<N, D, E>(
+            cb.rho_c * inv_dt,
+            &history[ci],
+            these
+        ));
+        let ok = res.map_err(|(e, cell)| AssemblyError::BadMesh {
+            region: format!("{} ({e:?})", model.regions[cb.region].0),
+            cell,
+        })?;
+        finite(ok)?;
+        return Ok(AssemblyStats::EMPTY);
+    }
+    let Some(info) = model.blocks.get(bi) else {
+        let fb = &model.facet_blocks[bi - model.blocks.len()];
+        let res = crate::with_element!(blk.kind, |N, D, E| job
+            .run_facets::<N, D, E>(&fb.law, these));
+        finite(res.map_err(|(e, facet)| facet_error(model, fb, e, facet))?)?;
+        return Ok(AssemblyStats::EMPTY);
+    };
+    let res = crate::with_cell!(blk.kind, |N, D, E| job.run::<N, D, E>(&info.mat, these));
+    let (min_j, energy, ok) = res.map_err(|(e, cell)| cell_error(model, bi, e, cell))?;
+    finite(ok)?;
+    let mut stats = AssemblyStats::EMPTY;
+    if info.mat.medium {
+        stats.min_J_medium = min_j;
+    } else {
+        stats.min_J_solid = min_j;
+    }
+    stats.energy = energy;
+    Ok(stats)
 }
 
 /// Blocks the assembler runs: the model's cell blocks, its facet blocks, then its capacity
