@@ -2,7 +2,6 @@
 //! reactions per Dirichlet group.
 
 use super::strategy::Strategy;
-use crate::assembly::{AssemblyError, convection_heat};
 use crate::case::Case;
 use crate::dofs::Field;
 use crate::model::{Model, Physics};
@@ -148,17 +147,12 @@ pub const HISTORY_STEP_COLUMNS: [&str; 9] = [
 pub const HISTORY_SOLVER_COLUMNS: [&str; 3] = ["krylov_iterations", "halvings", "time"];
 
 /// Force and heat on the body through every group: the Dirichlet groups' reactions (from the
-/// residual `r_full` of the state `x`), plus the loads of the groups with flux conditions at
-/// (pseudo-)time `t` (traction, heat flux, and the heat convection exchanges).
-pub fn group_flows(
-    model: &Model,
-    r_full: &[f64],
-    x: &[f64],
-    t: f64,
-) -> Result<Reactions, AssemblyError> {
+/// residual `r_full`), plus the loads of the groups with flux conditions at (pseudo-)time `t`
+/// (traction, heat flux) and the heat they `convected` (per flux group, from
+/// `assembly::convection_heat`).
+pub fn group_flows(model: &Model, r_full: &[f64], convected: &[f64], t: f64) -> Reactions {
     let mut out = reactions(model, r_full);
     let lambda = model.path.lambda(t);
-    let convected = convection_heat(model, x)?;
     for (g, group) in model.flux_groups.iter().enumerate() {
         let amp = if group.ramped { lambda } else { 1.0 };
         let entry = out.entry(group.name.clone()).or_default();
@@ -169,7 +163,7 @@ pub fn group_flows(
             *entry.entry("heat".into()).or_default() += convected[g];
         }
     }
-    Ok(out)
+    out
 }
 
 /// Reactions per Dirichlet group: force components on the body and heat supplied to it.

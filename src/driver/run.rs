@@ -160,8 +160,9 @@ impl<'a> Run<'a> {
             .assemble(self.model, &self.x, 0.0, false, None)
             .map_err(|e| SolveError::Setup(format!("the initial state is invalid: {e}")))?;
         self.summary.energy = stats0.energy;
-        let r0 = group_flows(self.model, &self.asm.r_full, &self.x, 0.0)
+        let convected = convection_heat(self.model, &self.x)
             .map_err(|e| SolveError::Setup(format!("the initial state is invalid: {e}")))?;
+        let r0 = group_flows(self.model, &self.asm.r_full, &convected, 0.0);
         let row = StepRow {
             min_J_solid: stats0.min_J_solid,
             min_J_medium: stats0.min_J_medium,
@@ -236,12 +237,13 @@ impl<'a> Run<'a> {
             .assemble(model, &self.x, target, false, None)
             .map_err(|e| SolveError::Setup(format!("converged state is invalid: {e}")))?;
         self.totals.t_reactions += t0.elapsed().as_secs_f64();
-        self.totals.reactions = group_flows(model, &self.asm.r_full, &self.x, target)
+        let convected = convection_heat(model, &self.x)
             .map_err(|e| SolveError::Setup(format!("converged state is invalid: {e}")))?;
+        self.totals.reactions = group_flows(model, &self.asm.r_full, &convected, target);
         // the history of the converged state (just assembled) is what the next step starts from
         self.asm.commit(target);
         if model.physics.transient {
-            self.account_heat(target, dt)?;
+            self.account_heat(target, dt, convected.iter().sum())?;
         }
         let f_now = self.forces(target);
         let tot = &mut self.totals;
@@ -283,9 +285,10 @@ impl<'a> Run<'a> {
 
     /// Heat balance of a transient scene after an accepted step of length `dt` to `t`: the heat
     /// stored, and the heat supplied over the run, Σ Δt × (rate at the step's end) as backward
-    /// Euler takes it. The rate is Σ over θ dofs of the reactions and the external heat, less
-    /// what convects out: at convergence, exactly the rate of the stored heat.
-    fn account_heat(&mut self, t: f64, dt: f64) -> Result<(), SolveError> {
+    /// Euler takes it. The rate is Σ over θ dofs of the reactions and the external heat, plus
+    /// the heat `convected` in (negative: out): at convergence, exactly the rate of the stored
+    /// heat.
+    fn account_heat(&mut self, t: f64, dt: f64, convected: f64) -> Result<(), SolveError> {
         let model = self.model;
         let invalid =
             |e: AssemblyError| SolveError::Setup(format!("converged state is invalid: {e}"));
@@ -299,10 +302,7 @@ impl<'a> Run<'a> {
                 rate += self.asm.r_full[d];
             }
         }
-        rate += convection_heat(model, &self.x)
-            .map_err(invalid)?
-            .iter()
-            .sum::<f64>();
+        rate += convected;
         self.totals.heat_in += dt * rate;
         self.summary.heat_in = Some(self.totals.heat_in);
         self.summary.heat_stored = Some(heat_stored(model, &self.x).map_err(invalid)?);

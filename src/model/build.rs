@@ -6,7 +6,7 @@ use super::{
     BcGroup, BlockInfo, CapacityBlock, FacetBlock, FluxGroup, LoadPath, Model, Physics,
     decide_physics, facet_weights,
 };
-use crate::case::{Case, CaseError, RegionKind};
+use crate::case::{Bc, Case, CaseError, RegionKind};
 use crate::dofs::{Constraints, DofMap, Field, Layout, NONE, Prescribed};
 use crate::kernel::CellMaterial;
 use crate::material::{Conductivity, Convection, Regularization, ThermoElastic};
@@ -328,6 +328,11 @@ fn dirichlet(
     Ok((Constraints::new(prescribed), bc_groups))
 }
 
+/// Whether a `[[bc]]` has a flux condition (and so a `FluxGroup`, in case order).
+fn has_flux(bc: &Bc) -> bool {
+    bc.traction.is_some() || bc.heat_flux.is_some() || bc.h.is_some()
+}
+
 /// Nodal external loads from tractions, heat fluxes, body forces and heat sources:
 /// (ramped by λ, held at full value), zero on prescribed dofs; and the groups with flux
 /// conditions, with their loads on free dofs.
@@ -344,7 +349,7 @@ fn external_loads(
     let mut f_full = vec![0.0; dofs.n_dofs];
     let mut groups = Vec::new();
     for bc in &f.bc {
-        if bc.traction.is_none() && bc.heat_flux.is_none() && bc.h.is_none() {
+        if !has_flux(bc) {
             continue;
         }
         let g = mesh.group(bc.group.get_ref()).expect("validated");
@@ -449,11 +454,7 @@ fn convection_blocks(
     flux_groups: &mut [FluxGroup],
 ) -> Vec<FacetBlock> {
     let mut out = Vec::new();
-    let with_flux = case
-        .file
-        .bc
-        .iter()
-        .filter(|bc| bc.traction.is_some() || bc.heat_flux.is_some() || bc.h.is_some());
+    let with_flux = case.file.bc.iter().filter(|bc| has_flux(bc));
     for (gi, bc) in with_flux.enumerate() {
         let (Some(h), Some(theta_inf)) = (&bc.h, &bc.theta_inf) else {
             continue;
