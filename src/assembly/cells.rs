@@ -196,13 +196,19 @@ impl Cells<'_> {
         Ok((mj, en, finite))
     }
 
-    /// Add the facets `cells` (global numbers, all of this block) with convection `law`.
-    /// Returns whether the tangent entries written are finite, or the kernel's error with the
-    /// block's facet number.
-    pub(super) fn run_facets<const N: usize, const D: usize, E: RefElement<N, D>>(
+    /// Run `kernel` on each of the cells `cells` (global numbers, all of this block) with the
+    /// cell's number, its gathered state and the local r and k to fill (k only with
+    /// `tangent`), and add the results. Returns whether the tangent entries written are
+    /// finite, or the kernel's error with the block's cell number.
+    fn each_cell<const N: usize>(
         self,
-        law: &Convection,
         cells: &[u32],
+        mut kernel: impl FnMut(
+            usize,
+            &CellState<N>,
+            &mut [f64],
+            Option<&mut [f64]>,
+        ) -> Result<(), KernelError>,
     ) -> Result<bool, (KernelError, usize)> {
         let nd = self.lay.ndof();
         let (mut ld, mut r) = (vec![0u32; nd], vec![0.0; nd]);
@@ -214,45 +220,40 @@ impl Cells<'_> {
             let s = gather::<N>(&self.model.mesh.coords, &self.model.dofs, nodes, self.x);
             local_dofs(&self.model.dofs, &self.lay, nodes, &mut ld);
             let kc = if self.tangent { Some(&mut k[..]) } else { None };
-            facet::convection::<N, D, E>(law, &self.lay, &s, self.act, &mut r, kc)
-                .map_err(|e| (e, c))?;
+            kernel(c, &s, &mut r, kc).map_err(|e| (e, c))?;
             // SAFETY: the schedule's promise (see `add`)
             finite &= unsafe { self.add(c, &ld, &r, &k) };
         }
         Ok(finite)
     }
 
+    /// Add the facets `cells` (global numbers, all of this block) with convection `law`.
+    pub(super) fn run_facets<const N: usize, const D: usize, E: RefElement<N, D>>(
+        self,
+        law: &Convection,
+        cells: &[u32],
+    ) -> Result<bool, (KernelError, usize)> {
+        let (lay, act) = (self.lay, self.act);
+        self.each_cell::<N>(cells, |_, s, r, k| {
+            facet::convection::<N, D, E>(law, &lay, s, act, r, k)
+        })
+    }
+
     /// Add the capacity term of the cells `cells` (global numbers, all of this block) with
-    /// `c = ρc/Δt` and the block's history. Returns whether the tangent entries written are
-    /// finite, or the kernel's error with the block's cell number.
+    /// `c = ρc/Δt` and the block's history.
     pub(super) fn run_capacity<const N: usize, const D: usize, E: RefElement<N, D>>(
         self,
         c: f64,
         slab: &SlabView,
         cells: &[u32],
     ) -> Result<bool, (KernelError, usize)> {
-        let nd = self.lay.ndof();
-        let w = slab.width;
-        let (mut ld, mut r) = (vec![0u32; nd], vec![0.0; nd]);
-        let mut k = vec![0.0; if self.tangent { nd * nd } else { 0 }];
-        let mut finite = true;
-        for &g in cells {
-            let cell = (g - self.first) as usize;
-            let nodes = self.blk.cell(cell);
-            let s = gather::<N>(&self.model.mesh.coords, &self.model.dofs, nodes, self.x);
-            local_dofs(&self.model.dofs, &self.lay, nodes, &mut ld);
+        let (lay, act, w) = (self.lay, self.act, slab.width);
+        self.each_cell::<N>(cells, |cell, s, r, k| {
             let theta_n = &slab.committed[cell * w..(cell + 1) * w];
             // SAFETY: each cell writes only its own values of the trial history, and a cell
             // runs once per assembly
             let theta_now = unsafe { std::slice::from_raw_parts_mut(slab.trial.at(cell * w), w) };
-            let kc = if self.tangent { Some(&mut k[..]) } else { None };
-            capacity::capacity::<N, D, E>(
-                c, &self.lay, &s, theta_n, theta_now, self.act, &mut r, kc,
-            )
-            .map_err(|e| (e, cell))?;
-            // SAFETY: the schedule's promise (see `add`)
-            finite &= unsafe { self.add(cell, &ld, &r, &k) };
-        }
-        Ok(finite)
+            capacity::capacity::<N, D, E>(c, &lay, s, theta_n, theta_now, act, r, k)
+        })
     }
 }

@@ -147,7 +147,10 @@ impl Assembler {
             "more than 2³¹ tangent entries"
         );
         let mut slots: Vec<Slots> = (0..n_blocks(model))
-            .map(|bi| Slots::new(model, conn(model, bi), layout(model, bi), &pattern))
+            .map(|bi| {
+                let (blk, lay) = block(model, bi);
+                Slots::new(model, blk, lay, &pattern)
+            })
             .collect();
         // one level of halves per doubling of the threads
         let depth = rayon::current_num_threads()
@@ -156,12 +159,12 @@ impl Assembler {
         let mesh = &model.mesh;
         let mut first_cell = vec![0u32];
         for bi in 0..n_blocks(model) {
-            let n = conn(model, bi).n_cells() as u32;
+            let n = block(model, bi).0.n_cells() as u32;
             first_cell.push(first_cell.last().unwrap() + n);
         }
         let nodes = |g: u32| -> &[usize] {
             let bi = first_cell.partition_point(|&f| f <= g) - 1;
-            conn(model, bi).cell((g - first_cell[bi]) as usize)
+            block(model, bi).0.cell((g - first_cell[bi]) as usize)
         };
         let cells = (0..*first_cell.last().unwrap()).collect();
         let (mut mark, mut stamp) = (vec![0u32; mesh.coords.len()], 0);
@@ -271,11 +274,11 @@ impl Assembler {
                 let len = rest.partition_point(|&h| h < first_cell[bi + 1]);
                 let (these, next) = rest.split_at(len);
                 rest = next;
-                let blk = conn(model, bi);
+                let (blk, lay) = block(model, bi);
                 let job = Cells {
                     model,
                     blk,
-                    lay: layout(model, bi),
+                    lay,
                     first: first_cell[bi],
                     slots: &slots[bi],
                     x,
@@ -377,25 +380,18 @@ fn capacity_index(model: &Model, bi: usize) -> Option<usize> {
     bi.checked_sub(model.blocks.len() + model.facet_blocks.len())
 }
 
-/// Connectivity of assembler block `bi` (see [`n_blocks`]).
-fn conn(model: &Model, bi: usize) -> &Block {
+/// Connectivity and local layout of assembler block `bi` (see [`n_blocks`]).
+fn block(model: &Model, bi: usize) -> (&Block, Layout) {
     if let Some(ci) = capacity_index(model, bi) {
-        return &model.mesh.cells[model.capacity_blocks[ci].block];
+        let cb = &model.capacity_blocks[ci];
+        return (&model.mesh.cells[cb.block], cb.layout);
     }
     match model.blocks.get(bi) {
-        Some(info) => &model.mesh.cells[info.block],
-        None => &model.mesh.facets[model.facet_blocks[bi - model.blocks.len()].block],
-    }
-}
-
-/// Local layout of assembler block `bi`.
-fn layout(model: &Model, bi: usize) -> Layout {
-    if let Some(ci) = capacity_index(model, bi) {
-        return model.capacity_blocks[ci].layout;
-    }
-    match model.blocks.get(bi) {
-        Some(info) => info.layout,
-        None => model.facet_blocks[bi - model.blocks.len()].layout,
+        Some(info) => (&model.mesh.cells[info.block], info.layout),
+        None => {
+            let fb = &model.facet_blocks[bi - model.blocks.len()];
+            (&model.mesh.facets[fb.block], fb.layout)
+        }
     }
 }
 
@@ -413,13 +409,10 @@ fn initial_history(model: &Model) -> PointHistory {
             let mut slab = Slab::new(blk.n_cells(), width, 0.0);
             for c in 0..blk.n_cells() {
                 let nodes = blk.cell(c);
+                let out = &mut slab.committed[c * width..(c + 1) * width];
                 crate::with_cell!(blk.kind, |N, D, E| {
                     let s = crate::dofs::gather::<N>(&model.mesh.coords, &model.dofs, nodes, &x0);
-                    for (q, (xi, _)) in <E as RefElement<N, D>>::quadrature().iter().enumerate() {
-                        let Nv = <E as RefElement<N, D>>::shape(xi);
-                        slab.committed[c * width + q] =
-                            Nv.iter().zip(&s.theta).map(|(a, b)| a * b).sum();
-                    }
+                    crate::kernel::capacity::theta_at_points::<N, D, E>(&s, out);
                 });
             }
             slab.trial.copy_from_slice(&slab.committed);

@@ -81,10 +81,7 @@ fn bulk_body<const N: usize, const D: usize, E: RefElement<N, D>, M: MulAdd>(
     mut k: Option<&mut [f64]>,
 ) -> Result<CellSummary, KernelError> {
     let nd = lay.ndof();
-    r[..nd].fill(0.0);
-    if let Some(k) = k.as_deref_mut() {
-        k[..nd * nd].fill(0.0);
-    }
+    super::zero_local(nd, r, k.as_deref_mut());
     let mut summary = CellSummary {
         min_J: f64::INFINITY,
         energy: 0.0,

@@ -26,10 +26,7 @@ pub fn capacity<const N: usize, const D: usize, E: RefElement<N, D>>(
     mut k: Option<&mut [f64]>,
 ) -> Result<(), KernelError> {
     let nd = lay.ndof();
-    r[..nd].fill(0.0);
-    if let Some(k) = k.as_deref_mut() {
-        k[..nd * nd].fill(0.0);
-    }
+    super::zero_local(nd, r, k.as_deref_mut());
     for (q, (xi, w)) in E::quadrature().iter().enumerate() {
         let Nv = E::shape(xi);
         let theta: f64 = Nv.iter().zip(&s.theta).map(|(a, b)| a * b).sum();
@@ -53,6 +50,16 @@ pub fn capacity<const N: usize, const D: usize, E: RefElement<N, D>>(
         }
     }
     Ok(())
+}
+
+/// θ at each quadrature point of a cell (the history the capacity term starts from).
+pub fn theta_at_points<const N: usize, const D: usize, E: RefElement<N, D>>(
+    s: &CellState<N>,
+    out: &mut [f64],
+) {
+    for (o, (xi, _)) in out.iter_mut().zip(E::quadrature()) {
+        *o = E::shape(xi).iter().zip(&s.theta).map(|(a, b)| a * b).sum();
+    }
 }
 
 /// Heat stored in one cell, ∫ ρc (θ − θ_ref) dV.

@@ -78,10 +78,7 @@ pub fn convection<const N: usize, const D: usize, E: RefElement<N, D>>(
     mut k: Option<&mut [f64]>,
 ) -> Result<(), KernelError> {
     let nd = lay.ndof();
-    r[..nd].fill(0.0);
-    if let Some(k) = k.as_deref_mut() {
-        k[..nd * nd].fill(0.0);
-    }
+    super::zero_local(nd, r, k.as_deref_mut());
     if !(lay.has_theta && act.heat) {
         return Ok(());
     }

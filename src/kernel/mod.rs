@@ -84,6 +84,16 @@ pub(super) struct PBlocks<const N: usize> {
     pub(super) pp: [NodeBlock<N>; 3],
 }
 
+/// Zero a kernel's local residual (`nd`) and, when asked for, its tangent (`nd × nd`): every
+/// kernel overwrites what it is given.
+#[inline(always)]
+fn zero_local(nd: usize, r: &mut [f64], k: Option<&mut [f64]>) {
+    r[..nd].fill(0.0);
+    if let Some(k) = k {
+        k[..nd * nd].fill(0.0);
+    }
+}
+
 /// Whether this CPU has AVX2 and FMA, the features the fast kernels are compiled for (the
 /// check is cached by the standard library).
 pub(super) fn avx2_fma() -> bool {
