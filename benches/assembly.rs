@@ -12,7 +12,6 @@ use std::time::Instant;
 use tmc::assembly::Assembler;
 use tmc::case::Case;
 use tmc::driver::mesh_for;
-use tmc::mesh::msh::read_msh;
 use tmc::model::build;
 
 fn main() {
@@ -34,7 +33,7 @@ fn bench(plan: &str, params: &str, paper_s: f64, paper_its: usize) {
     let path = dir.join("case.toml");
     std::fs::write(&path, &text).unwrap();
     let case = Case::parse(&path, text).unwrap();
-    let mesh = read_msh(&mesh_for(&case, &dir).unwrap()).unwrap();
+    let (mesh, _staged) = mesh_for(&case, &dir).unwrap();
     let model = build(&case, mesh).unwrap();
     let cells: usize = model.mesh.cells.iter().map(|b| b.n_cells()).sum();
     let mut asm = Assembler::new(&model);

@@ -275,6 +275,60 @@ pub struct Case {
     pub file: CaseFile,
 }
 
+/// Largest magnitude of any number in a case file: beyond it, products of moduli, strains and
+/// lengths overflow (no physical quantity in consistent units comes near).
+pub const MAX_MAGNITUDE: f64 = 1e30;
+
+/// Every number of a case file finite and at most [`MAX_MAGNITUDE`] in magnitude; the error
+/// gives the offending value's byte offset and its dotted key.
+fn check_numbers(text: &str) -> Result<(), (usize, String)> {
+    use toml::de::{DeTable, DeValue};
+    fn walk(v: &toml::Spanned<DeValue<'_>>, key: &str) -> Result<(), (usize, String)> {
+        match v.get_ref() {
+            DeValue::Float(f) => {
+                let x: f64 = f.as_str().replace('_', "").parse().unwrap_or(f64::NAN);
+                if !x.is_finite() {
+                    return Err((
+                        v.span().start,
+                        format!("`{key} = {f}` is not a finite number"),
+                    ));
+                }
+                if x.abs() > MAX_MAGNITUDE {
+                    return Err((
+                        v.span().start,
+                        format!("`{key} = {f}` is out of range (|value| ≤ {MAX_MAGNITUDE:e})"),
+                    ));
+                }
+            }
+            DeValue::Array(a) => {
+                for (i, e) in a.iter().enumerate() {
+                    walk(e, &format!("{key}[{i}]"))?;
+                }
+            }
+            DeValue::Table(t) => {
+                for (k, e) in t.iter() {
+                    let sub = if key.is_empty() {
+                        k.get_ref().to_string()
+                    } else {
+                        format!("{key}.{}", k.get_ref())
+                    };
+                    walk(e, &sub)?;
+                }
+            }
+            _ => {}
+        }
+        Ok(())
+    }
+    let Ok(table) = DeTable::parse(text) else {
+        return Ok(()); // syntax errors are reported by the parse proper
+    };
+    let span = table.span();
+    walk(
+        &toml::Spanned::new(span, DeValue::Table(table.into_inner())),
+        "",
+    )
+}
+
 impl Case {
     pub fn read(path: &Path) -> Result<Case, CaseError> {
         let text = std::fs::read_to_string(path).map_err(|source| CaseError::Io {
@@ -289,12 +343,19 @@ impl Case {
             path: path.to_owned(),
             msg: e.to_string().trim_end().to_string(),
         })?;
+
         let case = Case {
             path: path.to_owned(),
             text,
             file,
         };
         case.check_values()?;
+        // what the checks of each key leave: any other number not finite or absurd
+        check_numbers(&case.text).map_err(|(at, msg)| CaseError::Invalid {
+            path: case.path.clone(),
+            line: case.line_of(at..at),
+            msg,
+        })?;
         Ok(case)
     }
 
@@ -639,7 +700,25 @@ impl Case {
         let region_groups = self.validate_regions(mesh)?;
         self.validate_cells(mesh, &region_groups)?;
         self.validate_bcs(mesh)?;
+        self.validate_probes(mesh)?;
         self.validate_sizes(mesh)
+    }
+
+    /// No probe of a z quantity in a 2D mesh; points with the mesh's number of coordinates.
+    fn validate_probes(&self, mesh: &Mesh) -> Result<(), CaseError> {
+        for p in &self.file.probe {
+            let z = p.field.get_ref() == "uz" || p.axis.as_deref() == Some("z");
+            if mesh.dim == 2 && z {
+                return self.error(
+                    p.field.span(),
+                    format!(
+                        "probe \"{}\": a z quantity in a 2D mesh (x and y only)",
+                        p.name.get_ref()
+                    ),
+                );
+            }
+        }
+        Ok(())
     }
 
     /// The groups of `mesh` of a dimension `dim_ok` accepts, quoted, for error messages.
@@ -746,6 +825,12 @@ impl Case {
                 return self.error(
                     bc.group.span(),
                     format!("bc[{i}]: group \"{name}\" is a {gdim}D group of cells; boundary conditions go on curves/surfaces/points"),
+                );
+            }
+            if mesh.group_nodes(g).is_empty() {
+                return self.error(
+                    bc.group.span(),
+                    format!("bc[{i}]: group \"{name}\" has no elements in the mesh {} (its entities carry no mesh, or none of its nodes belongs to a cell)", mesh.source.display()),
                 );
             }
             if mesh.dim == 2 && bc.uz.is_some() {

@@ -90,6 +90,9 @@ fn parse_param(s: &str) -> Result<(String, f64), String> {
         .trim()
         .parse()
         .map_err(|_| format!("\"{v}\" is not a number"))?;
+    if !v.is_finite() {
+        return Err(format!("{k} = {v} is not a finite number"));
+    }
     Ok((k.trim().to_string(), v))
 }
 
@@ -135,7 +138,13 @@ fn main() -> ExitCode {
             set,
             verbose,
         } => {
-            let out = output.unwrap_or_else(|| geo.with_extension("msh"));
+            let stem = || PathBuf::from(geo.file_stem().unwrap_or_default()).with_extension("msh");
+            let out = match output {
+                // -o DIR: the mesh goes into the folder, named after the .geo
+                Some(dir) if dir.is_dir() => dir.join(stem()),
+                Some(out) => out,
+                None => geo.with_extension("msh"),
+            };
             let opts = MeshOptions {
                 order,
                 incomplete,
@@ -148,6 +157,7 @@ fn main() -> ExitCode {
                         eprintln!("gmsh: {w}");
                     }
                     println!("wrote {} ({}D)", r.output.display(), r.dim);
+                    print_mesh(&r.mesh);
                     ExitCode::SUCCESS
                 }
                 Err(e) => {
@@ -161,7 +171,43 @@ fn main() -> ExitCode {
             output,
             quiet,
             verbose,
-        } => solve_command(&case, output, quiet, verbose),
+        } => {
+            tmc::driver::stop_on_signals();
+            solve_command(&case, output, quiet, verbose)
+        }
+    }
+}
+
+/// What a mesh holds: nodes, cells per kind, and every physical group with its cells.
+fn print_mesh(mesh: &tmc::mesh::Mesh) {
+    let kinds: Vec<String> = mesh
+        .cell_kinds()
+        .iter()
+        .map(|&k| {
+            let n: usize = mesh
+                .cells
+                .iter()
+                .filter(|b| b.kind == k)
+                .map(|b| b.n_cells())
+                .sum();
+            format!("{n} {}", k.name())
+        })
+        .collect();
+    println!(
+        "  {} nodes, {} cells ({})",
+        mesh.coords.len(),
+        mesh.n_cells(),
+        kinds.join(", ")
+    );
+    for (g, group) in mesh.groups.iter().enumerate() {
+        let n: usize = mesh
+            .cells
+            .iter()
+            .chain(&mesh.facets)
+            .filter(|b| b.groups.contains(&g))
+            .map(|b| b.n_cells())
+            .sum();
+        println!("  group \"{}\" ({}D): {n} elements", group.name, group.dim);
     }
 }
 

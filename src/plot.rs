@@ -144,29 +144,37 @@ pub struct History {
 }
 
 impl History {
+    /// Read a CSV of numbers under one header line (`NaN` for a quantity a scene lacks);
+    /// every row must have the header's number of fields.
     pub fn read(path: &Path) -> Result<History, PlotError> {
-        let text = std::fs::read_to_string(path).map_err(|source| PlotError::Read {
+        let bad = |msg: String| PlotError::Bad {
             path: path.to_owned(),
-            source,
-        })?;
-        let mut lines = text.lines();
-        let columns: Vec<String> = lines
-            .next()
-            .ok_or_else(|| PlotError::Bad {
-                path: path.to_owned(),
-                msg: "empty file".into(),
-            })?
-            .split(',')
+            msg,
+        };
+        let mut r = csv::ReaderBuilder::new()
+            .has_headers(true)
+            .from_path(path)
+            .map_err(|e| match e.into_kind() {
+                csv::ErrorKind::Io(source) => PlotError::Read {
+                    path: path.to_owned(),
+                    source,
+                },
+                other => bad(format!("{other:?}")),
+            })?;
+        let columns: Vec<String> = r
+            .headers()
+            .map_err(|e| bad(e.to_string()))?
+            .iter()
             .map(String::from)
             .collect();
+        if columns.is_empty() || columns == [""] {
+            return Err(bad("empty file".into()));
+        }
         let mut rows = Vec::new();
-        for (i, l) in lines.enumerate() {
-            let row: Result<Vec<f64>, _> = l.split(',').map(|v| v.trim().parse::<f64>()).collect();
-            let row = row.map_err(|e| PlotError::Bad {
-                path: path.to_owned(),
-                msg: format!("line {}: {e}", i + 2),
-            })?;
-            rows.push(row);
+        for (i, record) in r.records().enumerate() {
+            let record = record.map_err(|e| bad(e.to_string()))?;
+            let row: Result<Vec<f64>, _> = record.iter().map(|v| v.trim().parse::<f64>()).collect();
+            rows.push(row.map_err(|e| bad(format!("line {}: {e}", i + 2)))?);
         }
         Ok(History { columns, rows })
     }
@@ -219,6 +227,17 @@ pub fn plot_results(
     } else {
         columns.to_vec()
     };
+    // every column first: nothing is drawn if one is missing
+    let mut curves = Vec::new();
+    for c in &columns {
+        let ys = h.column(c).ok_or_else(|| {
+            bad(format!(
+                "no column \"{c}\" (columns: {})",
+                h.columns.join(", ")
+            ))
+        })?;
+        curves.push((c, ys));
+    }
     let out = out.unwrap_or(dir);
     std::fs::create_dir_all(out).map_err(|source| PlotError::Read {
         path: out.to_owned(),
@@ -229,14 +248,8 @@ pub fn plot_results(
         .map(|n| n.to_string_lossy().to_string())
         .unwrap_or_default();
     let mut written = Vec::new();
-    for c in &columns {
-        let ys = h.column(c).ok_or_else(|| {
-            bad(format!(
-                "no column \"{c}\" (columns: {})",
-                h.columns.join(", ")
-            ))
-        })?;
-        let file = out.join(format!("{c}.png"));
+    for (c, ys) in curves {
+        let file = out.join(format!("{}.png", file_stem(c)));
         line_chart(
             &file,
             &Chart {
@@ -254,4 +267,18 @@ pub fn plot_results(
         written.push(file);
     }
     Ok(written)
+}
+
+/// A column name as a file name: characters other than letters, digits, `-`, `_` and `.`
+/// become `_` (a name may hold `/`).
+pub fn file_stem(name: &str) -> String {
+    name.chars()
+        .map(|c| {
+            if c.is_alphanumeric() || "-_.".contains(c) {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
 }

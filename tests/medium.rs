@@ -399,6 +399,7 @@ fn mixed_element_orders_are_refused() {
         }],
         groups: vec![group("solid", 2, 1), group("bottom", 1, 2)],
         source: "mixed.msh".into(),
+        warnings: Vec::new(),
     };
     let text = "mesh = \"mixed.msh\"\n[[region]]\ngroup = \"solid\"\nkind = \"solid\"\nK = 1.0\nmu = 1.0\n[[bc]]\ngroup = \"bottom\"\nuy = -0.1\n";
     let case = Case::parse(std::path::Path::new("mixed.toml"), text.into()).unwrap();

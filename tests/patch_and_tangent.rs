@@ -471,14 +471,14 @@ fn an_inverted_medium_cell_is_reported_with_and_without_the_tangent() {
     }
     let look = tmc::assembly::check_inversion(&model, &x);
     assert!(
-        matches!(&look, Err(tmc::assembly::AssemblyError::Inverted { region, J }) if region == "medium" && *J <= 0.0),
+        matches!(&look, Err(tmc::assembly::AssemblyError::Inverted { region, J, .. }) if region == "medium" && *J <= 0.0),
         "{look:?}"
     );
     assert!(tmc::assembly::check_inversion(&model, &model.initial_state()).is_ok());
     let mut asm = Assembler::new(&model);
     for tangent in [true, false] {
         match asm.assemble(&model, &x, 0.5, tangent, None) {
-            Err(tmc::assembly::AssemblyError::Inverted { region, J }) => {
+            Err(tmc::assembly::AssemblyError::Inverted { region, J, .. }) => {
                 assert_eq!(region, "medium", "tangent {tangent}");
                 assert!(J <= 0.0, "tangent {tangent}: J = {J}");
             }

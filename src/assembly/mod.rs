@@ -40,10 +40,20 @@ pub(crate) const MIN_PART_CELLS: usize = 256;
 /// Failure found while assembling.
 #[derive(Clone, Debug, PartialEq)]
 pub enum AssemblyError {
-    /// J ≤ 0 at a quadrature point of a cell of `region`.
-    Inverted { region: String, J: f64 },
+    /// J ≤ 0 at a quadrature point of cell `cell` (counted in its region's block, centroid `at`
+    /// in the undeformed mesh) of `region`.
+    Inverted {
+        region: String,
+        J: f64,
+        cell: usize,
+        at: [f64; 3],
+    },
     /// A cell of the undeformed mesh is inverted or degenerate.
-    BadMesh { region: String, cell: usize },
+    BadMesh {
+        region: String,
+        cell: usize,
+        at: [f64; 3],
+    },
     /// A regularization rotation measure is unbounded (a medium cell rotated by 90°).
     Singular { region: String },
     /// A boundary facet of `group` has collapsed to zero area (or was degenerate).
@@ -55,13 +65,23 @@ pub enum AssemblyError {
 impl std::fmt::Display for AssemblyError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            AssemblyError::Inverted { region, J } => {
-                write!(f, "J = {J:.3e} ≤ 0 in region \"{region}\"")
-            }
-            AssemblyError::BadMesh { region, cell } => {
+            AssemblyError::Inverted {
+                region,
+                J,
+                cell,
+                at,
+            } => {
                 write!(
                     f,
-                    "cell {cell} of region \"{region}\" is inverted or degenerate in the undeformed mesh"
+                    "J = {J:.3e} ≤ 0 in cell {cell} of region \"{region}\" (centre {})",
+                    point(at)
+                )
+            }
+            AssemblyError::BadMesh { region, cell, at } => {
+                write!(
+                    f,
+                    "cell {cell} of region \"{region}\" (centre {}) is inverted or degenerate in the undeformed mesh",
+                    point(at)
                 )
             }
             AssemblyError::Singular { region } => write!(
@@ -75,6 +95,11 @@ impl std::fmt::Display for AssemblyError {
             AssemblyError::NotFinite => write!(f, "the residual is not finite"),
         }
     }
+}
+
+/// A point as `(x, y, z)` with four significant digits.
+fn point(p: &[f64; 3]) -> String {
+    format!("({:.4}, {:.4}, {:.4})", p[0], p[1], p[2])
 }
 
 impl AssemblyError {
@@ -342,9 +367,10 @@ fn run_block(
             &history[ci],
             these
         ));
-        let ok = res.map_err(|(e, cell)| AssemblyError::BadMesh {
-            region: format!("{} ({e:?})", model.regions[cb.region].0),
+        let ok = res.map_err(|(_, cell)| AssemblyError::BadMesh {
+            region: model.regions[cb.region].0.clone(),
             cell,
+            at: centroid(&model.mesh.coords, blk.cell(cell)),
         })?;
         finite(ok)?;
         return Ok(AssemblyStats::EMPTY);
@@ -436,10 +462,22 @@ pub fn heat_stored(model: &Model, x: &[f64]) -> Result<f64, AssemblyError> {
             .map_err(|_| AssemblyError::BadMesh {
                 region: model.regions[cb.region].0.clone(),
                 cell: c,
+                at: centroid(&model.mesh.coords, nodes),
             })?;
         }
     }
     Ok(e)
+}
+
+/// The mean of a cell's node coordinates.
+fn centroid(coords: &[[f64; 3]], nodes: &[usize]) -> [f64; 3] {
+    let mut c = [0.0; 3];
+    for &n in nodes {
+        for (ci, xi) in c.iter_mut().zip(coords[n]) {
+            *ci += xi / nodes.len() as f64;
+        }
+    }
+    c
 }
 
 /// The assembly error of a facet kernel's failure.
@@ -452,16 +490,23 @@ fn facet_error(model: &Model, fb: &FacetBlock, e: KernelError, facet: usize) -> 
 }
 
 /// The assembly error of a kernel's failure in cell `cell` of model block `bi`.
-pub(super) fn cell_error(model: &Model, bi: usize, e: KernelError, cell: usize) -> AssemblyError {
+pub(crate) fn cell_error(model: &Model, bi: usize, e: KernelError, cell: usize) -> AssemblyError {
     let region = || model.regions[model.blocks[bi].region].0.clone();
+    let at = centroid(
+        &model.mesh.coords,
+        model.mesh.cells[model.blocks[bi].block].cell(cell),
+    );
     match e {
         KernelError::Inverted { J } => AssemblyError::Inverted {
             region: region(),
             J,
+            cell,
+            at,
         },
         KernelError::BadGeometry => AssemblyError::BadMesh {
             region: region(),
             cell,
+            at,
         },
         KernelError::Singular => AssemblyError::Singular { region: region() },
     }

@@ -161,6 +161,9 @@ impl Slots {
     #[inline]
     pub(super) unsafe fn add(&self, c: usize, k: &[f64], values: Shared) -> bool {
         let (n, nd) = (self.n, self.nd);
+        if nd == 0 {
+            return true; // a block without unknowns (a scene with no physics active)
+        }
         let base = &self.base[c * n * nd..(c + 1) * n * nd];
         let offset = &self.offset[c * nd..(c + 1) * nd];
         let mut finite = true;

@@ -8,11 +8,12 @@ pub use records::{HISTORY_SOLVER_COLUMNS, HISTORY_STEP_COLUMNS, Summary, group_f
 pub use strategy::{Strategy, choose_linear, choose_strategy, describe};
 
 use crate::case::{Case, CaseError};
+use crate::mesh::Mesh;
 use crate::mesh::gmsh::{GmshError, MeshOptions, mesh_geo};
 use crate::mesh::msh::{MshError, read_msh};
 use crate::model::{Model, build};
 use crate::output::probes::{self, Probe};
-use crate::output::{self, OutputError};
+use crate::output::{OutputError, RunFolder};
 use crate::solver::idle::IdleThreads;
 use crate::solver::linear::LinearError;
 use run::Run;
@@ -44,6 +45,44 @@ pub enum SolveError {
         steps: usize,
         dir: PathBuf,
     },
+    #[error(
+        "interrupted at λ = {lambda:.6} after {steps} converged steps; they are in {dir} \
+         (summary.json says \"interrupted\")"
+    )]
+    Interrupted {
+        lambda: f64,
+        steps: usize,
+        dir: PathBuf,
+    },
+}
+
+/// Set by SIGINT/SIGTERM (see [`stop_on_signals`]): runs stop after their current step.
+static INTERRUPTED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Whether a stop was asked for.
+pub fn interrupted() -> bool {
+    INTERRUPTED.load(std::sync::atomic::Ordering::Relaxed)
+}
+
+/// Ask running solves to stop after their current step (what the signal handler does).
+pub fn request_stop() {
+    INTERRUPTED.store(true, std::sync::atomic::Ordering::Relaxed);
+}
+
+extern "C" fn on_signal(sig: libc::c_int) {
+    request_stop();
+    // a second signal ends the process at once
+    unsafe { libc::signal(sig, libc::SIG_DFL) };
+}
+
+/// Make SIGINT (Ctrl-C) and SIGTERM stop a run after its current step, with its summary
+/// written; a second signal ends the process at once. For the `tmc` binary.
+pub fn stop_on_signals() {
+    let handler = on_signal as extern "C" fn(libc::c_int) as libc::sighandler_t;
+    unsafe {
+        libc::signal(libc::SIGINT, handler);
+        libc::signal(libc::SIGTERM, handler);
+    }
 }
 
 /// Options of `tmc solve`.
@@ -58,12 +97,35 @@ pub struct SolveOptions {
     pub idle_threads: IdleThreads,
 }
 
-/// Mesh the case's `.geo` into `out_dir/mesh.msh`, or return its `.msh` path.
-pub fn mesh_for(case: &Case, out_dir: &Path) -> Result<PathBuf, SolveError> {
+/// A mesh written for this run under a temporary name: moved to its final name once the run
+/// starts, removed if the run fails before.
+#[derive(Debug)]
+pub struct StagedMesh(PathBuf);
+
+impl StagedMesh {
+    /// Move the mesh to `to`.
+    pub fn commit(self, to: &Path) -> Result<(), SolveError> {
+        std::fs::rename(&self.0, to).map_err(|e| {
+            SolveError::Output(OutputError::Write {
+                path: to.to_owned(),
+                msg: e.to_string(),
+            })
+        })
+    }
+}
+
+impl Drop for StagedMesh {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.0);
+    }
+}
+
+/// The case's mesh: its `.msh` read, or its `.geo` meshed into a staged file in `out_dir`.
+pub fn mesh_for(case: &Case, out_dir: &Path) -> Result<(Mesh, Option<StagedMesh>), SolveError> {
     let path = case.mesh_path();
     match path.extension().and_then(|e| e.to_str()) {
         Some("geo") => {
-            let out = out_dir.join("mesh.msh");
+            let out = out_dir.join(".mesh.new.msh");
             let m = &case.file.mesh_options;
             let opts = MeshOptions {
                 order: m.order.unwrap_or(1),
@@ -71,10 +133,14 @@ pub fn mesh_for(case: &Case, out_dir: &Path) -> Result<PathBuf, SolveError> {
                 set_numbers: m.params.iter().map(|(k, v)| (k.clone(), *v)).collect(),
                 verbose: false,
             };
-            mesh_geo(&path, &out, &opts)?;
-            Ok(out)
+            let report = mesh_geo(&path, &out, &opts)?;
+            let staged = StagedMesh(out);
+            let mut mesh = report.mesh;
+            mesh.warnings = report.warnings;
+            mesh.source = path;
+            Ok((mesh, Some(staged)))
         }
-        Some("msh") => Ok(path),
+        Some("msh") => Ok((read_msh(&path)?, None)),
         _ => {
             let span = case.file.mesh.span();
             Err(case
@@ -89,6 +155,10 @@ pub fn mesh_for(case: &Case, out_dir: &Path) -> Result<PathBuf, SolveError> {
 }
 
 /// Solve a case file end to end.
+///
+/// Nothing in the output folder changes until the case, the mesh and the model have been
+/// checked: a run that fails on its input leaves the previous run's results as they were.
+/// Then the previous run's files (and only those, as its manifest lists them) are replaced.
 pub fn run(case_path: &Path, opts: &SolveOptions) -> Result<Summary, SolveError> {
     let start = Instant::now();
     let case = Case::read(case_path)?;
@@ -96,13 +166,22 @@ pub fn run(case_path: &Path, opts: &SolveOptions) -> Result<Summary, SolveError>
         .out_dir
         .clone()
         .unwrap_or_else(|| PathBuf::from("results").join(case.name()));
-    output::clean_dir(&out_dir)?;
-    let msh = mesh_for(&case, &out_dir)?;
-    let mesh = read_msh(&msh)?;
+    let mut folder = RunFolder::open(&out_dir)?;
+    let (mesh, staged) = mesh_for(&case, &out_dir)?;
+    if !opts.quiet {
+        for w in &mesh.warnings {
+            eprintln!("warning: {}: {w}", mesh.source.display());
+        }
+    }
     case.validate(&mesh)?;
     let model = build(&case, mesh)?;
     let probes = probes::build(&case, &model.mesh)?;
-    solve_model(&case, model, &probes, &out_dir, opts, start)
+    folder.replace_previous()?;
+    if let Some(staged) = staged {
+        folder.record("mesh.msh")?;
+        staged.commit(&out_dir.join("mesh.msh"))?;
+    }
+    solve_model(&case, model, &probes, folder, opts, start)
 }
 
 /// Step the model from its initial state to the end of its load path.
@@ -110,13 +189,16 @@ fn solve_model(
     case: &Case,
     model: Model,
     probes: &[Probe],
-    out_dir: &Path,
+    folder: RunFolder,
     opts: &SolveOptions,
     start: Instant,
 ) -> Result<Summary, SolveError> {
-    let mut run = Run::new(case, &model, probes, out_dir, opts, start)?;
+    let mut run = Run::new(case, &model, probes, folder, opts, start)?;
     run.record_initial()?;
     while !run.ctl.done() {
+        if interrupted() {
+            return run.interrupt();
+        }
         let target = run.ctl.target();
         match run.attempt(target) {
             Ok((trial, rep)) => run.accept(target, trial, rep)?,

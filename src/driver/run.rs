@@ -10,12 +10,12 @@ use crate::case::Case;
 use crate::dofs::{Field, equation_structure};
 use crate::model::Model;
 use crate::output::probes::Probe;
-use crate::output::{History, Series, write_atomic};
+use crate::output::{History, RunFolder, Series, write_atomic};
 use crate::solver::linear::{LinearKind, LinearSolver};
 use crate::solver::newton::{Newton, Part, StepFailure, StepReport};
 use crate::solver::stepping::Controller;
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::path::PathBuf;
 use std::time::Instant;
 
 /// What the run has done so far, beyond the controller's counts.
@@ -42,7 +42,8 @@ pub(super) struct Run<'a> {
     model: &'a Model,
     probes: &'a [Probe],
     opts: &'a SolveOptions,
-    out_dir: &'a Path,
+    folder: RunFolder,
+    out_dir: PathBuf,
     start: Instant,
     asm: Assembler,
     newton: Newton,
@@ -67,10 +68,11 @@ impl<'a> Run<'a> {
         case: &'a Case,
         model: &'a Model,
         probes: &'a [Probe],
-        out_dir: &'a Path,
+        mut folder: RunFolder,
         opts: &'a SolveOptions,
         start: Instant,
     ) -> Result<Run<'a>, SolveError> {
+        let out_dir = folder.dir().to_owned();
         let kind = choose_linear(case.file.solver.linear, &model.physics);
         if kind == LinearKind::Ldlt && model.physics.mechanics && model.physics.conduction {
             let span = case.file.mesh.span();
@@ -91,12 +93,21 @@ impl<'a> Run<'a> {
         let ctl = controller(case, model);
         let probe_names: Vec<String> = probes.iter().map(|p| p.name.clone()).collect();
         let layout = HistoryLayout::new(model, &probe_names);
+        for name in [
+            "history.csv",
+            "summary.json",
+            &format!("{}.pvd", case.name()),
+        ] {
+            folder.record(name)?;
+        }
         let history = History::new(&out_dir.join("history.csv"), &layout.columns);
-        let summary = Summary::start(case, model, solvers[0].1.kind, strategy, out_dir);
+        let summary = Summary::start(case, model, solvers[0].1.kind, strategy, &out_dir);
+        let series = Series::new(&out_dir, &case.name(), model);
         Ok(Run {
             model,
             probes,
             opts,
+            folder,
             out_dir,
             start,
             asm,
@@ -107,7 +118,7 @@ impl<'a> Run<'a> {
             u_dofs: (0..model.dofs.n_dofs)
                 .filter(|&d| model.dofs.field[d] == Field::U)
                 .collect(),
-            series: Series::new(out_dir, &case.name(), model),
+            series,
             layout,
             history,
             totals: Totals {
@@ -154,6 +165,7 @@ impl<'a> Run<'a> {
     /// Record the initial state: step 0 of the series and of the history, and the forces the
     /// work is counted from.
     pub(super) fn record_initial(&mut self) -> Result<(), SolveError> {
+        self.folder.record(&Series::file_name(0))?;
         self.series.write(self.model, 0, &self.x, 0.0)?;
         let stats0 = self
             .asm
@@ -276,9 +288,11 @@ impl<'a> Run<'a> {
         let values = self
             .layout
             .row(&row, &self.probe_values(), &self.totals.reactions);
-        self.history.row(&values)?;
+        // the step's file first: a history row always has its .vtu
+        self.folder.record(&Series::file_name(self.ctl.accepted))?;
         self.series
             .write(model, self.ctl.accepted, &self.x, target)?;
+        self.history.row(&values)?;
         self.report_step(&row, &rep);
         Ok(())
     }
@@ -364,12 +378,24 @@ impl<'a> Run<'a> {
                 dlambda: dl,
                 reason: self.totals.last_failure.clone(),
                 steps: self.ctl.accepted,
-                dir: self.out_dir.to_owned(),
+                dir: self.out_dir.clone(),
             };
             self.finish(false, err.to_string())?;
             return Err(err);
         }
         Ok(())
+    }
+
+    /// A stop was asked for (a signal): write the summary of the steps so far and say so.
+    pub(super) fn interrupt(mut self) -> Result<Summary, SolveError> {
+        self.pb.finish_and_clear();
+        let err = SolveError::Interrupted {
+            lambda: self.model.path.lambda(self.ctl.t),
+            steps: self.ctl.accepted,
+            dir: self.out_dir.clone(),
+        };
+        self.finish(false, format!("interrupted: {err}"))?;
+        Err(err)
     }
 
     /// The run reached its end: write the summary and return it.

@@ -6,25 +6,41 @@
 use std::ffi::{CStr, CString};
 use std::os::raw::{c_char, c_int};
 use std::path::{Path, PathBuf};
-use std::sync::Mutex;
-
-/// gmsh keeps global state: one model at a time per process.
-static GMSH: Mutex<()> = Mutex::new(());
 
 #[derive(Debug, thiserror::Error)]
 pub enum GmshError {
     #[error("{path}: no such .geo file")]
     NotFound { path: PathBuf },
+    #[error("{path} is a folder, not a .geo file")]
+    NotAFile { path: PathBuf },
     #[error("gmsh failed on {path}: {msg}")]
     Failed { path: PathBuf, msg: String },
     #[error(
         "{path}: the geometry defines no physical groups; tag solids, medium and boundaries with Physical Surface/Volume/Curve(\"name\")"
     )]
     NoPhysicalGroups { path: PathBuf },
+    #[error("{path}: {msg}")]
+    Parameter { path: PathBuf, msg: String },
+    #[error(
+        "gmsh ended the process while meshing {path} ({status}) and wrote no mesh; a .geo for tmc \
+         must not end with `Exit;` (tmc meshes and saves the geometry itself: remove Exit, Mesh \
+         and Save commands)"
+    )]
+    Ended { path: PathBuf, status: String },
+    #[error(
+        "gmsh crashed while meshing {path} ({signal}); try another meshing algorithm or \
+         recombination option in the .geo, or a coarser or finer mesh"
+    )]
+    Crashed { path: PathBuf, signal: String },
     #[error("cannot write {path}: {source}")]
     Write {
         path: PathBuf,
         source: std::io::Error,
+    },
+    #[error("gmsh wrote {path}, but it cannot be read back: {source}")]
+    Unreadable {
+        path: PathBuf,
+        source: Box<super::msh::MshError>,
     },
 }
 
@@ -35,70 +51,162 @@ pub struct MeshOptions {
     pub order: u8,
     /// Serendipity (incomplete) second-order elements: quad8/hex20 instead of quad9/hex27.
     pub incomplete: bool,
-    /// `.geo` parameters set before parsing (`-setnumber NAME VALUE`).
+    /// `.geo` parameters set before parsing (`-setnumber NAME VALUE`); each must be a
+    /// `DefineConstant` of the file.
     pub set_numbers: Vec<(String, f64)>,
     /// Print gmsh's own log.
     pub verbose: bool,
 }
 
-/// Summary of a meshing run.
+/// Summary of a meshing run, with the mesh as read back from the written file.
 #[derive(Clone, Debug)]
 pub struct MeshReport {
     pub dim: i32,
     pub output: PathBuf,
+    /// gmsh's warnings, then the mesh reader's.
     pub warnings: Vec<String>,
+    pub mesh: super::Mesh,
 }
 
-/// Mesh `geo` and write MSH 4.1 to `out` (written to a temporary file and renamed, so a failed
-/// run leaves no half-written mesh).
+/// What the meshing process sends back.
+#[derive(serde::Serialize, serde::Deserialize)]
+enum Outcome {
+    Meshed { dim: i32, warnings: Vec<String> },
+    NoPhysicalGroups,
+    Failed(String),
+}
+
+/// Mesh `geo` and write MSH 4.1 to `out`.
+///
+/// gmsh runs in a child process, so that a `.geo` that calls `Exit` or a crash inside gmsh
+/// ends only that process and is reported. The mesh is written to a temporary name, read back
+/// (a truncated file, e.g. on a full disk, fails here), synced and renamed: `out` is either the
+/// complete new mesh or untouched.
 pub fn mesh_geo(geo: &Path, out: &Path, opts: &MeshOptions) -> Result<MeshReport, GmshError> {
+    if geo.is_dir() {
+        return Err(GmshError::NotAFile {
+            path: geo.to_owned(),
+        });
+    }
     if !geo.is_file() {
         return Err(GmshError::NotFound {
             path: geo.to_owned(),
         });
     }
-    let _guard = GMSH.lock().unwrap_or_else(|e| e.into_inner());
+    check_parameters(geo, &opts.set_numbers)?;
+    if out.is_dir() {
+        return Err(GmshError::Write {
+            path: out.to_owned(),
+            source: std::io::Error::other("it is a folder; name the .msh file to write"),
+        });
+    }
+    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|source| GmshError::Write {
+            path: dir.to_owned(),
+            source,
+        })?;
+    }
     // .geo parameters: not gmsh's `-setnumber`, whose values stay in a process-wide table that
-    // every later `open` re-applies (so a parameter set for one mesh would leak into the
-    // next); instead a wrapper defines them before including the file, and `DefineConstant`
-    // keeps an existing definition.
+    // every later `open` re-applies; instead a wrapper defines them before including the file,
+    // and `DefineConstant` keeps an existing definition.
     let wrapper = ParamWrapper::new(geo, &opts.set_numbers).map_err(|source| GmshError::Write {
         path: std::env::temp_dir(),
         source,
     })?;
     let open_path = wrapper.path.as_deref().unwrap_or(geo);
-    let session = Session::start()?;
-    let fail = |msg: String| GmshError::Failed {
-        path: geo.to_owned(),
-        msg,
+    // gmsh picks the format from the extension: the temporary name must end in .msh
+    let tmp = Removed(out.with_extension("part.msh"));
+    let outcome = isolated(|| mesh_in_process(open_path, &tmp.0, opts)).map_err(|e| match e {
+        Isolation::Ended(status) => GmshError::Ended {
+            path: geo.to_owned(),
+            status,
+        },
+        Isolation::Crashed(signal) => GmshError::Crashed {
+            path: geo.to_owned(),
+            signal,
+        },
+        Isolation::Os(source) => GmshError::Write {
+            path: tmp.0.clone(),
+            source,
+        },
+    })?;
+    // messages about the wrapper are about the user's file
+    let own = |m: String| match &wrapper.path {
+        Some(w) => m.replace(&w.display().to_string(), &geo.display().to_string()),
+        None => m,
     };
-    let run = || -> Result<MeshReport, GmshError> {
+    let (dim, mut warnings): (i32, Vec<String>) = match outcome {
+        Outcome::Meshed { dim, warnings } => (dim, warnings.into_iter().map(own).collect()),
+        Outcome::NoPhysicalGroups => {
+            return Err(GmshError::NoPhysicalGroups {
+                path: geo.to_owned(),
+            });
+        }
+        Outcome::Failed(msg) => {
+            return Err(GmshError::Failed {
+                path: geo.to_owned(),
+                msg: own(msg),
+            });
+        }
+    };
+    let mut mesh = super::msh::read_msh(&tmp.0).map_err(|e| GmshError::Unreadable {
+        path: out.to_owned(),
+        source: Box::new(e),
+    })?;
+    mesh.source = out.to_owned();
+    warnings.extend(mesh.warnings.iter().cloned());
+    let write = |source| GmshError::Write {
+        path: out.to_owned(),
+        source,
+    };
+    std::fs::File::open(&tmp.0)
+        .and_then(|f| f.sync_all())
+        .map_err(write)?;
+    std::fs::rename(&tmp.0, out).map_err(write)?;
+    Ok(MeshReport {
+        dim,
+        output: out.to_owned(),
+        warnings,
+        mesh,
+    })
+}
+
+/// A path removed on drop if it still exists (a temporary file after a failure).
+struct Removed(PathBuf);
+
+impl Drop for Removed {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.0);
+    }
+}
+
+/// Mesh in this process (the child): open, generate, write `tmp`.
+fn mesh_in_process(open_path: &Path, tmp: &Path, opts: &MeshOptions) -> Outcome {
+    let session = match Session::start() {
+        Ok(s) => s,
+        Err(e) => return Outcome::Failed(e),
+    };
+    let run = || -> Result<Outcome, String> {
         session.set_number("General.Terminal", if opts.verbose { 1.0 } else { 0.0 });
-        session
-            .call(|e| unsafe { gmsh_sys::gmshLoggerStart(e) })
-            .map_err(&fail)?;
+        session.call(|e| unsafe { gmsh_sys::gmshLoggerStart(e) })?;
         let cgeo = cstring(&open_path.to_string_lossy());
         let opened = session.call(|e| unsafe { gmsh_sys::gmshOpen(cgeo.as_ptr(), e) });
         let errors = session.errors();
         if opened.is_err() || !errors.is_empty() {
-            return Err(fail(if errors.is_empty() {
+            return Err(if errors.is_empty() {
                 "could not open the file".into()
             } else {
                 errors.join("; ")
-            }));
-        }
-        let dim = session
-            .call(|e| unsafe { gmsh_sys::gmshModelGetDimension(e) })
-            .map_err(&fail)?;
-        if dim < 2 {
-            return Err(fail(format!(
-                "the geometry has dimension {dim}; tmc needs 2D surfaces or 3D volumes"
-            )));
-        }
-        if session.physical_group_count()? == 0 {
-            return Err(GmshError::NoPhysicalGroups {
-                path: geo.to_owned(),
             });
+        }
+        let dim = session.call(|e| unsafe { gmsh_sys::gmshModelGetDimension(e) })?;
+        if dim < 2 {
+            return Err(format!(
+                "the geometry has dimension {dim}; tmc needs 2D surfaces or 3D volumes"
+            ));
+        }
+        if session.physical_group_count() == 0 {
+            return Ok(Outcome::NoPhysicalGroups);
         }
         session.set_number("Mesh.MshFileVersion", 4.1);
         session.set_number("Mesh.Binary", 0.0);
@@ -112,38 +220,148 @@ pub fn mesh_geo(geo: &Path, out: &Path, opts: &MeshOptions) -> Result<MeshReport
         let generated = session.call(|e| unsafe { gmsh_sys::gmshModelMeshGenerate(dim, e) });
         let errors = session.errors();
         if generated.is_err() || !errors.is_empty() {
-            return Err(fail(format!("meshing failed: {}", errors.join("; "))));
+            return Err(format!("meshing failed: {}", errors.join("; ")));
         }
         if opts.order == 2 {
             session
                 .call(|e| unsafe { gmsh_sys::gmshModelMeshSetOrder(2, e) })
-                .map_err(|m| fail(format!("second-order meshing failed: {m}")))?;
-        }
-        // gmsh picks the format from the extension: the temporary name must end in .msh
-        let tmp = out.with_extension("part.msh");
-        if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir).map_err(|source| GmshError::Write {
-                path: dir.to_owned(),
-                source,
-            })?;
+                .map_err(|m| format!("second-order meshing failed: {m}"))?;
         }
         let ctmp = cstring(&tmp.to_string_lossy());
         let written = session.call(|e| unsafe { gmsh_sys::gmshWrite(ctmp.as_ptr(), e) });
         if written.is_err() || !tmp.is_file() {
-            let _ = std::fs::remove_file(&tmp);
-            return Err(fail(format!("could not write {}", out.display())));
+            return Err(format!("could not write {}", tmp.display()));
         }
-        std::fs::rename(&tmp, out).map_err(|source| GmshError::Write {
-            path: out.to_owned(),
-            source,
-        })?;
-        Ok(MeshReport {
+        Ok(Outcome::Meshed {
             dim,
-            output: out.to_owned(),
             warnings: session.warnings(),
         })
     };
-    run()
+    run().unwrap_or_else(Outcome::Failed)
+}
+
+/// How a child process ended without an answer.
+enum Isolation {
+    /// It exited (gmsh's `Exit`) before answering.
+    Ended(String),
+    /// A signal ended it.
+    Crashed(String),
+    Os(std::io::Error),
+}
+
+/// Run `f` in a forked child and return its answer. The child does nothing but `f` and the
+/// write of its answer to a pipe, then `_exit`s, so it runs no destructor or handler of this
+/// process; a child that exits or dies before answering is reported as such.
+fn isolated<T: serde::Serialize + serde::de::DeserializeOwned>(
+    f: impl FnOnce() -> T,
+) -> Result<T, Isolation> {
+    use std::io::Read;
+    use std::os::fd::FromRawFd;
+    let mut fds = [0 as c_int; 2];
+    if unsafe { libc::pipe(fds.as_mut_ptr()) } != 0 {
+        return Err(Isolation::Os(std::io::Error::last_os_error()));
+    }
+    let pid = unsafe { libc::fork() };
+    if pid < 0 {
+        let e = std::io::Error::last_os_error();
+        unsafe {
+            libc::close(fds[0]);
+            libc::close(fds[1]);
+        }
+        return Err(Isolation::Os(e));
+    }
+    if pid == 0 {
+        unsafe { libc::close(fds[0]) };
+        let answer = std::panic::catch_unwind(std::panic::AssertUnwindSafe(f))
+            .ok()
+            .and_then(|a| serde_json::to_vec(&a).ok())
+            .unwrap_or_default();
+        let mut rest: &[u8] = &answer;
+        while !rest.is_empty() {
+            let n = unsafe { libc::write(fds[1], rest.as_ptr().cast(), rest.len()) };
+            if n <= 0 {
+                break;
+            }
+            rest = &rest[n as usize..];
+        }
+        unsafe { libc::_exit(0) };
+    }
+    unsafe { libc::close(fds[1]) };
+    let mut answer = Vec::new();
+    let read = unsafe { std::fs::File::from_raw_fd(fds[0]) }.read_to_end(&mut answer);
+    let mut status: c_int = 0;
+    while unsafe { libc::waitpid(pid, &mut status, 0) } < 0 {
+        let e = std::io::Error::last_os_error();
+        if e.kind() != std::io::ErrorKind::Interrupted {
+            return Err(Isolation::Os(e));
+        }
+    }
+    read.map_err(Isolation::Os)?;
+    if libc::WIFSIGNALED(status) {
+        let sig = libc::WTERMSIG(status);
+        let name = match sig {
+            libc::SIGSEGV => "segmentation fault".to_string(),
+            libc::SIGABRT => "aborted".to_string(),
+            libc::SIGFPE => "floating-point exception".to_string(),
+            libc::SIGKILL => "killed, perhaps out of memory".to_string(),
+            libc::SIGBUS => "bus error".to_string(),
+            s => format!("signal {s}"),
+        };
+        return Err(Isolation::Crashed(name));
+    }
+    serde_json::from_slice(&answer).map_err(|_| {
+        Isolation::Ended(if libc::WIFEXITED(status) {
+            format!("exit status {}", libc::WEXITSTATUS(status))
+        } else {
+            format!("wait status {status}")
+        })
+    })
+}
+
+/// Every parameter finite and declared by a `DefineConstant` of the `.geo` (or of a file it
+/// includes): a misspelt name would otherwise be ignored and the default mesh used.
+fn check_parameters(geo: &Path, params: &[(String, f64)]) -> Result<(), GmshError> {
+    let err = |msg: String| GmshError::Parameter {
+        path: geo.to_owned(),
+        msg,
+    };
+    for (name, value) in params {
+        if !value.is_finite() {
+            return Err(err(format!(
+                "parameter {name} = {value} is not a finite number"
+            )));
+        }
+        if name.is_empty()
+            || !name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+            || name.starts_with(|c: char| c.is_ascii_digit())
+        {
+            return Err(err(format!("\"{name}\" is not a .geo parameter name")));
+        }
+    }
+    if params.is_empty() {
+        return Ok(());
+    }
+    let mut defined = Vec::new();
+    super::geo_text::define_constants(geo, &mut defined, 0).map_err(|e| GmshError::Write {
+        path: geo.to_owned(),
+        source: e,
+    })?;
+    for (name, _) in params {
+        if !defined.contains(name) {
+            return Err(err(if defined.is_empty() {
+                format!(
+                    "no parameter \"{name}\": the file declares no DefineConstant[...], so it \
+                     has no parameters to set"
+                )
+            } else {
+                format!(
+                    "no parameter \"{name}\"; its parameters (DefineConstant) are {}",
+                    defined.join(", ")
+                )
+            }));
+        }
+    }
+    Ok(())
 }
 
 /// A temporary `.geo` that sets parameters and includes the user's file; removed on drop.
@@ -194,16 +412,13 @@ struct Session {
 }
 
 impl Session {
-    fn start() -> Result<Session, GmshError> {
+    fn start() -> Result<Session, String> {
         let args = [cstring("tmc")];
         let mut argv: Vec<*mut c_char> = args.iter().map(|a| a.as_ptr() as *mut c_char).collect();
         let mut ierr: c_int = 0;
         unsafe { gmsh_sys::gmshInitialize(argv.len() as c_int, argv.as_mut_ptr(), 0, &mut ierr) };
         if ierr != 0 {
-            return Err(GmshError::Failed {
-                path: PathBuf::new(),
-                msg: "gmsh could not be initialised".into(),
-            });
+            return Err("gmsh could not be initialised".into());
         }
         Ok(Session {
             log: std::cell::RefCell::new(Vec::new()),
@@ -278,7 +493,7 @@ impl Session {
             .collect()
     }
 
-    fn physical_group_count(&self) -> Result<usize, GmshError> {
+    fn physical_group_count(&self) -> usize {
         let mut tags: *mut c_int = std::ptr::null_mut();
         let mut n: usize = 0;
         let mut ierr: c_int = 0;
@@ -286,7 +501,7 @@ impl Session {
         if !tags.is_null() {
             unsafe { gmsh_sys::gmshFree(tags as *mut _) };
         }
-        Ok(n / 2)
+        n / 2
     }
 }
 
@@ -297,5 +512,27 @@ impl Drop for Session {
             gmsh_sys::gmshLoggerStop(&mut ierr);
             gmsh_sys::gmshFinalize(&mut ierr);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_child_that_crashes_or_exits_is_reported() {
+        let answer = isolated(|| 42u32);
+        assert!(matches!(answer, Ok(42)));
+        // (not raise(SIGSEGV): Rust's own SIGSEGV handler returns from a raised one)
+        let crashed = isolated(|| -> u32 { unsafe { libc::abort() } });
+        assert!(
+            matches!(&crashed, Err(Isolation::Crashed(s)) if s == "aborted"),
+            "crash"
+        );
+        let ended = isolated(|| -> u32 { std::process::exit(3) });
+        assert!(
+            matches!(&ended, Err(Isolation::Ended(s)) if s == "exit status 3"),
+            "exit"
+        );
     }
 }

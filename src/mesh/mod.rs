@@ -2,6 +2,7 @@
 //!
 //! Everything a user names is a gmsh physical group; raw numeric ids never leave this module.
 
+pub mod geo_text;
 pub mod gmsh;
 pub mod msh;
 
@@ -232,6 +233,8 @@ pub struct Mesh {
     pub groups: Vec<PhysicalGroup>,
     /// File the mesh was read from.
     pub source: PathBuf,
+    /// What the reader found suspicious but valid (e.g. coincident nodes).
+    pub warnings: Vec<String>,
 }
 
 impl Mesh {
@@ -280,4 +283,119 @@ impl Mesh {
         }
         kinds
     }
+}
+
+/// Checks of a mesh as read: every coordinate finite and every cell of non-zero measure
+/// (errors naming the cell's group and centre); coincident nodes are a warning (the mesh is cut
+/// there: a crack or geometry that was not merged).
+pub fn check_geometry(mesh: &Mesh) -> Result<Vec<String>, String> {
+    if let Some((n, x)) = mesh
+        .coords
+        .iter()
+        .enumerate()
+        .find(|(_, x)| x.iter().any(|v| !v.is_finite()))
+    {
+        return Err(format!("node {n} has a non-finite coordinate {x:?}"));
+    }
+    let h = mesh.extent();
+    if h <= 0.0 {
+        return Err("all nodes coincide".into());
+    }
+    let tol = 1e-12 * h.powi(mesh.dim as i32);
+    for b in &mesh.cells {
+        for c in 0..b.n_cells() {
+            let nodes = b.cell(c);
+            let x: Vec<[f64; 3]> = nodes[..b.kind.corners()]
+                .iter()
+                .map(|&n| mesh.coords[n])
+                .collect();
+            if min_corner_measure(b.kind, &x).abs() <= tol {
+                let group = b
+                    .groups
+                    .first()
+                    .map(|&g| mesh.groups[g].name.as_str())
+                    .unwrap_or("(no group)");
+                let k = x.len() as f64;
+                let centre: Vec<String> = (0..mesh.dim)
+                    .map(|i| format!("{:.4}", x.iter().map(|p| p[i]).sum::<f64>() / k))
+                    .collect();
+                return Err(format!(
+                    "a {} cell of group \"{group}\" at ({}) is degenerate (zero {})",
+                    b.kind.name(),
+                    centre.join(", "),
+                    if mesh.dim == 2 { "area" } else { "volume" }
+                ));
+            }
+        }
+    }
+    Ok(coincident_nodes(mesh, h).into_iter().collect())
+}
+
+/// The smallest signed measure among a cell's corner simplices (twice the area of a corner
+/// triangle in 2D, six times the volume of a corner tetrahedron in 3D): zero when corners
+/// coincide or a face collapses.
+fn min_corner_measure(kind: CellKind, x: &[[f64; 3]]) -> f64 {
+    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let tri = |o: usize, p: usize, q: usize| {
+        let (a, b) = (sub(x[p], x[o]), sub(x[q], x[o]));
+        a[0] * b[1] - a[1] * b[0]
+    };
+    let tet = |o: usize, p: usize, q: usize, r: usize| {
+        let (a, b, c) = (sub(x[p], x[o]), sub(x[q], x[o]), sub(x[r], x[o]));
+        a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
+            + a[2] * (b[0] * c[1] - b[1] * c[0])
+    };
+    // 2D cells may be stored either way round (they are oriented later): compare magnitudes
+    match kind.dim() {
+        2 => {
+            let k = x.len();
+            (0..k)
+                .map(|i| tri(i, (i + 1) % k, (i + k - 1) % k).abs())
+                .fold(f64::INFINITY, f64::min)
+        }
+        3 if x.len() == 4 => tet(0, 1, 2, 3).abs(),
+        3 => {
+            // hexahedron: the tetrahedron at each corner spanned by its three edges
+            const EDGES: [[usize; 4]; 8] = [
+                [0, 1, 3, 4],
+                [1, 2, 0, 5],
+                [2, 3, 1, 6],
+                [3, 0, 2, 7],
+                [4, 7, 5, 0],
+                [5, 4, 6, 1],
+                [6, 5, 7, 2],
+                [7, 6, 4, 3],
+            ];
+            EDGES
+                .iter()
+                .map(|e| tet(e[0], e[1], e[2], e[3]).abs())
+                .fold(f64::INFINITY, f64::min)
+        }
+        _ => f64::INFINITY,
+    }
+}
+
+/// A warning when distinct nodes share a position (to 1e-10 of the extent `h`).
+fn coincident_nodes(mesh: &Mesh, h: f64) -> Option<String> {
+    let q = 1e-10 * h;
+    let mut keys: Vec<([i64; 3], usize)> = mesh
+        .coords
+        .iter()
+        .enumerate()
+        .map(|(n, x)| (x.map(|v| (v / q).round() as i64), n))
+        .collect();
+    keys.sort_unstable();
+    let pairs: Vec<usize> = keys
+        .windows(2)
+        .filter(|w| w[0].0 == w[1].0)
+        .map(|w| w[0].1)
+        .collect();
+    let &first = pairs.first()?;
+    Some(format!(
+        "{} nodes share their position with another node (the first at {:?}): the mesh is cut \
+         there and the cells on either side are not connected (a crack, or geometry that was not \
+         merged with Coherence / BooleanFragments)",
+        pairs.len(),
+        mesh.coords[first]
+    ))
 }

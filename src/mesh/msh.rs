@@ -26,14 +26,29 @@ pub fn read_msh(path: &Path) -> Result<Mesh, MshError> {
         path: path.to_owned(),
         source,
     })?;
+    read_msh_bytes(path, &bytes)
+}
+
+/// Read MSH 4.1 `bytes`; `path` names the file in errors.
+pub fn read_msh_bytes(path: &Path, bytes: &[u8]) -> Result<Mesh, MshError> {
     let invalid = |msg: String| MshError::Invalid {
         path: path.to_owned(),
         msg,
     };
-    let groups = physical_names(&bytes).map_err(invalid)?;
-    let msh = mshio::parse_msh_bytes(&bytes).map_err(|e| MshError::Parse {
+    check_sections(bytes).map_err(&invalid)?;
+    let groups = physical_names(bytes).map_err(invalid)?;
+    // mshio unwraps in a few places (e.g. a header number too large for its type): a panic
+    // there is a parse error of this file, not of tmc
+    let parsed = std::panic::catch_unwind(|| {
+        mshio::parse_msh_bytes(bytes).map_err(|e| parse_message(bytes, &e))
+    });
+    let msh = match parsed {
+        Ok(r) => r,
+        Err(_) => Err("the MSH reader stopped on a malformed number".to_string()),
+    }
+    .map_err(|msg| MshError::Parse {
         path: path.to_owned(),
-        msg: first_line(&format!("{e}")),
+        msg,
     })?;
     if groups.is_empty() {
         return Err(invalid(
@@ -74,6 +89,7 @@ pub fn read_msh(path: &Path) -> Result<Mesh, MshError> {
     if dim == 2
         && let Some(x) = coords
             .iter()
+            .filter(|x| x.iter().all(|v| v.is_finite()))
             .find(|x| x[2].abs() > 1e-12 * (1.0 + x[0].abs() + x[1].abs()))
     {
         return Err(invalid(format!(
@@ -87,7 +103,9 @@ pub fn read_msh(path: &Path) -> Result<Mesh, MshError> {
         facets,
         groups,
         source: path.to_owned(),
+        warnings: Vec::new(),
     };
+    mesh.warnings = super::check_geometry(&mesh).map_err(&invalid)?;
     orient_cells(&mut mesh);
     Ok(mesh)
 }
@@ -284,8 +302,118 @@ fn orient_cells(mesh: &mut Mesh) {
     }
 }
 
-fn first_line(s: &str) -> String {
-    s.lines().next().unwrap_or("").chars().take(200).collect()
+/// 1-based line number of byte `offset`.
+fn line_of(bytes: &[u8], offset: usize) -> usize {
+    1 + bytes[..offset.min(bytes.len())]
+        .iter()
+        .filter(|&&b| b == b'\n')
+        .count()
+}
+
+/// mshio's error as "line N: what (in section, block …)".
+fn parse_message(bytes: &[u8], e: &mshio::error::MshParserError<&[u8]>) -> String {
+    let trace = e.filtered_backtrace();
+    let Some((at, kind)) = trace.first() else {
+        return "malformed file".into();
+    };
+    let offset = (at.as_ptr() as usize).saturating_sub(bytes.as_ptr() as usize);
+    let context: Vec<String> = trace[1..]
+        .iter()
+        .rev()
+        .map(|(_, k)| {
+            k.context()
+                .map(str::to_string)
+                .unwrap_or_else(|| k.to_string())
+        })
+        .collect();
+    let what = kind.to_string();
+    if context.is_empty() {
+        format!("line {}: {what}", line_of(bytes, offset))
+    } else {
+        format!(
+            "line {}: {what} (in {})",
+            line_of(bytes, offset),
+            context.join(", in ")
+        )
+    }
+}
+
+/// Every `$Section` line must be closed by its `$EndSection` before the next section opens:
+/// a truncated or spliced file is named by its section and line, before any parsing.
+/// (Binary data may hold `$` bytes, so only the text before `$Nodes`/`$Elements` data of a
+/// binary file is scanned line by line: those sections are found by their end markers.)
+fn check_sections(bytes: &[u8]) -> Result<(), String> {
+    if !bytes.starts_with(b"$MeshFormat") {
+        return Err("not a gmsh mesh: the file must start with $MeshFormat".into());
+    }
+    let header = bytes
+        .split(|&b| b == b'\n')
+        .nth(1)
+        .and_then(|l| std::str::from_utf8(l).ok())
+        .unwrap_or("");
+    let fields: Vec<&str> = header.split_whitespace().collect();
+    match fields.as_slice() {
+        ["4.1", "0" | "1", "4" | "8"] => {}
+        [v, ..] if *v != "4.1" => {
+            return Err(format!(
+                "line 2: MSH version {v}; tmc reads MSH 4.1 (gmsh -format msh41)"
+            ));
+        }
+        _ => {
+            return Err(format!(
+                "line 2: \"{}\" is not a MSH 4.1 header (version, 0 or 1 for ASCII or binary, size of size_t)",
+                header.trim().chars().take(60).collect::<String>()
+            ));
+        }
+    }
+    let binary = fields[1] == "1";
+    let mut open: Option<(&[u8], usize)> = None;
+    let mut line = 0usize;
+    let mut pos = 0usize;
+    while pos < bytes.len() {
+        line += 1;
+        let end = bytes[pos..]
+            .iter()
+            .position(|&b| b == b'\n')
+            .map_or(bytes.len(), |k| pos + k);
+        let l = bytes[pos..end]
+            .strip_suffix(b"\r")
+            .unwrap_or(&bytes[pos..end]);
+        if let Some(name) = l.strip_prefix(b"$")
+            && !name.is_empty()
+            && name.iter().all(|b| b.is_ascii_alphanumeric())
+        {
+            match open {
+                Some((sec, _)) if name.strip_prefix(b"End") == Some(sec) => open = None,
+                Some((sec, start)) if !binary => {
+                    return Err(format!(
+                        "line {line}: ${} inside section ${} opened at line {start}, which has no ${}{} (a truncated or spliced file?)",
+                        String::from_utf8_lossy(name),
+                        String::from_utf8_lossy(sec),
+                        "End",
+                        String::from_utf8_lossy(sec),
+                    ));
+                }
+                Some(_) => {}
+                None if name.starts_with(b"End") => {
+                    return Err(format!(
+                        "line {line}: ${} closes no open section",
+                        String::from_utf8_lossy(name)
+                    ));
+                }
+                None => open = Some((name, line)),
+            }
+        }
+        pos = end + 1;
+    }
+    if let Some((sec, start)) = open {
+        return Err(format!(
+            "section ${} opened at line {start} has no $End{} (the file ends at line {line}: truncated?)",
+            String::from_utf8_lossy(sec),
+            String::from_utf8_lossy(sec)
+        ));
+    }
+    Ok(())
 }
 
 /// Parse the `$PhysicalNames` section: lines `dim tag "name"`.
@@ -306,8 +434,15 @@ fn physical_names(bytes: &[u8]) -> Result<Vec<PhysicalGroup>, String> {
         .next()
         .and_then(|l| l.parse().ok())
         .ok_or("bad count in $PhysicalNames")?;
+    let lines: Vec<&str> = lines.collect();
+    if lines.len() != n {
+        return Err(format!(
+            "$PhysicalNames announces {n} names but holds {} lines",
+            lines.len()
+        ));
+    }
     let mut groups = Vec::with_capacity(n);
-    for line in lines.take(n) {
+    for line in lines {
         let mut it = line.splitn(3, char::is_whitespace);
         let dim: usize = it
             .next()

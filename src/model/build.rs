@@ -15,6 +15,13 @@ use crate::mesh::Mesh;
 /// Build the model. The case must already be validated against the mesh.
 pub fn build(case: &Case, mesh: Mesh) -> Result<Model, CaseError> {
     let mut physics = decide_physics(case);
+    if !physics.mechanics && !physics.conduction {
+        return case.error(
+            case.file.mesh.span(),
+            "the case loads nothing: no displacement, traction or body force, no temperature, \
+             heat flux, convection or heat source; there is nothing to solve",
+        );
+    }
     require_conductivities(case, &physics)?;
     let d = mesh.extent();
     let materials = region_materials(case, d);
@@ -37,7 +44,7 @@ pub fn build(case: &Case, mesh: Mesh) -> Result<Model, CaseError> {
     let facet_blocks = convection_blocks(case, &mesh, &physics, &mut flux_groups);
     let capacity_blocks = capacity_blocks(case, &mesh, &physics, &blocks);
     debug_assert!(cons.eq.iter().filter(|&&e| e != NONE).count() == cons.n_eq);
-    Ok(Model {
+    let model = Model {
         physics,
         dofs,
         cons,
@@ -58,7 +65,11 @@ pub fn build(case: &Case, mesh: Mesh) -> Result<Model, CaseError> {
         d,
         theta_init,
         mesh,
-    })
+    };
+    if let Some(msg) = super::held::unheld_body(&model) {
+        return case.error(case.file.mesh.span(), msg);
+    }
+    Ok(model)
 }
 
 /// The load factor over time: `[time] lambda` (default: from 0 at t = 0 to 1 at the end), or

@@ -3,6 +3,7 @@
 //! together by [`build`]. Nothing here changes during a solve.
 
 pub mod build;
+pub mod held;
 pub mod loads;
 pub mod physics;
 

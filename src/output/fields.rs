@@ -2,18 +2,20 @@
 //! conductivity, cell by cell.
 #![allow(non_snake_case)]
 
+use crate::assembly::{AssemblyError, cell_error};
 use crate::dofs::gather;
 use crate::element::RefElement;
-use crate::kernel::{CellFields, KernelError, cell_fields};
+use crate::kernel::{CellFields, cell_fields};
 use crate::model::Model;
 use rayon::prelude::*;
 
 /// Cell fields for every cell, in mesh block order.
-pub fn all_cell_fields(model: &Model, x: &[f64]) -> Result<Vec<CellFields>, KernelError> {
+/// A failing cell is named by region, index and position.
+pub fn all_cell_fields(model: &Model, x: &[f64]) -> Result<Vec<CellFields>, AssemblyError> {
     let mut out = Vec::with_capacity(model.mesh.n_cells());
-    for info in &model.blocks {
+    for (bi, info) in model.blocks.iter().enumerate() {
         let kind = model.mesh.cells[info.block].kind;
-        let v = crate::with_cell!(kind, |N, D, E| block::<N, D, E>(model, info, x)?);
+        let v = crate::with_cell!(kind, |N, D, E| block::<N, D, E>(model, bi, x)?);
         out.extend(v);
     }
     Ok(out)
@@ -21,9 +23,10 @@ pub fn all_cell_fields(model: &Model, x: &[f64]) -> Result<Vec<CellFields>, Kern
 
 fn block<const N: usize, const D: usize, E: RefElement<N, D>>(
     model: &Model,
-    info: &crate::model::BlockInfo,
+    bi: usize,
     x: &[f64],
-) -> Result<Vec<CellFields>, KernelError> {
+) -> Result<Vec<CellFields>, AssemblyError> {
+    let info = &model.blocks[bi];
     let blk = &model.mesh.cells[info.block];
     (0..blk.n_cells())
         .into_par_iter()
@@ -33,6 +36,7 @@ fn block<const N: usize, const D: usize, E: RefElement<N, D>>(
                 &info.layout,
                 &gather::<N>(&model.mesh.coords, &model.dofs, blk.cell(c), x),
             )
+            .map_err(|e| cell_error(model, bi, e, c))
         })
         .collect()
 }

@@ -1,4 +1,6 @@
 //! `history.csv`: one row of numbers per converged step, rewritten atomically after each row.
+//! Written with a CSV library, so a column named with a comma or a quote (a group or probe
+//! name) is quoted, and every reader sees as many fields per row as the header has.
 
 use super::{OutputError, write_atomic};
 use std::path::{Path, PathBuf};
@@ -13,7 +15,7 @@ impl History {
     pub fn new(path: &Path, columns: &[String]) -> History {
         History {
             path: path.to_owned(),
-            text: columns.join(",") + "\n",
+            text: csv_line(columns),
         }
     }
     pub fn row(&mut self, values: &[f64]) -> Result<(), OutputError> {
@@ -29,11 +31,18 @@ impl History {
                 }
             })
             .collect();
-        self.text.push_str(&row.join(","));
-        self.text.push('\n');
+        self.text.push_str(&csv_line(&row));
         write_atomic(&self.path, self.text.as_bytes())
     }
     pub fn flush_header(&self) -> Result<(), OutputError> {
         write_atomic(&self.path, self.text.as_bytes())
     }
+}
+
+/// One CSV record (quoted where needed), with its line end.
+pub fn csv_line<S: AsRef<[u8]>>(fields: &[S]) -> String {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    // writing to memory cannot fail
+    w.write_record(fields).expect("in memory");
+    String::from_utf8(w.into_inner().expect("in memory")).expect("fields are UTF-8")
 }

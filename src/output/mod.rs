@@ -4,11 +4,13 @@
 //! leaves a half-written file.
 
 pub mod fields;
+pub mod folder;
 pub mod history;
 pub mod probes;
 pub mod series;
 pub mod vtu;
 
+pub use folder::RunFolder;
 pub use history::History;
 pub use series::Series;
 pub use vtu::{StepFields, write_pvd, write_vtu};
@@ -22,6 +24,11 @@ pub enum OutputError {
     Write { path: PathBuf, msg: String },
     #[error("post-processing failed at step {step}: {msg}")]
     Fields { step: usize, msg: String },
+    #[error(
+        "{dir} is in use by another tmc run (process {pid}); wait for it, stop it, or write \
+         elsewhere with -o"
+    )]
+    Busy { dir: PathBuf, pid: i32 },
 }
 
 pub(crate) fn werr(path: &Path, e: impl std::fmt::Display) -> OutputError {
@@ -31,32 +38,24 @@ pub(crate) fn werr(path: &Path, e: impl std::fmt::Display) -> OutputError {
     }
 }
 
-/// Write `bytes` to `path` atomically.
+/// Write `bytes` to `path` atomically: to a temporary name beside it, synced to the disk
+/// (a full disk fails here, naming the file), then renamed; on failure the temporary file is
+/// removed and `path` keeps its old content.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
-    let tmp = path.with_extension(format!(
-        "{}.part",
-        path.extension()
-            .map(|e| e.to_string_lossy().into_owned())
-            .unwrap_or_default()
-    ));
-    std::fs::write(&tmp, bytes).map_err(|e| werr(&tmp, e))?;
-    std::fs::rename(&tmp, path).map_err(|e| werr(path, e))
-}
-
-/// Remove stale step files of an earlier run in `dir`.
-pub fn clean_dir(dir: &Path) -> Result<(), OutputError> {
-    std::fs::create_dir_all(dir).map_err(|e| werr(dir, e))?;
-    for entry in std::fs::read_dir(dir).map_err(|e| werr(dir, e))?.flatten() {
-        let name = entry.file_name().to_string_lossy().into_owned();
-        if (name.starts_with("step_") && name.ends_with(".vtu"))
-            || name == "history.csv"
-            || name == "summary.json"
-            || name.ends_with(".pvd")
-        {
-            std::fs::remove_file(entry.path()).map_err(|e| werr(&entry.path(), e))?;
-        }
+    use std::io::Write;
+    let mut tmp_name = path.file_name().unwrap_or_default().to_os_string();
+    tmp_name.push(".part");
+    let tmp = path.with_file_name(tmp_name);
+    let written = std::fs::File::create(&tmp)
+        .and_then(|mut f| f.write_all(bytes).and_then(|_| f.sync_data()));
+    if let Err(e) = written {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(werr(path, e));
     }
-    Ok(())
+    std::fs::rename(&tmp, path).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        werr(path, e)
+    })
 }
 
 /// Write a small text file (e.g. a log) atomically.

@@ -41,6 +41,11 @@ impl Series {
         }
     }
 
+    /// The file of step `step`.
+    pub fn file_name(step: usize) -> String {
+        format!("step_{step:04}.vtu")
+    }
+
     /// Write the state `x` as step `step` at `time`, and the updated `.pvd`.
     pub fn write(
         &mut self,
@@ -51,7 +56,7 @@ impl Series {
     ) -> Result<(), OutputError> {
         let cells = all_cell_fields(model, x).map_err(|e| OutputError::Fields {
             step,
-            msg: format!("{e:?}"),
+            msg: e.to_string(),
         })?;
         let (d, dofs) = (model.mesh.dim, &model.dofs);
         let u: Vec<[f64; 3]> = (0..model.mesh.coords.len())
@@ -74,7 +79,7 @@ impl Series {
                 .map(|&d| if d == NONE { 0.0 } else { x[d as usize] })
                 .collect()
         });
-        let file = format!("step_{step:04}.vtu");
+        let file = Series::file_name(step);
         write_vtu(
             &self.dir.join(&file),
             &model.mesh,

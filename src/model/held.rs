@@ -1,0 +1,204 @@
+//! Before anything is solved: every connected body must be held. A body that no prescribed
+//! displacement holds in some direction (or against some rotation), or whose temperature
+//! nothing fixes, makes the tangent singular; the solver would only find out after every step
+//! cut. Said here per body, with the direction.
+
+use super::Model;
+use crate::dofs::{Field, NONE};
+use nalgebra::{DMatrix, SymmetricEigen};
+
+/// The first body that is not held, as a sentence; `None` if all are.
+pub fn unheld_body(model: &Model) -> Option<String> {
+    let mesh = &model.mesh;
+    let comp = components(model);
+    let n_comp = comp
+        .iter()
+        .filter(|&&c| c != usize::MAX)
+        .max()
+        .map_or(0, |&m| m + 1);
+    if n_comp == 0 {
+        return None;
+    }
+    let dofs = &model.dofs;
+    let d = mesh.dim;
+    let held_dof = |dof: u32| dof != NONE && model.cons.eq[dof as usize] == NONE;
+    for c in 0..n_comp {
+        let nodes: Vec<usize> = (0..comp.len()).filter(|&n| comp[n] == c).collect();
+        let name = || body_name(model, &comp, c, nodes.len(), n_comp);
+        if model.physics.mechanics && dofs.has(Field::U) {
+            let held: Vec<(usize, usize)> = nodes
+                .iter()
+                .flat_map(|&n| (0..d).map(move |i| (n, i)))
+                .filter(|&(n, i)| held_dof(dofs.u[n * d + i]))
+                .collect();
+            if let Some(mode) = free_rigid_mode(model, &nodes, &held) {
+                return Some(format!(
+                    "{} is not held: it can {mode}; prescribe displacements on its boundary \
+                     groups that stop it",
+                    name()
+                ));
+            }
+        }
+        if model.physics.conduction && dofs.has(Field::Theta) {
+            let fixed = nodes.iter().any(|&n| held_dof(dofs.theta[n]));
+            let convects = model
+                .facet_blocks
+                .iter()
+                .any(|fb| mesh.facets[fb.block].conn.iter().any(|&n| comp[n] == c));
+            let stores = model.capacity_blocks.iter().any(|cb| {
+                mesh.cells[cb.block]
+                    .conn
+                    .first()
+                    .is_some_and(|&n| comp[n] == c)
+            });
+            if !(fixed || convects || stores) {
+                return Some(format!(
+                    "the temperature of {} is not fixed: no `theta` is prescribed on it and no \
+                     boundary of it convects (`h`), so a stationary solution is not unique",
+                    name()
+                ));
+            }
+        }
+    }
+    None
+}
+
+/// The connected component of every node (through the cells); `usize::MAX` for nodes in no
+/// cell.
+fn components(model: &Model) -> Vec<usize> {
+    let n = model.mesh.coords.len();
+    let mut parent: Vec<usize> = (0..n).collect();
+    fn find(p: &mut [usize], mut a: usize) -> usize {
+        while p[a] != a {
+            p[a] = p[p[a]];
+            a = p[a];
+        }
+        a
+    }
+    let mut used = vec![false; n];
+    for b in &model.mesh.cells {
+        for c in 0..b.n_cells() {
+            let cell = b.cell(c);
+            used[cell[0]] = true;
+            for &m in &cell[1..] {
+                used[m] = true;
+                let (ra, rb) = (find(&mut parent, cell[0]), find(&mut parent, m));
+                if ra != rb {
+                    parent[ra.max(rb)] = ra.min(rb);
+                }
+            }
+        }
+    }
+    let mut label = vec![usize::MAX; n];
+    let mut next = 0;
+    let mut comp = vec![usize::MAX; n];
+    for a in 0..n {
+        if !used[a] {
+            continue;
+        }
+        let r = find(&mut parent, a);
+        if label[r] == usize::MAX {
+            label[r] = next;
+            next += 1;
+        }
+        comp[a] = label[r];
+    }
+    comp
+}
+
+/// A rigid motion of the body (`nodes`) that the held (node, direction) pairs do not stop,
+/// in words; `None` if they stop every one.
+fn free_rigid_mode(model: &Model, nodes: &[usize], held: &[(usize, usize)]) -> Option<String> {
+    let x = &model.mesh.coords;
+    let d = model.mesh.dim;
+    // centre and size of the body, so that rotations and translations weigh alike
+    let mut c = [0.0; 3];
+    for &n in nodes {
+        for i in 0..3 {
+            c[i] += x[n][i] / nodes.len() as f64;
+        }
+    }
+    let h = nodes
+        .iter()
+        .map(|&n| (0..3).map(|i| (x[n][i] - c[i]).abs()).fold(0.0, f64::max))
+        .fold(0.0, f64::max)
+        .max(f64::MIN_POSITIVE);
+    let r = |n: usize, i: usize| (x[n][i] - c[i]) / h;
+    // the rigid modes' value at (node, direction): translations, then rotations
+    let modes = if d == 2 { 3 } else { 6 };
+    let value = |n: usize, i: usize, m: usize| -> f64 {
+        if m < d {
+            return (m == i) as u8 as f64;
+        }
+        // rotation about axis a: ω × r, component i
+        let a = if d == 2 { 2 } else { m - 3 };
+        let (b, e) = ((a + 1) % 3, (a + 2) % 3);
+        if i == b {
+            -r(n, e)
+        } else if i == e {
+            r(n, b)
+        } else {
+            0.0
+        }
+    };
+    let mut g = DMatrix::<f64>::zeros(modes, modes);
+    for &(n, i) in held {
+        for p in 0..modes {
+            let vp = value(n, i, p);
+            if vp == 0.0 {
+                continue;
+            }
+            for q in 0..modes {
+                g[(p, q)] += vp * value(n, i, q);
+            }
+        }
+    }
+    let eig = SymmetricEigen::new(g);
+    let (k, &lmin) = eig
+        .eigenvalues
+        .iter()
+        .enumerate()
+        .min_by(|a, b| a.1.total_cmp(b.1))?;
+    if lmin > 1e-10 * (1.0 + held.len() as f64) {
+        return None;
+    }
+    let v = eig.eigenvectors.column(k);
+    let (m, _) = v
+        .iter()
+        .enumerate()
+        .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))?;
+    let axis = ["x", "y", "z"];
+    Some(if held.is_empty() {
+        "move freely: no displacement is prescribed anywhere on it".to_string()
+    } else if m < d {
+        format!("move freely in {}", axis[m])
+    } else {
+        let a = if d == 2 { 2 } else { m - 3 };
+        format!("rotate freely about the {} axis", axis[a])
+    })
+}
+
+/// "the body made of region(s) …", with its size, numbered if there are several.
+fn body_name(model: &Model, comp: &[usize], c: usize, n_nodes: usize, n_comp: usize) -> String {
+    let mut regions: Vec<&str> = Vec::new();
+    for info in &model.blocks {
+        let b = &model.mesh.cells[info.block];
+        if b.conn.first().is_some_and(|&n| comp[n] == c) {
+            let name = model.regions[info.region].0.as_str();
+            if !regions.contains(&name) {
+                regions.push(name);
+            }
+        }
+    }
+    let quoted: Vec<String> = regions.iter().map(|r| format!("\"{r}\"")).collect();
+    let which = if n_comp > 1 {
+        format!("body {} of {n_comp}", c + 1)
+    } else {
+        "the body".to_string()
+    };
+    format!(
+        "{which} (region{} {}, {n_nodes} nodes)",
+        if regions.len() > 1 { "s" } else { "" },
+        quoted.join(", ")
+    )
+}
