@@ -275,6 +275,11 @@ pub struct Case {
     pub file: CaseFile,
 }
 
+/// Most load or time steps a case may ask for (a `path` value or a `dt` is at least one).
+pub const MAX_STEPS: usize = 100_000;
+/// Smallest `[steps] min`, as a fraction of the path.
+pub const MIN_STEP: f64 = 1e-12;
+
 /// Largest magnitude of any number in a case file: beyond it, products of moduli, strains and
 /// lengths overflow (no physical quantity in consistent units comes near).
 pub const MAX_MAGNITUDE: f64 = 1e30;
@@ -484,6 +489,21 @@ impl Case {
         if !(s.min > 0.0 && s.min <= s.initial && s.initial <= s.max && s.max <= 1.0) {
             bad("need 0 < min <= initial <= max <= 1")?;
         }
+        if s.min < MIN_STEP {
+            bad(&format!(
+                "min = {:e} is below {MIN_STEP:e}: a step that small changes nothing a double \
+                 can hold, and cutting down to it takes thousands of failed attempts",
+                s.min
+            ))?;
+        }
+        if let Some(p) = &s.path
+            && p.len() > MAX_STEPS
+        {
+            bad(&format!(
+                "path has {} values; at most {MAX_STEPS} (each is at least one load step)",
+                p.len()
+            ))?;
+        }
         if !(s.tol > 0.0 && s.tol < 1.0) {
             bad("tol must be in (0, 1)")?;
         }
@@ -628,9 +648,24 @@ impl Case {
                     format!("[time]: `dt` must be positive and at most `end` ({end}), got {v}"),
                 );
             }
+            if end / v > MAX_STEPS as f64 {
+                return self.error(
+                    dt.span(),
+                    format!(
+                        "[time]: end / dt = {:.3e} steps; at most {MAX_STEPS}",
+                        end / v
+                    ),
+                );
+            }
         }
         if let Some(times) = &t.times {
             let v = times.get_ref();
+            if v.len() > MAX_STEPS {
+                return self.error(
+                    times.span(),
+                    format!("[time]: {} `times`; at most {MAX_STEPS}", v.len()),
+                );
+            }
             let increasing = v.windows(2).all(|w| w[0] < w[1]);
             if v.is_empty() || !increasing || !(v[0] > 0.0) || !(v[v.len() - 1] <= end) {
                 return self.error(

@@ -105,8 +105,29 @@ fn print_chain(e: &dyn std::error::Error) {
     }
 }
 
+/// `RAYON_NUM_THREADS`, if set, a thread count this machine can start (a huge one would hang
+/// while spawning).
+fn check_thread_count() -> Result<(), String> {
+    let Ok(v) = std::env::var("RAYON_NUM_THREADS") else {
+        return Ok(());
+    };
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let limit = 16 * cores;
+    match v.trim().parse::<usize>() {
+        Ok(n) if n <= limit => Ok(()),
+        _ => Err(format!(
+            "RAYON_NUM_THREADS={v}: give a number of threads from 1 to {limit} (16 per core), \
+             or 0 for one per core"
+        )),
+    }
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    if let Err(e) = check_thread_count() {
+        eprintln!("error: {e}");
+        return ExitCode::FAILURE;
+    }
     match cli.command {
         Command::Study {
             study,

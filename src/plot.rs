@@ -172,7 +172,19 @@ impl History {
         }
         let mut rows = Vec::new();
         for (i, record) in r.records().enumerate() {
-            let record = record.map_err(|e| bad(e.to_string()))?;
+            let record = record.map_err(|e| {
+                bad(match e.kind() {
+                    csv::ErrorKind::UnequalLengths {
+                        pos: Some(pos),
+                        expected_len,
+                        len,
+                    } => format!(
+                        "line {}: {len} fields, but the header has {expected_len}",
+                        pos.line()
+                    ),
+                    _ => e.to_string(),
+                })
+            })?;
             let row: Result<Vec<f64>, _> = record.iter().map(|v| v.trim().parse::<f64>()).collect();
             rows.push(row.map_err(|e| bad(format!("line {}: {e}", i + 2)))?);
         }

@@ -219,10 +219,42 @@ fn slug(name: &str) -> String {
         .collect()
 }
 
-/// A measured quantity from a summary: a probe, `Q_<group>` or `R_<group>_<axis>`.
+/// A measured quantity from a summary: a probe, `Q_<group>` or `R_<group>_<axis>`, or a
+/// number of the summary; `NaN` if the summary has no such quantity (see [`known_quantity`]).
 fn measured(summary: &serde_json::Value, q: &str) -> f64 {
+    known_quantity(summary, q).unwrap_or(f64::NAN)
+}
+
+/// The names a measure may take in `summary`, for an error message.
+fn quantity_names(summary: &serde_json::Value) -> Vec<String> {
+    let mut names: Vec<String> = Vec::new();
+    if let Some(p) = summary["probes"].as_object() {
+        names.extend(p.keys().cloned());
+    }
+    if let Some(r) = summary["reactions"].as_object() {
+        for (g, v) in r {
+            for (k, _) in v.as_object().into_iter().flatten() {
+                names.push(if k == "heat" {
+                    format!("Q_{g}")
+                } else {
+                    format!("R_{g}_{k}")
+                });
+            }
+        }
+    }
+    if let Some(o) = summary.as_object() {
+        names.extend(
+            o.iter()
+                .filter(|(_, v)| v.is_number())
+                .map(|(k, _)| k.clone()),
+        );
+    }
+    names
+}
+
+fn known_quantity(summary: &serde_json::Value, q: &str) -> Option<f64> {
     if let Some(v) = summary["probes"][q].as_f64() {
-        return v;
+        return Some(v);
     }
     let r = &summary["reactions"];
     let heat = q.strip_prefix("Q_").and_then(|g| r[g]["heat"].as_f64());
@@ -230,10 +262,7 @@ fn measured(summary: &serde_json::Value, q: &str) -> f64 {
         .strip_prefix("R_")
         .and_then(|rest| rest.rsplit_once('_'))
         .and_then(|(g, c)| r[g][c].as_f64());
-    if let Some(v) = heat.or(force) {
-        return v;
-    }
-    summary[q].as_f64().unwrap_or(f64::NAN)
+    heat.or(force).or_else(|| summary[q].as_f64())
 }
 
 /// Options of `tmc study`.
@@ -264,7 +293,11 @@ pub fn run_study(path: &Path, opts: &StudyOptions) -> Result<StudyReport, StudyE
         if !opts.quiet {
             eprintln!("[{}/{}] {} ...", i + 1, study.variant.len(), v.name);
         }
-        let o = run_variant(&study, v, case, &runs.join(slug(&v.name)), opts)?;
+        let o =
+            run_variant(&study, v, case, &runs.join(slug(&v.name)), opts).map_err(|m| match m {
+                VariantError::Study(e) => e,
+                VariantError::Unknown(msg) => invalid(path, msg),
+            })?;
         if !opts.quiet {
             eprintln!(
                 "      {}: {:.0} dofs, {:.0} steps, {:.0} its, {:.2} s",
@@ -320,6 +353,21 @@ fn read_study(path: &Path) -> Result<(StudyFile, String), StudyError> {
             format!("variant name \"{}\" is used twice", w[0]),
         ));
     }
+    let mut slugs: Vec<(String, &str)> = study
+        .variant
+        .iter()
+        .map(|v| (slug(&v.name), v.name.as_str()))
+        .collect();
+    slugs.sort_unstable();
+    if let Some(w) = slugs.windows(2).find(|w| w[0].0 == w[1].0) {
+        return Err(invalid(
+            path,
+            format!(
+                "variants \"{}\" and \"{}\" would share the folder runs/{}; rename one",
+                w[0].1, w[1].1, w[0].0
+            ),
+        ));
+    }
     if let Reference::Variant(r) = &study.reference
         && r != "last"
         && !study.variant.iter().any(|v| &v.name == r)
@@ -355,10 +403,80 @@ fn variant_cases(path: &Path, study: &StudyFile) -> Result<Vec<String>, StudyErr
         .variant
         .iter()
         .map(|v| {
-            variant_case(&base, &case_dir, v)
-                .map_err(|m| invalid(path, format!("variant \"{}\": {m}", v.name)))
+            let text = variant_case(&base, &case_dir, v)
+                .map_err(|m| invalid(path, format!("variant \"{}\": {m}", v.name)))?;
+            // the whole case check (unknown keys, values) now, naming the variant and what it
+            // sets, not a line of a generated file later
+            crate::case::Case::parse(&case_path, text.clone()).map_err(|e| {
+                let detail = match &e {
+                    crate::case::CaseError::Syntax { msg, .. } => msg
+                        .lines()
+                        .rfind(|l| {
+                            !l.trim().is_empty()
+                                && !l.contains(" | ")
+                                && !l.trim_start().starts_with('|')
+                        })
+                        .unwrap_or(msg)
+                        .trim()
+                        .to_string(),
+                    crate::case::CaseError::Invalid { msg, .. } => msg.clone(),
+                    other => other.to_string(),
+                };
+                invalid(
+                    path,
+                    format!(
+                        "variant \"{}\" (set = {}) makes an invalid case: {detail}",
+                        v.name,
+                        toml::Value::Table(v.set.clone())
+                    ),
+                )
+            })?;
+            Ok(text)
         })
         .collect()
+}
+
+/// Why a variant stops the study.
+enum VariantError {
+    Study(StudyError),
+    /// A measure, shown quantity or history column its results do not have.
+    Unknown(String),
+}
+
+impl From<StudyError> for VariantError {
+    fn from(e: StudyError) -> Self {
+        VariantError::Study(e)
+    }
+}
+
+/// Every `measure`, `show` and `history` name the study asks for is in a converged variant's
+/// results.
+fn check_names(
+    study: &StudyFile,
+    summary: &serde_json::Value,
+    res: &Path,
+) -> Result<(), VariantError> {
+    for q in study.measure.iter().chain(&study.show) {
+        if known_quantity(summary, q).is_none() {
+            return Err(VariantError::Unknown(format!(
+                "the results have no quantity \"{q}\" to measure (they have: {})",
+                quantity_names(summary).join(", ")
+            )));
+        }
+    }
+    if !study.history.is_empty() {
+        let h = History::read(&res.join("history.csv"))
+            .map_err(|e| VariantError::Unknown(e.to_string()))?;
+        for c in &study.history {
+            if h.column(c).is_none() {
+                return Err(VariantError::Unknown(format!(
+                    "history.csv has no column \"{c}\" to draw (columns: {})",
+                    h.columns.join(", ")
+                )));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Solve one variant's `case` with `tmc solve` in `dir`, and read what it measured.
@@ -368,7 +486,7 @@ fn run_variant(
     case: &str,
     dir: &Path,
     opts: &StudyOptions,
-) -> Result<Outcome, StudyError> {
+) -> Result<Outcome, VariantError> {
     let io = |path: &Path| {
         let path = path.to_owned();
         move |source| StudyError::Io { path, source }
@@ -394,6 +512,9 @@ fn run_variant(
         .unwrap_or(serde_json::Value::Null);
     let num = |k: &str| summary[k].as_f64().unwrap_or(f64::NAN);
     let converged = proc.status.success() && summary["converged"].as_bool() == Some(true);
+    if converged {
+        check_names(study, &summary, &res)?;
+    }
     let quantities = |qs: &[String]| -> Vec<f64> {
         qs.iter()
             .map(|q| {

@@ -7,24 +7,6 @@ use common::*;
 use std::path::Path;
 use std::process::{Command, Output};
 
-fn tmc(args: &[&str]) -> Output {
-    tmc_with(args, &[])
-}
-
-/// `tmc args` with the environment variables `vars` set.
-fn tmc_with(args: &[&str], vars: &[(&str, &str)]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_tmc"))
-        .args(args)
-        .envs(vars.iter().copied())
-        .current_dir(root())
-        .output()
-        .unwrap()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
 fn summary(dir: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
 }

@@ -191,13 +191,189 @@ fn mutated_meshes_never_panic() {
                         .cloned()
                         .or_else(|| p.downcast_ref::<&str>().map(|s| s.to_string()))
                         .unwrap_or_default();
-                    std::fs::write(format!("/tmp/fz/{}-{k}.msh", name.replace(' ', "_")), &m).ok();
+                    let keep = scratch("robust-msh-panics");
+                    std::fs::write(keep.join(format!("{}-{k}.msh", name.replace(' ', "_"))), &m)
+                        .ok();
                     panics.push(format!("{name} mutation {k}: {msg}"));
                 }
             }
         }
     }
     eprintln!("{tried} mutated meshes, {accepted} still valid");
+    assert!(
+        panics.is_empty(),
+        "{} panics:\n{}",
+        panics.len(),
+        panics.join("\n")
+    );
+}
+
+/// Mutations of a case file's text: lines dropped, doubled and swapped, values replaced by
+/// hostile ones, truncations and byte flips.
+fn case_mutations(text: &str, rng: &mut Rng, n: usize) -> Vec<String> {
+    const VALUES: &[&str] = &[
+        "nan",
+        "inf",
+        "-inf",
+        "-1.0",
+        "0",
+        "0.0",
+        "1e308",
+        "-1e308",
+        "1e-320",
+        "9223372036854775807",
+        "-9223372036854775808",
+        "\"x\"",
+        "\"\"",
+        "[]",
+        "{}",
+        "[nan, 1.0]",
+        "[1.0]",
+        "[1.0, 2.0, 3.0, 4.0]",
+        "true",
+        "\"solid\"",
+        "\"medium\"",
+        "\"top\"",
+    ];
+    let lines: Vec<&str> = text.lines().collect();
+    let mut out = Vec::with_capacity(n);
+    for _ in 0..n {
+        let mut l: Vec<String> = lines.iter().map(|s| s.to_string()).collect();
+        let k = rng.below(l.len());
+        match rng.below(7) {
+            0 => {
+                l.remove(k);
+            }
+            1 => {
+                let line = l[k].clone();
+                l.insert(k, line);
+            }
+            2 => l.swap(k, rng.below(lines.len())),
+            3 | 4 => {
+                // a value: the right side of some `key = value`
+                let with_value: Vec<usize> =
+                    (0..l.len()).filter(|&i| l[i].contains(" = ")).collect();
+                if let Some(&i) = with_value.get(rng.below(with_value.len())) {
+                    let key = l[i].split(" = ").next().unwrap().to_string();
+                    l[i] = format!("{key} = {}", VALUES[rng.below(VALUES.len())]);
+                }
+            }
+            5 => {
+                let joined = l.join("\n");
+                let cut = rng.below(joined.len());
+                let cut = (0..=cut)
+                    .rev()
+                    .find(|&c| joined.is_char_boundary(c))
+                    .unwrap_or(0);
+                l = vec![joined[..cut].to_string()];
+            }
+            _ => {
+                let mut bytes = l.join("\n").into_bytes();
+                let i = rng.below(bytes.len());
+                const BYTES: &[u8] = b" =[]{}\",.#0123456789enaif-";
+                bytes[i] = BYTES[rng.below(BYTES.len())];
+                l = vec![String::from_utf8_lossy(&bytes).into_owned()];
+            }
+        }
+        out.push(l.join("\n") + "\n");
+    }
+    out
+}
+
+#[test]
+fn mutated_case_files_never_panic() {
+    use tmc::case::Case;
+    let dir = scratch("robust-case");
+    type Scene = (&'static str, &'static str, &'static [(&'static str, f64)]);
+    let scenes: &[Scene] = &[
+        ("block", "block.geo", &[("n", 4.0), ("m", 2.0), ("l", 1.0)]),
+        (
+            "block-transient",
+            "block.geo",
+            &[("n", 4.0), ("m", 2.0), ("l", 1.0)],
+        ),
+        ("slab-convection", "slab.geo", &[("n", 4.0), ("m", 2.0)]),
+        ("plate-hole", "plate-hole.geo", &[("h", 0.3)]),
+        (
+            "block-plate-3d",
+            "block-plate-3d.geo",
+            &[("n", 2.0), ("nb", 1.0), ("nm", 1.0), ("nq", 1.0)],
+        ),
+    ];
+    let mut rng = Rng(0x5eed_0002);
+    let (mut tried, mut built, mut solved) = (0, 0, 0);
+    let mut panics = Vec::new();
+    for (name, geo, params) in scenes {
+        let msh = dir.join(format!("{name}.msh"));
+        let opts = MeshOptions {
+            set_numbers: params.iter().map(|(n, v)| (n.to_string(), *v)).collect(),
+            order: 1,
+            ..Default::default()
+        };
+        let mesh = mesh_geo(&root().join("geo").join(geo), &msh, &opts)
+            .unwrap()
+            .mesh;
+        let text =
+            std::fs::read_to_string(root().join("cases").join(format!("{name}.toml"))).unwrap();
+        let path = dir.join(format!("{name}.toml"));
+        let through = |text: String| -> Result<(), String> {
+            let case = Case::parse(&path, text).map_err(|e| e.to_string())?;
+            case.validate(&mesh).map_err(|e| e.to_string())?;
+            let model = tmc::model::build(&case, mesh.clone()).map_err(|e| e.to_string())?;
+            tmc::output::probes::build(&case, &model.mesh).map_err(|e| e.to_string())?;
+            Ok(())
+        };
+        assert_eq!(through(text.clone()), Ok(()), "{name} is valid");
+        // a valid mutation, solved on the small mesh
+        let solve_text = |m: &str| {
+            let own: String = m
+                .lines()
+                .map(|l| {
+                    if l.starts_with("mesh =") {
+                        format!("mesh = \"{}\"", msh.display())
+                    } else {
+                        l.to_string()
+                    }
+                })
+                .collect::<Vec<_>>()
+                .join("\n");
+            let case = dir.join(format!("{name}-solve.toml"));
+            std::fs::write(&case, own).unwrap();
+            let opts = tmc::driver::SolveOptions {
+                out_dir: Some(dir.join(format!("{name}-out"))),
+                quiet: true,
+                ..Default::default()
+            };
+            let _ = tmc::driver::run(&case, &opts);
+        };
+        for (k, m) in case_mutations(&text, &mut rng, 700).into_iter().enumerate() {
+            tried += 1;
+            match catch_unwind(AssertUnwindSafe(|| through(m.clone()))) {
+                Ok(Ok(())) => {
+                    built += 1;
+                    // solve every fifth valid one to its end (or to an error)
+                    if built % 5 == 0 {
+                        solved += 1;
+                        let solved_ok = catch_unwind(AssertUnwindSafe(|| solve_text(&m)));
+                        if solved_ok.is_err() {
+                            panics.push(format!("{name} mutation {k} (solving)"));
+                        }
+                    }
+                }
+                Ok(Err(e)) => {
+                    assert!(
+                        e.contains(&format!("{name}.toml")),
+                        "{name} mutation {k}: the file is named: {e}"
+                    )
+                }
+                Err(_) => {
+                    std::fs::write(dir.join(format!("panic-{name}-{k}.toml")), &m).ok();
+                    panics.push(format!("{name} mutation {k}"));
+                }
+            }
+        }
+    }
+    eprintln!("{tried} mutated case files, {built} still valid, {solved} of those solved");
     assert!(
         panics.is_empty(),
         "{} panics:\n{}",

@@ -174,12 +174,14 @@ pub fn run(case_path: &Path, opts: &SolveOptions) -> Result<Summary, SolveError>
         }
     }
     case.validate(&mesh)?;
-    let model = build(&case, mesh)?;
+    let mut model = build(&case, mesh)?;
     let probes = probes::build(&case, &model.mesh)?;
     folder.replace_previous()?;
     if let Some(staged) = staged {
+        // errors so far named the .geo; from now on the mesh is the file written
         folder.record("mesh.msh")?;
-        staged.commit(&out_dir.join("mesh.msh"))?;
+        model.mesh.source = out_dir.join("mesh.msh");
+        staged.commit(&model.mesh.source)?;
     }
     solve_model(&case, model, &probes, folder, opts, start)
 }

@@ -37,11 +37,11 @@ pub enum GmshError {
         path: PathBuf,
         source: std::io::Error,
     },
-    #[error("gmsh wrote {path}, but it cannot be read back: {source}")]
-    Unreadable {
-        path: PathBuf,
-        source: Box<super::msh::MshError>,
-    },
+    #[error(
+        "the mesh gmsh wrote for {path} cannot be read back (a full disk or a file size limit \
+         truncates it; an unsupported element kind is named): {msg}"
+    )]
+    Unreadable { path: PathBuf, msg: String },
 }
 
 /// Options of `tmc mesh`.
@@ -150,8 +150,13 @@ pub fn mesh_geo(geo: &Path, out: &Path, opts: &MeshOptions) -> Result<MeshReport
         }
     };
     let mut mesh = super::msh::read_msh(&tmp.0).map_err(|e| GmshError::Unreadable {
-        path: out.to_owned(),
-        source: Box::new(e),
+        path: geo.to_owned(),
+        msg: match e {
+            super::msh::MshError::Parse { msg, .. } | super::msh::MshError::Invalid { msg, .. } => {
+                msg
+            }
+            other => other.to_string(),
+        },
     })?;
     mesh.source = out.to_owned();
     warnings.extend(mesh.warnings.iter().cloned());

@@ -179,7 +179,7 @@ fn read_blocks(
         let gtype = block.element_type as u32;
         let kind = CellKind::from_gmsh(gtype).ok_or_else(|| {
             invalid(format!(
-                "element type {} (entity {} of dim {}) is not supported; tmc reads tri3, quad4, tet4, hex8",
+                "element type {} (entity {} of dim {}) is not supported; tmc reads tri3, quad4, tet4, hex8 and their second-order kinds tri6, quad8, quad9, tet10, hex20, hex27 (no prisms or pyramids: mesh with tetrahedra or hexahedra only)",
                 gmsh_type_name(gtype),
                 block.entity_tag,
                 block.entity_dim

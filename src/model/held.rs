@@ -153,29 +153,35 @@ fn free_rigid_mode(model: &Model, nodes: &[usize], held: &[(usize, usize)]) -> O
             }
         }
     }
+    let axis = ["x", "y", "z"];
+    if held.is_empty() {
+        return Some("move freely: no displacement is prescribed anywhere on it".to_string());
+    }
+    let scale = 1.0 + held.len() as f64;
+    if let Some(i) = (0..d).find(|&i| g[(i, i)] <= 1e-10 * scale) {
+        return Some(format!("move freely in {}", axis[i]));
+    }
     let eig = SymmetricEigen::new(g);
     let (k, &lmin) = eig
         .eigenvalues
         .iter()
         .enumerate()
         .min_by(|a, b| a.1.total_cmp(b.1))?;
-    if lmin > 1e-10 * (1.0 + held.len() as f64) {
+    if lmin > 1e-10 * scale {
         return None;
     }
+    // every translation is held: the free motion turns; name the axis it turns about most
     let v = eig.eigenvectors.column(k);
     let (m, _) = v
         .iter()
         .enumerate()
+        .skip(d)
         .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))?;
-    let axis = ["x", "y", "z"];
-    Some(if held.is_empty() {
-        "move freely: no displacement is prescribed anywhere on it".to_string()
-    } else if m < d {
-        format!("move freely in {}", axis[m])
-    } else {
-        let a = if d == 2 { 2 } else { m - 3 };
-        format!("rotate freely about the {} axis", axis[a])
-    })
+    let a = if d == 2 { 2 } else { m - 3 };
+    Some(format!(
+        "rotate freely about an axis along {} (what holds it lies on one point or line)",
+        axis[a]
+    ))
 }
 
 /// "the body made of region(s) …", with its size, numbered if there are several.

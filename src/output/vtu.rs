@@ -118,9 +118,11 @@ pub fn write_vtu(path: &Path, mesh: &Mesh, f: &StepFields) -> Result<(), OutputE
             }))],
         },
     };
-    let tmp = path.with_extension("part.vtu");
-    vtk.export(&tmp).map_err(|e| werr(path, e))?;
-    std::fs::rename(&tmp, path).map_err(|e| werr(path, e))
+    // into memory, then through the checked write (vtkio's own file export drops write
+    // errors: a full disk left a truncated file under the final name)
+    let mut bytes = Vec::new();
+    vtk.write_xml(&mut bytes).map_err(|e| werr(path, e))?;
+    write_atomic(path, &bytes)
 }
 
 /// Write the `.pvd` collection of (λ, file name) pairs.

@@ -10,6 +10,25 @@ use tmc::mesh::gmsh::{MeshOptions, mesh_geo};
 use tmc::mesh::msh::read_msh;
 use tmc::model::{Model, build};
 
+/// `tmc args` in the project folder.
+pub fn tmc(args: &[&str]) -> std::process::Output {
+    tmc_with(args, &[])
+}
+
+/// `tmc args` with the environment variables `vars` set.
+pub fn tmc_with(args: &[&str], vars: &[(&str, &str)]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_tmc"))
+        .args(args)
+        .envs(vars.iter().copied())
+        .current_dir(root())
+        .output()
+        .unwrap()
+}
+
+pub fn stderr(o: &std::process::Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
 pub fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
@@ -40,13 +59,8 @@ pub fn solve_case(name: &str) -> (Summary, PathBuf) {
 
 /// Read a history.csv into (columns, rows).
 pub fn history(dir: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
-    let text = std::fs::read_to_string(dir.join("history.csv")).unwrap();
-    let mut lines = text.lines();
-    let cols = lines.next().unwrap().split(',').map(String::from).collect();
-    let rows = lines
-        .map(|l| l.split(',').map(|v| v.parse::<f64>().unwrap()).collect())
-        .collect();
-    (cols, rows)
+    let h = tmc::plot::History::read(&dir.join("history.csv")).unwrap();
+    (h.columns, h.rows)
 }
 
 /// Solve a case given as text (its `mesh` key is prepended: `geo/GEO`, meshed with `params`)

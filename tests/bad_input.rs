@@ -1,0 +1,511 @@
+//! One test per class of bad or hostile input, end to end through the `tmc` binary: no panic,
+//! no exit 0 without output, no lost file, a message that names the file, line, key, group,
+//! element or body, and singular systems found before solving.
+
+mod common;
+
+use common::{history, root, scratch, stderr as err, tmc, tmc_with as tmc_env};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// A failed run: exit status 1, a message, and no panic.
+fn fails_with(o: &Output, words: &[&str]) -> String {
+    let e = err(o);
+    assert!(!o.status.success(), "should fail: {e}");
+    assert_eq!(o.status.code(), Some(1), "an error, not a crash: {e}");
+    assert!(!e.contains("panicked"), "{e}");
+    for w in words {
+        assert!(e.contains(w), "\"{w}\" not in: {e}");
+    }
+    e
+}
+
+/// The slab (2 × 1, groups solid, left, right, top, bottom, origin) with `body` after its
+/// `mesh` line.
+fn slab_case(dir: &Path, name: &str, body: &str) -> PathBuf {
+    slab_case_params(dir, name, "n = 4, m = 2", body)
+}
+
+/// As [`slab_case`], meshed with the `.geo` parameters `params`.
+fn slab_case_params(dir: &Path, name: &str, params: &str, body: &str) -> PathBuf {
+    let p = dir.join(format!("{name}.toml"));
+    std::fs::write(
+        &p,
+        format!(
+            "mesh = \"{}\"\n[mesh_options]\nparams = {{ {params} }}\n{body}",
+            root().join("geo/slab.geo").display()
+        ),
+    )
+    .unwrap();
+    p
+}
+
+const SOLID: &str = "[[region]]\ngroup = \"solid\"\nkind = \"solid\"\nK = 20.0\nmu = 10.0\n";
+const HELD: &str = "[[bc]]\ngroup = \"left\"\nux = 0.0\n[[bc]]\ngroup = \"origin\"\nuy = 0.0\n[[bc]]\ngroup = \"right\"\nux = 0.2\n";
+
+fn solve(case: &Path, out: &Path) -> Output {
+    tmc(&[
+        "solve",
+        case.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "-q",
+    ])
+}
+
+/// File names in `dir`, sorted.
+fn listing(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn what_used_to_panic_now_ends_in_an_error() {
+    let dir = scratch("bad-panic");
+    // one solid region and nothing else: chunks_exact(0) in the assembly before
+    let case = slab_case(&dir, "nothing", SOLID);
+    fails_with(
+        &solve(&case, &dir.join("out")),
+        &["nothing.toml:1", "loads nothing"],
+    );
+    // a history row shorter than its header: indexed past its end before
+    let res = dir.join("short");
+    std::fs::create_dir_all(&res).unwrap();
+    std::fs::write(res.join("history.csv"), "lambda,gap\n0,1\n0.5\n").unwrap();
+    fails_with(
+        &tmc(&["plot", res.to_str().unwrap(), "-c", "gap"]),
+        &["history.csv", "line 3: 1 fields, but the header has 2"],
+    );
+    assert!(!res.join("gap.png").exists());
+    // a probe whose name holds a comma: tmc's own history stays readable
+    let case = slab_case(
+        &dir,
+        "comma",
+        &format!("{SOLID}{HELD}[[probe]]\nname = \"u, right\"\nfield = \"ux\"\nat = [2.0, 1.0]\n"),
+    );
+    let out = dir.join("comma-out");
+    let o = solve(&case, &out);
+    assert!(o.status.success(), "{}", err(&o));
+    let (cols, rows) = history(&out);
+    assert!(cols.contains(&"u, right".to_string()), "{cols:?}");
+    let c = cols.iter().position(|c| c == "u, right").unwrap();
+    assert!((rows.last().unwrap()[c] - 0.2).abs() < 1e-12);
+    let o = tmc(&["plot", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", err(&o));
+    assert!(out.join("u__right.png").is_file(), "{:?}", listing(&out));
+}
+
+#[test]
+fn gmsh_exiting_or_a_full_disk_never_ends_in_success() {
+    let dir = scratch("bad-exit0");
+    // the usual batch ending of a .geo: gmsh's exit() used to end tmc with status 0
+    let geo = dir.join("batch.geo");
+    let text = std::fs::read_to_string(root().join("geo/slab.geo")).unwrap();
+    std::fs::write(
+        &geo,
+        format!("{text}\nMesh 2;\nSave \"batch-own.msh\";\nExit;\n"),
+    )
+    .unwrap();
+    let msh = dir.join("batch.msh");
+    fails_with(
+        &tmc(&["mesh", geo.to_str().unwrap(), "-o", msh.to_str().unwrap()]),
+        &["batch.geo", "Exit"],
+    );
+    assert!(!msh.exists() && !dir.join("batch.part.msh").exists());
+    let case = dir.join("batch.toml");
+    std::fs::write(&case, format!("mesh = \"batch.geo\"\n{SOLID}{HELD}")).unwrap();
+    let out = dir.join("batch-out");
+    fails_with(&solve(&case, &out), &["batch.geo", "Exit"]);
+    assert!(!out.join("summary.json").exists());
+
+    // a full disk, as a file size limit: every write checked, no truncated file left under
+    // its final name (SIGXFSZ ignored, so writes fail with EFBIG as on a full disk)
+    let limited = |args: &str| {
+        Command::new("sh")
+            .arg("-c")
+            .arg(format!(
+                "trap '' XFSZ; ulimit -f 24; exec {} {args}",
+                env!("CARGO_BIN_EXE_tmc")
+            ))
+            .current_dir(root())
+            .output()
+            .unwrap()
+    };
+    let big = dir.join("big.msh");
+    let o = limited(&format!(
+        "mesh geo/slab.geo --set n=60 --set m=30 -o {}",
+        big.display()
+    ));
+    fails_with(&o, &["slab.geo", "cannot be read back", "truncated"]);
+    assert!(
+        !big.exists() && !dir.join("big.part.msh").exists(),
+        "{:?}",
+        listing(&dir)
+    );
+    let block = dir.join("block.msh");
+    assert!(
+        tmc(&["mesh", "geo/block.geo", "-o", block.to_str().unwrap()])
+            .status
+            .success()
+    );
+    let body = std::fs::read_to_string(root().join("cases/block.toml")).unwrap();
+    let case = dir.join("block.toml");
+    std::fs::write(&case, body.replace("../geo/block.geo", "block.msh")).unwrap();
+    let out = dir.join("full");
+    let o = limited(&format!("solve {} -o {} -q", case.display(), out.display()));
+    let e = fails_with(&o, &["cannot write"]);
+    assert!(e.contains("File too large") || e.contains("space"), "{e}");
+    for f in listing(&out) {
+        assert!(!f.ends_with(".part"), "{f} left behind");
+        if f.ends_with(".vtu") {
+            vtkio::Vtk::import(out.join(&f)).unwrap_or_else(|e| panic!("{f}: {e}"));
+        }
+    }
+}
+
+#[test]
+fn nothing_a_user_wrote_is_lost() {
+    let dir = scratch("bad-loss");
+    let out = dir.join("out");
+    let good = slab_case(&dir, "good", &format!("{SOLID}{HELD}"));
+    assert!(solve(&good, &out).status.success());
+    let before: Vec<(String, Vec<u8>)> = listing(&out)
+        .into_iter()
+        .map(|f| (f.clone(), std::fs::read(out.join(&f)).unwrap()))
+        .collect();
+    // a rerun with a misspelt group fails before touching the folder
+    let typo = slab_case(
+        &dir,
+        "typo",
+        &format!("{SOLID}{}", HELD.replace("\"left\"", "\"lefft\"")),
+    );
+    fails_with(&solve(&typo, &out), &["typo.toml", "lefft"]);
+    for (f, bytes) in &before {
+        assert_eq!(&std::fs::read(out.join(f)).unwrap(), bytes, "{f} changed");
+    }
+    // files tmc did not write survive a rerun, even with tmc-like names
+    for f in ["notes.txt", "mine.pvd", "step_9999.vtu", "history.csv.bak"] {
+        std::fs::write(out.join(f), "mine").unwrap();
+    }
+    let shorter = slab_case(
+        &dir,
+        "good",
+        &format!("{SOLID}{HELD}[steps]\nmax = 1.0\ninitial = 1.0\n"),
+    );
+    let o = solve(&shorter, &out);
+    assert!(o.status.success(), "{}", err(&o));
+    for f in ["notes.txt", "mine.pvd", "step_9999.vtu", "history.csv.bak"] {
+        assert_eq!(std::fs::read_to_string(out.join(f)).unwrap(), "mine", "{f}");
+    }
+    // the previous run's later steps went with it
+    let steps = common::history(&out).1.len() - 1;
+    assert!(!out.join(format!("step_{:04}.vtu", steps + 1)).exists());
+    assert!(
+        !out.join(".tmc.lock").exists(),
+        "the lock goes with the run"
+    );
+
+    // a folder another live run holds is refused; a lock of a dead process is taken over
+    std::fs::write(out.join(".tmc.lock"), format!("{}\n", std::process::id())).unwrap();
+    fails_with(
+        &solve(&good, &out),
+        &["in use by another tmc run", &std::process::id().to_string()],
+    );
+    std::fs::write(out.join(".tmc.lock"), "2147483646\n").unwrap();
+    let o = solve(&good, &out);
+    assert!(o.status.success(), "{}", err(&o));
+    assert!(!out.join(".tmc.lock").exists());
+
+    // an interrupted run says so, with the λ it reached, and every history row has its file
+    let slow = dir.join("slow");
+    let child = Command::new(env!("CARGO_BIN_EXE_tmc"))
+        .args([
+            "solve",
+            "cases/block.toml",
+            "-q",
+            "-o",
+            slow.to_str().unwrap(),
+        ])
+        .current_dir(root())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let t0 = std::time::Instant::now();
+    while !slow.join("step_0002.vtu").exists() {
+        assert!(t0.elapsed().as_secs() < 300, "no step written");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
+    let o = child.wait_with_output().unwrap();
+    fails_with(&o, &["interrupted at λ"]);
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(slow.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(s["converged"], false);
+    assert!(
+        s["message"].as_str().unwrap().contains("interrupted"),
+        "{s}"
+    );
+    let lambda = s["lambda"].as_f64().unwrap();
+    assert!(lambda > 0.0 && lambda < 1.0, "λ = {lambda}");
+    let (cols, rows) = history(&slow);
+    let l = cols.iter().position(|c| c == "lambda").unwrap();
+    assert_eq!(rows.last().unwrap()[l], lambda);
+    for k in 0..rows.len() {
+        assert!(
+            slow.join(format!("step_{k:04}.vtu")).is_file(),
+            "row {k} without its file"
+        );
+    }
+    assert!(!slow.join(".tmc.lock").exists());
+}
+
+#[test]
+fn bad_values_are_named_by_file_line_and_key() {
+    let dir = scratch("bad-values");
+    let out = dir.join("out");
+    for (tag, body, words) in [
+        (
+            "alpha",
+            format!("{}alpha = inf\n{HELD}", SOLID),
+            vec!["alpha-c.toml:9", "region[0].alpha = inf"],
+        ),
+        (
+            "theta0",
+            format!("{}theta0 = nan\n{HELD}", SOLID),
+            vec!["theta0-c.toml:9", "region[0].theta0 = nan"],
+        ),
+        (
+            "force",
+            format!("{}body_force = [1e300, 0.0]\n{HELD}", SOLID),
+            vec!["force-c.toml:9", "body_force[0]", "out of range"],
+        ),
+        (
+            "value",
+            format!("{SOLID}{}", HELD.replace("ux = 0.2", "ux = -inf")),
+            vec!["value-c.toml:", "ux = -inf"],
+        ),
+    ] {
+        let case = slab_case(&dir, &format!("{tag}-c"), &body);
+        let e = fails_with(&solve(&case, &out), &words);
+        assert!(
+            !out.join("step_0000.vtu").exists(),
+            "{tag}: nothing written: {e}"
+        );
+    }
+    // .geo parameters: a NaN is named against the case, a misspelt name is refused
+    let p = slab_case_params(&dir, "nan-param", "n = nan", &format!("{SOLID}{HELD}"));
+    fails_with(
+        &solve(&p, &out),
+        &["nan-param.toml:3", "mesh_options.params.n = nan"],
+    );
+    let p = slab_case_params(&dir, "typo-param", "nn = 2", &format!("{SOLID}{HELD}"));
+    fails_with(
+        &solve(&p, &out),
+        &["slab.geo", "no parameter \"nn\"", "L, H, n, m"],
+    );
+    fails_with(
+        &tmc(&["mesh", "geo/slab.geo", "--set", "hx=0.3"]),
+        &["no parameter \"hx\""],
+    );
+    let o = tmc(&["mesh", "geo/slab.geo", "--set", "n=nan"]);
+    assert!(
+        !o.status.success() && err(&o).contains("not a finite number"),
+        "{}",
+        err(&o)
+    );
+    // a truncated mesh is named by its section and line
+    let good = dir.join("slab.msh");
+    assert!(
+        tmc(&["mesh", "geo/slab.geo", "-o", good.to_str().unwrap()])
+            .status
+            .success()
+    );
+    let text = std::fs::read_to_string(&good).unwrap();
+    let cut = dir.join("cut.msh");
+    std::fs::write(&cut, &text[..text.find("$EndNodes").unwrap() - 10]).unwrap();
+    let p = dir.join("cut.toml");
+    std::fs::write(&p, format!("mesh = \"cut.msh\"\n{SOLID}{HELD}")).unwrap();
+    fails_with(
+        &solve(&p, &out),
+        &["cut.msh", "section $Nodes opened at line", "truncated"],
+    );
+    // the smaller ones
+    let uz = slab_case(
+        &dir,
+        "uz",
+        &format!("{SOLID}{HELD}[[probe]]\nname = \"w\"\nfield = \"uz\"\nat = [1.0, 1.0]\n"),
+    );
+    fails_with(&solve(&uz, &out), &["uz.toml:", "z quantity in a 2D mesh"]);
+    let tiny = slab_case(
+        &dir,
+        "tiny",
+        &format!("{SOLID}{HELD}[steps]\nmin = 1e-300\n"),
+    );
+    fails_with(&solve(&tiny, &out), &["tiny.toml:", "min = 1e-300"]);
+    let long: Vec<String> = (0..200_000)
+        .map(|k| format!("{}", k as f64 * 1e-5))
+        .collect();
+    let long = slab_case(
+        &dir,
+        "long",
+        &format!("{SOLID}{HELD}[steps]\npath = [{}]\n", long.join(", ")),
+    );
+    fails_with(&solve(&long, &out), &["long.toml:", "at most 100000"]);
+    fails_with(
+        &tmc_env(
+            &["solve", good.to_str().unwrap()],
+            &[("RAYON_NUM_THREADS", "100000")],
+        ),
+        &["RAYON_NUM_THREADS=100000"],
+    );
+    std::fs::create_dir_all(dir.join("folder.geo")).unwrap();
+    fails_with(
+        &tmc(&["mesh", dir.join("folder.geo").to_str().unwrap()]),
+        &["is a folder"],
+    );
+    // -o DIR: the mesh goes into the folder, nothing half-written beside it
+    let o = tmc(&["mesh", "geo/slab.geo", "-o", dir.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", err(&o));
+    assert!(dir.join("slab.msh").is_file() && !dir.join("slab.part.msh").exists());
+    let o = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(
+        o.contains("group \"solid\" (2D)") && o.contains("nodes"),
+        "{o}"
+    );
+    // plot: a missing column draws nothing
+    let res = dir.join("plotted");
+    assert!(
+        solve(&slab_case(&dir, "p", &format!("{SOLID}{HELD}")), &res)
+            .status
+            .success()
+    );
+    fails_with(
+        &tmc(&["plot", res.to_str().unwrap(), "-c", "energy,nosuch"]),
+        &["no column \"nosuch\""],
+    );
+    assert!(!res.join("energy.png").exists());
+}
+
+#[test]
+fn singular_systems_are_found_before_solving() {
+    let dir = scratch("bad-singular");
+    let out = dir.join("out");
+    // held in x only
+    let case = slab_case(
+        &dir,
+        "x-only",
+        &format!(
+            "{SOLID}[[bc]]\ngroup = \"left\"\nux = 0.0\n[[bc]]\ngroup = \"right\"\nux = 0.2\n"
+        ),
+    );
+    fails_with(
+        &solve(&case, &out),
+        &["x-only.toml:1", "region \"solid\"", "move freely in y"],
+    );
+    // held at one point in x and y: it can still turn
+    let case = slab_case(
+        &dir,
+        "pinned",
+        &format!(
+            "{SOLID}[[bc]]\ngroup = \"origin\"\nux = 0.0\nuy = 0.0\n[[bc]]\ngroup = \"top\"\ntraction = [1.0, 0.0]\n"
+        ),
+    );
+    fails_with(
+        &solve(&case, &out),
+        &["rotate freely about an axis along z"],
+    );
+    // conduction with fluxes only: no temperature fixes the level
+    let case = slab_case(
+        &dir,
+        "flux-only",
+        &format!(
+            "{SOLID}k = 1.0\n[[bc]]\ngroup = \"left\"\nheat_flux = 1.0\n[[bc]]\ngroup = \"right\"\nheat_flux = -1.0\n"
+        ),
+    );
+    fails_with(
+        &solve(&case, &out),
+        &["temperature of the body", "not fixed"],
+    );
+    // a group without elements
+    let good = dir.join("slab.msh");
+    assert!(
+        tmc(&["mesh", "geo/slab.geo", "-o", good.to_str().unwrap()])
+            .status
+            .success()
+    );
+    let text = std::fs::read_to_string(&good).unwrap();
+    let (head, rest) = text.split_once("$PhysicalNames\n").unwrap();
+    let (count, names) = rest.split_once('\n').unwrap();
+    let n: usize = count.trim().parse().unwrap();
+    let ghost = format!("{head}$PhysicalNames\n{}\n1 77 \"ghost\"\n{names}", n + 1);
+    std::fs::write(dir.join("ghost.msh"), ghost).unwrap();
+    let p = dir.join("ghost.toml");
+    std::fs::write(
+        &p,
+        format!("mesh = \"ghost.msh\"\n{SOLID}{HELD}[[bc]]\ngroup = \"ghost\"\nuy = 0.0\n"),
+    )
+    .unwrap();
+    fails_with(
+        &solve(&p, &out),
+        &["ghost.toml:", "group \"ghost\" has no elements"],
+    );
+    assert!(!out.exists() || !out.join("step_0000.vtu").exists());
+}
+
+#[test]
+fn studies_refuse_what_they_cannot_measure_or_keep_apart() {
+    let dir = scratch("bad-study");
+    let case = slab_case(
+        &dir,
+        "base",
+        &format!("{SOLID}{HELD}[[probe]]\nname = \"u\"\nfield = \"ux\"\nat = [2.0, 1.0]\n"),
+    );
+    let study = |name: &str, head: &str, variants: &str| {
+        let p = dir.join(format!("{name}.toml"));
+        std::fs::write(
+            &p,
+            format!(
+                "case = \"{}\"\nreference = \"last\"\n{head}\n{variants}",
+                case.display()
+            ),
+        )
+        .unwrap();
+        tmc(&[
+            "study",
+            p.to_str().unwrap(),
+            "-q",
+            "-o",
+            dir.join(name).to_str().unwrap(),
+        ])
+    };
+    let one = "[[variant]]\nname = \"a\"\nset = { \"mesh_options.params.n\" = 2 }\n";
+    fails_with(
+        &study("measure", "measure = [\"nosuch\"]", one),
+        &["no quantity \"nosuch\"", "u"],
+    );
+    fails_with(
+        &study("column", "measure = [\"u\"]\nhistory = [\"nosuch\"]", one),
+        &["no column \"nosuch\""],
+    );
+    assert!(!dir.join("column/history_nosuch.png").exists());
+    fails_with(
+        &study(
+            "clash",
+            "measure = [\"u\"]",
+            "[[variant]]\nname = \"a b\"\n[[variant]]\nname = \"a_b\"\n",
+        ),
+        &["\"a b\" and \"a_b\"", "runs/a_b"],
+    );
+    fails_with(
+        &study(
+            "key",
+            "measure = [\"u\"]",
+            "[[variant]]\nname = \"k\"\nset = { \"region.solid.Kk\" = 2.0 }\n",
+        ),
+        &["variant \"k\"", "Kk"],
+    );
+}
