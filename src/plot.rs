@@ -71,16 +71,37 @@ pub fn line_chart(path: &Path, chart: &Chart) -> Result<(), PlotError> {
             .flat_map(|s| s.points.iter().map(|p| p.1)),
         chart.log_y,
     );
-    let r = match (chart.log_x, chart.log_y) {
-        (false, false) => draw(path, chart, xs, ys),
-        (true, false) => draw(path, chart, xs.log_scale(), ys),
-        (false, true) => draw(path, chart, xs, ys.log_scale()),
-        (true, true) => draw(path, chart, xs.log_scale(), ys.log_scale()),
-    };
+    let r = draw_then_rename(path, |p| match (chart.log_x, chart.log_y) {
+        (false, false) => draw(p, chart, xs, ys),
+        (true, false) => draw(p, chart, xs.log_scale(), ys),
+        (false, true) => draw(p, chart, xs, ys.log_scale()),
+        (true, true) => draw(p, chart, xs.log_scale(), ys.log_scale()),
+    });
     r.map_err(|msg| PlotError::Draw {
         path: path.to_owned(),
         msg,
     })
+}
+
+/// Draw into a temporary PNG beside `path`, then rename: a failed draw (a full disk) leaves no
+/// broken picture under the final name.
+fn draw_then_rename(
+    path: &Path,
+    draw: impl FnOnce(&Path) -> Result<(), String>,
+) -> Result<(), String> {
+    let mut name = path.file_stem().unwrap_or_default().to_os_string();
+    name.push(".part.png");
+    let tmp = path.with_file_name(name);
+    let drawn = draw(&tmp).and_then(|_| {
+        std::fs::File::open(&tmp)
+            .and_then(|f| f.sync_all())
+            .and_then(|_| std::fs::rename(&tmp, path))
+            .map_err(|e| e.to_string())
+    });
+    if drawn.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    drawn
 }
 
 fn draw<X, Y>(path: &Path, chart: &Chart, x: X, y: Y) -> Result<(), String>
@@ -239,6 +260,13 @@ pub fn plot_results(
     } else {
         columns.to_vec()
     };
+    if columns.is_empty() {
+        return Err(bad(format!(
+            "nothing to draw: every probe, reaction, energy and work column is zero or NaN; \
+             name columns with -c (columns: {})",
+            h.columns.join(", ")
+        )));
+    }
     // every column first: nothing is drawn if one is missing
     let mut curves = Vec::new();
     for c in &columns {

@@ -634,12 +634,9 @@ fn write_csv(out: &Path, study: &StudyFile, os: &[Outcome]) -> Result<PathBuf, S
     cols.extend(study.show.iter().cloned());
     cols.extend(study.measure.iter().map(|q| format!("err_{q}")));
     cols.extend(["error", "converged"].map(String::from));
-    let mut text = cols.join(",") + "\n";
+    let mut text = crate::output::history::csv_line(&cols);
     for o in os {
-        let mut row = vec![
-            format!("\"{}\"", o.variant.name.replace('"', "'")),
-            format!("\"{}\"", group(&o.variant)),
-        ];
+        let mut row = vec![o.variant.name.clone(), group(&o.variant).to_string()];
         row.extend(
             [
                 o.dofs,
@@ -659,7 +656,7 @@ fn write_csv(out: &Path, study: &StudyFile, os: &[Outcome]) -> Result<PathBuf, S
         row.extend(o.errors.iter().map(|v| format!("{v:e}")));
         row.push(format!("{:e}", o.error()));
         row.push(o.converged.to_string());
-        text += &(row.join(",") + "\n");
+        text += &crate::output::history::csv_line(&row);
     }
     write_file(out.join("study.csv"), &text)
 }

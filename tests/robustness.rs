@@ -381,3 +381,75 @@ fn mutated_case_files_never_panic() {
         panics.join("\n")
     );
 }
+
+#[test]
+fn degenerate_cells_are_refused_and_coincident_nodes_reported() {
+    use tmc::mesh::{Block, CellKind, Mesh, PhysicalGroup, check_geometry};
+    let mesh = |coords: Vec<[f64; 3]>, conn: Vec<usize>| Mesh {
+        dim: 2,
+        coords,
+        cells: vec![Block {
+            kind: CellKind::Quad4,
+            groups: vec![0],
+            conn,
+        }],
+        facets: vec![],
+        groups: vec![PhysicalGroup {
+            name: "solid".into(),
+            dim: 2,
+            tag: 1,
+        }],
+        source: "test.msh".into(),
+        warnings: vec![],
+    };
+    let square = vec![
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [0.0, 1.0, 0.0],
+    ];
+    assert_eq!(
+        check_geometry(&mesh(square.clone(), vec![0, 1, 2, 3])),
+        Ok(vec![])
+    );
+    // a corner moved onto its neighbour: the cell has a zero-area corner
+    let mut collapsed = square.clone();
+    collapsed[2] = collapsed[1];
+    let e = check_geometry(&mesh(collapsed, vec![0, 1, 2, 3])).unwrap_err();
+    assert!(
+        e.contains("Q1") && e.contains("\"solid\"") && e.contains("degenerate"),
+        "{e}"
+    );
+    // a non-finite coordinate is named with its node
+    let mut bad = square.clone();
+    bad[3][1] = f64::NAN;
+    let e = check_geometry(&mesh(bad, vec![0, 1, 2, 3])).unwrap_err();
+    assert!(e.contains("node 3") && e.contains("non-finite"), "{e}");
+    // two cells side by side that do not share their edge: a crack
+    let mut coords = square.clone();
+    coords.extend([
+        [1.0, 0.0, 0.0],
+        [2.0, 0.0, 0.0],
+        [2.0, 1.0, 0.0],
+        [1.0, 1.0, 0.0],
+    ]);
+    let w = check_geometry(&mesh(coords, vec![0, 1, 2, 3, 4, 5, 6, 7])).unwrap();
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(w[0].starts_with("2 nodes share their position"), "{w:?}");
+}
+
+#[test]
+fn a_huge_count_in_a_mesh_file_is_an_error_not_an_allocation() {
+    let (_, bytes) = valid_meshes().swap_remove(0);
+    let text = String::from_utf8(bytes).unwrap();
+    let (head, rest) = text.split_once("$PhysicalNames\n").unwrap();
+    let (_, names) = rest.split_once('\n').unwrap();
+    for count in ["100000000000000", "18446744073709551615"] {
+        let m = format!("{head}$PhysicalNames\n{count}\n{names}");
+        let e = read_msh_bytes(std::path::Path::new("huge.msh"), m.as_bytes()).unwrap_err();
+        assert!(
+            e.to_string().contains(&format!("announces {count} names")),
+            "{e}"
+        );
+    }
+}

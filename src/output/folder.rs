@@ -19,11 +19,14 @@ pub struct RunFolder {
     /// Files of this run (after `replace_previous`).
     written: Vec<String>,
     replaced: bool,
+    /// The folder did not exist before this run.
+    created: bool,
 }
 
 impl RunFolder {
     /// Create `dir` if needed and take it; refused while another live process holds it.
     pub fn open(dir: &Path) -> Result<RunFolder, OutputError> {
+        let created = !dir.exists();
         std::fs::create_dir_all(dir).map_err(|e| werr(dir, e))?;
         let lock = dir.join(LOCK);
         let me = std::process::id();
@@ -71,6 +74,7 @@ impl RunFolder {
             previous,
             written: Vec::new(),
             replaced: false,
+            created,
         })
     }
 
@@ -113,6 +117,11 @@ impl RunFolder {
 impl Drop for RunFolder {
     fn drop(&mut self) {
         let _ = std::fs::remove_file(self.dir.join(LOCK));
+        if self.created && !self.replaced {
+            // a run that failed on its input leaves no empty folder behind (only removed if
+            // empty)
+            let _ = std::fs::remove_dir(&self.dir);
+        }
     }
 }
 
