@@ -23,6 +23,12 @@ pub enum CaseError {
         line: usize,
         msg: String,
     },
+    #[error("{path} with --set {sets}: {msg}")]
+    Set {
+        path: PathBuf,
+        sets: String,
+        msg: String,
+    },
 }
 
 /// Region kinds.
@@ -87,16 +93,54 @@ pub struct Bc {
     pub h: Option<Spanned<f64>>,
     /// Ambient temperature θ∞ of the convection.
     pub theta_inf: Option<Spanned<f64>>,
-    /// Scale by the load factor λ (true) or hold at full value from the start (false).
-    #[serde(default = "yes")]
-    pub ramp: bool,
+    /// Scale by the load factor λ (true, the default) or hold at full value from the start
+    /// (false): for every value of the block (`ramp = false`), or per value
+    /// (`ramp = { theta = false }`: the values not named are ramped).
+    pub ramp: Option<Spanned<Ramp>>,
     /// This group's own amplitude at pseudo-times 0, 1, …, T (as `[steps] path`), instead of
     /// λ: e.g. press first, then slide. Prescribed values only.
     pub path: Option<Spanned<Vec<f64>>>,
 }
 
-fn yes() -> bool {
-    true
+/// `ramp` of a `[[bc]]`: one choice for the block, or one per value.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(untagged)]
+pub enum Ramp {
+    All(bool),
+    Per(std::collections::BTreeMap<String, bool>),
+}
+
+/// The values of a `[[bc]]` that `ramp` may name.
+pub const RAMPED_VALUES: [&str; 6] = ["ux", "uy", "uz", "theta", "traction", "heat_flux"];
+
+impl Bc {
+    /// Whether `value` (one of [`RAMPED_VALUES`]) grows with λ (else it is held at full value
+    /// from the start).
+    pub fn ramped(&self, value: &str) -> bool {
+        match self.ramp.as_ref().map(|r| r.get_ref()) {
+            None => true,
+            Some(Ramp::All(r)) => *r,
+            Some(Ramp::Per(m)) => m.get(value).copied().unwrap_or(true),
+        }
+    }
+
+    /// Whether any value of the block is held at full value.
+    pub fn holds_any(&self) -> bool {
+        RAMPED_VALUES.iter().any(|v| self.has(v) && !self.ramped(v))
+    }
+
+    /// Whether the block gives `value`.
+    pub fn has(&self, value: &str) -> bool {
+        match value {
+            "ux" => self.ux.is_some(),
+            "uy" => self.uy.is_some(),
+            "uz" => self.uz.is_some(),
+            "theta" => self.theta.is_some(),
+            "traction" => self.traction.is_some(),
+            "heat_flux" => self.heat_flux.is_some(),
+            _ => false,
+        }
+    }
 }
 
 /// `[steps]`: load stepping and Newton controls.
@@ -275,6 +319,49 @@ pub struct Case {
     pub file: CaseFile,
 }
 
+/// Set `path` (dotted) in the case `doc` to `value`.
+pub fn set_path(doc: &mut toml::Table, path: &str, value: toml::Value) -> Result<(), String> {
+    let segs: Vec<&str> = path.split('.').collect();
+    let mut cur: &mut toml::Table = doc;
+    for (i, seg) in segs.iter().enumerate() {
+        if i + 1 == segs.len() {
+            cur.insert(seg.to_string(), value);
+            return Ok(());
+        }
+        let entry = cur
+            .entry(seg.to_string())
+            .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+        cur = match entry {
+            toml::Value::Table(t) => t,
+            toml::Value::Array(items) => {
+                let next = segs[i + 1];
+                let found = items.iter_mut().find_map(|it| match it {
+                    toml::Value::Table(t)
+                        if t.get("group").and_then(|g| g.as_str()) == Some(next)
+                            || t.get("name").and_then(|g| g.as_str()) == Some(next) =>
+                    {
+                        Some(t)
+                    }
+                    _ => None,
+                });
+                let Some(t) = found else {
+                    return Err(format!(
+                        "\"{path}\": no [[{seg}]] with group or name \"{next}\""
+                    ));
+                };
+                // the array segment consumed the next one too
+                let rest = &segs[i + 2..];
+                if rest.is_empty() {
+                    return Err(format!("\"{path}\": names an entry, not a key in it"));
+                }
+                return set_path(t, &rest.join("."), value);
+            }
+            _ => return Err(format!("\"{path}\": \"{seg}\" is not a table")),
+        };
+    }
+    Err(format!("\"{path}\": empty key"))
+}
+
 /// Most load or time steps a case may ask for (a `path` value or a `dt` is at least one).
 pub const MAX_STEPS: usize = 100_000;
 /// Smallest `[steps] min`, as a fraction of the path.
@@ -335,6 +422,47 @@ fn check_numbers(text: &str) -> Result<(), (usize, String)> {
 }
 
 impl Case {
+    /// The case with `sets` applied: dotted paths as in a study's `set`
+    /// (`mesh_options.params.n`, `region.medium.gamma`, `steps.max`), values in TOML syntax
+    /// (a bare word is a string). The case as written was checked already; an error the
+    /// settings cause names them.
+    pub fn with_sets(self, sets: &[(String, String)]) -> Result<Case, CaseError> {
+        if sets.is_empty() {
+            return Ok(self);
+        }
+        let said = sets
+            .iter()
+            .map(|(k, v)| format!("{k}={v}"))
+            .collect::<Vec<_>>()
+            .join(" ");
+        let err = |msg: String| CaseError::Set {
+            path: self.path.clone(),
+            sets: said.clone(),
+            msg,
+        };
+        let mut doc: toml::Table = toml::from_str(&self.text).map_err(|e| err(e.to_string()))?;
+        for (key, raw) in sets {
+            let value = toml::from_str::<toml::Table>(&format!("v = {raw}"))
+                .ok()
+                .and_then(|mut t| t.remove("v"))
+                .unwrap_or_else(|| toml::Value::String(raw.clone()));
+            set_path(&mut doc, key, value).map_err(&err)?;
+        }
+        let text = toml::to_string(&doc).map_err(|e| err(e.to_string()))?;
+        Case::parse(&self.path, text).map_err(|e| {
+            err(match e {
+                CaseError::Invalid { msg, .. } => msg,
+                CaseError::Syntax { msg, .. } => msg
+                    .lines()
+                    .rfind(|l| !l.trim().is_empty() && !l.contains('|'))
+                    .unwrap_or(&msg)
+                    .trim()
+                    .to_string(),
+                other => other.to_string(),
+            })
+        })
+    }
+
     pub fn read(path: &Path) -> Result<Case, CaseError> {
         let text = std::fs::read_to_string(path).map_err(|source| CaseError::Io {
             path: path.to_owned(),
@@ -534,9 +662,29 @@ impl Case {
         Ok(n_path)
     }
 
-    /// Each `[[bc]]`'s own `path` (`n_path` values) and convection.
+    /// Each `[[bc]]`'s own `path` (`n_path` values), `ramp` and convection.
     fn check_bc_values(&self, n_path: usize) -> Result<(), CaseError> {
         let f = &self.file;
+        for (i, bc) in f.bc.iter().enumerate() {
+            let Some(r) = &bc.ramp else { continue };
+            if let Ramp::Per(m) = r.get_ref() {
+                let given: Vec<&str> = RAMPED_VALUES
+                    .iter()
+                    .copied()
+                    .filter(|v| bc.has(v))
+                    .collect();
+                if let Some(k) = m.keys().find(|k| !given.contains(&k.as_str())) {
+                    return self.error(
+                        r.span(),
+                        format!(
+                            "bc[{i}] (\"{}\"): `ramp` names \"{k}\", which this block does not give (it gives {})",
+                            bc.group.get_ref(),
+                            given.join(", ")
+                        ),
+                    );
+                }
+            }
+        }
         for bc in &f.bc {
             let Some(own) = &bc.path else { continue };
             let g = bc.group.get_ref();
@@ -547,7 +695,7 @@ impl Case {
                     format!("bc on \"{g}\": `path` needs {n_path} finite values (one per value of [steps] path, or per row of [time] lambda), the first 0"),
                 );
             }
-            if bc.traction.is_some() || bc.heat_flux.is_some() || bc.h.is_some() || !bc.ramp {
+            if bc.traction.is_some() || bc.heat_flux.is_some() || bc.h.is_some() || bc.holds_any() {
                 return self.error(
                     own.span(),
                     format!("bc on \"{g}\": `path` applies to prescribed values (ux, uy, uz, theta) only, not to `traction`, `heat_flux`, `h` or `ramp = false`"),

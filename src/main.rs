@@ -50,9 +50,23 @@ enum Command {
         /// No progress bar, no summary line.
         #[arg(short, long)]
         quiet: bool,
-        /// One line per load step.
+        /// One line per load step: λ, Δλ, Newton iterations and the last residual of each
+        /// field (u, θ, p), relative to its first.
         #[arg(short, long)]
         verbose: bool,
+        /// Set a case key: --set KEY.PATH=VALUE, a dotted path as in a study's `set`
+        /// (mesh_options.params.n=16, region.medium.gamma=1e-5, steps.max=0.2); repeatable.
+        #[arg(long = "set", value_name = "KEY.PATH=VALUE", value_parser = parse_set)]
+        set: Vec<(String, String)>,
+    },
+    /// Check a case as `solve` would up to its first assembly (mesh, groups, physics, strategy,
+    /// unknowns, memory) and report; writes nothing where results go.
+    Check {
+        /// The case (.toml).
+        case: PathBuf,
+        /// Set a case key, as for `solve`.
+        #[arg(long = "set", value_name = "KEY.PATH=VALUE", value_parser = parse_set)]
+        set: Vec<(String, String)>,
     },
     /// Solve a scene over a list of variants: study.csv, study.md, error-vs-time and history
     /// plots.
@@ -94,6 +108,13 @@ fn parse_param(s: &str) -> Result<(String, f64), String> {
         return Err(format!("{k} = {v} is not a finite number"));
     }
     Ok((k.trim().to_string(), v))
+}
+
+fn parse_set(s: &str) -> Result<(String, String), String> {
+    let (k, v) = s
+        .split_once('=')
+        .ok_or_else(|| format!("expected KEY.PATH=VALUE, got \"{s}\""))?;
+    Ok((k.trim().to_string(), v.trim().to_string()))
 }
 
 fn print_chain(e: &dyn std::error::Error) {
@@ -192,10 +213,12 @@ fn main() -> ExitCode {
             output,
             quiet,
             verbose,
+            set,
         } => {
             tmc::driver::stop_on_signals();
-            solve_command(&case, output, quiet, verbose)
+            solve_command(&case, output, quiet, verbose, set)
         }
+        Command::Check { case, set } => check_command(&case, set),
     }
 }
 
@@ -229,6 +252,46 @@ fn print_mesh(mesh: &tmc::mesh::Mesh) {
             .map(|b| b.n_cells())
             .sum();
         println!("  group \"{}\" ({}D): {n} elements", group.name, group.dim);
+    }
+}
+
+/// `tmc check`: the report of everything before the first assembly.
+fn check_command(case: &std::path::Path, sets: Vec<(String, String)>) -> ExitCode {
+    let opts = SolveOptions {
+        sets,
+        quiet: true,
+        ..Default::default()
+    };
+    match tmc::driver::check(case, &opts) {
+        Ok(r) => {
+            println!("{}: ready to solve", case.display());
+            println!("mesh {} ({}D)", r.mesh.source.display(), r.mesh.dim);
+            print_mesh(&r.mesh);
+            for w in &r.mesh.warnings {
+                println!("  warning: {w}");
+            }
+            println!("{}", r.physics);
+            let unknowns: Vec<String> =
+                r.unknowns.iter().map(|(f, n)| format!("{n} {f}")).collect();
+            println!("unknowns: {} ({} free)", unknowns.join(", "), r.free);
+            println!(
+                "tangent: {} entries; factor: {}; about {:.0} MB for the linear algebra",
+                r.tangent_entries,
+                r.factor_entries.map_or(
+                    "fill known only after the first factorisation (LU)".to_string(),
+                    |n| { format!("{n} entries") }
+                ),
+                r.estimated_mb()
+            );
+            if !r.probes.is_empty() {
+                println!("probes: {}", r.probes.join(", "));
+            }
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            print_chain(&e);
+            ExitCode::FAILURE
+        }
     }
 }
 
@@ -279,6 +342,7 @@ fn solve_command(
     output: Option<PathBuf>,
     quiet: bool,
     verbose: bool,
+    sets: Vec<(String, String)>,
 ) -> ExitCode {
     let idle_threads = match IdleThreads::from_env() {
         Ok(i) => i,
@@ -292,6 +356,7 @@ fn solve_command(
         quiet,
         verbose,
         idle_threads,
+        sets,
     };
     match run(case, &opts) {
         Ok(s) => {

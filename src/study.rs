@@ -8,7 +8,8 @@
 //! measure = ["gap", "Q_top"]          # probes, Q_<group> or R_<group>_<x|y|z>
 //! show = ["min_J_medium"]             # shown, not compared (also any summary.json number)
 //! reference = "last"                  # "last" (the finest variant), a variant's name, or
-//!                                     # a table of values: reference = { gap = 3.0e-4 }
+//!                                     # a table of values: reference = { gap = 3.0e-4 };
+//!                                     # without measure and reference the study tabulates
 //! history = ["gap", "Q_top"]          # history.csv columns drawn against λ, per variant
 //!
 //! [[variant]]
@@ -21,6 +22,7 @@
 //! `set` keys are dotted paths into the case; a segment that meets an array of tables
 //! (`region`, `bc`, `probe`) picks the entry whose `group` (or `name`) it names.
 
+use crate::case::set_path;
 use crate::plot::{Chart, History, PlotError, Series, line_chart};
 use serde::Deserialize;
 use std::collections::BTreeMap;
@@ -71,12 +73,15 @@ pub struct StudyFile {
     pub name: Option<String>,
     pub description: Option<String>,
     pub case: String,
+    /// Compared against `reference` (none: the study only tabulates).
+    #[serde(default)]
     pub measure: Vec<String>,
     /// Quantities shown beside the measured ones but not compared (e.g. a gap whose reference
     /// is 0).
     #[serde(default)]
     pub show: Vec<String>,
-    pub reference: Reference,
+    /// What the measures are compared with (none: no errors, no error-vs-time plot).
+    pub reference: Option<Reference>,
     #[serde(default)]
     pub history: Vec<String>,
     pub variant: Vec<Variant>,
@@ -142,49 +147,6 @@ fn flatten(prefix: &str, t: &toml::Table, out: &mut Vec<(String, toml::Value)>) 
             _ => out.push((key, v.clone())),
         }
     }
-}
-
-/// Set `path` (dotted) in the case `doc` to `value`.
-pub fn set_path(doc: &mut toml::Table, path: &str, value: toml::Value) -> Result<(), String> {
-    let segs: Vec<&str> = path.split('.').collect();
-    let mut cur: &mut toml::Table = doc;
-    for (i, seg) in segs.iter().enumerate() {
-        if i + 1 == segs.len() {
-            cur.insert(seg.to_string(), value);
-            return Ok(());
-        }
-        let entry = cur
-            .entry(seg.to_string())
-            .or_insert_with(|| toml::Value::Table(toml::Table::new()));
-        cur = match entry {
-            toml::Value::Table(t) => t,
-            toml::Value::Array(items) => {
-                let next = segs[i + 1];
-                let found = items.iter_mut().find_map(|it| match it {
-                    toml::Value::Table(t)
-                        if t.get("group").and_then(|g| g.as_str()) == Some(next)
-                            || t.get("name").and_then(|g| g.as_str()) == Some(next) =>
-                    {
-                        Some(t)
-                    }
-                    _ => None,
-                });
-                let Some(t) = found else {
-                    return Err(format!(
-                        "\"{path}\": no [[{seg}]] with group or name \"{next}\""
-                    ));
-                };
-                // the array segment consumed the next one too
-                let rest = &segs[i + 2..];
-                if rest.is_empty() {
-                    return Err(format!("\"{path}\": names an entry, not a key in it"));
-                }
-                return set_path(t, &rest.join("."), value);
-            }
-            _ => return Err(format!("\"{path}\": \"{seg}\" is not a table")),
-        };
-    }
-    Err(format!("\"{path}\": empty key"))
 }
 
 /// The case text of one variant: the base case with the variant's keys set, and `mesh` made
@@ -339,10 +301,13 @@ fn read_study(path: &Path) -> Result<(StudyFile, String), StudyError> {
             .map(|s| s.to_string_lossy().to_string())
             .unwrap_or_else(|| "study".into())
     });
-    if study.variant.is_empty() || study.measure.is_empty() {
+    if study.variant.is_empty() {
+        return Err(invalid(path, "a study needs at least one [[variant]]"));
+    }
+    if study.reference.is_some() && study.measure.is_empty() {
         return Err(invalid(
             path,
-            "a study needs at least one [[variant]] and one `measure`",
+            "a `reference` needs the quantities to compare with it: `measure = [...]`",
         ));
     }
     let mut names: Vec<&str> = study.variant.iter().map(|v| v.name.as_str()).collect();
@@ -368,7 +333,7 @@ fn read_study(path: &Path) -> Result<(StudyFile, String), StudyError> {
             ),
         ));
     }
-    if let Reference::Variant(r) = &study.reference
+    if let Some(Reference::Variant(r)) = &study.reference
         && r != "last"
         && !study.variant.iter().any(|v| &v.name == r)
     {
@@ -565,7 +530,13 @@ fn run_variant(
 /// The relative errors of every outcome against the study's reference; returns the
 /// reference, in words.
 fn set_errors(study: &StudyFile, outcomes: &mut [Outcome]) -> String {
-    let reference: Vec<f64> = match &study.reference {
+    let Some(reference) = &study.reference else {
+        for o in outcomes.iter_mut() {
+            o.errors = vec![f64::NAN; study.measure.len()];
+        }
+        return "nothing (the study has no `reference`: it tabulates)".into();
+    };
+    let reference_values: Vec<f64> = match reference {
         Reference::Values(m) => study
             .measure
             .iter()
@@ -584,11 +555,11 @@ fn set_errors(study: &StudyFile, outcomes: &mut [Outcome]) -> String {
         o.errors = o
             .values
             .iter()
-            .zip(&reference)
+            .zip(&reference_values)
             .map(|(v, r)| (v - r).abs() / r.abs())
             .collect();
     }
-    match &study.reference {
+    match reference {
         Reference::Values(m) => format!(
             "known values: {}",
             m.iter()
@@ -770,7 +741,20 @@ fn write_plots(
     os: &[Outcome],
 ) -> Result<Vec<PathBuf>, StudyError> {
     let mut files = Vec::new();
-    // error against total time, one curve per group, in time order
+    if study.reference.is_some() {
+        files.push(error_plot(out, name, study, os)?);
+    }
+    files.extend(history_plots(out, name, study, os)?);
+    Ok(files)
+}
+
+/// Error against total time, one curve per group, in time order.
+fn error_plot(
+    out: &Path,
+    name: &str,
+    study: &StudyFile,
+    os: &[Outcome],
+) -> Result<PathBuf, StudyError> {
     let mut groups: Vec<String> = Vec::new();
     for o in os {
         if !groups.iter().any(|g| g == group(&o.variant)) {
@@ -804,8 +788,17 @@ fn write_plots(
             log_y: true,
         },
     )?;
-    files.push(f);
-    // history curves of every variant
+    Ok(f)
+}
+
+/// The chosen history columns of every variant against λ, one plot per column.
+fn history_plots(
+    out: &Path,
+    name: &str,
+    study: &StudyFile,
+    os: &[Outcome],
+) -> Result<Vec<PathBuf>, StudyError> {
+    let mut files = Vec::new();
     for c in &study.history {
         let mut series = Vec::new();
         for o in os {

@@ -453,7 +453,10 @@ fn singular_systems_are_found_before_solving() {
         &solve(&p, &out),
         &["ghost.toml:", "group \"ghost\" has no elements"],
     );
-    assert!(!out.exists(), "runs that fail on their input leave no folder behind");
+    assert!(
+        !out.exists(),
+        "runs that fail on their input leave no folder behind"
+    );
 }
 
 #[test]

@@ -1,9 +1,11 @@
 //! `tmc solve`: case → mesh → model → load stepping with Newton → VTU series, history, summary.
 
+pub mod check;
 pub mod records;
 mod run;
 pub mod strategy;
 
+pub use check::{CheckReport, check};
 pub use records::{HISTORY_SOLVER_COLUMNS, HISTORY_STEP_COLUMNS, Summary, group_flows, reactions};
 pub use strategy::{Strategy, choose_linear, choose_strategy, describe};
 
@@ -95,6 +97,8 @@ pub struct SolveOptions {
     pub verbose: bool,
     /// What the other threads do during linear solves (`TMC_IDLE_THREADS` for `tmc solve`).
     pub idle_threads: IdleThreads,
+    /// Case keys set on the command line: (dotted path, value in TOML syntax).
+    pub sets: Vec<(String, String)>,
 }
 
 /// A mesh written for this run under a temporary name: moved to its final name once the run
@@ -161,7 +165,7 @@ pub fn mesh_for(case: &Case, out_dir: &Path) -> Result<(Mesh, Option<StagedMesh>
 /// Then the previous run's files (and only those, as its manifest lists them) are replaced.
 pub fn run(case_path: &Path, opts: &SolveOptions) -> Result<Summary, SolveError> {
     let start = Instant::now();
-    let case = Case::read(case_path)?;
+    let case = Case::read(case_path)?.with_sets(&opts.sets)?;
     let out_dir = opts
         .out_dir
         .clone()

@@ -154,9 +154,9 @@ pub fn group_flows(model: &Model, r_full: &[f64], convected: &[f64], t: f64) -> 
     let mut out = reactions(model, r_full);
     let lambda = model.path.lambda(t);
     for (g, group) in model.flux_groups.iter().enumerate() {
-        let amp = if group.ramped { lambda } else { 1.0 };
         let entry = out.entry(group.name.clone()).or_default();
-        for &(_, key, value) in &group.loads {
+        for &(_, key, value, ramped) in &group.loads {
+            let amp = if ramped { lambda } else { 1.0 };
             *entry.entry(key.into()).or_default() += amp * value;
         }
         if group.convects {

@@ -60,19 +60,22 @@ pub(super) struct Run<'a> {
     totals: Totals,
     summary: Summary,
     pb: indicatif::ProgressBar,
+    /// Non-zero values held at full value from the start, as `uy = -0.2 on "top"`.
+    held_in_full: Vec<String>,
 }
 
-impl<'a> Run<'a> {
-    /// Choose strategy and solvers, and set up the records; nothing is written yet.
-    pub(super) fn new(
-        case: &'a Case,
-        model: &'a Model,
-        probes: &'a [Probe],
-        mut folder: RunFolder,
-        opts: &'a SolveOptions,
-        start: Instant,
-    ) -> Result<Run<'a>, SolveError> {
-        let out_dir = folder.dir().to_owned();
+/// What a run solves with, decided and set up before the first assembly: strategy, the
+/// assembler's pattern and schedule, Newton, and the symbolic analysis of every linear solver.
+pub(super) struct Plan {
+    pub strategy: Strategy,
+    pub asm: Assembler,
+    pub newton: Newton,
+    /// One solver per part: the whole system, or mechanics and heat of a one-way scene.
+    pub solvers: Vec<(Part, LinearSolver)>,
+}
+
+impl Plan {
+    pub(super) fn new(case: &Case, model: &Model, opts: &SolveOptions) -> Result<Plan, SolveError> {
         let kind = choose_linear(case.file.solver.linear, &model.physics);
         if kind == LinearKind::Ldlt && model.physics.mechanics && model.physics.conduction {
             let span = case.file.mesh.span();
@@ -87,6 +90,57 @@ impl<'a> Run<'a> {
         let mut newton = Newton::new(model, steps.tol, steps.max_iter);
         newton.idle = opts.idle_threads;
         let solvers = Self::solvers(model, &asm, &newton, strategy, kind)?;
+        Ok(Plan {
+            strategy,
+            asm,
+            newton,
+            solvers,
+        })
+    }
+
+    /// The linear solvers of `strategy`: one for the whole system of `kind`, or symmetric block
+    /// factorisations for mechanics and for heat.
+    fn solvers(
+        model: &Model,
+        asm: &Assembler,
+        newton: &Newton,
+        strategy: Strategy,
+        kind: LinearKind,
+    ) -> Result<Vec<(Part, LinearSolver)>, SolveError> {
+        let structure = equation_structure(&model.dofs, &model.cons);
+        Ok(match strategy {
+            Strategy::OneWay => {
+                let part = |p: Part| -> Result<(Part, LinearSolver), SolveError> {
+                    let eqs = newton.equations(p);
+                    Ok((p, LinearSolver::block_ldlt(&asm.pattern, &structure, &eqs)?))
+                };
+                vec![part(Part::Mechanics)?, part(Part::Heat)?]
+            }
+            _ => vec![(
+                Part::All,
+                LinearSolver::new(kind, &asm.pattern, &structure)?,
+            )],
+        })
+    }
+}
+
+impl<'a> Run<'a> {
+    /// Choose strategy and solvers, and set up the records; nothing is written yet.
+    pub(super) fn new(
+        case: &'a Case,
+        model: &'a Model,
+        probes: &'a [Probe],
+        mut folder: RunFolder,
+        opts: &'a SolveOptions,
+        start: Instant,
+    ) -> Result<Run<'a>, SolveError> {
+        let out_dir = folder.dir().to_owned();
+        let Plan {
+            strategy,
+            asm,
+            newton,
+            solvers,
+        } = Plan::new(case, model, opts)?;
         if !opts.quiet {
             eprintln!("{}", describe(&model.physics, strategy));
         }
@@ -134,31 +188,7 @@ impl<'a> Run<'a> {
             },
             summary,
             pb: progress_bar(opts.quiet),
-        })
-    }
-
-    /// The linear solvers of `strategy`: one for the whole system of `kind`, or symmetric block
-    /// factorisations for mechanics and for heat.
-    fn solvers(
-        model: &Model,
-        asm: &Assembler,
-        newton: &Newton,
-        strategy: Strategy,
-        kind: LinearKind,
-    ) -> Result<Vec<(Part, LinearSolver)>, SolveError> {
-        let structure = equation_structure(&model.dofs, &model.cons);
-        Ok(match strategy {
-            Strategy::OneWay => {
-                let part = |p: Part| -> Result<(Part, LinearSolver), SolveError> {
-                    let eqs = newton.equations(p);
-                    Ok((p, LinearSolver::block_ldlt(&asm.pattern, &structure, &eqs)?))
-                };
-                vec![part(Part::Mechanics)?, part(Part::Heat)?]
-            }
-            _ => vec![(
-                Part::All,
-                LinearSolver::new(kind, &asm.pattern, &structure)?,
-            )],
+            held_in_full: held_in_full(case),
         })
     }
 
@@ -373,10 +403,19 @@ impl<'a> Run<'a> {
         self.asm.restore();
         if let Err(dl) = self.ctl.reject() {
             self.pb.finish_and_clear();
+            let mut reason = self.totals.last_failure.clone();
+            if self.ctl.accepted == 0 && !self.held_in_full.is_empty() {
+                // no step converged: values applied in full from the start are the usual cause
+                reason += &format!(
+                    "; applied in full from the first step (ramp = false): {}; let them grow \
+                     with λ (ramp = true, or ramp = {{ NAME = true }} for one value)",
+                    self.held_in_full.join(", ")
+                );
+            }
             let err = SolveError::StepTooSmall {
                 lambda: self.model.path.lambda(self.ctl.t),
                 dlambda: dl,
-                reason: self.totals.last_failure.clone(),
+                reason,
                 steps: self.ctl.accepted,
                 dir: self.out_dir.clone(),
             };
@@ -453,6 +492,36 @@ impl<'a> Run<'a> {
             self.pb.println(line);
         }
     }
+}
+
+/// The non-zero values of the case's `[[bc]]`s that `ramp` holds at full value from the start.
+fn held_in_full(case: &Case) -> Vec<String> {
+    let mut out = Vec::new();
+    for bc in &case.file.bc {
+        let g = bc.group.get_ref();
+        let scalar = [
+            ("ux", bc.ux),
+            ("uy", bc.uy),
+            ("uz", bc.uz),
+            ("theta", bc.theta),
+            ("heat_flux", bc.heat_flux),
+        ];
+        for (name, v) in scalar {
+            if let Some(v) = v
+                && v != 0.0
+                && !bc.ramped(name)
+            {
+                out.push(format!("{name} = {v} on \"{g}\""));
+            }
+        }
+        if let Some(t) = &bc.traction
+            && t.get_ref().iter().any(|&v| v != 0.0)
+            && !bc.ramped("traction")
+        {
+            out.push(format!("traction = {:?} on \"{g}\"", t.get_ref()));
+        }
+    }
+    out
 }
 
 /// The step controller: over physical time with `[time]` (steps of at most `dt`, onto every

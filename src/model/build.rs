@@ -286,13 +286,14 @@ fn dirichlet(
         let g = mesh.group(bc.group.get_ref()).expect("validated");
         let nodes = mesh.group_nodes(g);
         let index = bc_groups.len();
-        let amp = match (&bc.path, bc.ramp) {
-            (Some(own), _) => {
-                path.own.push(own.get_ref().clone());
-                LoadPath::RAMPED + path.own.len()
-            }
-            (None, true) => LoadPath::RAMPED,
-            (None, false) => LoadPath::HELD,
+        let own = bc.path.as_ref().map(|own| {
+            path.own.push(own.get_ref().clone());
+            LoadPath::RAMPED + path.own.len()
+        });
+        let amp = |name: &str| match own {
+            Some(own) => own,
+            None if bc.ramped(name) => LoadPath::RAMPED,
+            None => LoadPath::HELD,
         };
         bc_groups.push(BcGroup {
             name: bc.group.get_ref().clone(),
@@ -313,7 +314,7 @@ fn dirichlet(
                         Field::Theta => theta_init[n],
                         _ => 0.0,
                     },
-                    amp,
+                    amp: amp(name),
                     bc: index,
                 };
                 if let Some(old) = prescribed[dof] {
@@ -364,8 +365,8 @@ fn external_loads(
             continue;
         }
         let g = mesh.group(bc.group.get_ref()).expect("validated");
-        let target = if bc.ramp { &mut f_ramp } else { &mut f_full };
-        let mut loads: Vec<(usize, &'static str, f64)> = Vec::new();
+        let mut loads: Vec<(usize, &'static str, f64, bool)> = Vec::new();
+        let (ramp_t, ramp_q) = (bc.ramped("traction"), bc.ramped("heat_flux"));
         for b in mesh.facets.iter().filter(|b| b.groups.contains(&g)) {
             for c in 0..b.n_cells() {
                 let nodes = b.cell(c);
@@ -375,23 +376,24 @@ fn external_loads(
                     if let (Some(t), true) = (&bc.traction, dofs.has(Field::U)) {
                         for (i, ti) in t.get_ref().iter().enumerate() {
                             let dof = dofs.u[n * dofs.dim + i] as usize;
+                            let target = if ramp_t { &mut f_ramp } else { &mut f_full };
                             target[dof] += ti * wi;
-                            loads.push((dof, AXES[i], ti * wi));
+                            loads.push((dof, AXES[i], ti * wi, ramp_t));
                         }
                     }
                     if let (Some(q), true) = (bc.heat_flux, dofs.has(Field::Theta)) {
                         let dof = dofs.theta[n] as usize;
+                        let target = if ramp_q { &mut f_ramp } else { &mut f_full };
                         target[dof] += q * wi;
-                        loads.push((dof, "heat", q * wi));
+                        loads.push((dof, "heat", q * wi, ramp_q));
                     }
                 }
             }
         }
-        loads.retain(|&(dof, _, _)| cons.prescribed[dof].is_none());
+        loads.retain(|&(dof, _, _, _)| cons.prescribed[dof].is_none());
         groups.push(FluxGroup {
             name: bc.group.get_ref().clone(),
             loads,
-            ramped: bc.ramp,
             convects: bc.h.is_some() && dofs.has(Field::Theta),
         });
     }

@@ -68,9 +68,8 @@ pub struct CapacityBlock {
 pub struct FluxGroup {
     pub name: String,
     /// Prescribed loads on free dofs: (dof, component "x", "y", "z" or "heat", value at full
-    /// load), scaled by λ when `ramped`.
-    pub loads: Vec<(usize, &'static str, f64)>,
-    pub ramped: bool,
+    /// load, whether it is scaled by λ).
+    pub loads: Vec<(usize, &'static str, f64, bool)>,
     /// Whether facet blocks of this group convect (their heat is assembled, not prescribed).
     pub convects: bool,
 }

@@ -73,6 +73,22 @@ enum Backend {
 }
 
 impl LinearSolver {
+    /// Entries of the factor(s) as the symbolic analysis laid them out: known before any
+    /// numeric work for LDLᵀ (and the blocks of block GMRES); `None` for LU, whose fill
+    /// depends on pivoting.
+    pub fn factor_entries(&self) -> Option<usize> {
+        match &self.backend {
+            Backend::Lu(_) => None,
+            Backend::Ldlt(f) => Some(f.symbolic.len_val()),
+            Backend::BlockGmres(b) => Some(
+                [&b.fm, &b.ft]
+                    .iter()
+                    .filter_map(|f| f.as_ref().map(|f| f.symbolic.len_val()))
+                    .sum(),
+            ),
+        }
+    }
+
     /// Symbolic analysis of the pattern (once per mesh).
     pub fn new(kind: LinearKind, p: &Pattern, s: &Structure) -> Result<LinearSolver, LinearError> {
         let backend = match kind {

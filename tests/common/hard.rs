@@ -192,6 +192,7 @@ fn solve_text(
             quiet: true,
             verbose: false,
             idle_threads,
+            ..Default::default()
         },
     )
 }

@@ -1,0 +1,77 @@
+//! `tmc check`: everything `tmc solve` does before its first assembly (case, mesh, groups,
+//! physics, strategy, unknowns, the symbolic analysis of the linear solvers), then a report;
+//! nothing is written where results go.
+
+use super::run::Plan;
+use super::strategy::describe;
+use super::{SolveError, SolveOptions, mesh_for};
+use crate::case::Case;
+use crate::dofs::Field;
+use crate::mesh::Mesh;
+use crate::model::build;
+use crate::output::probes;
+use std::path::Path;
+
+/// What `tmc check` found.
+pub struct CheckReport {
+    pub mesh: Mesh,
+    /// The physics and the strategy, in words.
+    pub physics: String,
+    /// Unknowns per field, in field order, and the free ones.
+    pub unknowns: Vec<(&'static str, usize)>,
+    pub free: usize,
+    /// Stored entries of the tangent.
+    pub tangent_entries: usize,
+    /// Entries of the direct factors (known before factorising for LDLᵀ), if known.
+    pub factor_entries: Option<usize>,
+    /// The probes' names.
+    pub probes: Vec<String>,
+}
+
+impl CheckReport {
+    /// Memory of the tangent (values and row indices) and of the factors in double precision,
+    /// in MB: what the run adds to the mesh and the state.
+    pub fn estimated_mb(&self) -> f64 {
+        let tangent = self.tangent_entries as f64 * 16.0;
+        let factor = self.factor_entries.unwrap_or(0) as f64 * 16.0;
+        (tangent + factor) / 1e6
+    }
+}
+
+/// Check the case at `case_path` (with `opts.sets`) as a solve would, up to its first
+/// assembly. A `.geo` is meshed in a temporary folder that is removed afterwards.
+pub fn check(case_path: &Path, opts: &SolveOptions) -> Result<CheckReport, SolveError> {
+    let case = Case::read(case_path)?.with_sets(&opts.sets)?;
+    let scratch = std::env::temp_dir().join(format!("tmc-check-{}", std::process::id()));
+    std::fs::create_dir_all(&scratch).map_err(|e| {
+        SolveError::Output(crate::output::OutputError::Write {
+            path: scratch.clone(),
+            msg: e.to_string(),
+        })
+    })?;
+    let meshed = mesh_for(&case, &scratch);
+    let _ = std::fs::remove_dir_all(&scratch);
+    let (mesh, _staged) = meshed?;
+    case.validate(&mesh)?;
+    let model = build(&case, mesh)?;
+    let probes = probes::build(&case, &model.mesh)?;
+    let plan = Plan::new(&case, &model, opts)?;
+    let factor_entries = plan
+        .solvers
+        .iter()
+        .map(|(_, s)| s.factor_entries())
+        .sum::<Option<usize>>();
+    Ok(CheckReport {
+        physics: describe(&model.physics, plan.strategy),
+        unknowns: Field::ALL
+            .iter()
+            .map(|&f| (f.name(), model.dofs.count(f)))
+            .filter(|&(_, n)| n > 0)
+            .collect(),
+        free: model.cons.n_eq,
+        tangent_entries: plan.asm.pattern.row_idx.len(),
+        factor_entries,
+        probes: probes.iter().map(|p| p.name.clone()).collect(),
+        mesh: model.mesh,
+    })
+}

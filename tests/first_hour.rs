@@ -1,0 +1,251 @@
+//! What a new user meets first: `ramp` per value and the message when an unramped value
+//! breaks the first step, `tmc check`, `tmc solve --set`.
+
+mod common;
+
+use common::{case_body, root, scratch, solve_text, stderr, tmc};
+
+/// The block scene with its four `[[bc]]` blocks replaced by `bcs`.
+fn block_with(bcs: &str) -> String {
+    let body = case_body("block");
+    let start = body.find("[[bc]]").unwrap();
+    let end = body.find("[[probe]]").unwrap();
+    format!("{}{bcs}\n{}", &body[..start], &body[end..])
+}
+
+const COARSE: &str = "n = 8, m = 4, l = 2";
+
+#[test]
+fn ramp_per_value_equals_separate_blocks_and_a_full_load_is_named() {
+    // the block's own form: displacement ramped, temperatures held, in separate blocks
+    let (separate, _) = solve_text("ramp-separate", "block.geo", COARSE, &case_body("block"));
+    // one block per group, ramp per value
+    let per_value = block_with(
+        "[[bc]]\ngroup = \"bottom\"\nux = 0.0\nuy = 0.0\ntheta = 20.0\nramp = { theta = false }\n\
+         [[bc]]\ngroup = \"top\"\nux = 0.0\nuy = -0.4\ntheta = 100.0\nramp = { theta = false, ux = true }\n",
+    );
+    let (joined, out) = solve_text("ramp-per-value", "block.geo", COARSE, &per_value);
+    assert_eq!(joined.load_steps, separate.load_steps);
+    assert_eq!(joined.newton_iterations, separate.newton_iterations);
+    let (a, b) = (joined.probes["gap"], separate.probes["gap"]);
+    assert!((a - b).abs() <= 1e-12 * b.abs(), "gap {a} vs {b}");
+    // heat through the top at step 0 is that of θ at full value
+    let (cols, rows) = common::history(&out);
+    let q = cols.iter().position(|c| c == "Q_top").unwrap();
+    assert!(rows.last().unwrap()[q] > 0.0);
+
+    // the whole block held: the displacement is applied at once; with two Newton iterations
+    // allowed the first step cannot converge, and the message names the value applied in full
+    let held = block_with(
+        "[[bc]]\ngroup = \"bottom\"\nux = 0.0\nuy = 0.0\ntheta = 20.0\nramp = false\n\
+         [[bc]]\ngroup = \"top\"\nux = 0.0\nuy = -0.4\ntheta = 100.0\nramp = false\n",
+    );
+    let dir = scratch("ramp-held");
+    let case = dir.join("held.toml");
+    std::fs::write(
+        &case,
+        format!(
+            "mesh = \"{}\"\n[mesh_options]\nparams = {{ {COARSE} }}\n[steps]\nmin = 0.05\nmax_iter = 2\n{held}",
+            root().join("geo/block.geo").display()
+        ),
+    )
+    .unwrap();
+    let o = tmc(&[
+        "solve",
+        case.to_str().unwrap(),
+        "-q",
+        "-o",
+        dir.join("out").to_str().unwrap(),
+    ]);
+    let e = stderr(&o);
+    assert!(!o.status.success(), "{e}");
+    assert!(
+        e.contains("applied in full from the first step") && e.contains("uy = -0.4 on \"top\""),
+        "{e}"
+    );
+    // a ramp table naming a value the block does not give
+    let bad = block_with("[[bc]]\ngroup = \"top\"\nuy = -0.4\nramp = { thetaa = false }\n");
+    let case = dir.join("bad.toml");
+    std::fs::write(
+        &case,
+        format!(
+            "mesh = \"{}\"\n{bad}",
+            root().join("geo/block.geo").display()
+        ),
+    )
+    .unwrap();
+    let o = tmc(&[
+        "solve",
+        case.to_str().unwrap(),
+        "-q",
+        "-o",
+        dir.join("out2").to_str().unwrap(),
+    ]);
+    let e = stderr(&o);
+    assert!(
+        !o.status.success()
+            && e.contains("bad.toml:")
+            && e.contains("names \"thetaa\"")
+            && e.contains("it gives uy"),
+        "{e}"
+    );
+}
+
+#[test]
+fn check_reports_what_a_solve_would_use_and_writes_nothing() {
+    let o = tmc(&[
+        "check",
+        "cases/block.toml",
+        "--set",
+        "mesh_options.params={ n = 8, m = 4, l = 2 }",
+    ]);
+    let out = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(o.status.success(), "{}", stderr(&o));
+    for words in [
+        "ready to solve",
+        "group \"medium\" (2D): 16 elements",
+        "group \"solid\" (2D): 32 elements",
+        "group \"top\" (1D): 8 elements",
+        "one-way coupled",
+        "unknowns: ",
+        "factor: ",
+        "probes: gap",
+    ] {
+        assert!(out.contains(words), "\"{words}\" not in:\n{out}");
+    }
+    // the same numbers a solve reports
+    let dir = scratch("check-vs-solve");
+    let o = tmc(&[
+        "solve",
+        "cases/block.toml",
+        "-q",
+        "-o",
+        dir.join("out").to_str().unwrap(),
+        "--set",
+        "mesh_options.params={ n = 8, m = 4, l = 2 }",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("out/summary.json")).unwrap())
+            .unwrap();
+    let dofs = &s["dofs"];
+    let line = format!(
+        "unknowns: {} u, {} theta, {} p ({} free)",
+        dofs["u"], dofs["theta"], dofs["p"], dofs["free"]
+    );
+    assert!(out.contains(&line), "\"{line}\" not in:\n{out}");
+    // check writes nothing: no results folder, nothing beside the case
+    let alone = scratch("check-alone");
+    let case = alone.join("never-solved.toml");
+    std::fs::write(
+        &case,
+        format!(
+            "mesh = \"{}\"\n{}",
+            root().join("geo/block.geo").display(),
+            case_body("block")
+        ),
+    )
+    .unwrap();
+    let o = tmc(&["check", case.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!root().join("results/never-solved").exists());
+    assert_eq!(std::fs::read_dir(&alone).unwrap().count(), 1);
+    let o = tmc(&[
+        "check",
+        "cases/block.toml",
+        "--set",
+        "region.medium.gama=1e-5",
+    ]);
+    let e = stderr(&o);
+    assert!(
+        !o.status.success()
+            && e.contains("with --set region.medium.gama=1e-5")
+            && e.contains("unknown field `gama`"),
+        "{e}"
+    );
+}
+
+#[test]
+fn solve_set_equals_the_edited_case() {
+    // --set on the command line and the same keys written into the case give the same run
+    let (edited, _) = solve_text(
+        "set-edited",
+        "block.geo",
+        COARSE,
+        &case_body("block").replace("gamma = 1e-4", "gamma = 2e-4"),
+    );
+    let dir = scratch("set-cli");
+    let case = dir.join("block.toml");
+    std::fs::write(
+        &case,
+        format!(
+            "mesh = \"{}\"\n{}",
+            root().join("geo/block.geo").display(),
+            case_body("block")
+        ),
+    )
+    .unwrap();
+    let o = tmc(&[
+        "solve",
+        case.to_str().unwrap(),
+        "-q",
+        "-o",
+        dir.join("out").to_str().unwrap(),
+        "--set",
+        "mesh_options.params={ n = 8, m = 4, l = 2 }",
+        "--set",
+        "region.medium.gamma=2e-4",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("out/summary.json")).unwrap())
+            .unwrap();
+    assert_eq!(
+        s["load_steps"].as_u64().unwrap() as usize,
+        edited.load_steps
+    );
+    let gap = s["probes"]["gap"].as_f64().unwrap();
+    assert!(
+        (gap - edited.probes["gap"]).abs() <= 1e-12 * gap.abs(),
+        "{gap} vs {}",
+        edited.probes["gap"]
+    );
+}
+
+#[test]
+fn a_study_without_measure_or_reference_tabulates() {
+    let dir = scratch("study-table");
+    let study = dir.join("sweep.toml");
+    std::fs::write(
+        &study,
+        format!(
+            "case = \"{}\"\nshow = [\"gap\"]\n\
+             [[variant]]\nname = \"g4\"\nset = {{ \"mesh_options.params\" = {{ n = 4, m = 2, l = 1 }}, \"region.medium.gamma\" = 1e-4 }}\n\
+             [[variant]]\nname = \"g3\"\nset = {{ \"mesh_options.params\" = {{ n = 4, m = 2, l = 1 }}, \"region.medium.gamma\" = 1e-3 }}\n",
+            root().join("cases/block.toml").display()
+        ),
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let o = tmc(&[
+        "study",
+        study.to_str().unwrap(),
+        "-q",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let mut r = csv::Reader::from_path(out.join("study.csv")).unwrap();
+    let head = r.headers().unwrap().clone();
+    let rows: Vec<csv::StringRecord> = r.records().map(|x| x.unwrap()).collect();
+    assert_eq!(rows.len(), 2);
+    let gap = head.iter().position(|c| c == "gap").unwrap();
+    let (g4, g3): (f64, f64) = (rows[0][gap].parse().unwrap(), rows[1][gap].parse().unwrap());
+    assert!(
+        g4 > 0.0 && g3 > g4,
+        "a stiffer medium keeps a wider gap: {g4} {g3}"
+    );
+    assert!(!out.join("error_vs_time.png").exists());
+    let md = std::fs::read_to_string(out.join("study.md")).unwrap();
+    assert!(md.contains("it tabulates"), "{md}");
+}
