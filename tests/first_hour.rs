@@ -249,3 +249,75 @@ fn a_study_without_measure_or_reference_tabulates() {
     let md = std::fs::read_to_string(out.join("study.md")).unwrap();
     assert!(md.contains("it tabulates"), "{md}");
 }
+
+#[test]
+fn a_surface_in_no_group_is_reported() {
+    let dir = scratch("forgotten-group");
+    let geo = dir.join("forgot.geo");
+    let two = "Point(1)={0,0,0};Point(2)={1,0,0};Point(3)={1,1,0};Point(4)={0,1,0};\
+               Point(5)={1,2,0};Point(6)={0,2,0};\n\
+               Line(1)={1,2};Line(2)={2,3};Line(3)={3,4};Line(4)={4,1};Line(5)={3,5};\
+               Line(6)={5,6};Line(7)={6,4};\n\
+               Curve Loop(1)={1,2,3,4};Plane Surface(1)={1};\
+               Curve Loop(2)={-3,5,6,7};Plane Surface(2)={2};\n\
+               Physical Surface(\"solid\")={2};\n";
+    // only the upper surface is tagged: the lower one's cells are dropped, with a warning
+    std::fs::write(&geo, format!("{two}Physical Curve(\"top\")={{6}};\n")).unwrap();
+    let o = tmc(&["mesh", geo.to_str().unwrap()]);
+    let e = stderr(&o);
+    assert!(o.status.success(), "{e}");
+    assert!(
+        e.contains("surfaces 1 belong to no physical group") && e.contains("without contact"),
+        "{e}"
+    );
+    // a boundary group on the dropped surface: the error says why
+    std::fs::write(&geo, format!("{two}Physical Curve(\"bottom\")={{1}};\n")).unwrap();
+    let o = tmc(&["mesh", geo.to_str().unwrap()]);
+    let e = stderr(&o);
+    assert!(
+        !o.status.success()
+            && e.contains("\"bottom\" has a node")
+            && e.contains("surfaces 1 belong to no physical group"),
+        "{e}"
+    );
+}
+
+#[test]
+fn a_log_gets_one_line_per_step_and_history_the_wall_time() {
+    let dir = scratch("log-lines");
+    let out = dir.join("out");
+    // stderr is a pipe here, as in a log file: no progress bar, a line per step
+    let o = tmc(&[
+        "solve",
+        "cases/block-transient.toml",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    let e = stderr(&o);
+    assert!(o.status.success(), "{e}");
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let steps = s["load_steps"].as_u64().unwrap() as usize;
+    let lines: Vec<&str> = e.lines().filter(|l| l.starts_with("step ")).collect();
+    assert_eq!(lines.len(), steps, "{e}");
+    // physical time first under [time]
+    assert!(
+        lines[0].contains("t 1.0000e-1") && lines[0].contains(" s"),
+        "{}",
+        lines[0]
+    );
+    let (cols, rows) = common::history(&out);
+    assert_eq!(cols.last().map(String::as_str), Some("wall_seconds"));
+    let w: Vec<f64> = rows.iter().map(|r| *r.last().unwrap()).collect();
+    assert!(w.windows(2).all(|p| p[1] >= p[0]) && w[0] >= 0.0, "{w:?}");
+    assert!(*w.last().unwrap() <= s["wall_seconds"].as_f64().unwrap());
+    // -q: nothing per step
+    let o = tmc(&[
+        "solve",
+        "cases/block-transient.toml",
+        "-q",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!stderr(&o).contains("step "), "{}", stderr(&o));
+}

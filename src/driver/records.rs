@@ -225,11 +225,13 @@ pub struct StepRow {
     pub work: f64,
     /// Transient scenes: (heat stored, heat supplied so far).
     pub heat: Option<(f64, f64)>,
+    /// Seconds since the run started, when the step was accepted.
+    pub wall: f64,
 }
 
 /// The columns of one model's `history.csv`: the step columns, `energy`, the probes, the
 /// reactions (`R_group_x`, `Q_group`), the solver columns and `work`; in transient scenes
-/// then `heat_stored` and `heat_in`.
+/// then `heat_stored` and `heat_in`; last `wall_seconds`.
 pub struct HistoryLayout {
     pub columns: Vec<String>,
     transient: bool,
@@ -280,6 +282,7 @@ impl HistoryLayout {
         if transient {
             columns.extend(["heat_stored".into(), "heat_in".into()]);
         }
+        columns.push("wall_seconds".into());
         HistoryLayout {
             columns,
             transient,
@@ -314,6 +317,7 @@ impl HistoryLayout {
             let (stored, supplied) = s.heat.unwrap_or((0.0, 0.0));
             row.extend([stored, supplied]);
         }
+        row.push(s.wall);
         row
     }
 }

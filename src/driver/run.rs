@@ -62,6 +62,8 @@ pub(super) struct Run<'a> {
     pb: indicatif::ProgressBar,
     /// Non-zero values held at full value from the start, as `uy = -0.2 on "top"`.
     held_in_full: Vec<String>,
+    /// The case steps over physical time (`[time]`): progress lines show t.
+    transient_clock: bool,
 }
 
 /// What a run solves with, decided and set up before the first assembly: strategy, the
@@ -189,6 +191,7 @@ impl<'a> Run<'a> {
             summary,
             pb: progress_bar(opts.quiet),
             held_in_full: held_in_full(case),
+            transient_clock: case.file.time.is_some(),
         })
     }
 
@@ -209,6 +212,7 @@ impl<'a> Run<'a> {
             min_J_solid: stats0.min_J_solid,
             min_J_medium: stats0.min_J_medium,
             energy: stats0.energy,
+            wall: self.start.elapsed().as_secs_f64(),
             ..StepRow::default()
         };
         self.history
@@ -314,6 +318,7 @@ impl<'a> Run<'a> {
             time: target,
             work: self.totals.work,
             heat: self.summary.heat_stored.zip(self.summary.heat_in),
+            wall: self.start.elapsed().as_secs_f64(),
         };
         let values = self
             .layout
@@ -364,11 +369,12 @@ impl<'a> Run<'a> {
         };
         if self.opts.verbose {
             let line = format!(
-                "step {:3}  λ {:.4}  Δλ {:.2e}  its {:2}  min J solid {} medium {}",
+                "step {:3}  {}  Δλ {:.2e}  its {:2}  {:.2} s  min J solid {} medium {}",
                 row.step,
-                row.lambda,
+                self.clock(row),
                 row.dlambda,
                 row.iterations,
+                row.wall,
                 fmt_j(row.min_J_solid),
                 fmt_j(row.min_J_medium)
             );
@@ -379,6 +385,15 @@ impl<'a> Run<'a> {
                 .map(|h| format!("{:.0e}", h.iter().fold(0.0f64, |a, &b| a.max(b))))
                 .collect();
             self.say(&format!("{line}  [{}]", table.join(" ")));
+        } else if !self.opts.quiet && self.pb.is_hidden() {
+            // no progress bar (not a terminal, e.g. a log file): one short line per step
+            self.say(&format!(
+                "step {:3}  {}  its {:2}  {:.2} s",
+                row.step,
+                self.clock(row),
+                row.iterations,
+                row.wall
+            ));
         }
         self.pb
             .set_position((row.time / self.ctl.end * 1000.0) as u64);
@@ -386,6 +401,15 @@ impl<'a> Run<'a> {
             "step {} its {}",
             self.ctl.accepted, self.totals.iterations
         ));
+    }
+
+    /// Where a step ended: λ, and the physical time with `[time]`.
+    fn clock(&self, row: &StepRow) -> String {
+        if self.transient_clock {
+            format!("t {:.4e}  λ {:.4}", row.time, row.lambda)
+        } else {
+            format!("λ {:.4}", row.lambda)
+        }
     }
 
     /// A failed attempt: cut the step, or end the run below the minimum step (its summary

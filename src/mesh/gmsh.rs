@@ -39,9 +39,11 @@ pub enum GmshError {
     },
     #[error(
         "the mesh gmsh wrote for {path} cannot be read back (a full disk or a file size limit \
-         truncates it; an unsupported element kind is named): {msg}"
+         truncates it): {msg}"
     )]
     Unreadable { path: PathBuf, msg: String },
+    #[error("the mesh of {path} cannot be used: {msg}")]
+    Unusable { path: PathBuf, msg: String },
 }
 
 /// Options of `tmc mesh`.
@@ -149,13 +151,22 @@ pub fn mesh_geo(geo: &Path, out: &Path, opts: &MeshOptions) -> Result<MeshReport
             });
         }
     };
-    let mut mesh = super::msh::read_msh(&tmp.0).map_err(|e| GmshError::Unreadable {
-        path: geo.to_owned(),
-        msg: match e {
-            super::msh::MshError::Parse { msg, .. } | super::msh::MshError::Invalid { msg, .. } => {
-                msg
-            }
-            other => other.to_string(),
+    let mut mesh = super::msh::read_msh(&tmp.0).map_err(|e| match e {
+        super::msh::MshError::Invalid { msg, .. } => GmshError::Unusable {
+            path: geo.to_owned(),
+            // what gmsh warned about (e.g. surfaces in no group) is usually why
+            msg: std::iter::once(msg)
+                .chain(warnings.iter().cloned())
+                .collect::<Vec<_>>()
+                .join("; "),
+        },
+        super::msh::MshError::Parse { msg, .. } => GmshError::Unreadable {
+            path: geo.to_owned(),
+            msg,
+        },
+        other => GmshError::Unreadable {
+            path: geo.to_owned(),
+            msg: other.to_string(),
         },
     })?;
     mesh.source = out.to_owned();
@@ -213,6 +224,7 @@ fn mesh_in_process(open_path: &Path, tmp: &Path, opts: &MeshOptions) -> Outcome 
         if session.physical_group_count() == 0 {
             return Ok(Outcome::NoPhysicalGroups);
         }
+        let untagged = session.untagged_entities(dim);
         session.set_number("Mesh.MshFileVersion", 4.1);
         session.set_number("Mesh.Binary", 0.0);
         session.set_number("Mesh.SaveAll", 0.0);
@@ -237,10 +249,22 @@ fn mesh_in_process(open_path: &Path, tmp: &Path, opts: &MeshOptions) -> Outcome 
         if written.is_err() || !tmp.is_file() {
             return Err(format!("could not write {}", tmp.display()));
         }
-        Ok(Outcome::Meshed {
-            dim,
-            warnings: session.warnings(),
-        })
+        let mut warnings = session.warnings();
+        if !untagged.is_empty() {
+            let kind = if dim == 2 { "surfaces" } else { "volumes" };
+            warnings.push(format!(
+                "{kind} {} belong to no physical group: gmsh leaves their cells out of the mesh \
+                 (a forgotten Physical {}(\"medium\") leaves the bodies without the medium \
+                 between them, and without contact)",
+                untagged
+                    .iter()
+                    .map(|t| t.to_string())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                if dim == 2 { "Surface" } else { "Volume" }
+            ));
+        }
+        Ok(Outcome::Meshed { dim, warnings })
     };
     run().unwrap_or_else(Outcome::Failed)
 }
@@ -496,6 +520,36 @@ impl Session {
             .filter(|l| l.starts_with("Warning"))
             .cloned()
             .collect()
+    }
+
+    /// Tags of the entities of dimension `dim` that belong to no physical group.
+    fn untagged_entities(&self, dim: c_int) -> Vec<c_int> {
+        let mut dim_tags: *mut c_int = std::ptr::null_mut();
+        let mut n: usize = 0;
+        let mut ierr: c_int = 0;
+        unsafe { gmsh_sys::gmshModelGetEntities(&mut dim_tags, &mut n, dim, &mut ierr) };
+        if ierr != 0 || dim_tags.is_null() {
+            return Vec::new();
+        }
+        let pairs: Vec<c_int> = unsafe { std::slice::from_raw_parts(dim_tags, n) }.to_vec();
+        unsafe { gmsh_sys::gmshFree(dim_tags as *mut _) };
+        let mut out = Vec::new();
+        for p in pairs.chunks_exact(2) {
+            let mut tags: *mut c_int = std::ptr::null_mut();
+            let mut m: usize = 0;
+            unsafe {
+                gmsh_sys::gmshModelGetPhysicalGroupsForEntity(
+                    p[0], p[1], &mut tags, &mut m, &mut ierr,
+                )
+            };
+            if !tags.is_null() {
+                unsafe { gmsh_sys::gmshFree(tags as *mut _) };
+            }
+            if ierr == 0 && m == 0 {
+                out.push(p[1]);
+            }
+        }
+        out
     }
 
     fn physical_group_count(&self) -> usize {

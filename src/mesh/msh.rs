@@ -35,7 +35,10 @@ pub fn read_msh_bytes(path: &Path, bytes: &[u8]) -> Result<Mesh, MshError> {
         path: path.to_owned(),
         msg,
     };
-    check_sections(bytes).map_err(&invalid)?;
+    check_sections(bytes).map_err(|msg| MshError::Parse {
+        path: path.to_owned(),
+        msg,
+    })?;
     let groups = physical_names(bytes).map_err(invalid)?;
     // mshio unwraps in a few places (e.g. a header number too large for its type): a panic
     // there is a parse error of this file, not of tmc
