@@ -309,6 +309,25 @@ pub struct CaseFile {
     pub solver: Solver,
     #[serde(default)]
     pub probe: Vec<Probe>,
+    #[serde(default)]
+    pub output: Output,
+}
+
+/// `[output]`: which steps get a `.vtu` (history.csv has every step).
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Output {
+    /// A `.vtu` every this many accepted steps (default 1: every step); step 0 and the last
+    /// step reached are always written.
+    pub every: Spanned<i64>,
+}
+
+impl Default for Output {
+    fn default() -> Self {
+        Output {
+            every: Spanned::new(0..0, 1),
+        }
+    }
 }
 
 /// A parsed case with its source, for error messages.
@@ -527,6 +546,16 @@ impl Case {
 
     /// Checks that need no mesh: moduli, steps, probes.
     fn check_values(&self) -> Result<(), CaseError> {
+        let every = &self.file.output.every;
+        if *every.get_ref() < 1 {
+            return self.error(
+                every.span(),
+                format!(
+                    "[output]: `every` must be at least 1, got {}",
+                    every.get_ref()
+                ),
+            );
+        }
         self.check_regions()?;
         let n_path = self.check_steps()?;
         self.check_bc_values(n_path)?;

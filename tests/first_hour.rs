@@ -321,3 +321,49 @@ fn a_log_gets_one_line_per_step_and_history_the_wall_time() {
     ]);
     assert!(!stderr(&o).contains("step "), "{}", stderr(&o));
 }
+
+#[test]
+fn output_every_n_steps_keeps_the_first_and_the_last() {
+    let dir = scratch("output-every");
+    let out = dir.join("out");
+    let o = tmc(&[
+        "solve",
+        "cases/block-transient.toml",
+        "-q",
+        "-o",
+        out.to_str().unwrap(),
+        "--set",
+        "output.every=3",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (_, rows) = common::history(&out);
+    let steps = rows.len() - 1;
+    assert!(
+        steps % 3 != 0,
+        "the scene's step count shows the last step's own file"
+    );
+    let mut want: Vec<usize> = (0..=steps).filter(|k| k % 3 == 0).collect();
+    want.push(steps);
+    let mut have: Vec<usize> = std::fs::read_dir(&out)
+        .unwrap()
+        .filter_map(|e| {
+            let n = e.unwrap().file_name().to_string_lossy().into_owned();
+            n.strip_prefix("step_")?.strip_suffix(".vtu")?.parse().ok()
+        })
+        .collect();
+    have.sort();
+    assert_eq!(have, want);
+    let pvd = std::fs::read_to_string(out.join("block-transient.pvd")).unwrap();
+    assert_eq!(pvd.matches("<DataSet").count(), want.len());
+    let o = tmc(&[
+        "check",
+        "cases/block-transient.toml",
+        "--set",
+        "output.every=0",
+    ]);
+    assert!(
+        stderr(&o).contains("`every` must be at least 1"),
+        "{}",
+        stderr(&o)
+    );
+}

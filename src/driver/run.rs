@@ -64,6 +64,9 @@ pub(super) struct Run<'a> {
     held_in_full: Vec<String>,
     /// The case steps over physical time (`[time]`): progress lines show t.
     transient_clock: bool,
+    /// `[output] every`, and the last step written.
+    every: usize,
+    written: Option<usize>,
 }
 
 /// What a run solves with, decided and set up before the first assembly: strategy, the
@@ -192,14 +195,15 @@ impl<'a> Run<'a> {
             pb: progress_bar(opts.quiet),
             held_in_full: held_in_full(case),
             transient_clock: case.file.time.is_some(),
+            every: *case.file.output.every.get_ref() as usize,
+            written: None,
         })
     }
 
     /// Record the initial state: step 0 of the series and of the history, and the forces the
     /// work is counted from.
     pub(super) fn record_initial(&mut self) -> Result<(), SolveError> {
-        self.folder.record(&Series::file_name(0))?;
-        self.series.write(self.model, 0, &self.x, 0.0)?;
+        self.write_step()?;
         let stats0 = self
             .asm
             .assemble(self.model, &self.x, 0.0, false, None)
@@ -323,10 +327,11 @@ impl<'a> Run<'a> {
         let values = self
             .layout
             .row(&row, &self.probe_values(), &self.totals.reactions);
-        // the step's file first: a history row always has its .vtu
-        self.folder.record(&Series::file_name(self.ctl.accepted))?;
-        self.series
-            .write(model, self.ctl.accepted, &self.x, target)?;
+        // the step's file first (when [output] every asks for it): a row never announces a
+        // file that is not there yet
+        if self.ctl.accepted.is_multiple_of(self.every) {
+            self.write_step()?;
+        }
         self.history.row(&values)?;
         self.report_step(&row, &rep);
         Ok(())
@@ -401,6 +406,18 @@ impl<'a> Run<'a> {
             "step {} its {}",
             self.ctl.accepted, self.totals.iterations
         ));
+    }
+
+    /// The `.vtu` of the last accepted state, once.
+    fn write_step(&mut self) -> Result<(), SolveError> {
+        let step = self.ctl.accepted;
+        if self.written == Some(step) {
+            return Ok(());
+        }
+        self.folder.record(&Series::file_name(step))?;
+        self.series.write(self.model, step, &self.x, self.ctl.t)?;
+        self.written = Some(step);
+        Ok(())
     }
 
     /// Where a step ended: λ, and the physical time with `[time]`.
@@ -478,6 +495,8 @@ impl<'a> Run<'a> {
 
     /// Fill the summary from the run's state and write `summary.json`.
     fn finish(&mut self, converged: bool, message: String) -> Result<(), SolveError> {
+        // the last state reached always has its file
+        self.write_step()?;
         let (model, ctl, tot, spent) = (self.model, &self.ctl, &self.totals, self.newton.spent);
         let s = &mut self.summary;
         s.converged = converged;
