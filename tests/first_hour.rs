@@ -367,3 +367,41 @@ fn output_every_n_steps_keeps_the_first_and_the_last() {
         stderr(&o)
     );
 }
+
+#[test]
+fn the_readme_geometry_is_the_shipped_one_and_it_solves() {
+    let readme = std::fs::read_to_string(root().join("README.md")).unwrap();
+    for f in ["geo/cylinder-plate.geo", "cases/cylinder-plate.toml"] {
+        let text = std::fs::read_to_string(root().join(f)).unwrap();
+        assert!(readme.contains(&text), "the README shows {f} as it is");
+    }
+    let dir = scratch("cylinder-plate");
+    let out = dir.join("out");
+    let o = tmc(&[
+        "solve",
+        "cases/cylinder-plate.toml",
+        "-q",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    // the gap of 0.1 closes to the medium's thin remnant under a push of 0.15
+    let gap = s["probes"]["gap"].as_f64().unwrap();
+    assert!(gap > 0.0 && gap < 0.02, "gap {gap}");
+    // equilibrium and the heat balance of the two held groups
+    let r = &s["reactions"];
+    let (fb, fr) = (
+        r["bottom"]["y"].as_f64().unwrap(),
+        r["rim"]["y"].as_f64().unwrap(),
+    );
+    assert!(fb > 0.0 && (fb + fr).abs() <= 1e-9 * fb, "forces {fb} {fr}");
+    let (qb, qr) = (
+        r["bottom"]["heat"].as_f64().unwrap(),
+        r["rim"]["heat"].as_f64().unwrap(),
+    );
+    assert!(qr > 0.0 && (qb + qr).abs() <= 1e-9 * qr, "heat {qb} {qr}");
+    // no sideways drift of the symmetric scene
+    assert!(r["bottom"]["x"].as_f64().unwrap().abs() < 1e-3 * fb);
+}
