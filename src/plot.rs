@@ -44,7 +44,13 @@ fn range(v: impl Iterator<Item = f64>, log: bool) -> std::ops::Range<f64> {
         return if log { 0.1..10.0 } else { 0.0..1.0 };
     }
     if log {
-        (lo / 1.5)..(hi * 1.5)
+        // whole decades, at least two (plotters puts its log ticks on the decades)
+        let (mut a, mut b) = ((lo / 1.01).log10().floor(), (hi * 1.01).log10().ceil());
+        if b - a < 2.0 {
+            a -= 1.0;
+            b += 1.0;
+        }
+        10f64.powf(a)..10f64.powf(b)
     } else {
         let pad = if hi > lo {
             0.05 * (hi - lo)
@@ -71,11 +77,12 @@ pub fn line_chart(path: &Path, chart: &Chart) -> Result<(), PlotError> {
             .flat_map(|s| s.points.iter().map(|p| p.1)),
         chart.log_y,
     );
+    let spans = (xs.end - xs.start, ys.end - ys.start);
     let r = draw_then_rename(path, |p| match (chart.log_x, chart.log_y) {
-        (false, false) => draw(p, chart, xs, ys),
-        (true, false) => draw(p, chart, xs.log_scale(), ys),
-        (false, true) => draw(p, chart, xs, ys.log_scale()),
-        (true, true) => draw(p, chart, xs.log_scale(), ys.log_scale()),
+        (false, false) => draw(p, chart, spans, xs, ys),
+        (true, false) => draw(p, chart, spans, xs.log_scale(), ys),
+        (false, true) => draw(p, chart, spans, xs, ys.log_scale()),
+        (true, true) => draw(p, chart, spans, xs.log_scale(), ys.log_scale()),
     });
     r.map_err(|msg| PlotError::Draw {
         path: path.to_owned(),
@@ -104,7 +111,51 @@ fn draw_then_rename(
     drawn
 }
 
-fn draw<X, Y>(path: &Path, chart: &Chart, x: X, y: Y) -> Result<(), String>
+/// A tick label: as few digits as the axis needs, "0" for round-off around zero; on a log
+/// axis only 1, 2 and 5 times a power of ten are labelled (the others would overlap).
+pub fn tick_label(v: f64, span: f64, log: bool) -> String {
+    if log {
+        let m = v / 10f64.powf(v.log10().floor());
+        if ![1.0, 2.0, 5.0].iter().any(|k| (m - k).abs() < 1e-6 * k) {
+            return String::new();
+        }
+        return trim_sci(&format!("{v:.0e}"));
+    }
+    if v.abs() <= 1e-9 * span.abs().max(f64::MIN_POSITIVE) {
+        return "0".into();
+    }
+    let big = v.abs().max(span.abs());
+    if (1e-3..1e5).contains(&big) {
+        let step = span.abs() / 10.0;
+        let digits = (-step.log10()).ceil().clamp(0.0, 8.0) as usize;
+        let t = format!("{v:.digits$}");
+        if t.contains('.') {
+            t.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            t
+        }
+    } else {
+        trim_sci(&format!("{v:.2e}"))
+    }
+}
+
+/// `2.50e-1` → `2.5e-1`, `1.00e3` → `1e3`.
+fn trim_sci(s: &str) -> String {
+    match s.split_once('e') {
+        Some((m, e)) if m.contains('.') => {
+            format!("{}e{e}", m.trim_end_matches('0').trim_end_matches('.'))
+        }
+        _ => s.to_string(),
+    }
+}
+
+fn draw<X, Y>(
+    path: &Path,
+    chart: &Chart,
+    (x_span, y_span): (f64, f64),
+    x: X,
+    y: Y,
+) -> Result<(), String>
 where
     X: AsRangedCoord<Value = f64>,
     Y: AsRangedCoord<Value = f64>,
@@ -124,8 +175,8 @@ where
     c.configure_mesh()
         .x_desc(chart.x_label)
         .y_desc(chart.y_label)
-        .x_label_formatter(&|v| format!("{v:.3}"))
-        .y_label_formatter(&|v| format!("{v:.3e}"))
+        .x_label_formatter(&|v| tick_label(*v, x_span, chart.log_x))
+        .y_label_formatter(&|v| tick_label(*v, y_span, chart.log_y))
         .draw()
         .map_err(|x| e(&x))?;
     for (i, s) in chart.series.iter().enumerate() {
@@ -148,12 +199,15 @@ where
         c.draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled())))
             .map_err(|x| e(&x))?;
     }
-    c.configure_series_labels()
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .position(SeriesLabelPosition::UpperLeft)
-        .draw()
-        .map_err(|x| e(&x))?;
+    // a legend only tells curves apart
+    if chart.series.len() > 1 {
+        c.configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .position(SeriesLabelPosition::UpperLeft)
+            .draw()
+            .map_err(|x| e(&x))?;
+    }
     root.present().map_err(|x| e(&x))?;
     Ok(())
 }
@@ -294,8 +348,8 @@ pub fn plot_results(
             &file,
             &Chart {
                 title: &format!("{name}: {c}"),
-                x_label: x,
-                y_label: c,
+                x_label: axis_name(x),
+                y_label: axis_name(c),
                 series: &[Series {
                     name: c.clone(),
                     points: xs.iter().copied().zip(ys).collect(),
@@ -321,4 +375,37 @@ pub fn file_stem(name: &str) -> String {
             }
         })
         .collect()
+}
+
+/// The axis title of a history column: the quantity in words for the known ones.
+pub fn axis_name(column: &str) -> &str {
+    match column {
+        "lambda" => "load factor λ",
+        "time" => "time t",
+        "energy" => "stored energy",
+        "work" => "external work",
+        "wall_seconds" => "wall time, s",
+        "newton_iterations" => "Newton iterations",
+        "heat_stored" => "heat stored",
+        "heat_in" => "heat supplied",
+        other => other,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tick_labels_are_short_and_zero_is_zero() {
+        assert_eq!(tick_label(0.1, 1.0, false), "0.1");
+        assert_eq!(tick_label(0.25, 0.25, false), "0.25");
+        assert_eq!(tick_label(-2.220446e-16, 0.25, false), "0");
+        assert_eq!(tick_label(1.5e-7, 2e-6, false), "1.5e-7");
+        assert_eq!(tick_label(20000.0, 20000.0, false), "20000");
+        assert_eq!(tick_label(2e5, 1e6, false), "2e5");
+        assert_eq!(tick_label(1e-3, 1.0, true), "1e-3");
+        assert_eq!(tick_label(5e-3, 1.0, true), "5e-3");
+        assert_eq!(tick_label(8e-3, 1.0, true), "");
+    }
 }

@@ -780,7 +780,7 @@ fn error_plot(
     line_chart(
         &f,
         &Chart {
-            title: &format!("{name}: error vs time"),
+            title: &format!("{name}: error vs time{}", reference_note(study)),
             x_label: "total time, s",
             y_label: &format!("relative error ({})", study.measure.join(", ")),
             series: &series,
@@ -789,6 +789,21 @@ fn error_plot(
         },
     )?;
     Ok(f)
+}
+
+/// A reference variant's own error is 0, which a log axis cannot show: say so in the title.
+fn reference_note(study: &StudyFile) -> String {
+    match &study.reference {
+        Some(Reference::Variant(r)) => {
+            let name = if r == "last" {
+                study.variant.last().map(|v| v.name.as_str()).unwrap_or("")
+            } else {
+                r.as_str()
+            };
+            format!(" (reference \"{name}\": error 0, not drawn)")
+        }
+        _ => String::new(),
+    }
 }
 
 /// The chosen history columns of every variant against λ, one plot per column.
