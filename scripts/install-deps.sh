@@ -3,10 +3,15 @@
 # meshing, fontconfig/freetype and a font for the plots (plotters), python3-meshio and
 # python3-matplotlib to read and render results, python3-gmsh and python3-dolfinx (FEniCSx 0.5.2)
 # for the validation against FEniCSx. Idempotent: installs only missing packages.
+# `install-deps.sh demo` installs only what building and running tmc needs (no Python, no
+# FEniCSx, about 1 GB less); without an argument, also what the tests and validation need.
 set -euo pipefail
+packages=(gmsh libgmsh-dev pkg-config libfontconfig1-dev libfreetype-dev fonts-dejavu-core)
+if [ "${1:-all}" != "demo" ]; then
+  packages+=(python3-meshio python3-matplotlib python3-gmsh python3-dolfinx)
+fi
 need=()
-for pkg in gmsh libgmsh-dev pkg-config libfontconfig1-dev libfreetype-dev fonts-dejavu-core \
-  python3-meshio python3-matplotlib python3-gmsh python3-dolfinx; do
+for pkg in "${packages[@]}"; do
   dpkg -s "$pkg" >/dev/null 2>&1 || need+=("$pkg")
 done
 if [ ${#need[@]} -gt 0 ]; then
