@@ -31,6 +31,26 @@ pub enum CaseError {
     },
 }
 
+impl CaseError {
+    /// What went wrong, without the file and line (for a message that names the settings that
+    /// made the case, e.g. `--set` or a study's variant): the last line of a TOML error, which
+    /// says what was found.
+    pub fn detail(&self) -> String {
+        match self {
+            CaseError::Invalid { msg, .. } | CaseError::Set { msg, .. } => msg.clone(),
+            CaseError::Syntax { msg, .. } => msg
+                .lines()
+                .rfind(|l| {
+                    !l.trim().is_empty() && !l.contains(" | ") && !l.trim_start().starts_with('|')
+                })
+                .unwrap_or(msg)
+                .trim()
+                .to_string(),
+            other => other.to_string(),
+        }
+    }
+}
+
 /// Region kinds.
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
 #[serde(rename_all = "lowercase")]
@@ -132,14 +152,41 @@ impl Bc {
     /// Whether the block gives `value`.
     pub fn has(&self, value: &str) -> bool {
         match value {
-            "ux" => self.ux.is_some(),
-            "uy" => self.uy.is_some(),
-            "uz" => self.uz.is_some(),
-            "theta" => self.theta.is_some(),
             "traction" => self.traction.is_some(),
-            "heat_flux" => self.heat_flux.is_some(),
-            _ => false,
+            _ => self.scalar(value).is_some(),
         }
+    }
+
+    /// The scalar `value` of the block (`ux`, `uy`, `uz`, `theta`, `heat_flux`), if given.
+    fn scalar(&self, value: &str) -> Option<f64> {
+        match value {
+            "ux" => self.ux,
+            "uy" => self.uy,
+            "uz" => self.uz,
+            "theta" => self.theta,
+            "heat_flux" => self.heat_flux,
+            _ => None,
+        }
+    }
+
+    /// The block's non-zero values that `ramp` holds at full value from the start, as
+    /// `uy = -0.2 on "top"`.
+    pub fn held_in_full(&self) -> Vec<String> {
+        let g = self.group.get_ref();
+        RAMPED_VALUES
+            .iter()
+            .filter(|&&v| !self.ramped(v))
+            .filter_map(|&v| match (v, &self.traction) {
+                ("traction", Some(t)) if t.get_ref().iter().any(|&x| x != 0.0) => {
+                    Some(format!("traction = {:?} on \"{g}\"", t.get_ref()))
+                }
+                ("traction", _) => None,
+                _ => self
+                    .scalar(v)
+                    .filter(|&x| x != 0.0)
+                    .map(|x| format!("{v} = {x} on \"{g}\"")),
+            })
+            .collect()
     }
 }
 
@@ -468,18 +515,7 @@ impl Case {
             set_path(&mut doc, key, value).map_err(&err)?;
         }
         let text = toml::to_string(&doc).map_err(|e| err(e.to_string()))?;
-        Case::parse(&self.path, text).map_err(|e| {
-            err(match e {
-                CaseError::Invalid { msg, .. } => msg,
-                CaseError::Syntax { msg, .. } => msg
-                    .lines()
-                    .rfind(|l| !l.trim().is_empty() && !l.contains('|'))
-                    .unwrap_or(&msg)
-                    .trim()
-                    .to_string(),
-                other => other.to_string(),
-            })
-        })
+        Case::parse(&self.path, text).map_err(|e| err(e.detail()))
     }
 
     pub fn read(path: &Path) -> Result<Case, CaseError> {
@@ -495,7 +531,6 @@ impl Case {
             path: path.to_owned(),
             msg: e.to_string().trim_end().to_string(),
         })?;
-
         let case = Case {
             path: path.to_owned(),
             text,

@@ -7,7 +7,8 @@
 //! constraints, local layout, sparsity) → [`material`] (pure laws) → [`kernel`] (local residual
 //! and tangent) → [`case`] and [`model`] (the discrete problem) → [`assembly`] → [`solver`]
 //! (linear, Newton, stepping) → [`output`] (VTU, history, probes) → [`driver`] (`tmc solve`) →
-//! [`study`] and [`plot`]. See docs/ARCHITECTURE.md.
+//! [`study`] and [`plot`]. Under them all, [`files`]: writing a file under a temporary name.
+//! See docs/ARCHITECTURE.md.
 
 #![allow(non_snake_case)]
 // maths names: F, P, J, X, dP_dF
@@ -19,6 +20,7 @@ pub mod case;
 pub mod dofs;
 pub mod driver;
 pub mod element;
+pub mod files;
 pub mod kernel;
 pub mod material;
 pub mod mesh;

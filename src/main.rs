@@ -225,17 +225,9 @@ fn main() -> ExitCode {
 /// What a mesh holds: nodes, cells per kind, and every physical group with its cells.
 fn print_mesh(mesh: &tmc::mesh::Mesh) {
     let kinds: Vec<String> = mesh
-        .cell_kinds()
+        .cell_counts()
         .iter()
-        .map(|&k| {
-            let n: usize = mesh
-                .cells
-                .iter()
-                .filter(|b| b.kind == k)
-                .map(|b| b.n_cells())
-                .sum();
-            format!("{n} {}", k.name())
-        })
+        .map(|(k, n)| format!("{n} {}", k.name()))
         .collect();
     println!(
         "  {} nodes, {} cells ({})",

@@ -98,17 +98,11 @@ fn draw_then_rename(
 ) -> Result<(), String> {
     let mut name = path.file_stem().unwrap_or_default().to_os_string();
     name.push(".part.png");
-    let tmp = path.with_file_name(name);
-    let drawn = draw(&tmp).and_then(|_| {
-        std::fs::File::open(&tmp)
-            .and_then(|f| f.sync_all())
-            .and_then(|_| std::fs::rename(&tmp, path))
-            .map_err(|e| e.to_string())
-    });
-    if drawn.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    drawn
+    let tmp = crate::files::TempFile::new(path.with_file_name(name));
+    draw(tmp.path())?;
+    tmp.sync()
+        .and_then(|_| tmp.commit(path))
+        .map_err(|e| e.to_string())
 }
 
 /// A tick label: as few digits as the axis needs, "0" for round-off around zero; on a log

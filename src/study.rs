@@ -87,6 +87,20 @@ pub struct StudyFile {
     pub variant: Vec<Variant>,
 }
 
+impl StudyFile {
+    /// The variant the errors are measured against, by name ("last" resolved), if the
+    /// reference is a variant.
+    fn reference_variant(&self) -> Option<&str> {
+        match &self.reference {
+            Some(Reference::Variant(r)) if r == "last" => {
+                self.variant.last().map(|v| v.name.as_str())
+            }
+            Some(Reference::Variant(r)) => Some(r),
+            _ => None,
+        }
+    }
+}
+
 /// One solved variant.
 #[derive(Clone, Debug)]
 pub struct Outcome {
@@ -196,11 +210,7 @@ fn quantity_names(summary: &serde_json::Value) -> Vec<String> {
     if let Some(r) = summary["reactions"].as_object() {
         for (g, v) in r {
             for (k, _) in v.as_object().into_iter().flatten() {
-                names.push(if k == "heat" {
-                    format!("Q_{g}")
-                } else {
-                    format!("R_{g}_{k}")
-                });
+                names.push(crate::driver::records::flow_name(g, k));
             }
         }
     }
@@ -373,26 +383,13 @@ fn variant_cases(path: &Path, study: &StudyFile) -> Result<Vec<String>, StudyErr
             // the whole case check (unknown keys, values) now, naming the variant and what it
             // sets, not a line of a generated file later
             crate::case::Case::parse(&case_path, text.clone()).map_err(|e| {
-                let detail = match &e {
-                    crate::case::CaseError::Syntax { msg, .. } => msg
-                        .lines()
-                        .rfind(|l| {
-                            !l.trim().is_empty()
-                                && !l.contains(" | ")
-                                && !l.trim_start().starts_with('|')
-                        })
-                        .unwrap_or(msg)
-                        .trim()
-                        .to_string(),
-                    crate::case::CaseError::Invalid { msg, .. } => msg.clone(),
-                    other => other.to_string(),
-                };
                 invalid(
                     path,
                     format!(
-                        "variant \"{}\" (set = {}) makes an invalid case: {detail}",
+                        "variant \"{}\" (set = {}) makes an invalid case: {}",
                         v.name,
-                        toml::Value::Table(v.set.clone())
+                        toml::Value::Table(v.set.clone()),
+                        e.detail()
                     ),
                 )
             })?;
@@ -542,13 +539,13 @@ fn set_errors(study: &StudyFile, outcomes: &mut [Outcome]) -> String {
             .iter()
             .map(|q| m.get(q).copied().unwrap_or(f64::NAN))
             .collect(),
-        Reference::Variant(r) => {
-            let o = if r == "last" {
-                outcomes.last()
-            } else {
-                outcomes.iter().find(|o| &o.variant.name == r)
-            };
-            o.map(|o| o.values.clone()).unwrap_or_default()
+        Reference::Variant(_) => {
+            let name = study.reference_variant();
+            outcomes
+                .iter()
+                .find(|o| Some(o.variant.name.as_str()) == name)
+                .map(|o| o.values.clone())
+                .unwrap_or_default()
         }
     };
     for o in outcomes.iter_mut() {
@@ -569,7 +566,7 @@ fn set_errors(study: &StudyFile, outcomes: &mut [Outcome]) -> String {
         ),
         Reference::Variant(r) if r == "last" => format!(
             "the last (finest) variant, \"{}\"",
-            study.variant.last().map(|v| v.name.as_str()).unwrap_or("")
+            study.reference_variant().unwrap_or("")
         ),
         Reference::Variant(r) => format!("the variant \"{r}\""),
     }
@@ -793,17 +790,10 @@ fn error_plot(
 
 /// A reference variant's own error is 0, which a log axis cannot show: say so in the title.
 fn reference_note(study: &StudyFile) -> String {
-    match &study.reference {
-        Some(Reference::Variant(r)) => {
-            let name = if r == "last" {
-                study.variant.last().map(|v| v.name.as_str()).unwrap_or("")
-            } else {
-                r.as_str()
-            };
-            format!(" (reference \"{name}\": error 0, not drawn)")
-        }
-        _ => String::new(),
-    }
+    study
+        .reference_variant()
+        .map(|name| format!(" (reference \"{name}\": error 0, not drawn)"))
+        .unwrap_or_default()
 }
 
 /// The chosen history columns of every variant against λ, one plot per column.

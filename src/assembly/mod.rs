@@ -25,7 +25,7 @@ pub use cells::check_inversion;
 use crate::dofs::{Layout, Pattern, build_pattern};
 use crate::element::RefElement;
 use crate::kernel::{Active, KernelError};
-use crate::mesh::Block;
+use crate::mesh::{Block, centroid};
 use crate::model::{FacetBlock, Model};
 use cells::{Arrays, Cells, SlabView};
 use history::{PointHistory, Slab};
@@ -467,17 +467,6 @@ pub fn heat_stored(model: &Model, x: &[f64]) -> Result<f64, AssemblyError> {
         }
     }
     Ok(e)
-}
-
-/// The mean of a cell's node coordinates.
-fn centroid(coords: &[[f64; 3]], nodes: &[usize]) -> [f64; 3] {
-    let mut c = [0.0; 3];
-    for &n in nodes {
-        for (ci, xi) in c.iter_mut().zip(coords[n]) {
-            *ci += xi / nodes.len() as f64;
-        }
-    }
-    c
 }
 
 /// The assembly error of a facet kernel's failure.

@@ -3,6 +3,7 @@
 //! or last (right).
 
 use super::MIN_PART_CELLS;
+use crate::mesh::centroid;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// The order a block's cells are assembled in, and which of them may run at once.
@@ -37,17 +38,10 @@ impl Schedule {
             cells.sort_unstable();
             return Schedule::Cells(cells);
         }
-        let centroid = |c: u32| -> [f64; 3] {
-            let nodes = nodes(c);
-            let mut m = [0.0; 3];
-            for &n in nodes {
-                for (mi, xi) in m.iter_mut().zip(&coords[n]) {
-                    *mi += xi;
-                }
-            }
-            m.map(|v| v / nodes.len() as f64)
-        };
-        let mut keyed: Vec<([f64; 3], u32)> = cells.iter().map(|&c| (centroid(c), c)).collect();
+        let mut keyed: Vec<([f64; 3], u32)> = cells
+            .iter()
+            .map(|&c| (centroid(coords, nodes(c)), c))
+            .collect();
         let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
         for (m, _) in &keyed {
             for i in 0..3 {

@@ -4,12 +4,11 @@
 
 use super::run::Plan;
 use super::strategy::describe;
-use super::{SolveError, SolveOptions, mesh_for};
+use super::{SolveError, SolveOptions, checked_model};
 use crate::case::Case;
 use crate::dofs::Field;
 use crate::mesh::Mesh;
-use crate::model::build;
-use crate::output::probes;
+use crate::output::werr;
 use std::path::Path;
 
 /// What `tmc check` found.
@@ -43,18 +42,11 @@ impl CheckReport {
 pub fn check(case_path: &Path, opts: &SolveOptions) -> Result<CheckReport, SolveError> {
     let case = Case::read(case_path)?.with_sets(&opts.sets)?;
     let scratch = std::env::temp_dir().join(format!("tmc-check-{}", std::process::id()));
-    std::fs::create_dir_all(&scratch).map_err(|e| {
-        SolveError::Output(crate::output::OutputError::Write {
-            path: scratch.clone(),
-            msg: e.to_string(),
-        })
-    })?;
-    let meshed = mesh_for(&case, &scratch);
+    std::fs::create_dir_all(&scratch).map_err(|e| SolveError::Output(werr(&scratch, e)))?;
+    // the mesh's warnings go to the report
+    let checked = checked_model(&case, &scratch, true);
     let _ = std::fs::remove_dir_all(&scratch);
-    let (mesh, _staged) = meshed?;
-    case.validate(&mesh)?;
-    let model = build(&case, mesh)?;
-    let probes = probes::build(&case, &model.mesh)?;
+    let (model, probes, _staged) = checked?;
     let plan = Plan::new(&case, &model, opts)?;
     let factor_entries = plan
         .solvers

@@ -10,12 +10,13 @@ pub use records::{HISTORY_SOLVER_COLUMNS, HISTORY_STEP_COLUMNS, Summary, group_f
 pub use strategy::{Strategy, choose_linear, choose_strategy, describe};
 
 use crate::case::{Case, CaseError};
+use crate::files::TempFile;
 use crate::mesh::Mesh;
 use crate::mesh::gmsh::{GmshError, MeshOptions, mesh_geo};
 use crate::mesh::msh::{MshError, read_msh};
 use crate::model::{Model, build};
 use crate::output::probes::{self, Probe};
-use crate::output::{OutputError, RunFolder};
+use crate::output::{OutputError, RunFolder, werr};
 use crate::solver::idle::IdleThreads;
 use crate::solver::linear::LinearError;
 use run::Run;
@@ -103,26 +104,7 @@ pub struct SolveOptions {
 
 /// A mesh written for this run under a temporary name: moved to its final name once the run
 /// starts, removed if the run fails before.
-#[derive(Debug)]
-pub struct StagedMesh(PathBuf);
-
-impl StagedMesh {
-    /// Move the mesh to `to`.
-    pub fn commit(self, to: &Path) -> Result<(), SolveError> {
-        std::fs::rename(&self.0, to).map_err(|e| {
-            SolveError::Output(OutputError::Write {
-                path: to.to_owned(),
-                msg: e.to_string(),
-            })
-        })
-    }
-}
-
-impl Drop for StagedMesh {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_file(&self.0);
-    }
-}
+pub type StagedMesh = TempFile;
 
 /// The case's mesh: its `.msh` read, or its `.geo` meshed into a staged file in `out_dir`.
 pub fn mesh_for(case: &Case, out_dir: &Path) -> Result<(Mesh, Option<StagedMesh>), SolveError> {
@@ -138,7 +120,7 @@ pub fn mesh_for(case: &Case, out_dir: &Path) -> Result<(Mesh, Option<StagedMesh>
                 verbose: false,
             };
             let report = mesh_geo(&path, &out, &opts)?;
-            let staged = StagedMesh(out);
+            let staged = TempFile::new(out);
             let mut mesh = report.mesh;
             mesh.warnings = report.warnings;
             mesh.source = path;
@@ -158,6 +140,26 @@ pub fn mesh_for(case: &Case, out_dir: &Path) -> Result<(Mesh, Option<StagedMesh>
     }
 }
 
+/// The case's model and probes, everything checked: its mesh (a `.geo` meshed into a staged
+/// file in `mesh_dir`; the mesh's warnings printed unless `quiet`), the case against the mesh,
+/// the model (every body held).
+pub(crate) fn checked_model(
+    case: &Case,
+    mesh_dir: &Path,
+    quiet: bool,
+) -> Result<(Model, Vec<Probe>, Option<StagedMesh>), SolveError> {
+    let (mesh, staged) = mesh_for(case, mesh_dir)?;
+    if !quiet {
+        for w in &mesh.warnings {
+            eprintln!("warning: {}: {w}", mesh.source.display());
+        }
+    }
+    case.validate(&mesh)?;
+    let model = build(case, mesh)?;
+    let probes = probes::build(case, &model.mesh)?;
+    Ok((model, probes, staged))
+}
+
 /// Solve a case file end to end.
 ///
 /// Nothing in the output folder changes until the case, the mesh and the model have been
@@ -171,21 +173,15 @@ pub fn run(case_path: &Path, opts: &SolveOptions) -> Result<Summary, SolveError>
         .clone()
         .unwrap_or_else(|| PathBuf::from("results").join(case.name()));
     let mut folder = RunFolder::open(&out_dir)?;
-    let (mesh, staged) = mesh_for(&case, &out_dir)?;
-    if !opts.quiet {
-        for w in &mesh.warnings {
-            eprintln!("warning: {}: {w}", mesh.source.display());
-        }
-    }
-    case.validate(&mesh)?;
-    let mut model = build(&case, mesh)?;
-    let probes = probes::build(&case, &model.mesh)?;
+    let (mut model, probes, staged) = checked_model(&case, &out_dir, opts.quiet)?;
     folder.replace_previous()?;
     if let Some(staged) = staged {
         // errors so far named the .geo; from now on the mesh is the file written
         folder.record("mesh.msh")?;
         model.mesh.source = out_dir.join("mesh.msh");
-        staged.commit(&model.mesh.source)?;
+        staged
+            .commit(&model.mesh.source)
+            .map_err(|e| SolveError::Output(werr(&model.mesh.source, e)))?;
     }
     solve_model(&case, model, &probes, folder, opts, start)
 }

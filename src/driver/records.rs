@@ -80,10 +80,12 @@ impl Summary {
         strategy: Strategy,
         out_dir: &Path,
     ) -> Summary {
-        let mut cells = BTreeMap::new();
-        for b in &model.mesh.cells {
-            *cells.entry(b.kind.name().to_string()).or_default() += b.n_cells();
-        }
+        let cells = model
+            .mesh
+            .cell_counts()
+            .into_iter()
+            .map(|(k, n)| (k.name().to_string(), n))
+            .collect();
         let mut dofs = BTreeMap::new();
         for f in Field::ALL {
             dofs.insert(f.name().to_string(), model.dofs.count(f));
@@ -207,6 +209,16 @@ pub(super) fn peak_memory_mb() -> Option<f64> {
 /// Reactions and heat flows per group: group name → component ("x", "y", "z", "heat") → value.
 pub type Reactions = BTreeMap<String, BTreeMap<String, f64>>;
 
+/// The name of a group's flow (component `key`: "x", "y", "z" or "heat") as a history column
+/// and a study measure: `R_<group>_<key>` for a force, `Q_<group>` for heat.
+pub fn flow_name(group: &str, key: &str) -> String {
+    if key == "heat" {
+        format!("Q_{group}")
+    } else {
+        format!("R_{group}_{key}")
+    }
+}
+
 /// One accepted step's numbers for its history row, besides probes and reactions.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct StepRow {
@@ -269,13 +281,7 @@ impl HistoryLayout {
         let mut columns: Vec<String> = HISTORY_STEP_COLUMNS.map(String::from).to_vec();
         columns.push("energy".into());
         columns.extend(probe_names.iter().cloned());
-        columns.extend(reactions.iter().map(|(g, k)| {
-            if k == "heat" {
-                format!("Q_{g}")
-            } else {
-                format!("R_{g}_{k}")
-            }
-        }));
+        columns.extend(reactions.iter().map(|(g, k)| flow_name(g, k)));
         columns.extend(HISTORY_SOLVER_COLUMNS.map(String::from));
         columns.push("work".into());
         let transient = model.physics.transient;

@@ -193,7 +193,12 @@ impl<'a> Run<'a> {
             },
             summary,
             pb: progress_bar(opts.quiet),
-            held_in_full: held_in_full(case),
+            held_in_full: case
+                .file
+                .bc
+                .iter()
+                .flat_map(|bc| bc.held_in_full())
+                .collect(),
             transient_clock: case.file.time.is_some(),
             every: *case.file.output.every.get_ref() as usize,
             written: None,
@@ -535,36 +540,6 @@ impl<'a> Run<'a> {
             self.pb.println(line);
         }
     }
-}
-
-/// The non-zero values of the case's `[[bc]]`s that `ramp` holds at full value from the start.
-fn held_in_full(case: &Case) -> Vec<String> {
-    let mut out = Vec::new();
-    for bc in &case.file.bc {
-        let g = bc.group.get_ref();
-        let scalar = [
-            ("ux", bc.ux),
-            ("uy", bc.uy),
-            ("uz", bc.uz),
-            ("theta", bc.theta),
-            ("heat_flux", bc.heat_flux),
-        ];
-        for (name, v) in scalar {
-            if let Some(v) = v
-                && v != 0.0
-                && !bc.ramped(name)
-            {
-                out.push(format!("{name} = {v} on \"{g}\""));
-            }
-        }
-        if let Some(t) = &bc.traction
-            && t.get_ref().iter().any(|&v| v != 0.0)
-            && !bc.ramped("traction")
-        {
-            out.push(format!("traction = {:?} on \"{g}\"", t.get_ref()));
-        }
-    }
-    out
 }
 
 /// The step controller: over physical time with `[time]` (steps of at most `dt`, onto every

@@ -3,6 +3,7 @@
 //! Every function called here was checked against `/usr/include/gmshc.h` of gmsh 4.8.4: the
 //! crate binds the 4.4.1 API, whose signatures for these calls are unchanged.
 
+use crate::files::TempFile;
 use std::ffi::{CStr, CString};
 use std::os::raw::{c_char, c_int};
 use std::path::{Path, PathBuf};
@@ -111,30 +112,31 @@ pub fn mesh_geo(geo: &Path, out: &Path, opts: &MeshOptions) -> Result<MeshReport
     // .geo parameters: not gmsh's `-setnumber`, whose values stay in a process-wide table that
     // every later `open` re-applies; instead a wrapper defines them before including the file,
     // and `DefineConstant` keeps an existing definition.
-    let wrapper = ParamWrapper::new(geo, &opts.set_numbers).map_err(|source| GmshError::Write {
+    let wrapper = param_wrapper(geo, &opts.set_numbers).map_err(|source| GmshError::Write {
         path: std::env::temp_dir(),
         source,
     })?;
-    let open_path = wrapper.path.as_deref().unwrap_or(geo);
+    let open_path = wrapper.as_ref().map_or(geo, TempFile::path);
     // gmsh picks the format from the extension: the temporary name must end in .msh
-    let tmp = Removed(out.with_extension("part.msh"));
-    let outcome = isolated(|| mesh_in_process(open_path, &tmp.0, opts)).map_err(|e| match e {
-        Isolation::Ended(status) => GmshError::Ended {
-            path: geo.to_owned(),
-            status,
-        },
-        Isolation::Crashed(signal) => GmshError::Crashed {
-            path: geo.to_owned(),
-            signal,
-        },
-        Isolation::Os(source) => GmshError::Write {
-            path: tmp.0.clone(),
-            source,
-        },
-    })?;
+    let tmp = TempFile::new(out.with_extension("part.msh"));
+    let outcome =
+        isolated(|| mesh_in_process(open_path, tmp.path(), opts)).map_err(|e| match e {
+            Isolation::Ended(status) => GmshError::Ended {
+                path: geo.to_owned(),
+                status,
+            },
+            Isolation::Crashed(signal) => GmshError::Crashed {
+                path: geo.to_owned(),
+                signal,
+            },
+            Isolation::Os(source) => GmshError::Write {
+                path: tmp.path().to_owned(),
+                source,
+            },
+        })?;
     // messages about the wrapper are about the user's file
-    let own = |m: String| match &wrapper.path {
-        Some(w) => m.replace(&w.display().to_string(), &geo.display().to_string()),
+    let own = |m: String| match &wrapper {
+        Some(w) => m.replace(&w.path().display().to_string(), &geo.display().to_string()),
         None => m,
     };
     let (dim, mut warnings): (i32, Vec<String>) = match outcome {
@@ -151,7 +153,7 @@ pub fn mesh_geo(geo: &Path, out: &Path, opts: &MeshOptions) -> Result<MeshReport
             });
         }
     };
-    let mut mesh = super::msh::read_msh(&tmp.0).map_err(|e| match e {
+    let mut mesh = super::msh::read_msh(tmp.path()).map_err(|e| match e {
         super::msh::MshError::Invalid { msg, .. } => GmshError::Unusable {
             path: geo.to_owned(),
             // what gmsh warned about (e.g. surfaces in no group) is usually why
@@ -175,25 +177,14 @@ pub fn mesh_geo(geo: &Path, out: &Path, opts: &MeshOptions) -> Result<MeshReport
         path: out.to_owned(),
         source,
     };
-    std::fs::File::open(&tmp.0)
-        .and_then(|f| f.sync_all())
-        .map_err(write)?;
-    std::fs::rename(&tmp.0, out).map_err(write)?;
+    tmp.sync().map_err(write)?;
+    tmp.commit(out).map_err(write)?;
     Ok(MeshReport {
         dim,
         output: out.to_owned(),
         warnings,
         mesh,
     })
-}
-
-/// A path removed on drop if it still exists (a temporary file after a failure).
-struct Removed(PathBuf);
-
-impl Drop for Removed {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_file(&self.0);
-    }
 }
 
 /// Mesh in this process (the child): open, generate, write `tmp`.
@@ -393,42 +384,29 @@ fn check_parameters(geo: &Path, params: &[(String, f64)]) -> Result<(), GmshErro
     Ok(())
 }
 
-/// A temporary `.geo` that sets parameters and includes the user's file; removed on drop.
-struct ParamWrapper {
-    path: Option<PathBuf>,
-}
-
-impl ParamWrapper {
-    fn new(geo: &Path, params: &[(String, f64)]) -> std::io::Result<ParamWrapper> {
-        if params.is_empty() {
-            return Ok(ParamWrapper { path: None });
-        }
-        static COUNT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
-        let k = COUNT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        let path = std::env::temp_dir().join(format!(
-            "tmc-{}-{k}-{}",
-            std::process::id(),
-            geo.file_name()
-                .map(|f| f.to_string_lossy())
-                .unwrap_or_default()
-        ));
-        let abs = std::fs::canonicalize(geo)?;
-        let mut text = String::new();
-        for (name, value) in params {
-            text.push_str(&format!("{name} = {value:?};\n"));
-        }
-        text.push_str(&format!("Include \"{}\";\n", abs.display()));
-        std::fs::write(&path, text)?;
-        Ok(ParamWrapper { path: Some(path) })
+/// A temporary `.geo` that sets parameters and includes the user's file (removed when
+/// dropped); `None` without parameters.
+fn param_wrapper(geo: &Path, params: &[(String, f64)]) -> std::io::Result<Option<TempFile>> {
+    if params.is_empty() {
+        return Ok(None);
     }
-}
-
-impl Drop for ParamWrapper {
-    fn drop(&mut self) {
-        if let Some(p) = &self.path {
-            let _ = std::fs::remove_file(p);
-        }
+    static COUNT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let k = COUNT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let wrapper = TempFile::new(std::env::temp_dir().join(format!(
+        "tmc-{}-{k}-{}",
+        std::process::id(),
+        geo.file_name()
+            .map(|f| f.to_string_lossy())
+            .unwrap_or_default()
+    )));
+    let abs = std::fs::canonicalize(geo)?;
+    let mut text = String::new();
+    for (name, value) in params {
+        text.push_str(&format!("{name} = {value:?};\n"));
     }
+    text.push_str(&format!("Include \"{}\";\n", abs.display()));
+    std::fs::write(wrapper.path(), text)?;
+    Ok(Some(wrapper))
 }
 
 fn cstring(s: &str) -> CString {

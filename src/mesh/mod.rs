@@ -273,6 +273,22 @@ impl Mesh {
         (0..3).map(|i| hi[i] - lo[i]).fold(0.0, f64::max)
     }
 
+    /// Cells per element type, in order of first appearance.
+    pub fn cell_counts(&self) -> Vec<(CellKind, usize)> {
+        self.cell_kinds()
+            .into_iter()
+            .map(|k| {
+                let n = self
+                    .cells
+                    .iter()
+                    .filter(|b| b.kind == k)
+                    .map(Block::n_cells)
+                    .sum();
+                (k, n)
+            })
+            .collect()
+    }
+
     /// Element types present among the cells, in order of first appearance.
     pub fn cell_kinds(&self) -> Vec<CellKind> {
         let mut kinds = Vec::new();
@@ -283,6 +299,17 @@ impl Mesh {
         }
         kinds
     }
+}
+
+/// The mean of the nodes' coordinates (a cell's centre, a body's centre).
+pub fn centroid(coords: &[[f64; 3]], nodes: &[usize]) -> [f64; 3] {
+    let mut m = [0.0; 3];
+    for &n in nodes {
+        for (mi, xi) in m.iter_mut().zip(&coords[n]) {
+            *mi += xi;
+        }
+    }
+    m.map(|v| v / nodes.len() as f64)
 }
 
 /// Checks of a mesh as read: every coordinate finite and every cell of non-zero measure
@@ -304,21 +331,17 @@ pub fn check_geometry(mesh: &Mesh) -> Result<Vec<String>, String> {
     let tol = 1e-12 * h.powi(mesh.dim as i32);
     for b in &mesh.cells {
         for c in 0..b.n_cells() {
-            let nodes = b.cell(c);
-            let x: Vec<[f64; 3]> = nodes[..b.kind.corners()]
-                .iter()
-                .map(|&n| mesh.coords[n])
-                .collect();
+            let corners = &b.cell(c)[..b.kind.corners()];
+            let x: Vec<[f64; 3]> = corners.iter().map(|&n| mesh.coords[n]).collect();
             if min_corner_measure(b.kind, &x).abs() <= tol {
                 let group = b
                     .groups
                     .first()
                     .map(|&g| mesh.groups[g].name.as_str())
                     .unwrap_or("(no group)");
-                let k = x.len() as f64;
-                let centre: Vec<String> = (0..mesh.dim)
-                    .map(|i| format!("{:.4}", x.iter().map(|p| p[i]).sum::<f64>() / k))
-                    .collect();
+                let at = centroid(&mesh.coords, corners);
+                let centre: Vec<String> =
+                    at[..mesh.dim].iter().map(|v| format!("{v:.4}")).collect();
                 return Err(format!(
                     "a {} cell of group \"{group}\" at ({}) is degenerate (zero {})",
                     b.kind.name(),

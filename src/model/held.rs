@@ -112,12 +112,7 @@ fn free_rigid_mode(model: &Model, nodes: &[usize], held: &[(usize, usize)]) -> O
     let x = &model.mesh.coords;
     let d = model.mesh.dim;
     // centre and size of the body, so that rotations and translations weigh alike
-    let mut c = [0.0; 3];
-    for &n in nodes {
-        for i in 0..3 {
-            c[i] += x[n][i] / nodes.len() as f64;
-        }
-    }
+    let c = crate::mesh::centroid(x, nodes);
     let h = nodes
         .iter()
         .map(|&n| (0..3).map(|i| (x[n][i] - c[i]).abs()).fold(0.0, f64::max))

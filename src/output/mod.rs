@@ -15,6 +15,7 @@ pub use history::History;
 pub use series::Series;
 pub use vtu::{StepFields, write_pvd, write_vtu};
 
+use crate::files::TempFile;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -45,17 +46,11 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
     use std::io::Write;
     let mut tmp_name = path.file_name().unwrap_or_default().to_os_string();
     tmp_name.push(".part");
-    let tmp = path.with_file_name(tmp_name);
-    let written = std::fs::File::create(&tmp)
-        .and_then(|mut f| f.write_all(bytes).and_then(|_| f.sync_data()));
-    if let Err(e) = written {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(werr(path, e));
-    }
-    std::fs::rename(&tmp, path).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        werr(path, e)
-    })
+    let tmp = TempFile::new(path.with_file_name(tmp_name));
+    std::fs::File::create(tmp.path())
+        .and_then(|mut f| f.write_all(bytes).and_then(|_| f.sync_data()))
+        .and_then(|_| tmp.commit(path))
+        .map_err(|e| werr(path, e))
 }
 
 /// Write a small text file (e.g. a log) atomically.
