@@ -44,13 +44,7 @@ const SOLID: &str = "[[region]]\ngroup = \"solid\"\nkind = \"solid\"\nK = 20.0\n
 const HELD: &str = "[[bc]]\ngroup = \"left\"\nux = 0.0\n[[bc]]\ngroup = \"origin\"\nuy = 0.0\n[[bc]]\ngroup = \"right\"\nux = 0.2\n";
 
 fn solve(case: &Path, out: &Path) -> Output {
-    tmc(&[
-        "solve",
-        case.to_str().unwrap(),
-        "-o",
-        out.to_str().unwrap(),
-        "-q",
-    ])
+    common::solve_cli(case, out, &[])
 }
 
 /// File names in `dir`, sorted.
@@ -147,11 +141,7 @@ fn gmsh_exiting_or_a_full_disk_never_ends_in_success() {
         listing(&dir)
     );
     let block = dir.join("block.msh");
-    assert!(
-        tmc(&["mesh", "geo/block.geo", "-o", block.to_str().unwrap()])
-            .status
-            .success()
-    );
+    common::mesh_cli("geo/block.geo", &block);
     let body = std::fs::read_to_string(root().join("cases/block.toml")).unwrap();
     let case = dir.join("block.toml");
     std::fs::write(&case, body.replace("../geo/block.geo", "block.msh")).unwrap();
@@ -242,8 +232,7 @@ fn nothing_a_user_wrote_is_lost() {
     unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
     let o = child.wait_with_output().unwrap();
     fails_with(&o, &["interrupted at λ"]);
-    let s: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(slow.join("summary.json")).unwrap()).unwrap();
+    let s = common::summary(&slow);
     assert_eq!(s["converged"], false);
     assert!(
         s["message"].as_str().unwrap().contains("interrupted"),
@@ -319,11 +308,7 @@ fn bad_values_are_named_by_file_line_and_key() {
     );
     // a truncated mesh is named by its section and line
     let good = dir.join("slab.msh");
-    assert!(
-        tmc(&["mesh", "geo/slab.geo", "-o", good.to_str().unwrap()])
-            .status
-            .success()
-    );
+    common::mesh_cli("geo/slab.geo", &good);
     let text = std::fs::read_to_string(&good).unwrap();
     let cut = dir.join("cut.msh");
     std::fs::write(&cut, &text[..text.find("$EndNodes").unwrap() - 10]).unwrap();
@@ -432,11 +417,7 @@ fn singular_systems_are_found_before_solving() {
     );
     // a group without elements
     let good = dir.join("slab.msh");
-    assert!(
-        tmc(&["mesh", "geo/slab.geo", "-o", good.to_str().unwrap()])
-            .status
-            .success()
-    );
+    common::mesh_cli("geo/slab.geo", &good);
     let text = std::fs::read_to_string(&good).unwrap();
     let (head, rest) = text.split_once("$PhysicalNames\n").unwrap();
     let (count, names) = rest.split_once('\n').unwrap();

@@ -7,10 +7,6 @@ use common::*;
 use std::path::Path;
 use std::process::{Command, Output};
 
-fn summary(dir: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
-}
-
 #[test]
 fn mesh_then_solve_2d_and_3d() {
     let dir = scratch("cli-e2e");

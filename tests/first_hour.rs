@@ -3,7 +3,8 @@
 
 mod common;
 
-use common::{case_body, root, scratch, solve_text, stderr, tmc};
+use common::{case_body, root, scratch, solve_cli, solve_text, stderr, summary, tmc};
+use std::path::{Path, PathBuf};
 
 /// The block scene with its four `[[bc]]` blocks replaced by `bcs`.
 fn block_with(bcs: &str) -> String {
@@ -14,6 +15,14 @@ fn block_with(bcs: &str) -> String {
 }
 
 const COARSE: &str = "n = 8, m = 4, l = 2";
+
+/// `dir/NAME.toml`: the block's `.geo` as its mesh, then `body`.
+fn block_case(dir: &Path, name: &str, body: &str) -> PathBuf {
+    let case = dir.join(format!("{name}.toml"));
+    let geo = root().join("geo/block.geo");
+    std::fs::write(&case, format!("mesh = \"{}\"\n{body}", geo.display())).unwrap();
+    case
+}
 
 #[test]
 fn ramp_per_value_equals_separate_blocks_and_a_full_load_is_named() {
@@ -41,22 +50,14 @@ fn ramp_per_value_equals_separate_blocks_and_a_full_load_is_named() {
          [[bc]]\ngroup = \"top\"\nux = 0.0\nuy = -0.4\ntheta = 100.0\nramp = false\n",
     );
     let dir = scratch("ramp-held");
-    let case = dir.join("held.toml");
-    std::fs::write(
-        &case,
-        format!(
-            "mesh = \"{}\"\n[mesh_options]\nparams = {{ {COARSE} }}\n[steps]\nmin = 0.05\nmax_iter = 2\n{held}",
-            root().join("geo/block.geo").display()
+    let case = block_case(
+        &dir,
+        "held",
+        &format!(
+            "[mesh_options]\nparams = {{ {COARSE} }}\n[steps]\nmin = 0.05\nmax_iter = 2\n{held}"
         ),
-    )
-    .unwrap();
-    let o = tmc(&[
-        "solve",
-        case.to_str().unwrap(),
-        "-q",
-        "-o",
-        dir.join("out").to_str().unwrap(),
-    ]);
+    );
+    let o = solve_cli(&case, &dir.join("out"), &[]);
     let e = stderr(&o);
     assert!(!o.status.success(), "{e}");
     assert!(
@@ -65,22 +66,8 @@ fn ramp_per_value_equals_separate_blocks_and_a_full_load_is_named() {
     );
     // a ramp table naming a value the block does not give
     let bad = block_with("[[bc]]\ngroup = \"top\"\nuy = -0.4\nramp = { thetaa = false }\n");
-    let case = dir.join("bad.toml");
-    std::fs::write(
-        &case,
-        format!(
-            "mesh = \"{}\"\n{bad}",
-            root().join("geo/block.geo").display()
-        ),
-    )
-    .unwrap();
-    let o = tmc(&[
-        "solve",
-        case.to_str().unwrap(),
-        "-q",
-        "-o",
-        dir.join("out2").to_str().unwrap(),
-    ]);
+    let case = block_case(&dir, "bad", &bad);
+    let o = solve_cli(&case, &dir.join("out2"), &[]);
     let e = stderr(&o);
     assert!(
         !o.status.success()
@@ -115,19 +102,13 @@ fn check_reports_what_a_solve_would_use_and_writes_nothing() {
     }
     // the same numbers a solve reports
     let dir = scratch("check-vs-solve");
-    let o = tmc(&[
-        "solve",
-        "cases/block.toml",
-        "-q",
-        "-o",
-        dir.join("out").to_str().unwrap(),
-        "--set",
-        "mesh_options.params={ n = 8, m = 4, l = 2 }",
-    ]);
+    let o = solve_cli(
+        Path::new("cases/block.toml"),
+        &dir.join("out"),
+        &["--set", "mesh_options.params={ n = 8, m = 4, l = 2 }"],
+    );
     assert!(o.status.success(), "{}", stderr(&o));
-    let s: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("out/summary.json")).unwrap())
-            .unwrap();
+    let s = summary(&dir.join("out"));
     let dofs = &s["dofs"];
     let line = format!(
         "unknowns: {} u, {} theta, {} p ({} free)",
@@ -136,16 +117,7 @@ fn check_reports_what_a_solve_would_use_and_writes_nothing() {
     assert!(out.contains(&line), "\"{line}\" not in:\n{out}");
     // check writes nothing: no results folder, nothing beside the case
     let alone = scratch("check-alone");
-    let case = alone.join("never-solved.toml");
-    std::fs::write(
-        &case,
-        format!(
-            "mesh = \"{}\"\n{}",
-            root().join("geo/block.geo").display(),
-            case_body("block")
-        ),
-    )
-    .unwrap();
+    let case = block_case(&alone, "never-solved", &case_body("block"));
     let o = tmc(&["check", case.to_str().unwrap()]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(!root().join("results/never-solved").exists());
@@ -175,31 +147,19 @@ fn solve_set_equals_the_edited_case() {
         &case_body("block").replace("gamma = 1e-4", "gamma = 2e-4"),
     );
     let dir = scratch("set-cli");
-    let case = dir.join("block.toml");
-    std::fs::write(
+    let case = block_case(&dir, "block", &case_body("block"));
+    let o = solve_cli(
         &case,
-        format!(
-            "mesh = \"{}\"\n{}",
-            root().join("geo/block.geo").display(),
-            case_body("block")
-        ),
-    )
-    .unwrap();
-    let o = tmc(&[
-        "solve",
-        case.to_str().unwrap(),
-        "-q",
-        "-o",
-        dir.join("out").to_str().unwrap(),
-        "--set",
-        "mesh_options.params={ n = 8, m = 4, l = 2 }",
-        "--set",
-        "region.medium.gamma=2e-4",
-    ]);
+        &dir.join("out"),
+        &[
+            "--set",
+            "mesh_options.params={ n = 8, m = 4, l = 2 }",
+            "--set",
+            "region.medium.gamma=2e-4",
+        ],
+    );
     assert!(o.status.success(), "{}", stderr(&o));
-    let s: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("out/summary.json")).unwrap())
-            .unwrap();
+    let s = summary(&dir.join("out"));
     assert_eq!(
         s["load_steps"].as_u64().unwrap() as usize,
         edited.load_steps
@@ -295,8 +255,7 @@ fn a_log_gets_one_line_per_step_and_history_the_wall_time() {
     ]);
     let e = stderr(&o);
     assert!(o.status.success(), "{e}");
-    let s: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let s = summary(&out);
     let steps = s["load_steps"].as_u64().unwrap() as usize;
     let lines: Vec<&str> = e.lines().filter(|l| l.starts_with("step ")).collect();
     assert_eq!(lines.len(), steps, "{e}");
@@ -312,13 +271,7 @@ fn a_log_gets_one_line_per_step_and_history_the_wall_time() {
     assert!(w.windows(2).all(|p| p[1] >= p[0]) && w[0] >= 0.0, "{w:?}");
     assert!(*w.last().unwrap() <= s["wall_seconds"].as_f64().unwrap());
     // -q: nothing per step
-    let o = tmc(&[
-        "solve",
-        "cases/block-transient.toml",
-        "-q",
-        "-o",
-        out.to_str().unwrap(),
-    ]);
+    let o = solve_cli(Path::new("cases/block-transient.toml"), &out, &[]);
     assert!(!stderr(&o).contains("step "), "{}", stderr(&o));
 }
 
@@ -326,15 +279,11 @@ fn a_log_gets_one_line_per_step_and_history_the_wall_time() {
 fn output_every_n_steps_keeps_the_first_and_the_last() {
     let dir = scratch("output-every");
     let out = dir.join("out");
-    let o = tmc(&[
-        "solve",
-        "cases/block-transient.toml",
-        "-q",
-        "-o",
-        out.to_str().unwrap(),
-        "--set",
-        "output.every=3",
-    ]);
+    let o = solve_cli(
+        Path::new("cases/block-transient.toml"),
+        &out,
+        &["--set", "output.every=3"],
+    );
     assert!(o.status.success(), "{}", stderr(&o));
     let (_, rows) = common::history(&out);
     let steps = rows.len() - 1;
@@ -377,16 +326,9 @@ fn the_readme_geometry_is_the_shipped_one_and_it_solves() {
     }
     let dir = scratch("cylinder-plate");
     let out = dir.join("out");
-    let o = tmc(&[
-        "solve",
-        "cases/cylinder-plate.toml",
-        "-q",
-        "-o",
-        out.to_str().unwrap(),
-    ]);
+    let o = solve_cli(Path::new("cases/cylinder-plate.toml"), &out, &[]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let s: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let s = summary(&out);
     // the gap of 0.1 closes to the medium's thin remnant under a push of 0.15
     let gap = s["probes"]["gap"].as_f64().unwrap();
     assert!(gap > 0.0 && gap < 0.02, "gap {gap}");

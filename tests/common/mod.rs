@@ -25,6 +25,30 @@ pub fn tmc_with(args: &[&str], vars: &[(&str, &str)]) -> std::process::Output {
         .unwrap()
 }
 
+/// `tmc solve CASE -q -o OUT` with `extra` arguments (e.g. `--set`).
+pub fn solve_cli(case: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
+    let mut args = vec![
+        "solve",
+        case.to_str().unwrap(),
+        "-q",
+        "-o",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    tmc(&args)
+}
+
+/// `tmc mesh GEO -o OUT` (GEO relative to the project), which must succeed.
+pub fn mesh_cli(geo: &str, out: &Path) {
+    let o = tmc(&["mesh", geo, "-o", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
+/// A results folder's `summary.json`.
+pub fn summary(dir: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
+}
+
 pub fn stderr(o: &std::process::Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
