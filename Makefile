@@ -33,6 +33,7 @@ bench: deps
 	$(CARGO) bench --bench stability
 	$(CARGO) bench --bench kernel
 	$(CARGO) bench --bench assembly
+	$(CARGO) bench --bench output
 
 # tmc against FEniCSx on six scenes (T1, T2, Q1, tet4, H1, H2); writes validation/fenicsx/RESULTS.md.
 validate: build

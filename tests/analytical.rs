@@ -36,7 +36,7 @@ fn uniaxial(l: f64, plane: bool) -> (f64, f64) {
 
 #[test]
 fn bar3d_uniaxial_stretch_matches_neo_hooke_closed_form() {
-    let (s, _) = solve_case("bar3d-stretch");
+    let (s, dir) = solve_case("bar3d-stretch");
     assert!(s.converged);
     let (t, p11) = uniaxial(1.5, false);
     // corner (2, 0.5, 0.5): u_y = 0.5 (t − 1); force on x1 = P11 × B²
@@ -53,6 +53,39 @@ fn bar3d_uniaxial_stretch_matches_neo_hooke_closed_form() {
         p11 * 0.25
     );
     assert!((s.reactions["x0"]["x"] + fx).abs() < 1e-9);
+
+    // the .vtu read by meshio (an independent reader): integer connectivity, the region by
+    // name, and at every node the uniaxial Cauchy stress σ11 = P11 / t² as von Mises and as
+    // the first principal stress, the other two zero
+    let vtu = dir.join(format!("step_{:04}.vtu", s.load_steps));
+    let script = "import sys, meshio, numpy as np
+m = meshio.read(sys.argv[1])
+vm, pr = m.point_data['von_mises'], m.point_data['sigma_principal']
+print(m.cells[0].data.dtype.name, sorted(m.field_data), len(vm), vm.min(), vm.max(), pr[:, 0].min(), pr[:, 0].max(), abs(pr[:, 1:]).max())";
+    let o = std::process::Command::new("/usr/bin/python3")
+        .args(["-c", script])
+        .arg(&vtu)
+        .output()
+        .expect("python3-meshio is installed by make test");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    let w: Vec<&str> = out.split_whitespace().collect();
+    assert_eq!(&w[..2], ["int64", "['solid']"], "{out}");
+    let v: Vec<f64> = w[2..].iter().map(|x| x.parse().unwrap()).collect();
+    let sigma11 = p11 / (t * t);
+    assert!(v[0] > 0.0, "{out}");
+    for (what, x) in [
+        ("von Mises min", v[1]),
+        ("max", v[2]),
+        ("σ1 min", v[3]),
+        ("σ1 max", v[4]),
+    ] {
+        assert!(
+            (x - sigma11).abs() < 1e-9 * sigma11,
+            "{what} {x} vs σ11 = {sigma11}"
+        );
+    }
+    assert!(v[5] < 1e-9 * sigma11, "σ2, σ3 up to {}", v[5]);
 }
 
 #[test]
@@ -90,13 +123,22 @@ fn free_thermal_expansion_is_stress_free_with_j_exp_3_alpha_dtheta() {
 
 #[test]
 fn steady_conduction_through_a_slab() {
-    let (s, _) = solve_case("slab-conduction");
+    let (s, dir) = solve_case("slab-conduction");
     assert!(!s.physics.mechanics && s.physics.conduction);
     assert_eq!(s.newton_iterations, 1, "linear conduction takes one solve");
     assert!((s.probes["theta_mid"] - 60.0).abs() < 1e-10);
     // k Δθ H / L = 5 × 80 × 1 / 2
     assert!((s.reactions["left"]["heat"] - 200.0).abs() < 1e-9);
     assert!((s.reactions["right"]["heat"] + 200.0).abs() < 1e-9);
+    // the heat flux at every node: q = −k ∇θ = (200, 0, 0)
+    let q = point_array(&dir.join(format!("step_{:04}.vtu", s.load_steps)), "q");
+    assert_eq!(q.len(), 3 * s.nodes);
+    for x in q.chunks(3) {
+        assert!(
+            (x[0] - 200.0).abs() < 1e-9 && x[1].abs() < 1e-9 && x[2] == 0.0,
+            "{x:?}"
+        );
+    }
 }
 
 #[test]

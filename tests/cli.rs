@@ -451,6 +451,7 @@ fn geo_parameters_do_not_leak_into_the_next_mesh() {
 fn quadratic_cells_reach_vtk_in_vtk_order() {
     use tmc::mesh::gmsh::{MeshOptions, mesh_geo};
     use tmc::mesh::msh::read_msh;
+    use tmc::output::nodal::NodalFields;
     use tmc::output::{StepFields, write_vtu};
     let dir = scratch("vtk-order");
     for (geo, incomplete) in [
@@ -474,15 +475,22 @@ fn quadratic_cells_reach_vtk_in_vtk_order() {
         let ints = vec![0; mesh.n_cells()];
         let vtu = dir.join(format!("{tag}.vtu"));
         let u = vec![[0.0; 3]; n];
+        let nodal = NodalFields {
+            sigma: vec![[[0.0; 3]; 3]; n],
+            q: vec![[0.0; 3]; n],
+        };
         let fields = StepFields {
             u: &u,
             theta: None,
             p: None,
             cells: &cells,
+            nodal: &nodal,
             region: &ints,
             kind: &ints,
+            region_names: &["all".into()],
         };
-        write_vtu(&vtu, &mesh, &fields).unwrap();
+        // uncompressed and compressed, both read by meshio
+        write_vtu(&vtu, &mesh, &fields, 0).unwrap();
         let script = "import sys, meshio, numpy as np
 def cells(m, dim):
     out = {}
@@ -505,6 +513,16 @@ print(sorted(ca), sorted(cb), 'same' if ca == cb else 'DIFFERENT')";
         let out = String::from_utf8_lossy(&o.stdout);
         assert!(o.status.success(), "{}", stderr(&o));
         assert!(out.trim_end().ends_with("same"), "{tag}: {out}");
+        write_vtu(&vtu, &mesh, &fields, 1).unwrap();
+        let o = Command::new("/usr/bin/python3")
+            .args(["-c", script])
+            .arg(&msh)
+            .arg(&vtu)
+            .arg(mesh.dim.to_string())
+            .output()
+            .unwrap();
+        let out = String::from_utf8_lossy(&o.stdout);
+        assert!(out.trim_end().ends_with("same"), "{tag} compressed: {out}");
     }
 }
 

@@ -17,6 +17,8 @@ pub struct CellFields {
     /// Current heat flux q = F Q / J.
     pub q: [f64; 3],
     pub k: f64,
+    /// Reference volume (area in 2D) of the cell: the weight of its values in nodal averages.
+    pub volume: f64,
 }
 
 /// Volume averages of J, σ, q and k over a cell.
@@ -50,6 +52,7 @@ pub fn cell_fields<const N: usize, const D: usize, E: RefElement<N, D>>(
         out.k += h.k * dV;
         vol += dV;
     }
+    out.volume = vol;
     out.J /= vol;
     out.k /= vol;
     sigma /= vol;

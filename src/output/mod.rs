@@ -6,6 +6,7 @@
 pub mod fields;
 pub mod folder;
 pub mod history;
+pub mod nodal;
 pub mod probes;
 pub mod series;
 pub mod vtu;

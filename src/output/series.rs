@@ -4,7 +4,8 @@
 
 use super::OutputError;
 use super::fields::all_cell_fields;
-use super::vtu::{StepFields, write_pvd, write_vtu};
+use super::nodal::nodal_fields;
+use super::vtu::{StepFields, ZLIB_LEVEL, write_pvd, write_vtu};
 use crate::case::RegionKind;
 use crate::dofs::{Field, NONE};
 use crate::model::Model;
@@ -18,6 +19,9 @@ pub struct Series {
     /// Per cell: index of its `[[region]]`, and 1 for the medium, 0 for a solid.
     region: Vec<i32>,
     kind: Vec<i32>,
+    region_names: Vec<String>,
+    /// zlib level of the `.vtu` data (0: uncompressed); [`ZLIB_LEVEL`] unless changed.
+    pub zlib_level: u32,
 }
 
 impl Series {
@@ -38,6 +42,8 @@ impl Series {
             written: Vec::new(),
             region,
             kind,
+            region_names: model.regions.iter().map(|r| r.0.clone()).collect(),
+            zlib_level: ZLIB_LEVEL,
         }
     }
 
@@ -79,6 +85,8 @@ impl Series {
                 .map(|&d| if d == NONE { 0.0 } else { x[d as usize] })
                 .collect()
         });
+        let medium: Vec<bool> = self.kind.iter().map(|&k| k == 1).collect();
+        let nodal = nodal_fields(&model.mesh, &cells, &medium);
         let file = Series::file_name(step);
         write_vtu(
             &self.dir.join(&file),
@@ -88,9 +96,12 @@ impl Series {
                 theta: theta.as_deref(),
                 p: p.as_deref().map(|p| (p, dofs.np)),
                 cells: &cells,
+                nodal: &nodal,
                 region: &self.region,
                 kind: &self.kind,
+                region_names: &self.region_names,
             },
+            self.zlib_level,
         )?;
         self.written.push((time, file));
         write_pvd(&self.pvd, &self.written)
