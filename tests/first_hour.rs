@@ -38,10 +38,21 @@ fn ramp_per_value_equals_separate_blocks_and_a_full_load_is_named() {
     assert_eq!(joined.newton_iterations, separate.newton_iterations);
     let (a, b) = (joined.probes["gap"], separate.probes["gap"]);
     assert!((a - b).abs() <= 1e-12 * b.abs(), "gap {a} vs {b}");
-    // heat through the top at step 0 is that of θ at full value
+    // θ held at full value conducts from the start: step 0 is the equilibrium at λ = 0, its
+    // heat in through the top equal to the heat out through the bottom, and the same at the end
     let (cols, rows) = common::history(&out);
-    let q = cols.iter().position(|c| c == "Q_top").unwrap();
-    assert!(rows.last().unwrap()[q] > 0.0);
+    let col = |name: &str| cols.iter().position(|c| c == name).unwrap();
+    let (top, bottom) = (col("Q_top"), col("Q_bottom"));
+    for row in [&rows[0], rows.last().unwrap()] {
+        assert!(row[top] > 0.0, "Q_top {}", row[top]);
+        assert!(
+            (row[top] + row[bottom]).abs() < 1e-9 * row[top],
+            "{} vs {}",
+            row[top],
+            row[bottom]
+        );
+    }
+    assert!(rows[0][col("newton_iterations")] >= 1.0);
 
     // the whole block held: the displacement is applied at once; with two Newton iterations
     // allowed the first step cannot converge, and the message names the value applied in full

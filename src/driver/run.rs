@@ -208,6 +208,7 @@ impl<'a> Run<'a> {
     /// Record the initial state: step 0 of the series and of the history, and the forces the
     /// work is counted from.
     pub(super) fn record_initial(&mut self) -> Result<(), SolveError> {
+        let iterations = self.settle_initial()?;
         self.write_step()?;
         let stats0 = self
             .asm
@@ -221,6 +222,7 @@ impl<'a> Run<'a> {
             min_J_solid: stats0.min_J_solid,
             min_J_medium: stats0.min_J_medium,
             energy: stats0.energy,
+            iterations,
             wall: self.start.elapsed().as_secs_f64(),
             ..StepRow::default()
         };
@@ -229,6 +231,36 @@ impl<'a> Run<'a> {
         self.totals.reactions = r0;
         self.totals.f_last = self.forces(0.0);
         Ok(())
+    }
+
+    /// A steady scene with values applied in full (`ramp = false`) starts from its equilibrium
+    /// at λ = 0 under them (a temperature held at 100 conducts from the start: step 0 reports
+    /// that heat, not 0); a transient scene starts from its initial condition. Returns the
+    /// Newton iterations spent (0 when there is nothing to settle).
+    fn settle_initial(&mut self) -> Result<usize, SolveError> {
+        if self.transient_clock || self.held_in_full.is_empty() {
+            return Ok(0);
+        }
+        match self.attempt(0.0) {
+            Ok((x, rep)) => {
+                self.x = x;
+                self.totals.iterations += rep.iterations;
+                self.totals.krylov += rep.krylov;
+                self.summary.tangents_skipped += rep.tangents_skipped;
+                Ok(rep.iterations)
+            }
+            Err(failure) => {
+                self.pb.finish_and_clear();
+                let err = SolveError::Setup(format!(
+                    "the state at λ = 0 does not converge ({failure}) under the values applied \
+                     in full from the first step (ramp = false): {}; let them grow with λ \
+                     (ramp = true, or ramp = {{ NAME = true }} for one value)",
+                    self.held_in_full.join(", ")
+                ));
+                self.finish(false, err.to_string())?;
+                Err(err)
+            }
+        }
     }
 
     /// The probes at the last accepted state.
@@ -449,15 +481,7 @@ impl<'a> Run<'a> {
         self.asm.restore();
         if let Err(dl) = self.ctl.reject() {
             self.pb.finish_and_clear();
-            let mut reason = self.totals.last_failure.clone();
-            if self.ctl.accepted == 0 && !self.held_in_full.is_empty() {
-                // no step converged: values applied in full from the start are the usual cause
-                reason += &format!(
-                    "; applied in full from the first step (ramp = false): {}; let them grow \
-                     with λ (ramp = true, or ramp = {{ NAME = true }} for one value)",
-                    self.held_in_full.join(", ")
-                );
-            }
+            let reason = self.totals.last_failure.clone();
             let err = SolveError::StepTooSmall {
                 lambda: self.model.path.lambda(self.ctl.t),
                 dlambda: dl,

@@ -151,6 +151,14 @@ pub struct Newton {
     /// Totals over every step attempt so far, converged or not.
     pub spent: Spent,
     run_ref: FieldNorms,
+    /// Residual per field below which it has converged whatever its reference (u and p; 0 for
+    /// θ): round-off for the stiffest body. A step that loads a field with nothing (the equilibrium at λ = 0 under
+    /// temperatures held in full) leaves it only round-off residuals, which no reference built
+    /// from that step's own loads can judge.
+    floor: FieldNorms,
+    /// Update per field below which it is negligible whatever the step's updates (u and p; 0
+    /// for θ): a displacement of 1e-12 of the body's extent.
+    update_floor: FieldNorms,
     /// Field of each free equation.
     eq_field: Vec<Field>,
     /// What the other threads do during linear solves.
@@ -165,11 +173,27 @@ impl Newton {
                 eq_field[e as usize] = model.dofs.field[d];
             }
         }
+        // a residual below the force that strains the stiffest body by 1e-12 (modulus × area
+        // of its extent × 1e-12) is converged whatever the step's loads
+        let modulus = model
+            .blocks
+            .iter()
+            .map(|b| b.mat.law.K + b.mat.law.mu)
+            .fold(0.0, f64::max);
+        let force = 1e-12 * modulus * model.d.powi(model.mesh.dim as i32 - 1);
+        let mut floor = [0.0; 3];
+        floor[idx(Field::U)] = force;
+        floor[idx(Field::P)] = force;
+        let mut update_floor = [0.0; 3];
+        update_floor[idx(Field::U)] = 1e-12 * model.d;
+        update_floor[idx(Field::P)] = 1e-12 * model.d;
         Newton {
             tol,
             max_iter,
             spent: Spent::default(),
             run_ref: [0.0; 3],
+            floor,
+            update_floor,
             eq_field,
             idle: IdleThreads::default(),
         }
@@ -399,10 +423,15 @@ impl Newton {
         }
         std::array::from_fn(|f| {
             let r = same_units(f, |g| st.step_ref[g].max(self.run_ref[g]));
-            if r > 0.0 && st.active[f] {
+            let rel = if r > 0.0 && st.active[f] {
                 res[f] / r
             } else {
                 0.0
+            };
+            if res[f] <= self.floor[f] {
+                rel.min(self.tol * res[f] / self.floor[f])
+            } else {
+                rel
             }
         })
     }
@@ -492,6 +521,7 @@ impl Newton {
         let update_ok = (0..3).filter(|&f| st.active[f]).all(|f| {
             last_update[f] <= self.tol.sqrt() * same_units(f, |g| st.du_ref[g])
                 || last_update[f] <= 1e-10 * same_units(f, |g| size[g])
+                || last_update[f] <= self.update_floor[f]
         });
         // and the residual, falling at its last rate, would be below tolerance
         let worst = |h: &FieldNorms| h.iter().fold(0.0f64, |a, &v| a.max(v));
