@@ -58,6 +58,11 @@ enum Command {
         /// (mesh_options.params.n=16, region.medium.gamma=1e-5, steps.max=0.2); repeatable.
         #[arg(long = "set", value_name = "KEY.PATH=VALUE", value_parser = parse_set)]
         set: Vec<(String, String)>,
+        /// Continue the run in the output folder from its last converged step (its
+        /// restart.json), exactly as if it had not stopped. The case may change only its
+        /// [steps] controls (not `path`) and [output].
+        #[arg(long)]
+        restart: bool,
     },
     /// Check a case as `solve` would up to its first assembly (mesh, groups, physics, strategy,
     /// unknowns, memory) and report; writes nothing where results go.
@@ -214,9 +219,10 @@ fn main() -> ExitCode {
             quiet,
             verbose,
             set,
+            restart,
         } => {
             tmc::driver::stop_on_signals();
-            solve_command(&case, output, quiet, verbose, set)
+            solve_command(&case, output, quiet, verbose, set, restart)
         }
         Command::Check { case, set } => check_command(&case, set),
     }
@@ -335,6 +341,7 @@ fn solve_command(
     quiet: bool,
     verbose: bool,
     sets: Vec<(String, String)>,
+    restart: bool,
 ) -> ExitCode {
     let idle_threads = match IdleThreads::from_env() {
         Ok(i) => i,
@@ -349,6 +356,7 @@ fn solve_command(
         verbose,
         idle_threads,
         sets,
+        restart,
     };
     match run(case, &opts) {
         Ok(s) => {

@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{case_body, root, scratch, solve_cli, solve_text, stderr, summary, tmc};
+use common::{case_body, point_array, root, scratch, solve_cli, solve_text, stderr, summary, tmc};
 use std::path::{Path, PathBuf};
 
 /// The block scene with its four `[[bc]]` blocks replaced by `bcs`.
@@ -357,4 +357,105 @@ fn the_readme_geometry_is_the_shipped_one_and_it_solves() {
     assert!(qr > 0.0 && (qb + qr).abs() <= 1e-9 * qr, "heat {qb} {qr}");
     // no sideways drift of the symmetric scene
     assert!(r["bottom"]["x"].as_f64().unwrap().abs() < 1e-3 * fb);
+}
+
+#[test]
+fn restart_continues_an_interrupted_run_exactly() {
+    // the transient block: physical time, history variables (θ of the last step), growing
+    // steps; stopped by Ctrl-C after a few steps, then continued with --restart
+    let dir = scratch("restart");
+    let (full, stopped) = (dir.join("full"), dir.join("stopped"));
+    let case = root().join("cases/block-transient.toml");
+    let o = solve_cli(&case, &full, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_tmc"))
+        .args([
+            "solve",
+            case.to_str().unwrap(),
+            "-q",
+            "-o",
+            stopped.to_str().unwrap(),
+        ])
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let t0 = std::time::Instant::now();
+    while !stopped.join("step_0002.vtu").exists() {
+        assert!(t0.elapsed().as_secs() < 300, "no step written");
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
+    let o = child.wait_with_output().unwrap();
+    assert!(!o.status.success(), "the run was interrupted");
+    let (cols, all_rows) = common::history(&full);
+    let done = common::history(&stopped).1.len();
+    assert!(
+        done >= 3 && done < all_rows.len(),
+        "stopped after {done} of {} rows",
+        all_rows.len()
+    );
+
+    // a changed case is refused (only [steps] controls and [output] may change), nothing lost
+    let o = solve_cli(
+        &case,
+        &stopped,
+        &["--restart", "--set", "region.solid.k=11.0"],
+    );
+    assert!(
+        !o.status.success() && stderr(&o).contains("has changed since"),
+        "{}",
+        stderr(&o)
+    );
+    assert_eq!(common::history(&stopped).1.len(), done);
+    // no checkpoint: said so
+    let o = solve_cli(&case, &dir.join("nothing"), &["--restart"]);
+    assert!(
+        !o.status.success() && stderr(&o).contains("cannot restart"),
+        "{}",
+        stderr(&o)
+    );
+
+    let o = solve_cli(&case, &stopped, &["--restart", "--set", "steps.min=1e-6"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // the same rows, every column but the wall time, to the last bit
+    let (cols2, rows) = common::history(&stopped);
+    assert_eq!(cols, cols2);
+    assert_eq!(rows.len(), all_rows.len());
+    let wall = cols.iter().position(|c| c == "wall_seconds").unwrap();
+    for (i, (a, b)) in all_rows.iter().zip(&rows).enumerate() {
+        for (j, (x, y)) in a.iter().zip(b).enumerate() {
+            assert!(
+                j == wall || x.to_bits() == y.to_bits() || (x.is_nan() && y.is_nan()),
+                "row {i}, {}: {x} vs {y}",
+                cols[j]
+            );
+        }
+    }
+    let (a, b) = (common::summary(&full), common::summary(&stopped));
+    for key in [
+        "converged",
+        "load_steps",
+        "rejected_steps",
+        "newton_iterations",
+        "linear_solves",
+        "probes",
+        "reactions",
+        "heat_stored",
+        "heat_in",
+        "external_work",
+        "energy",
+    ] {
+        assert_eq!(a[key], b[key], "{key}");
+    }
+    let last = format!("step_{:04}.vtu", all_rows.len() - 1);
+    for field in ["u", "theta", "von_mises"] {
+        let (x, y) = (
+            point_array(&full.join(&last), field),
+            point_array(&stopped.join(&last), field),
+        );
+        assert!(
+            x.iter().zip(&y).all(|(p, q)| p.to_bits() == q.to_bits()),
+            "{field}"
+        );
+    }
 }

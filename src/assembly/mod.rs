@@ -228,6 +228,15 @@ impl Assembler {
         self.t_committed = t;
     }
 
+    /// Continue a run: the committed history of its last accepted step at time `t`, per slab.
+    pub fn resume(&mut self, committed: &[Vec<f64>], t: f64) {
+        for (s, c) in self.history.slabs.iter_mut().zip(committed) {
+            s.committed.copy_from_slice(c);
+            s.trial.copy_from_slice(c);
+        }
+        self.t_committed = t;
+    }
+
     /// A step was rejected: whatever its attempts wrote into the history is discarded.
     pub fn restore(&mut self) {
         self.history.restore();

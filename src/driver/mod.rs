@@ -1,6 +1,7 @@
 //! `tmc solve`: case → mesh → model → load stepping with Newton → VTU series, history, summary.
 
 pub mod check;
+pub mod checkpoint;
 pub mod records;
 mod run;
 pub mod strategy;
@@ -100,6 +101,8 @@ pub struct SolveOptions {
     pub idle_threads: IdleThreads,
     /// Case keys set on the command line: (dotted path, value in TOML syntax).
     pub sets: Vec<(String, String)>,
+    /// Continue the run in the output folder from its last converged step.
+    pub restart: bool,
 }
 
 /// A mesh written for this run under a temporary name: moved to its final name once the run
@@ -149,6 +152,12 @@ pub(crate) fn checked_model(
     quiet: bool,
 ) -> Result<(Model, Vec<Probe>, Option<StagedMesh>), SolveError> {
     let (mesh, staged) = mesh_for(case, mesh_dir)?;
+    let (model, probes) = model_on(case, mesh, quiet)?;
+    Ok((model, probes, staged))
+}
+
+/// The case's model and probes on `mesh`, everything checked.
+fn model_on(case: &Case, mesh: Mesh, quiet: bool) -> Result<(Model, Vec<Probe>), SolveError> {
     if !quiet {
         for w in &mesh.warnings {
             eprintln!("warning: {}: {w}", mesh.source.display());
@@ -157,7 +166,7 @@ pub(crate) fn checked_model(
     case.validate(&mesh)?;
     let model = build(case, mesh)?;
     let probes = probes::build(case, &model.mesh)?;
-    Ok((model, probes, staged))
+    Ok((model, probes))
 }
 
 /// Solve a case file end to end.
@@ -173,6 +182,9 @@ pub fn run(case_path: &Path, opts: &SolveOptions) -> Result<Summary, SolveError>
         .clone()
         .unwrap_or_else(|| PathBuf::from("results").join(case.name()));
     let mut folder = RunFolder::open(&out_dir)?;
+    if opts.restart {
+        return restart(&case, folder, opts, start);
+    }
     let (mut model, probes, staged) = checked_model(&case, &out_dir, opts.quiet)?;
     folder.replace_previous()?;
     if let Some(staged) = staged {
@@ -183,7 +195,28 @@ pub fn run(case_path: &Path, opts: &SolveOptions) -> Result<Summary, SolveError>
             .commit(&model.mesh.source)
             .map_err(|e| SolveError::Output(werr(&model.mesh.source, e)))?;
     }
-    solve_model(&case, model, &probes, folder, opts, start)
+    solve_model(&case, model, &probes, folder, opts, start, None)
+}
+
+/// Continue the run in `folder` from its checkpoint, on the mesh it ran on (the folder's
+/// `mesh.msh` when the case meshes a `.geo`).
+fn restart(
+    case: &Case,
+    mut folder: RunFolder,
+    opts: &SolveOptions,
+    start: Instant,
+) -> Result<Summary, SolveError> {
+    let dir = folder.dir().to_owned();
+    checkpoint::Checkpoint::exists(&dir)?;
+    let mesh = if case.mesh_path().extension().is_some_and(|e| e == "geo") {
+        read_msh(&dir.join("mesh.msh"))?
+    } else {
+        mesh_for(case, &dir)?.0
+    };
+    let (model, probes) = model_on(case, mesh, opts.quiet)?;
+    let cp = checkpoint::Checkpoint::read(&dir, case, &model.mesh)?;
+    folder.keep_previous()?;
+    solve_model(case, model, &probes, folder, opts, start, Some(cp))
 }
 
 /// Step the model from its initial state to the end of its load path.
@@ -194,9 +227,13 @@ fn solve_model(
     folder: RunFolder,
     opts: &SolveOptions,
     start: Instant,
+    from: Option<checkpoint::Checkpoint>,
 ) -> Result<Summary, SolveError> {
     let mut run = Run::new(case, &model, probes, folder, opts, start)?;
-    run.record_initial()?;
+    match from {
+        Some(cp) => run.resume(cp),
+        None => run.record_initial()?,
+    }
     while !run.ctl.done() {
         if interrupted() {
             return run.interrupt();

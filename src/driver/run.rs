@@ -2,6 +2,7 @@
 //! controller, and what each accepted step records (history row, VTU, reactions, work).
 //! [`super::solve_model`] drives it: attempt a step, then accept or reject it, until done.
 
+use super::checkpoint::{self, Checkpoint};
 use super::records::{HistoryLayout, Reactions, StepRow, Summary, group_flows, peak_memory_mb};
 use super::strategy::{Strategy, choose_linear, choose_strategy, describe};
 use super::{SolveError, SolveOptions};
@@ -67,6 +68,8 @@ pub(super) struct Run<'a> {
     /// `[output] every`, and the last step written.
     every: usize,
     written: Option<usize>,
+    /// What the results depend on (case, mesh), for the checkpoints.
+    fingerprint: (String, String),
 }
 
 /// What a run solves with, decided and set up before the first assembly: strategy, the
@@ -202,6 +205,10 @@ impl<'a> Run<'a> {
             transient_clock: case.file.time.is_some(),
             every: *case.file.output.every.get_ref() as usize,
             written: None,
+            fingerprint: (
+                checkpoint::case_fingerprint(case),
+                checkpoint::mesh_fingerprint(&model.mesh),
+            ),
         })
     }
 
@@ -230,7 +237,7 @@ impl<'a> Run<'a> {
             .row(&self.layout.row(&row, &self.probe_values(), &r0))?;
         self.totals.reactions = r0;
         self.totals.f_last = self.forces(0.0);
-        Ok(())
+        self.save_checkpoint()
     }
 
     /// A steady scene with values applied in full (`ramp = false`) starts from its equilibrium
@@ -370,8 +377,92 @@ impl<'a> Run<'a> {
             self.write_step()?;
         }
         self.history.row(&values)?;
+        self.save_checkpoint()?;
         self.report_step(&row, &rep);
         Ok(())
+    }
+
+    /// `restart.json` of the last accepted state (after its `.vtu` and history row).
+    fn save_checkpoint(&mut self) -> Result<(), SolveError> {
+        let tot = &self.totals;
+        let finite = |v: f64| v.is_finite().then_some(v);
+        let cp = Checkpoint {
+            version: checkpoint::VERSION,
+            case: self.fingerprint.0.clone(),
+            mesh: self.fingerprint.1.clone(),
+            x: self.x.clone(),
+            point_history: self
+                .asm
+                .history
+                .slabs
+                .iter()
+                .map(|s| s.committed.clone())
+                .collect(),
+            t: self.ctl.t,
+            dt: self.ctl.dt,
+            accepted: self.ctl.accepted,
+            rejected: self.ctl.rejected,
+            run_ref: self.newton.run_ref(),
+            spent: self.newton.spent,
+            iterations: tot.iterations,
+            krylov: tot.krylov,
+            t_reactions: tot.t_reactions,
+            min_J: (finite(tot.min_J.0), finite(tot.min_J.1)),
+            work: tot.work,
+            f_last: tot.f_last.clone(),
+            reactions: tot.reactions.clone(),
+            heat_in: tot.heat_in,
+            energy: self.summary.energy,
+            tangents_skipped: self.summary.tangents_skipped,
+            heat_stored: self.summary.heat_stored,
+            series: self.series.written().to_vec(),
+            written: self.written,
+            history: self.history.text().to_string(),
+            wall: self.start.elapsed().as_secs_f64(),
+        };
+        self.folder.record(checkpoint::FILE)?;
+        write_atomic(&Checkpoint::path(&self.out_dir), cp.to_json().as_bytes())?;
+        Ok(())
+    }
+
+    /// Continue from a checkpoint instead of recording the initial state: the run goes on as
+    /// if it had never stopped.
+    pub(super) fn resume(&mut self, cp: Checkpoint) {
+        self.x = cp.x;
+        self.asm.resume(&cp.point_history, cp.t);
+        self.ctl.t = cp.t;
+        self.ctl.dt = cp.dt;
+        self.ctl.accepted = cp.accepted;
+        self.ctl.rejected = cp.rejected;
+        self.newton.resume(cp.run_ref, cp.spent);
+        let tot = &mut self.totals;
+        tot.iterations = cp.iterations;
+        tot.krylov = cp.krylov;
+        tot.t_reactions = cp.t_reactions;
+        tot.min_J = (
+            cp.min_J.0.unwrap_or(f64::INFINITY),
+            cp.min_J.1.unwrap_or(f64::INFINITY),
+        );
+        tot.work = cp.work;
+        tot.f_last = cp.f_last;
+        tot.reactions = cp.reactions;
+        tot.heat_in = cp.heat_in;
+        let s = &mut self.summary;
+        s.energy = cp.energy;
+        s.external_work = cp.work;
+        s.krylov_iterations = cp.krylov;
+        s.tangents_skipped = cp.tangents_skipped;
+        s.heat_stored = cp.heat_stored;
+        if self.model.physics.transient {
+            s.heat_in = Some(cp.heat_in);
+        }
+        self.series.resume(cp.series);
+        self.written = cp.written;
+        self.history.resume(cp.history);
+        // wall seconds go on from where the run stopped
+        self.start = Instant::now()
+            .checked_sub(std::time::Duration::from_secs_f64(cp.wall))
+            .unwrap_or(self.start);
     }
 
     /// Heat balance of a transient scene after an accepted step of length `dt` to `t`: the heat

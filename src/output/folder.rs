@@ -97,6 +97,14 @@ impl RunFolder {
         self.save()
     }
 
+    /// Keep the previous run's files: this run continues it (a restart), and its manifest
+    /// goes on from the previous one.
+    pub fn keep_previous(&mut self) -> Result<(), OutputError> {
+        self.written = std::mem::take(&mut self.previous);
+        self.replaced = true;
+        self.save()
+    }
+
     /// Note that this run writes `name` in the folder (before writing it).
     pub fn record(&mut self, name: &str) -> Result<(), OutputError> {
         debug_assert!(self.replaced, "record after replace_previous");

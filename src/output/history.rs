@@ -18,6 +18,16 @@ impl History {
             text: csv_line(columns),
         }
     }
+    /// Continue a run's history: `text` is the file as it stood (header and rows).
+    pub fn resume(&mut self, text: String) {
+        self.text = text;
+    }
+
+    /// The file's text so far.
+    pub fn text(&self) -> &str {
+        &self.text
+    }
+
     pub fn row(&mut self, values: &[f64]) -> Result<(), OutputError> {
         let row: Vec<String> = values
             .iter()

@@ -47,6 +47,16 @@ impl Series {
         }
     }
 
+    /// (time, file name) of every state written so far.
+    pub fn written(&self) -> &[(f64, String)] {
+        &self.written
+    }
+
+    /// Continue a run's series: the states it has written.
+    pub fn resume(&mut self, written: Vec<(f64, String)>) {
+        self.written = written;
+    }
+
     /// The file of step `step`.
     pub fn file_name(step: usize) -> String {
         format!("step_{step:04}.vtu")

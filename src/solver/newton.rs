@@ -131,7 +131,7 @@ impl Part {
 }
 
 /// Work done by all attempts of a run, rejected ones included.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct Spent {
     /// Seconds in assembly (residual and tangent).
     pub assembly: f64,
@@ -197,6 +197,17 @@ impl Newton {
             eq_field,
             idle: IdleThreads::default(),
         }
+    }
+
+    /// The residual references over the run so far (what a restart carries over).
+    pub fn run_ref(&self) -> FieldNorms {
+        self.run_ref
+    }
+
+    /// Continue a run: its references and the work of its attempts so far.
+    pub fn resume(&mut self, run_ref: FieldNorms, spent: Spent) {
+        self.run_ref = run_ref;
+        self.spent = spent;
     }
 
     /// The free equations of `part`, increasing.

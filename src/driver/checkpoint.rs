@@ -1,0 +1,167 @@
+//! `restart.json`: what a run needs to continue from its last converged step exactly as if
+//! it had never stopped (`tmc solve CASE --restart`). Written after every accepted step, with
+//! the step's `.vtu` and `history.csv` row already on disk. Numbers are written so that they
+//! read back to the same bits.
+
+use super::SolveError;
+use crate::case::Case;
+use crate::mesh::Mesh;
+use crate::solver::newton::Spent;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+pub const FILE: &str = "restart.json";
+
+/// This format's version: a checkpoint of another version is refused.
+pub const VERSION: u32 = 1;
+
+/// Everything a run carries from one step to the next.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Checkpoint {
+    pub version: u32,
+    /// What the results depend on: the case without `[steps]` controls and `[output]`, and
+    /// the mesh. A restart under another case or mesh is refused.
+    pub case: String,
+    pub mesh: String,
+    /// The last accepted state and the assembler's committed history, per block.
+    pub x: Vec<f64>,
+    pub point_history: Vec<Vec<f64>>,
+    /// Step controller: time reached, next increment, accepted and rejected steps.
+    pub t: f64,
+    pub dt: f64,
+    pub accepted: usize,
+    pub rejected: usize,
+    /// Newton's residual references over the run, and the work of every attempt.
+    pub run_ref: [f64; 3],
+    pub spent: Spent,
+    /// Totals: iterations, Krylov iterations, reaction assembly seconds, smallest J of solids
+    /// and medium (`None`: none yet), work, forces of the last state, reactions, heat in.
+    pub iterations: usize,
+    pub krylov: usize,
+    pub t_reactions: f64,
+    pub min_J: (Option<f64>, Option<f64>),
+    pub work: f64,
+    pub f_last: Vec<f64>,
+    pub reactions: BTreeMap<String, BTreeMap<String, f64>>,
+    pub heat_in: f64,
+    /// Summary values carried over: stored energy, tangents skipped, heat stored.
+    pub energy: f64,
+    pub tangents_skipped: usize,
+    pub heat_stored: Option<f64>,
+    /// The files written so far: (time, name) of the series, the last step written, and
+    /// `history.csv` as it stands.
+    pub series: Vec<(f64, String)>,
+    pub written: Option<usize>,
+    pub history: String,
+    /// Wall seconds of the run when the checkpoint was written.
+    pub wall: f64,
+}
+
+/// What the results of `case` depend on: its text with the `[steps]` controls (all but
+/// `path`) and `[output]` left out, which a restart may change (a smaller `min` to get past a
+/// hard step, another output frequency).
+pub fn case_fingerprint(case: &Case) -> String {
+    let mut doc: toml::Table = toml::from_str(&case.text).unwrap_or_default();
+    doc.remove("output");
+    if let Some(toml::Value::Table(steps)) = doc.get_mut("steps") {
+        steps.retain(|k, _| k == "path");
+        if steps.is_empty() {
+            doc.remove("steps");
+        }
+    }
+    toml::to_string(&doc).unwrap_or_default()
+}
+
+/// The mesh's size and a hash (FNV-1a) of its coordinates' bits and its cells.
+pub fn mesh_fingerprint(mesh: &Mesh) -> String {
+    let mut h: u64 = 0xcbf29ce484222325;
+    let mut eat = |v: u64| {
+        for b in v.to_le_bytes() {
+            h ^= b as u64;
+            h = h.wrapping_mul(0x100000001b3);
+        }
+    };
+    for x in mesh.coords.iter().flatten() {
+        eat(x.to_bits());
+    }
+    for b in &mesh.cells {
+        for c in 0..b.n_cells() {
+            for &n in b.cell(c) {
+                eat(n as u64);
+            }
+        }
+    }
+    format!(
+        "{} nodes, {} cells, {h:016x}",
+        mesh.coords.len(),
+        mesh.n_cells()
+    )
+}
+
+impl Checkpoint {
+    pub fn path(dir: &Path) -> PathBuf {
+        dir.join(FILE)
+    }
+
+    pub fn to_json(&self) -> String {
+        serde_json::to_string(self).expect("a checkpoint is serialisable")
+    }
+
+    /// Whether `dir` holds a checkpoint; the error says what to do when it does not.
+    pub fn exists(dir: &Path) -> Result<(), SolveError> {
+        let path = Checkpoint::path(dir);
+        if path.is_file() {
+            return Ok(());
+        }
+        Err(SolveError::Setup(format!(
+            "cannot restart: {} has no {FILE} (a run leaves it from its first step on); run \
+             without --restart to start over",
+            dir.display()
+        )))
+    }
+
+    /// The checkpoint of the run in `dir`, checked against the case and mesh it continues.
+    pub fn read(dir: &Path, case: &Case, mesh: &Mesh) -> Result<Checkpoint, SolveError> {
+        let path = Checkpoint::path(dir);
+        let text = std::fs::read_to_string(&path).map_err(|e| {
+            SolveError::Setup(format!(
+                "cannot restart: {} ({e}); a run leaves it after its first converged step — \
+                 run without --restart to start over",
+                path.display()
+            ))
+        })?;
+        let cp: Checkpoint = serde_json::from_str(&text).map_err(|e| {
+            SolveError::Setup(format!(
+                "cannot restart: {} is not a tmc checkpoint: {e}",
+                path.display()
+            ))
+        })?;
+        let refuse = |what: &str| {
+            Err(SolveError::Setup(format!(
+                "cannot restart from {}: {what}; run without --restart to start over",
+                path.display()
+            )))
+        };
+        if cp.version != VERSION {
+            return refuse(&format!(
+                "it was written by another version of tmc (format {})",
+                cp.version
+            ));
+        }
+        if cp.case != case_fingerprint(case) {
+            return refuse(&format!(
+                "{} has changed since (only [steps] controls and [output] may change)",
+                case.path.display()
+            ));
+        }
+        if cp.mesh != mesh_fingerprint(mesh) {
+            return refuse(&format!(
+                "the mesh has changed since ({} then, {} now)",
+                cp.mesh,
+                mesh_fingerprint(mesh)
+            ));
+        }
+        Ok(cp)
+    }
+}
