@@ -269,6 +269,9 @@ fn check_command(case: &std::path::Path, sets: Vec<(String, String)>) -> ExitCod
                 println!("  warning: {w}");
             }
             println!("{}", r.physics);
+            for e in &r.expansion {
+                println!("thermal expansion in {e}");
+            }
             let unknowns: Vec<String> =
                 r.unknowns.iter().map(|(f, n)| format!("{n} {f}")).collect();
             println!("unknowns: {} ({} free)", unknowns.join(", "), r.free);

@@ -146,6 +146,32 @@ fn check_reports_what_a_solve_would_use_and_writes_nothing() {
             && e.contains("unknown field `gama`"),
         "{e}"
     );
+    // thermal expansion and the θ0 it is counted from, said per region
+    let o = tmc(&[
+        "check",
+        "cases/block.toml",
+        "--set",
+        "region.solid.alpha=1e-5",
+    ]);
+    let out = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        out.contains("thermal expansion in \"solid\": α = 0.00001 from θ0 = 0 (not given"),
+        "{out}"
+    );
+    let o = tmc(&[
+        "check",
+        "cases/block.toml",
+        "--set",
+        "region.solid.alpha=1e-5",
+        "--set",
+        "region.solid.theta0=20.0",
+    ]);
+    let out = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(
+        out.contains("thermal expansion in \"solid\": α = 0.00001 from θ0 = 20\n"),
+        "{out}"
+    );
 }
 
 #[test]

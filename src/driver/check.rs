@@ -25,6 +25,8 @@ pub struct CheckReport {
     pub factor_entries: Option<usize>,
     /// The probes' names.
     pub probes: Vec<String>,
+    /// Regions with thermal expansion, with the temperature their strain is counted from.
+    pub expansion: Vec<String>,
 }
 
 impl CheckReport {
@@ -35,6 +37,35 @@ impl CheckReport {
         let factor = self.factor_entries.unwrap_or(0) as f64 * 16.0;
         (tangent + factor) / 1e6
     }
+}
+
+/// Each region with α ≠ 0 and the θ0 its thermal strain α (θ − θ0) is counted from: a case in
+/// °C whose θ0 is left at 0 strains its bodies from 0 °C to the first temperature.
+fn expansion(case: &Case) -> Vec<String> {
+    let doc: toml::Table = toml::from_str(&case.text).unwrap_or_default();
+    let given = |i: usize| {
+        doc.get("region")
+            .and_then(|r| r.as_array())
+            .and_then(|r| r.get(i))
+            .and_then(|r| r.get("theta0"))
+            .is_some()
+    };
+    case.file
+        .region
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| r.alpha != 0.0)
+        .map(|(i, r)| {
+            let from = if given(i) {
+                format!("θ0 = {}", r.theta0)
+            } else {
+                "θ0 = 0 (not given: temperatures are taken relative to the stress-free one; a \
+                 case in absolute units sets theta0, e.g. 20 for °C)"
+                    .to_string()
+            };
+            format!("\"{}\": α = {} from {from}", r.group.get_ref(), r.alpha)
+        })
+        .collect()
 }
 
 /// Check the case at `case_path` (with `opts.sets`) as a solve would, up to its first
@@ -64,6 +95,7 @@ pub fn check(case_path: &Path, opts: &SolveOptions) -> Result<CheckReport, Solve
         tangent_entries: plan.asm.pattern.row_idx.len(),
         factor_entries,
         probes: probes.iter().map(|p| p.name.clone()).collect(),
+        expansion: expansion(&case),
         mesh: model.mesh,
     })
 }
