@@ -212,25 +212,7 @@ fn nothing_a_user_wrote_is_lost() {
 
     // an interrupted run says so, with the λ it reached, and every history row has its file
     let slow = dir.join("slow");
-    let child = Command::new(env!("CARGO_BIN_EXE_tmc"))
-        .args([
-            "solve",
-            "cases/block.toml",
-            "-q",
-            "-o",
-            slow.to_str().unwrap(),
-        ])
-        .current_dir(root())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    let t0 = std::time::Instant::now();
-    while !slow.join("step_0002.vtu").exists() {
-        assert!(t0.elapsed().as_secs() < 300, "no step written");
-        std::thread::sleep(std::time::Duration::from_millis(20));
-    }
-    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
-    let o = child.wait_with_output().unwrap();
+    let o = common::solve_interrupted(&root().join("cases/block.toml"), &slow);
     fails_with(&o, &["interrupted at λ"]);
     let s = common::summary(&slow);
     assert_eq!(s["converged"], false);

@@ -394,24 +394,7 @@ fn restart_continues_an_interrupted_run_exactly() {
     let case = root().join("cases/block-transient.toml");
     let o = solve_cli(&case, &full, &[]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let child = std::process::Command::new(env!("CARGO_BIN_EXE_tmc"))
-        .args([
-            "solve",
-            case.to_str().unwrap(),
-            "-q",
-            "-o",
-            stopped.to_str().unwrap(),
-        ])
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    let t0 = std::time::Instant::now();
-    while !stopped.join("step_0002.vtu").exists() {
-        assert!(t0.elapsed().as_secs() < 300, "no step written");
-        std::thread::sleep(std::time::Duration::from_millis(2));
-    }
-    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
-    let o = child.wait_with_output().unwrap();
+    let o = common::solve_interrupted(&case, &stopped);
     assert!(!o.status.success(), "the run was interrupted");
     let (cols, all_rows) = common::history(&full);
     let done = common::history(&stopped).1.len();

@@ -39,6 +39,29 @@ pub fn solve_cli(case: &Path, out: &Path, extra: &[&str]) -> std::process::Outpu
 }
 
 /// `tmc mesh GEO -o OUT` (GEO relative to the project), which must succeed.
+/// `tmc solve case -q -o out`, sent Ctrl-C (SIGINT) as soon as its step 2 is written: the run
+/// stops after the step it is in.
+pub fn solve_interrupted(case: &Path, out: &Path) -> std::process::Output {
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_tmc"))
+        .args([
+            "solve",
+            case.to_str().unwrap(),
+            "-q",
+            "-o",
+            out.to_str().unwrap(),
+        ])
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let t0 = std::time::Instant::now();
+    while !out.join("step_0002.vtu").exists() {
+        assert!(t0.elapsed().as_secs() < 300, "no step written");
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
+    child.wait_with_output().unwrap()
+}
+
 pub fn mesh_cli(geo: &str, out: &Path) {
     let o = tmc(&["mesh", geo, "-o", out.to_str().unwrap()]);
     assert!(o.status.success(), "{}", stderr(&o));
