@@ -63,6 +63,18 @@ enum Command {
         /// [steps] controls (not `path`) and [output].
         #[arg(long)]
         restart: bool,
+        /// What the other threads do while a linear solve runs on one: spin while the solve
+        /// hands them work and then for at most this many milliseconds without, before they
+        /// sleep; `spin` (through every solve: a core busy for the whole run, the fastest
+        /// on a machine of your own); `sleep` (at once: frees the cores for others).
+        #[arg(
+            long,
+            value_name = "MS|spin|sleep",
+            env = IdleThreads::VAR,
+            default_value_t = IdleThreads::default(),
+            value_parser = IdleThreads::parse
+        )]
+        idle_threads: IdleThreads,
     },
     /// Check a case as `solve` would up to its first assembly (mesh, groups, physics, strategy,
     /// unknowns, memory) and report; writes nothing where results go.
@@ -220,9 +232,18 @@ fn main() -> ExitCode {
             verbose,
             set,
             restart,
+            idle_threads,
         } => {
             tmc::driver::stop_on_signals();
-            solve_command(&case, output, quiet, verbose, set, restart)
+            let opts = SolveOptions {
+                out_dir: output,
+                quiet,
+                verbose,
+                idle_threads,
+                sets: set,
+                restart,
+            };
+            solve_command(&case, &opts)
         }
         Command::Check { case, set } => check_command(&case, set),
     }
@@ -338,30 +359,9 @@ fn study_command(study: &std::path::Path, output: Option<PathBuf>, quiet: bool) 
 }
 
 /// `tmc solve`: one case, with a line of results unless `quiet`.
-fn solve_command(
-    case: &std::path::Path,
-    output: Option<PathBuf>,
-    quiet: bool,
-    verbose: bool,
-    sets: Vec<(String, String)>,
-    restart: bool,
-) -> ExitCode {
-    let idle_threads = match IdleThreads::from_env() {
-        Ok(i) => i,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return ExitCode::FAILURE;
-        }
-    };
-    let opts = SolveOptions {
-        out_dir: output,
-        quiet,
-        verbose,
-        idle_threads,
-        sets,
-        restart,
-    };
-    match run(case, &opts) {
+fn solve_command(case: &std::path::Path, opts: &SolveOptions) -> ExitCode {
+    let quiet = opts.quiet;
+    match run(case, opts) {
         Ok(s) => {
             if !quiet {
                 let probes: Vec<String> = s

@@ -130,7 +130,7 @@ fn good_case_runs() {
 
 #[test]
 fn a_bad_idle_threads_setting_is_refused_and_the_good_ones_run() {
-    // unset: the default (spin)
+    // unset: the default (spin while there is work, at most 50 ms without)
     let (o, p) = case_with("idle", |t| t.to_string());
     assert!(o.status.success(), "unset: {}", stderr(&o));
     let out = p.parent().unwrap().join("out");
@@ -149,10 +149,23 @@ fn a_bad_idle_threads_setting_is_refused_and_the_good_ones_run() {
         e.contains("TMC_IDLE_THREADS") && e.contains("\"nap\""),
         "{e}"
     );
-    for v in ["spin", "sleep"] {
+    for v in ["spin", "sleep", "20"] {
         let o = with(v);
         assert!(o.status.success(), "{v}: {}", stderr(&o));
     }
+    // the option, named in --help with its default and the variable
+    let mut flag = args.to_vec();
+    flag.extend(["--idle-threads", "sleep"]);
+    let o = tmc_with(&flag, &[]);
+    assert!(o.status.success(), "--idle-threads sleep: {}", stderr(&o));
+    let help = tmc_with(&["solve", "--help"], &[]);
+    let help = String::from_utf8_lossy(&help.stdout);
+    assert!(
+        help.contains("--idle-threads")
+            && help.contains("TMC_IDLE_THREADS")
+            && help.contains("[default: 50]"),
+        "{help}"
+    );
 }
 
 #[test]

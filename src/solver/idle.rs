@@ -1,50 +1,77 @@
 //! What the thread pool's other threads do while a linear solve runs on one of them.
 
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
 
 /// What the pool's other threads do while a linear solve runs: most of a factorisation or
 /// triangular solve is on one thread.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+///
+/// Why spin at all: on a virtual machine a core left idle halts, and the next parallel work
+/// waits for it to come back (one assembly, H1 16×16 on 2 threads, `benches/assembly.rs`:
+/// 10–16 ms after an idle solve against 8.3–9.5 ms with the core kept busy). Why not spin
+/// through everything: a long solve then burns a whole core for nothing, on a machine the user
+/// may share. The default spins only while work keeps coming, as OpenMP runtimes do.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum IdleThreads {
-    /// Stay on their cores: run whatever parallel work the solve hands out and spin in
-    /// between (as OpenMP's active wait policy does). On a virtual machine a core left idle for
-    /// the length of a solve halts, and the next assembly waits for it to come back: measured
-    /// 10–16 ms against 8.3–9.5 ms for one assembly (H1 16×16, 2 threads,
-    /// `benches/assembly.rs`).
-    #[default]
+    /// Run whatever parallel work the solve hands out and spin in between, until the solve has
+    /// handed out none for this long; then sleep until the next parallel work.
+    SpinFor(Duration),
+    /// Spin through every solve, however long.
     Spin,
-    /// Sleep until the next parallel work (frees the cores for other processes).
+    /// Sleep until the next parallel work (frees the cores for other processes at once).
     Sleep,
 }
 
+impl Default for IdleThreads {
+    fn default() -> IdleThreads {
+        IdleThreads::SpinFor(IdleThreads::DEFAULT_SPIN)
+    }
+}
+
 impl IdleThreads {
-    /// The environment variable that chooses: `spin` (the default) or `sleep`.
+    /// The environment variable `tmc solve --idle-threads` falls back to.
     pub const VAR: &'static str = "TMC_IDLE_THREADS";
 
-    /// From [`IdleThreads::VAR`]; unset means [`IdleThreads::Spin`].
-    pub fn from_env() -> Result<IdleThreads, String> {
-        match std::env::var(Self::VAR) {
-            Err(std::env::VarError::NotPresent) => Ok(IdleThreads::Spin),
-            Ok(v) if v == "spin" => Ok(IdleThreads::Spin),
-            Ok(v) if v == "sleep" => Ok(IdleThreads::Sleep),
-            Ok(v) => Err(format!(
-                "{} = \"{v}\": expected \"spin\" or \"sleep\"",
+    /// The default's bound on spinning without work.
+    pub const DEFAULT_SPIN: Duration = Duration::from_millis(DEFAULT_SPIN_MS);
+
+    /// `spin`, `sleep`, or a number of milliseconds to spin for without work (`50`, `50ms`).
+    pub fn parse(v: &str) -> Result<IdleThreads, String> {
+        let v = v.trim();
+        match v {
+            "spin" => return Ok(IdleThreads::Spin),
+            "sleep" => return Ok(IdleThreads::Sleep),
+            _ => {}
+        }
+        match v.strip_suffix("ms").unwrap_or(v).trim().parse::<u64>() {
+            Ok(ms) => Ok(IdleThreads::SpinFor(Duration::from_millis(ms))),
+            Err(_) => Err(format!(
+                "\"{v}\" (given here or in {}): expected \"spin\", \"sleep\" or the \
+                 milliseconds to spin without work (default {DEFAULT_SPIN_MS})",
                 Self::VAR
             )),
-            Err(e) => Err(format!("{}: {e}", Self::VAR)),
         }
     }
 
     /// Run `f` (a linear solve) with the pool's other threads doing what `self` says.
     pub fn run<R: Send>(self, f: impl FnOnce() -> R + Send) -> R {
         let threads = rayon::current_num_threads();
-        if self == IdleThreads::Sleep || threads < 2 {
-            return f();
-        }
+        let bound = match self {
+            IdleThreads::Sleep => return f(),
+            IdleThreads::SpinFor(d) if d.is_zero() => return f(),
+            _ if threads < 2 => return f(),
+            IdleThreads::SpinFor(d) => Some(d),
+            IdleThreads::Spin => None,
+        };
         let done = AtomicBool::new(false);
         rayon::scope(|s| {
             for _ in 1..threads {
-                s.spawn(|s| spin(s, &done));
+                let idle = Idle {
+                    done: &done,
+                    bound,
+                    since: Instant::now(),
+                };
+                s.spawn(move |s| spin(s, idle));
             }
             let r = f();
             done.store(true, Ordering::Release);
@@ -53,22 +80,55 @@ impl IdleThreads {
     }
 }
 
-/// How long one spinner runs before it hands its thread back to the pool's scheduler.
-const SPIN_SLICE: std::time::Duration = std::time::Duration::from_micros(200);
+impl std::fmt::Display for IdleThreads {
+    /// As [`IdleThreads::parse`] reads it.
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        match self {
+            IdleThreads::SpinFor(d) => write!(f, "{}", d.as_millis()),
+            IdleThreads::Spin => f.write_str("spin"),
+            IdleThreads::Sleep => f.write_str("sleep"),
+        }
+    }
+}
 
-/// Spin until `done`, running the pool's other jobs meanwhile. rayon's thieves take a
-/// worker's oldest job first, so the spinners (spawned before the solve starts) are claimed
-/// before any of the solve's own parallel work can be stolen, and none should end up on top of
-/// a frame the solve waits for. Should one still (several solves in one pool, another
-/// scheduler), it returns within [`SPIN_SLICE`], spawning its successor, and that frame resumes.
-fn spin<'s>(s: &rayon::Scope<'s>, done: &'s AtomicBool) {
-    let start = std::time::Instant::now();
-    while !done.load(Ordering::Acquire) {
-        if start.elapsed() > SPIN_SLICE {
-            s.spawn(move |s| spin(s, done));
+/// Milliseconds the default spins without work: the length of a few assemblies, so a solve
+/// that hands out work or ends within them finds its cores awake, and one that runs longer
+/// (where a core's wake-up is small beside it) does not keep them.
+pub const DEFAULT_SPIN_MS: u64 = 50;
+
+/// One spinner's state, handed on to its successors.
+#[derive(Clone, Copy)]
+struct Idle<'s> {
+    done: &'s AtomicBool,
+    /// How long to spin without work; `None`: until `done`.
+    bound: Option<Duration>,
+    /// When this thread last ran work (or started spinning).
+    since: Instant,
+}
+
+/// How long one spinner runs before it hands its thread back to the pool's scheduler.
+const SPIN_SLICE: Duration = Duration::from_micros(200);
+
+/// Spin until `done` (or until idle for longer than the bound), running the pool's other jobs
+/// meanwhile. rayon's thieves take a worker's oldest job first, so the spinners (spawned before
+/// the solve starts) are claimed before any of the solve's own parallel work can be stolen, and
+/// none should end up on top of a frame the solve waits for. Should one still (several solves
+/// in one pool, another scheduler), it returns within [`SPIN_SLICE`], spawning its successor,
+/// and that frame resumes.
+fn spin<'s>(s: &rayon::Scope<'s>, mut idle: Idle<'s>) {
+    let start = Instant::now();
+    while !idle.done.load(Ordering::Acquire) {
+        let now = Instant::now();
+        if idle.bound.is_some_and(|b| now - idle.since > b) {
+            return; // the thread goes back to the pool, which sleeps it until work comes
+        }
+        if now - start > SPIN_SLICE {
+            s.spawn(move |s| spin(s, idle));
             return;
         }
-        if rayon::yield_now() != Some(rayon::Yield::Executed) {
+        if rayon::yield_now() == Some(rayon::Yield::Executed) {
+            idle.since = Instant::now();
+        } else {
             std::hint::spin_loop();
         }
     }
@@ -78,6 +138,71 @@ fn spin<'s>(s: &rayon::Scope<'s>, done: &'s AtomicBool) {
 mod tests {
     use super::IdleThreads;
     use rayon::prelude::*;
+    use std::time::Duration;
+
+    /// CPU seconds this thread has used.
+    fn thread_cpu() -> f64 {
+        let mut t = libc::timespec {
+            tv_sec: 0,
+            tv_nsec: 0,
+        };
+        // SAFETY: clock_gettime writes one timespec, which `t` is
+        let rc = unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut t) };
+        assert_eq!(rc, 0);
+        t.tv_sec as f64 + 1e-9 * t.tv_nsec as f64
+    }
+
+    /// CPU seconds the pool's threads other than the caller use while `idle` runs a solve
+    /// that hands out no work for 200 ms.
+    fn idle_cpu(idle: IdleThreads) -> f64 {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap();
+        let cpu = || pool.broadcast(|_| thread_cpu());
+        pool.install(|| {
+            let caller = rayon::current_thread_index().unwrap();
+            let before = cpu();
+            idle.run(|| std::thread::sleep(Duration::from_millis(200)));
+            let after = cpu();
+            (0..2)
+                .filter(|&i| i != caller)
+                .map(|i| after[i] - before[i])
+                .sum()
+        })
+    }
+
+    #[test]
+    fn the_default_stops_spinning_when_a_solve_hands_out_no_work() {
+        let spin = idle_cpu(IdleThreads::Spin);
+        let default = idle_cpu(IdleThreads::default());
+        let sleep = idle_cpu(IdleThreads::Sleep);
+        // spinning through the solve keeps the other core busy for most of its 200 ms (less
+        // only if the machine takes the core away); the default gives it up after 50 ms
+        assert!(spin > 0.1, "spin: {spin} s of CPU");
+        assert!(default < 0.08, "default: {default} s of CPU");
+        assert!(sleep < 0.01, "sleep: {sleep} s of CPU");
+    }
+
+    #[test]
+    fn policies_parse_from_their_names_and_milliseconds() {
+        assert_eq!(IdleThreads::parse("spin"), Ok(IdleThreads::Spin));
+        assert_eq!(IdleThreads::parse("sleep"), Ok(IdleThreads::Sleep));
+        let ms = |n| Ok(IdleThreads::SpinFor(Duration::from_millis(n)));
+        assert_eq!(IdleThreads::parse("20"), ms(20));
+        assert_eq!(IdleThreads::parse("20ms"), ms(20));
+        assert_eq!(IdleThreads::parse("0"), ms(0));
+        let e = IdleThreads::parse("nap").unwrap_err();
+        assert!(e.contains("\"nap\"") && e.contains("spin"), "{e}");
+        assert!(IdleThreads::parse("-5").is_err());
+        for p in [
+            IdleThreads::default(),
+            IdleThreads::Spin,
+            IdleThreads::Sleep,
+        ] {
+            assert_eq!(IdleThreads::parse(&p.to_string()), Ok(p));
+        }
+    }
 
     /// Σ lo..hi by recursive halving with `rayon::join`, slowly enough that halves get stolen.
     fn sum(lo: u64, hi: u64) -> u64 {
@@ -101,7 +226,12 @@ mod tests {
         let n = 256;
         pool.install(|| {
             (0..8).into_par_iter().for_each(|_| {
-                for idle in [IdleThreads::Spin, IdleThreads::Sleep] {
+                for idle in [
+                    IdleThreads::Spin,
+                    IdleThreads::Sleep,
+                    IdleThreads::default(),
+                    IdleThreads::SpinFor(Duration::from_micros(50)),
+                ] {
                     for _ in 0..5 {
                         assert_eq!(idle.run(|| sum(0, n)), n * (n - 1) / 2);
                     }
