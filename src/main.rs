@@ -212,8 +212,8 @@ fn main() -> ExitCode {
             };
             match mesh_geo(&geo, &out, &opts) {
                 Ok(r) => {
-                    for w in &r.warnings {
-                        eprintln!("gmsh: {w}");
+                    for w in r.warnings.iter().chain(&r.mesh.untouched_bodies()) {
+                        eprintln!("warning: {w}");
                     }
                     println!("wrote {} ({}D)", r.output.display(), r.dim);
                     print_mesh(&r.mesh);
@@ -290,6 +290,9 @@ fn check_command(case: &std::path::Path, sets: Vec<(String, String)>) -> ExitCod
                 println!("  warning: {w}");
             }
             println!("{}", r.physics);
+            for w in &r.warnings {
+                println!("{w}");
+            }
             for e in &r.expansion {
                 println!("thermal expansion in {e}");
             }

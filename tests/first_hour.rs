@@ -248,6 +248,81 @@ fn a_study_without_measure_or_reference_tabulates() {
 }
 
 #[test]
+fn a_body_no_boundary_group_touches_is_reported() {
+    // the README's cylinder on a plate without the cylinder's "rim": nothing can hold the
+    // cylinder but the medium
+    let dir = scratch("untouched-body");
+    let geo = dir.join("norim.geo");
+    let text = std::fs::read_to_string(root().join("geo/cylinder-plate.geo")).unwrap();
+    let without: String = text
+        .lines()
+        .filter(|l| !l.contains("\"rim\""))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    assert_ne!(without, text, "the .geo has a rim group to leave out");
+    std::fs::write(&geo, without).unwrap();
+    let o = tmc(&["mesh", geo.to_str().unwrap()]);
+    let e = stderr(&o);
+    assert!(o.status.success(), "{e}");
+    assert!(
+        e.contains("warning: group \"cylinder\"")
+            && e.contains("touches no boundary group")
+            && e.contains("only \"medium\" holds it"),
+        "{e}"
+    );
+    // the medium between the two bodies is not a body to hold
+    assert!(!e.contains("group \"medium\""), "{e}");
+    // with the rim, no such warning
+    let o = tmc(&[
+        "mesh",
+        "geo/cylinder-plate.geo",
+        "-o",
+        dir.join("rim.msh").to_str().unwrap(),
+    ]);
+    let e = stderr(&o);
+    assert!(
+        o.status.success() && !e.contains("touches no boundary group"),
+        "{e}"
+    );
+}
+
+#[test]
+fn a_solid_only_the_medium_holds_is_reported() {
+    let dir = scratch("medium-alone");
+    let text = std::fs::read_to_string(root().join("cases/cylinder-plate.toml"))
+        .unwrap()
+        .replace("\"../geo/", &format!("\"{}/geo/", root().display()));
+    let check = |name: &str, text: &str| {
+        let case = dir.join(name);
+        std::fs::write(&case, text).unwrap();
+        let o = tmc(&["check", case.to_str().unwrap()]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        String::from_utf8_lossy(&o.stdout).into_owned()
+    };
+    let pushed = "ux = 0.0\nuy = -0.15\n";
+    assert!(text.contains(pushed), "the case pushes the cylinder's rim");
+    // pressed down at its rim but free to slide: the usual slip, a warning
+    let out = check("slides.toml", &text.replace(pushed, "uy = -0.15\n"));
+    assert!(
+        out.contains("warning: the solid body of \"cylinder\"")
+            && out.contains("held in part: it can move freely in x but for the third medium"),
+        "{out}"
+    );
+    // heated at its rim, not pushed: floating in the medium, a note
+    let out = check("floats.toml", &text.replace(pushed, ""));
+    assert!(
+        out.contains("note: the solid body of \"cylinder\"")
+            && out.contains("has no prescribed displacement")
+            && !out.contains("warning")
+            && !out.contains("of \"plate\""),
+        "{out}"
+    );
+    // held in full, as shipped: neither
+    let out = check("held.toml", &text);
+    assert!(!out.contains("warning") && !out.contains("note"), "{out}");
+}
+
+#[test]
 fn a_surface_in_no_group_is_reported() {
     let dir = scratch("forgotten-group");
     let geo = dir.join("forgot.geo");

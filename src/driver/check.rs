@@ -27,6 +27,8 @@ pub struct CheckReport {
     pub probes: Vec<String>,
     /// Regions with thermal expansion, with the temperature their strain is counted from.
     pub expansion: Vec<String>,
+    /// The model's warnings and notes (a body the medium alone holds in some direction).
+    pub warnings: Vec<String>,
 }
 
 impl CheckReport {
@@ -96,6 +98,7 @@ pub fn check(case_path: &Path, opts: &SolveOptions) -> Result<CheckReport, Solve
         factor_entries,
         probes: probes.iter().map(|p| p.name.clone()).collect(),
         expansion: expansion(&case),
+        warnings: model.warnings,
         mesh: model.mesh,
     })
 }

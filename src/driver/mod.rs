@@ -165,6 +165,11 @@ fn model_on(case: &Case, mesh: Mesh, quiet: bool) -> Result<(Model, Vec<Probe>),
     }
     case.validate(&mesh)?;
     let model = build(case, mesh)?;
+    if !quiet {
+        for w in &model.warnings {
+            eprintln!("{}: {w}", case.path.display());
+        }
+    }
     let probes = probes::build(case, &model.mesh)?;
     Ok((model, probes))
 }

@@ -273,6 +273,126 @@ impl Mesh {
         (0..3).map(|i| hi[i] - lo[i]).fold(0.0, f64::max)
     }
 
+    /// The connected sets of cells among the blocks (indices into [`Mesh::cells`]) `keep`
+    /// accepts (cells sharing a node are connected): per node, the index of its set, or
+    /// `usize::MAX` for a node of no kept cell.
+    pub fn components(&self, keep: impl Fn(usize) -> bool) -> Vec<usize> {
+        let n = self.coords.len();
+        let mut parent: Vec<usize> = (0..n).collect();
+        fn find(p: &mut [usize], mut a: usize) -> usize {
+            while p[a] != a {
+                p[a] = p[p[a]];
+                a = p[a];
+            }
+            a
+        }
+        let mut used = vec![false; n];
+        for (_, b) in self.cells.iter().enumerate().filter(|&(i, _)| keep(i)) {
+            for c in 0..b.n_cells() {
+                let cell = b.cell(c);
+                used[cell[0]] = true;
+                for &m in &cell[1..] {
+                    used[m] = true;
+                    let (ra, rb) = (find(&mut parent, cell[0]), find(&mut parent, m));
+                    if ra != rb {
+                        parent[ra.max(rb)] = ra.min(rb);
+                    }
+                }
+            }
+        }
+        let mut label = vec![usize::MAX; n];
+        let mut next = 0;
+        let mut comp = vec![usize::MAX; n];
+        for a in 0..n {
+            if !used[a] {
+                continue;
+            }
+            let r = find(&mut parent, a);
+            if label[r] == usize::MAX {
+                label[r] = next;
+                next += 1;
+            }
+            comp[a] = label[r];
+        }
+        comp
+    }
+
+    /// The bodies (connected cells of one physical group) that no lower-dimensional physical
+    /// group touches, as warnings for `tmc mesh`: a case can put no condition on them, so only
+    /// the group they are joined to holds them and sets their temperature. The trap: a body
+    /// given no boundary group at all rests on the third medium alone and slides on it. A group
+    /// joined to two or more others (a medium between bodies) is left out. (With a case,
+    /// `model::held` says which bodies the medium alone holds.)
+    pub fn untouched_bodies(&self) -> Vec<String> {
+        let mark = |blocks: &mut dyn Iterator<Item = &Block>| {
+            let mut m = vec![false; self.coords.len()];
+            for b in blocks {
+                for &n in &b.conn {
+                    m[n] = true;
+                }
+            }
+            m
+        };
+        let touched = mark(&mut self.facets.iter().filter(|b| !b.groups.is_empty()));
+        let bodies: Vec<usize> = (0..self.groups.len())
+            .filter(|&g| self.groups[g].dim == self.dim)
+            .collect();
+        let mut warnings = Vec::new();
+        for &g in &bodies {
+            let comp = self.components(|b| self.cells[b].groups.contains(&g));
+            let n_comp = comp
+                .iter()
+                .filter(|&&c| c != usize::MAX)
+                .max()
+                .map_or(0, |&m| m + 1);
+            let mut nodes = vec![Vec::new(); n_comp];
+            for (n, &c) in comp.iter().enumerate() {
+                if c != usize::MAX {
+                    nodes[c].push(n);
+                }
+            }
+            for body in nodes.iter().filter(|b| !b.iter().any(|&n| touched[n])) {
+                let joined: Vec<String> = bodies
+                    .iter()
+                    .filter(|&&o| o != g)
+                    .filter(|&&o| {
+                        let cells = mark(&mut self.cells.iter().filter(|b| b.groups.contains(&o)));
+                        body.iter().any(|&n| cells[n])
+                    })
+                    .map(|&o| format!("\"{}\"", self.groups[o].name))
+                    .collect();
+                if joined.len() > 1 {
+                    continue;
+                }
+                let at = centroid(&self.coords, body);
+                let at: Vec<String> = at[..self.dim].iter().map(|v| format!("{v:.4}")).collect();
+                let which = if n_comp > 1 {
+                    "a body of group"
+                } else {
+                    "group"
+                };
+                let held = if joined.is_empty() {
+                    "it is joined to nothing: nothing holds it".to_string()
+                } else {
+                    format!(
+                        "only {} holds it (a solid in the third medium alone slides on it)",
+                        joined[0]
+                    )
+                };
+                warnings.push(format!(
+                    "{which} \"{}\" ({} nodes around ({})) touches no boundary group, so no \
+                     condition can be put on it: {held}; a Physical {} on its boundary gives it \
+                     supports",
+                    self.groups[g].name,
+                    body.len(),
+                    at.join(", "),
+                    if self.dim == 2 { "Curve" } else { "Surface" }
+                ));
+            }
+        }
+        warnings
+    }
+
     /// Cells per element type, in order of first appearance.
     pub fn cell_counts(&self) -> Vec<(CellKind, usize)> {
         self.cell_kinds()
@@ -313,8 +433,8 @@ pub fn centroid(coords: &[[f64; 3]], nodes: &[usize]) -> [f64; 3] {
 }
 
 /// Checks of a mesh as read: every coordinate finite and every cell of non-zero measure
-/// (errors naming the cell's group and centre); coincident nodes are a warning (the mesh is cut
-/// there: a crack or geometry that was not merged).
+/// (errors naming the cell's group and centre); coincident nodes (the mesh is cut there: a
+/// crack or geometry that was not merged) are a warning.
 pub fn check_geometry(mesh: &Mesh) -> Result<Vec<String>, String> {
     if let Some((n, x)) = mesh
         .coords

@@ -44,7 +44,7 @@ pub fn build(case: &Case, mesh: Mesh) -> Result<Model, CaseError> {
     let facet_blocks = convection_blocks(case, &mesh, &physics, &mut flux_groups);
     let capacity_blocks = capacity_blocks(case, &mesh, &physics, &blocks);
     debug_assert!(cons.eq.iter().filter(|&&e| e != NONE).count() == cons.n_eq);
-    let model = Model {
+    let mut model = Model {
         physics,
         dofs,
         cons,
@@ -65,10 +65,12 @@ pub fn build(case: &Case, mesh: Mesh) -> Result<Model, CaseError> {
         d,
         theta_init,
         mesh,
+        warnings: Vec::new(),
     };
     if let Some(msg) = super::held::unheld_body(&model) {
         return case.error(case.file.mesh.span(), msg);
     }
+    model.warnings = super::held::held_by_medium_alone(&model);
     Ok(model)
 }
 

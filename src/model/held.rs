@@ -4,13 +4,14 @@
 //! cut. Said here per body, with the direction.
 
 use super::Model;
+use crate::case::RegionKind;
 use crate::dofs::{Field, NONE};
 use nalgebra::{DMatrix, SymmetricEigen};
 
 /// The first body that is not held, as a sentence; `None` if all are.
 pub fn unheld_body(model: &Model) -> Option<String> {
     let mesh = &model.mesh;
-    let comp = components(model);
+    let comp = mesh.components(|_| true);
     let n_comp = comp
         .iter()
         .filter(|&&c| c != usize::MAX)
@@ -63,47 +64,74 @@ pub fn unheld_body(model: &Model) -> Option<String> {
     None
 }
 
-/// The connected component of every node (through the cells); `usize::MAX` for nodes in no
-/// cell.
-fn components(model: &Model) -> Vec<usize> {
-    let n = model.mesh.coords.len();
-    let mut parent: Vec<usize> = (0..n).collect();
-    fn find(p: &mut [usize], mut a: usize) -> usize {
-        while p[a] != a {
-            p[a] = p[p[a]];
-            a = p[a];
-        }
-        a
+/// The solid bodies (connected solid cells) whose prescribed displacements leave a rigid
+/// motion free, which only the third medium around them resists: by its small stiffness, so
+/// they slide or turn under any force that way. A body held in part (pressed down, free to slide
+/// sideways: the usual slip) gives a warning; one held nowhere (floating or wedged in the
+/// medium, as the paper's discs) a note.
+pub fn held_by_medium_alone(model: &Model) -> Vec<String> {
+    let mesh = &model.mesh;
+    let has_medium = model.regions.iter().any(|r| r.1 == RegionKind::Medium);
+    if !has_medium || !model.physics.mechanics || !model.dofs.has(Field::U) {
+        return Vec::new();
     }
-    let mut used = vec![false; n];
-    for b in &model.mesh.cells {
-        for c in 0..b.n_cells() {
-            let cell = b.cell(c);
-            used[cell[0]] = true;
-            for &m in &cell[1..] {
-                used[m] = true;
-                let (ra, rb) = (find(&mut parent, cell[0]), find(&mut parent, m));
-                if ra != rb {
-                    parent[ra.max(rb)] = ra.min(rb);
-                }
+    let mut region = vec![None; mesh.cells.len()];
+    for info in &model.blocks {
+        if model.regions[info.region].1 == RegionKind::Solid {
+            region[info.block] = Some(info.region);
+        }
+    }
+    let comp = mesh.components(|b| region[b].is_some());
+    let n_comp = comp
+        .iter()
+        .filter(|&&c| c != usize::MAX)
+        .max()
+        .map_or(0, |&m| m + 1);
+    let d = mesh.dim;
+    let mut out = Vec::new();
+    for c in 0..n_comp {
+        let nodes: Vec<usize> = (0..comp.len()).filter(|&n| comp[n] == c).collect();
+        let held: Vec<(usize, usize)> = nodes
+            .iter()
+            .flat_map(|&n| (0..d).map(move |i| (n, i)))
+            .filter(|&(n, i)| {
+                let dof = model.dofs.u[n * d + i];
+                dof != NONE && model.cons.eq[dof as usize] == NONE
+            })
+            .collect();
+        let Some(mode) = free_rigid_mode(model, &nodes, &held) else {
+            continue;
+        };
+        let mut names: Vec<String> = Vec::new();
+        for (b, r) in region.iter().enumerate() {
+            let Some(r) = *r else { continue };
+            let name = format!("\"{}\"", model.regions[r].0);
+            if mesh.cells[b].conn.first().is_some_and(|&n| comp[n] == c) && !names.contains(&name) {
+                names.push(name);
             }
         }
+        let at = crate::mesh::centroid(&mesh.coords, &nodes);
+        let at: Vec<String> = at[..d].iter().map(|v| format!("{v:.4}")).collect();
+        let body = format!(
+            "the solid body of {} ({} nodes around ({}))",
+            names.join(", "),
+            nodes.len(),
+            at.join(", ")
+        );
+        out.push(if held.is_empty() {
+            format!(
+                "note: {body} has no prescribed displacement: the third medium alone holds it \
+                 (as it should a body floating or wedged in it)"
+            )
+        } else {
+            format!(
+                "warning: {body} is held in part: it can {mode} but for the third medium, \
+                 whose small stiffness lets it slip; prescribe displacements on its boundary \
+                 that stop it"
+            )
+        });
     }
-    let mut label = vec![usize::MAX; n];
-    let mut next = 0;
-    let mut comp = vec![usize::MAX; n];
-    for a in 0..n {
-        if !used[a] {
-            continue;
-        }
-        let r = find(&mut parent, a);
-        if label[r] == usize::MAX {
-            label[r] = next;
-            next += 1;
-        }
-        comp[a] = label[r];
-    }
-    comp
+    out
 }
 
 /// A rigid motion of the body (`nodes`) that the held (node, direction) pairs do not stop,

@@ -101,6 +101,9 @@ pub struct Model {
     pub d: f64,
     /// Initial temperature per node (θ0 of its region).
     pub theta_init: Vec<f64>,
+    /// What the case sets up that is valid but worth saying, each starting "warning:" or
+    /// "note:" (a body the medium alone holds in some direction), besides the mesh's warnings.
+    pub warnings: Vec<String>,
 }
 
 impl Model {
