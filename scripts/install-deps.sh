@@ -1,12 +1,12 @@
 #!/usr/bin/env bash
 # Install what tmc needs and the machine lacks: Debian's gmsh (library and headers) for
-# meshing, fontconfig/freetype and a font for the plots (plotters), python3-meshio and
+# meshing, a font for the plots (DejaVu Sans, read by plotters), python3-meshio and
 # python3-matplotlib to read and render results, python3-gmsh and python3-dolfinx (FEniCSx 0.5.2)
 # for the validation against FEniCSx. Idempotent: installs only missing packages.
 # `install-deps.sh demo` installs only what building and running tmc needs (no Python, no
 # FEniCSx, about 1 GB less); without an argument, also what the tests and validation need.
 set -euo pipefail
-packages=(gmsh libgmsh-dev pkg-config libfontconfig1-dev libfreetype-dev fonts-dejavu-core)
+packages=(gmsh libgmsh-dev pkg-config fonts-dejavu-core)
 if [ "${1:-all}" != "demo" ]; then
   packages+=(python3-meshio python3-matplotlib python3-gmsh python3-dolfinx)
 fi

@@ -358,6 +358,23 @@ pub struct CaseFile {
     pub probe: Vec<Probe>,
     #[serde(default)]
     pub output: Output,
+    #[serde(default)]
+    pub units: Units,
+}
+
+/// `[units]`: the names of the case's units, for plot axes and `summary.json` only. tmc
+/// converts nothing: the numbers are read and written in whatever consistent set the case uses.
+#[derive(Clone, Debug, Deserialize, Default, PartialEq, Eq)]
+#[serde(deny_unknown_fields)]
+pub struct Units {
+    pub length: Option<String>,
+    pub force: Option<String>,
+    pub time: Option<String>,
+    pub temperature: Option<String>,
+    /// Default: force·length.
+    pub energy: Option<String>,
+    /// Of heat flows; default: energy/time.
+    pub power: Option<String>,
 }
 
 /// `[output]`: which steps get a `.vtu` (history.csv has every step).

@@ -97,16 +97,17 @@ enum Command {
         #[arg(short, long)]
         quiet: bool,
     },
-    /// Draw history.csv columns of a solved case against λ, one PNG per column.
+    /// Draw history.csv columns of a solved case against λ (or the physical time), one PNG per
+    /// column.
     Plot {
         /// The results folder of a solve (holds history.csv).
         results: PathBuf,
         /// Columns to draw (default: probes, reactions, energy, work).
         #[arg(short, long, value_delimiter = ',')]
         columns: Vec<String>,
-        /// The x column.
-        #[arg(short, long, default_value = "lambda")]
-        x: String,
+        /// The x column (default: `time` where the case has a [time] section, else `lambda`).
+        #[arg(short, long)]
+        x: Option<String>,
         /// Output folder (default: the results folder).
         #[arg(short, long)]
         output: Option<PathBuf>,
@@ -177,7 +178,7 @@ fn main() -> ExitCode {
             columns,
             x,
             output,
-        } => match tmc::plot::plot_results(&results, &columns, &x, output.as_deref()) {
+        } => match tmc::plot::plot_results(&results, &columns, x.as_deref(), output.as_deref()) {
             Ok(files) => {
                 for f in files {
                     println!("wrote {}", f.display());

@@ -61,8 +61,49 @@ fn range(v: impl Iterator<Item = f64>, log: bool) -> std::ops::Range<f64> {
     }
 }
 
+/// Where the plots' font is looked for: `TMC_PLOT_FONT` if set, then DejaVu Sans where Debian
+/// (`fonts-dejavu-core`), Fedora and Arch put it.
+const FONT_FILES: [&str; 3] = [
+    "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
+    "/usr/share/fonts/dejavu-sans-fonts/DejaVuSans.ttf",
+    "/usr/share/fonts/TTF/DejaVuSans.ttf",
+];
+
+/// Read the font once and give it to plotters as "sans-serif" (its `ab_glyph` renderer: the
+/// `ttf` one, through font-kit, clips glyphs that reach left of their origin, such as the `J`
+/// of `mJ`).
+fn register_font(path: &Path) -> Result<(), PlotError> {
+    static FONT: std::sync::OnceLock<Result<(), String>> = std::sync::OnceLock::new();
+    let registered = FONT.get_or_init(|| {
+        let var = std::env::var_os("TMC_PLOT_FONT").map(PathBuf::from);
+        let candidates: Vec<PathBuf> = var
+            .into_iter()
+            .chain(FONT_FILES.iter().map(PathBuf::from))
+            .collect();
+        let Some((file, bytes)) = candidates
+            .iter()
+            .find_map(|f| Some((f, std::fs::read(f).ok()?)))
+        else {
+            return Err(format!(
+                "no font for the plots: install fonts-dejavu-core, or set TMC_PLOT_FONT to a \
+                 .ttf file (looked for {})",
+                FONT_FILES.join(", ")
+            ));
+        };
+        // one font for the life of the process, as plotters wants it
+        let bytes: &'static [u8] = Box::leak(bytes.into_boxed_slice());
+        plotters::style::register_font("sans-serif", FontStyle::Normal, bytes)
+            .map_err(|_| format!("{} is not a font plotters can read", file.display()))
+    });
+    registered.clone().map_err(|msg| PlotError::Draw {
+        path: path.to_owned(),
+        msg,
+    })
+}
+
 /// Draw `chart` into a PNG at `path`.
 pub fn line_chart(path: &Path, chart: &Chart) -> Result<(), PlotError> {
+    register_font(path)?;
     let xs = range(
         chart
             .series
@@ -266,12 +307,16 @@ impl History {
     }
 }
 
-/// The columns `tmc plot` draws by default: probes, reactions, energy and work (those after
-/// the bookkeeping ones), skipping columns the scene does not have (NaN).
+/// The columns `tmc plot` draws by default: probes, reactions, energy, work and heat (those
+/// after the bookkeeping ones, and not the wall clock), skipping columns the scene does not
+/// have (NaN) or that stay 0.
 pub fn default_columns(h: &History) -> Vec<String> {
     use crate::driver::{HISTORY_SOLVER_COLUMNS, HISTORY_STEP_COLUMNS};
-    let bookkeeping =
-        |c: &str| HISTORY_STEP_COLUMNS.contains(&c) || HISTORY_SOLVER_COLUMNS.contains(&c);
+    let bookkeeping = |c: &str| {
+        HISTORY_STEP_COLUMNS.contains(&c)
+            || HISTORY_SOLVER_COLUMNS.contains(&c)
+            || c == "wall_seconds"
+    };
     h.columns
         .iter()
         .filter(|c| !bookkeeping(c))
@@ -283,16 +328,19 @@ pub fn default_columns(h: &History) -> Vec<String> {
         .collect()
 }
 
-/// `tmc plot`: one PNG per column of `results/NAME/history.csv` against `x` (default λ),
-/// written to `out` (default the results folder). Returns the files written.
+/// `tmc plot`: one PNG per column of `results/NAME/history.csv` against `x` (default: the
+/// physical time where the run has one, else λ), written to `out` (default the results
+/// folder). Returns the files written.
 pub fn plot_results(
     dir: &Path,
     columns: &[String],
-    x: &str,
+    x: Option<&str>,
     out: Option<&Path>,
 ) -> Result<Vec<PathBuf>, PlotError> {
     let path = dir.join("history.csv");
     let h = History::read(&path)?;
+    let labels = Labels::read(dir);
+    let x = x.unwrap_or(labels.default_x());
     let bad = |msg: String| PlotError::Bad {
         path: path.clone(),
         msg,
@@ -342,8 +390,8 @@ pub fn plot_results(
             &file,
             &Chart {
                 title: &format!("{name}: {c}"),
-                x_label: axis_name(x),
-                y_label: axis_name(c),
+                x_label: &labels.axis(x),
+                y_label: &labels.axis(c),
                 series: &[Series {
                     name: c.clone(),
                     points: xs.iter().copied().zip(ys).collect(),
@@ -378,11 +426,66 @@ pub fn axis_name(column: &str) -> &str {
         "time" => "time t",
         "energy" => "stored energy",
         "work" => "external work",
-        "wall_seconds" => "wall time, s",
+        "wall_seconds" => "wall time [s]",
         "newton_iterations" => "Newton iterations",
         "heat_stored" => "heat stored",
         "heat_in" => "heat supplied",
         other => other,
+    }
+}
+
+/// What the columns of a results folder measure and the units its case named, from its
+/// `summary.json` (none for a folder without one, such as an older run's).
+#[derive(Debug, Default)]
+pub struct Labels {
+    /// Column → quantity ("length", "force", …).
+    quantities: std::collections::BTreeMap<String, String>,
+    /// Quantity → unit.
+    units: std::collections::BTreeMap<String, String>,
+}
+
+impl Labels {
+    pub fn read(dir: &Path) -> Labels {
+        let Ok(text) = std::fs::read_to_string(dir.join("summary.json")) else {
+            return Labels::default();
+        };
+        let Ok(json) = serde_json::from_str::<serde_json::Value>(&text) else {
+            return Labels::default();
+        };
+        let map = |key: &str| {
+            json.get(key)
+                .and_then(|m| m.as_object())
+                .map(|m| {
+                    m.iter()
+                        .filter_map(|(k, v)| Some((k.clone(), v.as_str()?.to_string())))
+                        .collect()
+                })
+                .unwrap_or_default()
+        };
+        Labels {
+            quantities: map("quantities"),
+            units: map("units"),
+        }
+    }
+
+    /// The x column where none is asked for: the physical time where the run has one, else λ.
+    pub fn default_x(&self) -> &'static str {
+        if self.quantities.contains_key("time") {
+            "time"
+        } else {
+            "lambda"
+        }
+    }
+
+    /// The axis title of `column`: its name or the quantity in words, then the unit in
+    /// brackets, or the quantity where the case named no unit for it (`gap [mm]`,
+    /// `R_bottom_y [force]`).
+    pub fn axis(&self, column: &str) -> String {
+        let name = axis_name(column);
+        match self.quantities.get(column) {
+            Some(q) => format!("{name} [{}]", self.units.get(q).unwrap_or(q)),
+            None => name.to_string(),
+        }
     }
 }
 

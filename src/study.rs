@@ -23,7 +23,7 @@
 //! (`region`, `bc`, `probe`) picks the entry whose `group` (or `name`) it names.
 
 use crate::case::set_path;
-use crate::plot::{Chart, History, PlotError, Series, line_chart};
+use crate::plot::{Chart, History, Labels, PlotError, Series, line_chart};
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -804,6 +804,8 @@ fn history_plots(
     os: &[Outcome],
 ) -> Result<Vec<PathBuf>, StudyError> {
     let mut files = Vec::new();
+    // the variants share their case's units and columns
+    let labels = os.first().map(|o| Labels::read(&o.dir)).unwrap_or_default();
     for c in &study.history {
         let mut series = Vec::new();
         for o in os {
@@ -822,8 +824,8 @@ fn history_plots(
             &f,
             &Chart {
                 title: &format!("{name}: {c}"),
-                x_label: "λ",
-                y_label: c,
+                x_label: &labels.axis("lambda"),
+                y_label: &labels.axis(c),
                 series: &series,
                 log_x: false,
                 log_y: false,

@@ -543,3 +543,63 @@ fn restart_continues_an_interrupted_run_exactly() {
         );
     }
 }
+
+#[test]
+fn units_named_in_the_case_label_the_plot_axes() {
+    let dir = scratch("units");
+    let out = dir.join("out");
+    let units = [
+        "units.length=mm",
+        "units.force=N",
+        "units.time=s",
+        "units.temperature=K",
+    ];
+    let sets: Vec<&str> = units.iter().flat_map(|u| ["--set", *u]).collect();
+    let o = solve_cli(Path::new("cases/block-transient.toml"), &out, &sets);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = summary(&out);
+    // energy and power made from those named
+    assert_eq!(s["units"]["energy"], "N·mm");
+    assert_eq!(s["units"]["power"], "N·mm/s");
+    let q = &s["quantities"];
+    for (column, quantity) in [
+        ("gap", "length"),
+        ("theta_block", "temperature"),
+        ("R_top_y", "force"),
+        ("Q_bottom", "power"),
+        ("energy", "energy"),
+        ("heat_in", "energy"),
+        ("time", "time"),
+    ] {
+        assert_eq!(q[column], quantity, "{column}");
+    }
+    for counted in ["lambda", "newton_iterations", "min_J_solid", "wall_seconds"] {
+        assert!(q.get(counted).is_none(), "{counted}");
+    }
+    let labels = tmc::plot::Labels::read(&out);
+    assert_eq!(labels.axis("gap"), "gap [mm]");
+    assert_eq!(labels.axis("Q_bottom"), "Q_bottom [N·mm/s]");
+    assert_eq!(labels.axis("heat_in"), "heat supplied [N·mm]");
+    assert_eq!(labels.axis("time"), "time t [s]");
+    assert_eq!(labels.axis("lambda"), "load factor λ");
+    assert_eq!(labels.default_x(), "time");
+    // drawn: every default column but the wall clock, 900 × 600
+    let o = tmc(&["plot", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let png = std::fs::read(out.join("Q_bottom.png")).unwrap();
+    assert_eq!(&png[1..4], b"PNG");
+    let size = |at: usize| u32::from_be_bytes(png[at..at + 4].try_into().unwrap());
+    assert_eq!((size(16), size(20)), (900, 600));
+    assert!(!out.join("wall_seconds.png").exists());
+
+    // without [units] the axes name the quantity, and a steady run is drawn against λ
+    let plain = dir.join("plain");
+    let o = solve_cli(Path::new("cases/block.toml"), &plain, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let labels = tmc::plot::Labels::read(&plain);
+    assert_eq!(labels.axis("gap"), "gap [length]");
+    assert_eq!(labels.axis("Q_top"), "Q_top [power]");
+    assert_eq!(labels.axis("time"), "time t");
+    assert_eq!(labels.default_x(), "lambda");
+    assert!(summary(&plain)["units"].as_object().unwrap().is_empty());
+}

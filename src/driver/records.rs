@@ -5,6 +5,8 @@ use super::strategy::Strategy;
 use crate::case::Case;
 use crate::dofs::Field;
 use crate::model::{Model, Physics};
+use crate::output::probes::Probe;
+use crate::output::quantity::Quantity;
 use crate::solver::linear::LinearKind;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -69,6 +71,11 @@ pub struct Summary {
     /// convected out, Σ Δt × rate by backward Euler. Equals `heat_stored` (the balance).
     pub heat_in: Option<f64>,
     pub output: String,
+    /// The units the case names in `[units]` (and energy and power made from them), by
+    /// quantity: "length", "force", "time", "temperature", "energy", "power".
+    pub units: BTreeMap<String, String>,
+    /// What each column of history.csv with a physical dimension measures: column → quantity.
+    pub quantities: BTreeMap<String, String>,
 }
 
 impl Summary {
@@ -78,6 +85,7 @@ impl Summary {
         model: &Model,
         linear_solver: LinearKind,
         strategy: Strategy,
+        layout: &HistoryLayout,
         out_dir: &Path,
     ) -> Summary {
         let cells = model
@@ -127,6 +135,16 @@ impl Summary {
             heat_stored: None,
             heat_in: None,
             output: out_dir.display().to_string(),
+            units: Quantity::ALL
+                .into_iter()
+                .filter_map(|q| Some((q.name().to_string(), q.unit(&case.file.units)?)))
+                .collect(),
+            quantities: layout
+                .columns
+                .iter()
+                .zip(&layout.quantities)
+                .filter_map(|(c, q)| Some((c.clone(), q.as_ref()?.name().to_string())))
+                .collect(),
         }
     }
 }
@@ -246,13 +264,16 @@ pub struct StepRow {
 /// then `heat_stored` and `heat_in`; last `wall_seconds`.
 pub struct HistoryLayout {
     pub columns: Vec<String>,
+    /// What each column measures (`None`: a count, a ratio or λ).
+    pub quantities: Vec<Option<Quantity>>,
     transient: bool,
     /// (group, component) of each reaction column.
     reactions: Vec<(String, String)>,
 }
 
 impl HistoryLayout {
-    pub fn new(model: &Model, probe_names: &[String]) -> HistoryLayout {
+    /// `physical_time`: the case has `[time]`, so the `time` column is a time.
+    pub fn new(model: &Model, probes: &[Probe], physical_time: bool) -> HistoryLayout {
         let mut reactions: Vec<(String, String)> = Vec::new();
         for g in &model.bc_groups {
             for f in &g.fields {
@@ -278,19 +299,33 @@ impl HistoryLayout {
                 }
             }
         }
-        let mut columns: Vec<String> = HISTORY_STEP_COLUMNS.map(String::from).to_vec();
-        columns.push("energy".into());
-        columns.extend(probe_names.iter().cloned());
-        columns.extend(reactions.iter().map(|(g, k)| flow_name(g, k)));
-        columns.extend(HISTORY_SOLVER_COLUMNS.map(String::from));
-        columns.push("work".into());
+        use Quantity::{Energy, Force, Power, Time};
+        let mut columns: Vec<(String, Option<Quantity>)> = HISTORY_STEP_COLUMNS
+            .iter()
+            .map(|c| (c.to_string(), None))
+            .collect();
+        columns.push(("energy".into(), Some(Energy)));
+        columns.extend(probes.iter().map(|p| (p.name.clone(), Some(p.quantity()))));
+        columns.extend(reactions.iter().map(|(g, k)| {
+            let q = if k == "heat" { Power } else { Force };
+            (flow_name(g, k), Some(q))
+        }));
+        for c in HISTORY_SOLVER_COLUMNS {
+            let q = (c == "time" && physical_time).then_some(Time);
+            columns.push((c.into(), q));
+        }
+        columns.push(("work".into(), Some(Energy)));
         let transient = model.physics.transient;
         if transient {
-            columns.extend(["heat_stored".into(), "heat_in".into()]);
+            columns.push(("heat_stored".into(), Some(Energy)));
+            columns.push(("heat_in".into(), Some(Energy)));
         }
-        columns.push("wall_seconds".into());
+        // seconds of this machine's clock, whatever the case's units
+        columns.push(("wall_seconds".into(), None));
+        let (columns, quantities) = columns.into_iter().unzip();
         HistoryLayout {
             columns,
+            quantities,
             transient,
             reactions,
         }

@@ -153,8 +153,7 @@ impl<'a> Run<'a> {
             eprintln!("{}", describe(&model.physics, strategy));
         }
         let ctl = controller(case, model);
-        let probe_names: Vec<String> = probes.iter().map(|p| p.name.clone()).collect();
-        let layout = HistoryLayout::new(model, &probe_names);
+        let layout = HistoryLayout::new(model, probes, case.file.time.is_some());
         for name in [
             "history.csv",
             "summary.json",
@@ -163,7 +162,7 @@ impl<'a> Run<'a> {
             folder.record(name)?;
         }
         let history = History::new(&out_dir.join("history.csv"), &layout.columns);
-        let summary = Summary::start(case, model, solvers[0].1.kind, strategy, &out_dir);
+        let summary = Summary::start(case, model, solvers[0].1.kind, strategy, &layout, &out_dir);
         let series = Series::new(&out_dir, &case.name(), model);
         Ok(Run {
             model,

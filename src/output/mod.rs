@@ -1,13 +1,14 @@
 //! Output: one `.vtu` per converged step and a `.pvd` collection ([`vtu`]), `history.csv`
-//! ([`history`]), the cell fields written with each step ([`fields`]) and the probes
-//! ([`probes`]). Every file is written to a temporary name and renamed, so a failure never
-//! leaves a half-written file.
+//! ([`history`]), the cell fields written with each step ([`fields`]), the probes
+//! ([`probes`]) and what their numbers measure ([`quantity`]). Every file is written to a
+//! temporary name and renamed, so a failure never leaves a half-written file.
 
 pub mod fields;
 pub mod folder;
 pub mod history;
 pub mod nodal;
 pub mod probes;
+pub mod quantity;
 pub mod series;
 pub mod vtu;
 

@@ -4,6 +4,7 @@ use crate::case::{Case, CaseError};
 use crate::dofs::DofMap;
 use crate::element::{RefElement, invert_small};
 use crate::mesh::Mesh;
+use crate::output::quantity::Quantity;
 
 /// A material point: the nodes of the cell that contains it and its shape-function weights.
 #[derive(Clone, Debug)]
@@ -40,6 +41,14 @@ pub struct Probe {
 }
 
 impl Probe {
+    /// What the probe measures: a length or a temperature.
+    pub fn quantity(&self) -> Quantity {
+        match self.kind {
+            ProbeKind::Theta(_) => Quantity::Temperature,
+            ProbeKind::U(..) | ProbeKind::Distance(..) => Quantity::Length,
+        }
+    }
+
     /// Evaluate on the solution `x`; `NaN` if the probe's field is not simulated.
     pub fn eval(&self, mesh: &Mesh, dofs: &DofMap, x: &[f64]) -> f64 {
         let d = mesh.dim;
