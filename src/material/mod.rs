@@ -2,7 +2,7 @@
 //! exact derivatives. They know nothing of meshes or dofs. One file per law family:
 //! [`thermo_elastic`] (the solid's and the medium's stress), [`conduction`] (the pulled-back
 //! Fourier law), [`regularization`] (the medium's rotation measures and their penalty),
-//! [`convection`] (heat lost through a boundary).
+//! [`convection`] (heat lost through a boundary), [`friction`] (Coulomb slip in the medium).
 //!
 //! Tensors are 3×3 even in 2D (plane strain: F33 = 1, 3D invariants). Fourth-order tangents
 //! are stored as 9×9 matrices with the index pair (i, J) ↦ 3 i + J.
@@ -10,6 +10,7 @@
 
 pub mod conduction;
 pub mod convection;
+pub mod friction;
 pub mod real;
 pub mod regularization;
 pub mod thermo_elastic;

@@ -1,0 +1,314 @@
+//! Coulomb friction in a slip plane of the third medium (the law alone: not yet assembled).
+//!
+//! Everything is measured in the reference configuration, so it stays well conditioned where
+//! the medium has closed to J ≈ 1e-3. With N the plane's unit normal, P = I − N⊗N and
+//! C = FᵀF, the plane's shear per reference thickness is γ = P C N: a layer of reference
+//! thickness H whose faces slide δ apart has γ = δ/H however far it has closed (not δ over the
+//! closed thickness, which is 10³ times larger), and a rotation leaves γ unchanged.
+//!
+//! Slip g_p lies in the plane, one per point, committed at accepted steps; the elastic shear is
+//! γ_e = γ − g_p and the shear traction per reference area τ = G_f(J) γ_e, with G_f rising as
+//! the medium closes ([`shear_modulus`]). Its virtual work τ · δγ gives the second
+//! Piola–Kirchhoff stress S_f = N⊗τ + τ⊗N and P_f = F S_f. Coulomb's condition is
+//! |τ| ≤ μ p_n, with p_n = −n · (P_m N) the compressive normal traction per reference area
+//! that the medium's own stress P_m carries across the plane (n = F⁻ᵀN / |F⁻ᵀN|, the plane's
+//! current normal); an open medium (p_n ≤ 0) resists no slip. The return to the Coulomb cone is
+//! closed form: at fixed F, τ is linear in g_p and p_n does not depend on it. G_f(J) is a
+//! coefficient, not differentiated as part of an energy, so the shear puts no pressure on the
+//! plane; the tangent is unsymmetric, as Coulomb friction's always is. The slip of a step
+//! dissipates τ · Δg_p per reference volume (the frictional heat).
+#![allow(non_snake_case)]
+
+use super::Tensor4;
+use nalgebra::{Matrix3, SMatrix, Vector3};
+
+/// Derivatives of a vector with respect to F: (I, 3k + L).
+type VectorByF = SMatrix<f64, 3, 9>;
+
+/// A slip plane with its Coulomb coefficient.
+#[derive(Clone, Copy, Debug)]
+pub struct Friction {
+    /// μ_f ≥ 0.
+    pub mu: f64,
+    /// The plane's unit normal N in the reference configuration.
+    pub normal: Vector3<f64>,
+}
+
+/// The medium's own first Piola–Kirchhoff stress at the point and its tangent: the normal
+/// traction across the plane comes from it.
+pub struct MediumStress<'a> {
+    pub P: &'a Matrix3<f64>,
+    pub dP_dF: &'a Tensor4,
+}
+
+/// The friction term at one point after the return to the Coulomb cone.
+#[derive(Clone, Debug)]
+pub struct FrictionResponse {
+    /// First Piola–Kirchhoff stress F (N⊗τ + τ⊗N).
+    pub P: Matrix3<f64>,
+    /// Its derivative in F (9×9, (3i + J, 3k + L)), unsymmetric.
+    pub dP_dF: Tensor4,
+    /// Shear traction per reference area, in the plane.
+    pub tau: Vector3<f64>,
+    /// The slip after the step (to commit if the step is accepted).
+    pub slip: Vector3<f64>,
+    /// Compressive normal traction per reference area across the plane.
+    pub p_n: f64,
+    /// On the Coulomb cone (the slip moved).
+    pub slipping: bool,
+    /// τ · (slip − previous slip) per reference volume: the heat the step's slip makes.
+    pub dissipated: f64,
+}
+
+/// The friction modulus G_f = c_f K_m (1 − ln J) / J² and dG_f/dJ: the medium's own stiffness
+/// against closing (K_m its bulk modulus) times c_f, so stick stiffens as the contact does.
+pub fn shear_modulus(c_f: f64, K_m: f64, J: f64) -> (f64, f64) {
+    let l = J.ln();
+    (
+        c_f * K_m * (1.0 - l) / (J * J),
+        -c_f * K_m * (3.0 - 2.0 * l) / (J * J * J),
+    )
+}
+
+impl Friction {
+    /// The friction stress at `F`, from the previous accepted `slip`, with the friction modulus
+    /// `modulus` = (G_f, dG_f/dJ) at this J and the medium's own stress. `None` when F is
+    /// singular.
+    pub fn respond(
+        &self,
+        F: &Matrix3<f64>,
+        slip: &Vector3<f64>,
+        modulus: (f64, f64),
+        medium: &MediumStress,
+    ) -> Option<FrictionResponse> {
+        let N = self.normal;
+        let (G, dG) = modulus;
+        let Pn = Matrix3::identity() - N * N.transpose();
+        let Finv = F.try_inverse()?;
+        let J = F.determinant();
+        let gamma = Pn * (F.transpose() * F) * N;
+        let elastic = gamma - slip;
+        let trial = elastic * G;
+        // dγ_I/dF_kL = P_IL (F N)_k + (F P)_kI N_L; dJ/dF = J F⁻ᵀ
+        let (FN, FP) = (F * N, F * Pn);
+        let mut dgamma = VectorByF::zeros();
+        let mut dtrial = VectorByF::zeros();
+        for (I, k, L) in (0..27).map(|n| (n / 9, n / 3 % 3, n % 3)) {
+            dgamma[(I, 3 * k + L)] = Pn[(I, L)] * FN[k] + FP[(k, I)] * N[L];
+            dtrial[(I, 3 * k + L)] =
+                dG * J * Finv[(L, k)] * elastic[I] + G * dgamma[(I, 3 * k + L)];
+        }
+        // the normal traction and its derivative: n = m/|m|, m = F⁻ᵀN, dm_a/dF_kL = −m_k F⁻¹_La
+        let m = Finv.transpose() * N;
+        let n = m / m.norm();
+        let t = medium.P * N;
+        let p_n = -n.dot(&t);
+        let limit = self.mu * p_n.max(0.0);
+        let slipping = trial.norm() > limit;
+        let (tau, dtau, new_slip) = if !slipping {
+            (trial, dtrial, *slip)
+        } else {
+            let size = trial.norm();
+            let e = trial / size;
+            let tau = e * limit;
+            let mut dtau = (Pn - e * e.transpose()) * dtrial * (limit / size);
+            if p_n > 0.0 {
+                let project = (Matrix3::identity() - n * n.transpose()) / m.norm();
+                for (k, L) in (0..9).map(|c| (c / 3, c % 3)) {
+                    let dm = -Finv.row(L).transpose() * m[k];
+                    let dn = project * dm;
+                    let mut dt = Vector3::zeros();
+                    for a in 0..3 {
+                        dt[a] = (0..3)
+                            .map(|A| medium.dP_dF[(3 * a + A, 3 * k + L)] * N[A])
+                            .sum();
+                    }
+                    let dp = -dn.dot(&t) - n.dot(&dt);
+                    for I in 0..3 {
+                        dtau[(I, 3 * k + L)] += self.mu * dp * e[I];
+                    }
+                }
+            }
+            // the slip that leaves exactly τ as elastic shear
+            (tau, dtau, gamma - tau / G)
+        };
+        let S = N * tau.transpose() + tau * N.transpose();
+        // A_iJkL = δ_ik S_LJ + (F N)_i dτ_J/dF_kL + (F dτ/dF)_i,kL N_J
+        let Fdtau = F * dtau;
+        let mut A = Tensor4::zeros();
+        for (i, Jc, k, L) in (0..81).map(|c| (c / 27, c / 9 % 3, c / 3 % 3, c % 3)) {
+            let d = if i == k { S[(L, Jc)] } else { 0.0 };
+            A[(3 * i + Jc, 3 * k + L)] =
+                d + FN[i] * dtau[(Jc, 3 * k + L)] + Fdtau[(i, 3 * k + L)] * N[Jc];
+        }
+        Some(FrictionResponse {
+            P: F * S,
+            dP_dF: A,
+            tau,
+            slip: new_slip,
+            p_n,
+            slipping,
+            dissipated: tau.dot(&(new_slip - slip)),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::material::ThermoElastic;
+    use crate::material::sample_F;
+
+    /// A third medium (γ = 1e-3 of K = 20, μ = 10).
+    const MEDIUM: ThermoElastic = ThermoElastic {
+        K: 0.02,
+        mu: 0.01,
+        alpha: 0.0,
+        theta0: 0.0,
+    };
+    const C_F: f64 = 1.0;
+
+    fn plane(dim: usize) -> Friction {
+        let normal = if dim == 2 {
+            Vector3::new(0.6, 0.8, 0.0)
+        } else {
+            Vector3::new(0.48, 0.6, 0.64)
+        };
+        Friction { mu: 0.3, normal }
+    }
+
+    /// The whole chain at F: medium stress, modulus at J(F), friction.
+    fn respond(law: &Friction, F: &Matrix3<f64>, slip: &Vector3<f64>) -> FrictionResponse {
+        let m = MEDIUM.stress(F, 0.0).unwrap();
+        let modulus = shear_modulus(C_F, MEDIUM.K, m.J);
+        let medium = MediumStress {
+            P: &m.P,
+            dP_dF: &m.dP_dF,
+        };
+        law.respond(F, slip, modulus, &medium).unwrap()
+    }
+
+    /// A layer normal to N closed to thickness `closed` (of 1), slid `slide` along T, then
+    /// turned by `turn` about z, and a small general `noise`.
+    fn layer(N: Vector3<f64>, closed: f64, slide: f64, turn: f64, noise: f64) -> Matrix3<f64> {
+        let T = Vector3::new(-N[1], N[0], 0.0).normalize();
+        let d = T * slide - N * (1.0 - closed);
+        let (s, c) = turn.sin_cos();
+        let R = Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0);
+        let G = sample_F(N[2] == 0.0) - Matrix3::identity();
+        R * (Matrix3::identity() + d * N.transpose() + G * noise)
+    }
+
+    #[test]
+    fn the_tangent_is_the_derivative_of_the_stress_in_stick_and_in_slip() {
+        for dim in [2, 3] {
+            let law = plane(dim);
+            let F = layer(law.normal, 0.05, 0.05, 0.3, 0.01);
+            // from no slip, the trial leaves the cone; from half the elastic shear of the
+            // return, it stays inside
+            let on_cone = respond(&law, &F, &Vector3::zeros());
+            let G = shear_modulus(C_F, MEDIUM.K, F.determinant()).0;
+            let inside = on_cone.slip + on_cone.tau / G * 0.5;
+            for (previous, slips) in [(Vector3::zeros(), true), (inside, false)] {
+                let r = respond(&law, &F, &previous);
+                assert_eq!(r.slipping, slips, "{dim}D");
+                assert!(r.p_n > 0.0, "the layer is pressed");
+                let h = 1e-7;
+                let scale = r.dP_dF.amax();
+                for c in 0..9 {
+                    let (mut p, mut m) = (F, F);
+                    p[(c / 3, c % 3)] += h;
+                    m[(c / 3, c % 3)] -= h;
+                    let dP = (respond(&law, &p, &previous).P - respond(&law, &m, &previous).P)
+                        / (2.0 * h);
+                    for a in 0..9 {
+                        let exact = r.dP_dF[(a, c)];
+                        assert!(
+                            (dP[(a / 3, a % 3)] - exact).abs() < 1e-6 * scale,
+                            "{dim}D slipping {slips}: A[{a},{c}] = {exact}, FD {}",
+                            dP[(a / 3, a % 3)]
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn with_a_constant_modulus_stick_is_the_gradient_of_its_energy() {
+        // ½ G |P C N − g|²: P_f = ∂Ψ/∂F
+        let law = Friction {
+            mu: 1e6,
+            ..plane(3)
+        };
+        let F = sample_F(false);
+        let g = Vector3::new(0.01, -0.02, 0.0);
+        let g = g - law.normal * law.normal.dot(&g);
+        let G = 3.0;
+        let energy = |F: &Matrix3<f64>| {
+            let N = law.normal;
+            let e = (Matrix3::identity() - N * N.transpose()) * (F.transpose() * F) * N - g;
+            0.5 * G * e.norm_squared()
+        };
+        // a medium under a pressure of 1 (P = −J F⁻ᵀ): with μ this large, far inside the cone
+        let P = -F.try_inverse().unwrap().transpose() * F.determinant();
+        let A = Tensor4::zeros();
+        let medium = MediumStress { P: &P, dP_dF: &A };
+        let r = law.respond(&F, &g, (G, 0.0), &medium).unwrap();
+        assert!(!r.slipping);
+        let h = 1e-6;
+        for c in 0..9 {
+            let (mut p, mut m) = (F, F);
+            p[(c / 3, c % 3)] += h;
+            m[(c / 3, c % 3)] -= h;
+            let d = (energy(&p) - energy(&m)) / (2.0 * h);
+            assert!((d - r.P[(c / 3, c % 3)]).abs() < 1e-8, "P[{c}]");
+        }
+        // and then the tangent is symmetric
+        assert!((r.dP_dF - r.dP_dF.transpose()).amax() < 1e-12);
+    }
+
+    #[test]
+    fn a_closed_layer_measures_its_slide_per_reference_thickness() {
+        let law = plane(2);
+        for closed in [0.5, 1e-2, 1e-3] {
+            for turn in [0.0, 0.7] {
+                let F = layer(law.normal, closed, 0.3, turn, 0.0);
+                // with no previous slip and a cone of zero width, all shear turns into slip
+                let free = Friction { mu: 0.0, ..law };
+                let r = respond(&free, &F, &Vector3::zeros());
+                let T = Vector3::new(-0.8, 0.6, 0.0);
+                assert!(
+                    (r.slip - T * 0.3).norm() < 1e-12,
+                    "closed to {closed}: {}",
+                    r.slip
+                );
+                assert!(r.tau.norm() == 0.0 && r.P.norm() == 0.0);
+            }
+        }
+    }
+
+    #[test]
+    fn slip_returns_to_the_cone_and_dissipates() {
+        for dim in [2, 3] {
+            let law = plane(dim);
+            let F = layer(law.normal, 1e-2, 0.3, 0.4, 1e-3);
+            let r = respond(&law, &F, &Vector3::zeros());
+            assert!(r.slipping && r.p_n > 0.0);
+            // on the cone, in the plane, and the slip leaves τ as elastic shear
+            assert!((r.tau.norm() - law.mu * r.p_n).abs() < 1e-12 * r.p_n);
+            assert!(r.tau.dot(&law.normal).abs() < 1e-12 * r.tau.norm());
+            // from the returned slip, the same state sticks
+            let again = respond(&law, &F, &r.slip);
+            assert!(!again.slipping && again.dissipated == 0.0);
+            assert!((again.tau - r.tau).norm() < 1e-9 * r.tau.norm());
+            // heat: τ · Δg = μ p_n |Δg| > 0
+            let expected = law.mu * r.p_n * r.slip.norm();
+            assert!((r.dissipated - expected).abs() < 1e-12 * expected);
+            // an open medium resists no slip
+            let open = layer(law.normal, 1.3, 0.3, 0.0, 0.0);
+            let r = respond(&law, &open, &Vector3::zeros());
+            assert!(r.p_n < 0.0 && r.tau.norm() == 0.0);
+        }
+    }
+}
