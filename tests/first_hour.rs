@@ -89,16 +89,22 @@ fn ramp_per_value_equals_separate_blocks_and_a_full_load_is_named() {
     );
 }
 
+/// `tmc check ARGS`, which must succeed: its report.
+fn check_ok(args: &[&str]) -> String {
+    let mut all = vec!["check"];
+    all.extend_from_slice(args);
+    let o = tmc(&all);
+    assert!(o.status.success(), "{}", stderr(&o));
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
 #[test]
 fn check_reports_what_a_solve_would_use_and_writes_nothing() {
-    let o = tmc(&[
-        "check",
+    let out = check_ok(&[
         "cases/block.toml",
         "--set",
         "mesh_options.params={ n = 8, m = 4, l = 2 }",
     ]);
-    let out = String::from_utf8_lossy(&o.stdout).into_owned();
-    assert!(o.status.success(), "{}", stderr(&o));
     for words in [
         "ready to solve",
         "group \"medium\" (2D): 16 elements",
@@ -147,27 +153,18 @@ fn check_reports_what_a_solve_would_use_and_writes_nothing() {
         "{e}"
     );
     // thermal expansion and the θ0 it is counted from, said per region
-    let o = tmc(&[
-        "check",
-        "cases/block.toml",
-        "--set",
-        "region.solid.alpha=1e-5",
-    ]);
-    let out = String::from_utf8_lossy(&o.stdout).into_owned();
-    assert!(o.status.success(), "{}", stderr(&o));
+    let out = check_ok(&["cases/block.toml", "--set", "region.solid.alpha=1e-5"]);
     assert!(
         out.contains("thermal expansion in \"solid\": α = 0.00001 from θ0 = 0 (not given"),
         "{out}"
     );
-    let o = tmc(&[
-        "check",
+    let out = check_ok(&[
         "cases/block.toml",
         "--set",
         "region.solid.alpha=1e-5",
         "--set",
         "region.solid.theta0=20.0",
     ]);
-    let out = String::from_utf8_lossy(&o.stdout).into_owned();
     assert!(
         out.contains("thermal expansion in \"solid\": α = 0.00001 from θ0 = 20\n"),
         "{out}"
@@ -295,9 +292,7 @@ fn a_solid_only_the_medium_holds_is_reported() {
     let check = |name: &str, text: &str| {
         let case = dir.join(name);
         std::fs::write(&case, text).unwrap();
-        let o = tmc(&["check", case.to_str().unwrap()]);
-        assert!(o.status.success(), "{}", stderr(&o));
-        String::from_utf8_lossy(&o.stdout).into_owned()
+        check_ok(&[case.to_str().unwrap()])
     };
     let pushed = "ux = 0.0\nuy = -0.15\n";
     assert!(text.contains(pushed), "the case pushes the cylinder's rim");

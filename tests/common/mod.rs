@@ -25,31 +25,29 @@ pub fn tmc_with(args: &[&str], vars: &[(&str, &str)]) -> std::process::Output {
         .unwrap()
 }
 
-/// `tmc solve CASE -q -o OUT` with `extra` arguments (e.g. `--set`).
-pub fn solve_cli(case: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
-    let mut args = vec![
+/// The arguments of `tmc solve CASE -q -o OUT`.
+fn solve_args<'a>(case: &'a Path, out: &'a Path) -> Vec<&'a str> {
+    vec![
         "solve",
         case.to_str().unwrap(),
         "-q",
         "-o",
         out.to_str().unwrap(),
-    ];
+    ]
+}
+
+/// `tmc solve CASE -q -o OUT` with `extra` arguments (e.g. `--set`).
+pub fn solve_cli(case: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
+    let mut args = solve_args(case, out);
     args.extend_from_slice(extra);
     tmc(&args)
 }
 
-/// `tmc mesh GEO -o OUT` (GEO relative to the project), which must succeed.
 /// `tmc solve case -q -o out`, sent Ctrl-C (SIGINT) as soon as its step 2 is written: the run
 /// stops after the step it is in.
 pub fn solve_interrupted(case: &Path, out: &Path) -> std::process::Output {
     let child = std::process::Command::new(env!("CARGO_BIN_EXE_tmc"))
-        .args([
-            "solve",
-            case.to_str().unwrap(),
-            "-q",
-            "-o",
-            out.to_str().unwrap(),
-        ])
+        .args(solve_args(case, out))
         .stderr(std::process::Stdio::piped())
         .spawn()
         .unwrap();
@@ -62,6 +60,7 @@ pub fn solve_interrupted(case: &Path, out: &Path) -> std::process::Output {
     child.wait_with_output().unwrap()
 }
 
+/// `tmc mesh GEO -o OUT` (GEO relative to the project), which must succeed.
 pub fn mesh_cli(geo: &str, out: &Path) {
     let o = tmc(&["mesh", geo, "-o", out.to_str().unwrap()]);
     assert!(o.status.success(), "{}", stderr(&o));
