@@ -324,21 +324,23 @@ impl Mesh {
     /// joined to two or more others (a medium between bodies) is left out. (With a case,
     /// `model::held` says which bodies the medium alone holds.)
     pub fn untouched_bodies(&self) -> Vec<String> {
-        let mark = |blocks: &mut dyn Iterator<Item = &Block>| {
+        // which nodes the blocks `keep` accepts hold
+        let nodes_of = |blocks: &[Block], keep: &dyn Fn(&Block) -> bool| {
             let mut m = vec![false; self.coords.len()];
-            for b in blocks {
+            for b in blocks.iter().filter(|b| keep(b)) {
                 for &n in &b.conn {
                     m[n] = true;
                 }
             }
             m
         };
-        let touched = mark(&mut self.facets.iter().filter(|b| !b.groups.is_empty()));
-        let bodies: Vec<usize> = (0..self.groups.len())
+        let touched = nodes_of(&self.facets, &|b| !b.groups.is_empty());
+        let bodies: Vec<(usize, Vec<bool>)> = (0..self.groups.len())
             .filter(|&g| self.groups[g].dim == self.dim)
+            .map(|g| (g, nodes_of(&self.cells, &|b| b.groups.contains(&g))))
             .collect();
         let mut warnings = Vec::new();
-        for &g in &bodies {
+        for &(g, _) in &bodies {
             let comp = self.components(|b| self.cells[b].groups.contains(&g));
             let n_comp = comp
                 .iter()
@@ -354,18 +356,12 @@ impl Mesh {
             for body in nodes.iter().filter(|b| !b.iter().any(|&n| touched[n])) {
                 let joined: Vec<String> = bodies
                     .iter()
-                    .filter(|&&o| o != g)
-                    .filter(|&&o| {
-                        let cells = mark(&mut self.cells.iter().filter(|b| b.groups.contains(&o)));
-                        body.iter().any(|&n| cells[n])
-                    })
-                    .map(|&o| format!("\"{}\"", self.groups[o].name))
+                    .filter(|(o, of)| *o != g && body.iter().any(|&n| of[n]))
+                    .map(|(o, _)| format!("\"{}\"", self.groups[*o].name))
                     .collect();
                 if joined.len() > 1 {
                     continue;
                 }
-                let at = centroid(&self.coords, body);
-                let at: Vec<String> = at[..self.dim].iter().map(|v| format!("{v:.4}")).collect();
                 let which = if n_comp > 1 {
                     "a body of group"
                 } else {
@@ -380,12 +376,12 @@ impl Mesh {
                     )
                 };
                 warnings.push(format!(
-                    "{which} \"{}\" ({} nodes around ({})) touches no boundary group, so no \
+                    "{which} \"{}\" ({} nodes around {}) touches no boundary group, so no \
                      condition can be put on it: {held}; a Physical {} on its boundary gives it \
                      supports",
                     self.groups[g].name,
                     body.len(),
-                    at.join(", "),
+                    point_text(&centroid(&self.coords, body), self.dim),
                     if self.dim == 2 { "Curve" } else { "Surface" }
                 ));
             }
@@ -432,6 +428,12 @@ pub fn centroid(coords: &[[f64; 3]], nodes: &[usize]) -> [f64; 3] {
     m.map(|v| v / nodes.len() as f64)
 }
 
+/// A point for a message: its `dim` coordinates to 4 decimals, "(x, y)" or "(x, y, z)".
+pub fn point_text(x: &[f64; 3], dim: usize) -> String {
+    let xs: Vec<String> = x[..dim].iter().map(|v| format!("{v:.4}")).collect();
+    format!("({})", xs.join(", "))
+}
+
 /// Checks of a mesh as read: every coordinate finite and every cell of non-zero measure
 /// (errors naming the cell's group and centre); coincident nodes (the mesh is cut there: a
 /// crack or geometry that was not merged) are a warning.
@@ -460,12 +462,10 @@ pub fn check_geometry(mesh: &Mesh) -> Result<Vec<String>, String> {
                     .map(|&g| mesh.groups[g].name.as_str())
                     .unwrap_or("(no group)");
                 let at = centroid(&mesh.coords, corners);
-                let centre: Vec<String> =
-                    at[..mesh.dim].iter().map(|v| format!("{v:.4}")).collect();
                 return Err(format!(
-                    "a {} cell of group \"{group}\" at ({}) is degenerate (zero {})",
+                    "a {} cell of group \"{group}\" at {} is degenerate (zero {})",
                     b.kind.name(),
-                    centre.join(", "),
+                    point_text(&at, mesh.dim),
                     if mesh.dim == 2 { "area" } else { "volume" }
                 ));
             }

@@ -6,6 +6,7 @@
 use super::Model;
 use crate::case::RegionKind;
 use crate::dofs::{Field, NONE};
+use crate::mesh::{centroid, point_text};
 use nalgebra::{DMatrix, SymmetricEigen};
 
 /// The first body that is not held, as a sentence; `None` if all are.
@@ -102,21 +103,11 @@ pub fn held_by_medium_alone(model: &Model) -> Vec<String> {
         let Some(mode) = free_rigid_mode(model, &nodes, &held) else {
             continue;
         };
-        let mut names: Vec<String> = Vec::new();
-        for (b, r) in region.iter().enumerate() {
-            let Some(r) = *r else { continue };
-            let name = format!("\"{}\"", model.regions[r].0);
-            if mesh.cells[b].conn.first().is_some_and(|&n| comp[n] == c) && !names.contains(&name) {
-                names.push(name);
-            }
-        }
-        let at = crate::mesh::centroid(&mesh.coords, &nodes);
-        let at: Vec<String> = at[..d].iter().map(|v| format!("{v:.4}")).collect();
         let body = format!(
-            "the solid body of {} ({} nodes around ({}))",
-            names.join(", "),
+            "the solid body of {} ({} nodes around {})",
+            region_names(model, &comp, c, |k| k == RegionKind::Solid).join(", "),
             nodes.len(),
-            at.join(", ")
+            point_text(&centroid(&mesh.coords, &nodes), d)
         );
         out.push(if held.is_empty() {
             format!(
@@ -140,7 +131,7 @@ fn free_rigid_mode(model: &Model, nodes: &[usize], held: &[(usize, usize)]) -> O
     let x = &model.mesh.coords;
     let d = model.mesh.dim;
     // centre and size of the body, so that rotations and translations weigh alike
-    let c = crate::mesh::centroid(x, nodes);
+    let c = centroid(x, nodes);
     let h = nodes
         .iter()
         .map(|&n| (0..3).map(|i| (x[n][i] - c[i]).abs()).fold(0.0, f64::max))
@@ -209,17 +200,7 @@ fn free_rigid_mode(model: &Model, nodes: &[usize], held: &[(usize, usize)]) -> O
 
 /// "the body made of region(s) …", with its size, numbered if there are several.
 fn body_name(model: &Model, comp: &[usize], c: usize, n_nodes: usize, n_comp: usize) -> String {
-    let mut regions: Vec<&str> = Vec::new();
-    for info in &model.blocks {
-        let b = &model.mesh.cells[info.block];
-        if b.conn.first().is_some_and(|&n| comp[n] == c) {
-            let name = model.regions[info.region].0.as_str();
-            if !regions.contains(&name) {
-                regions.push(name);
-            }
-        }
-    }
-    let quoted: Vec<String> = regions.iter().map(|r| format!("\"{r}\"")).collect();
+    let regions = region_names(model, comp, c, |_| true);
     let which = if n_comp > 1 {
         format!("body {} of {n_comp}", c + 1)
     } else {
@@ -228,6 +209,26 @@ fn body_name(model: &Model, comp: &[usize], c: usize, n_nodes: usize, n_comp: us
     format!(
         "{which} (region{} {}, {n_nodes} nodes)",
         if regions.len() > 1 { "s" } else { "" },
-        quoted.join(", ")
+        regions.join(", ")
     )
+}
+
+/// The quoted names of the regions (of the kinds `keep` accepts) whose cells begin in
+/// component `c`, in block order.
+fn region_names(
+    model: &Model,
+    comp: &[usize],
+    c: usize,
+    keep: impl Fn(RegionKind) -> bool,
+) -> Vec<String> {
+    let mut names: Vec<String> = Vec::new();
+    for info in &model.blocks {
+        let (name, k) = &model.regions[info.region];
+        let first = model.mesh.cells[info.block].conn.first();
+        let name = format!("\"{name}\"");
+        if keep(*k) && first.is_some_and(|&n| comp[n] == c) && !names.contains(&name) {
+            names.push(name);
+        }
+    }
+    names
 }
