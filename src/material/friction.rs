@@ -22,6 +22,9 @@
 use super::Tensor4;
 use nalgebra::{Matrix3, SMatrix, Vector3};
 
+/// A trial shear this little (relative) beyond the Coulomb limit still sticks.
+const YIELD_TOLERANCE: f64 = 1e-9;
+
 /// Derivatives of a vector with respect to F: (I, 3k + L).
 type VectorByF = SMatrix<f64, 3, 9>;
 
@@ -34,11 +37,13 @@ pub struct Friction {
     pub normal: Vector3<f64>,
 }
 
-/// The medium's own first Piola–Kirchhoff stress at the point and its tangent: the normal
+/// The medium's own first Piola–Kirchhoff stress at the point and its derivatives: the normal
 /// traction across the plane comes from it.
 pub struct MediumStress<'a> {
     pub P: &'a Matrix3<f64>,
     pub dP_dF: &'a Tensor4,
+    /// ∂P/∂θ (thermal expansion moves the normal traction, and so the Coulomb limit).
+    pub dP_dtheta: &'a Matrix3<f64>,
 }
 
 /// The friction term at one point after the return to the Coulomb cone.
@@ -48,6 +53,8 @@ pub struct FrictionResponse {
     pub P: Matrix3<f64>,
     /// Its derivative in F (9×9, (3i + J, 3k + L)), unsymmetric.
     pub dP_dF: Tensor4,
+    /// Its derivative in θ (through the Coulomb limit while slipping).
+    pub dP_dtheta: Matrix3<f64>,
     /// Shear traction per reference area, in the plane.
     pub tau: Vector3<f64>,
     /// The slip after the step (to commit if the step is accepted).
@@ -58,6 +65,9 @@ pub struct FrictionResponse {
     pub slipping: bool,
     /// τ · (slip − previous slip) per reference volume: the heat the step's slip makes.
     pub dissipated: f64,
+    /// ∂(dissipated)/∂F at (k, L), and ∂(dissipated)/∂θ.
+    pub ddissipated_dF: Matrix3<f64>,
+    pub ddissipated_dtheta: f64,
 }
 
 /// The friction modulus G_f = c_f K_m (1 − ln J) / J² and dG_f/dJ: the medium's own stiffness
@@ -104,14 +114,18 @@ impl Friction {
         let t = medium.P * N;
         let p_n = -n.dot(&t);
         let limit = self.mu * p_n.max(0.0);
-        let slipping = trial.norm() > limit;
-        let (tau, dtau, new_slip) = if !slipping {
-            (trial, dtrial, *slip)
+        // on the cone to round-off (γ − gₙ cancels digits where the layer is closed) is stick
+        let slipping = trial.norm() > limit * (1.0 + YIELD_TOLERANCE);
+        // while slipping: τ and its derivatives in F and θ, and the slip that leaves exactly τ
+        // as elastic shear
+        let (tau, dtau, dtau_dtheta, new_slip) = if !slipping {
+            (trial, dtrial, Vector3::zeros(), *slip)
         } else {
             let size = trial.norm();
             let e = trial / size;
             let tau = e * limit;
             let mut dtau = (Pn - e * e.transpose()) * dtrial * (limit / size);
+            let mut dtau_dtheta = Vector3::zeros();
             if p_n > 0.0 {
                 let project = (Matrix3::identity() - n * n.transpose()) / m.norm();
                 for (k, L) in (0..9).map(|c| (c / 3, c % 3)) {
@@ -128,10 +142,28 @@ impl Friction {
                         dtau[(I, 3 * k + L)] += self.mu * dp * e[I];
                     }
                 }
+                dtau_dtheta = e * (-self.mu * n.dot(&(medium.dP_dtheta * N)));
             }
-            // the slip that leaves exactly τ as elastic shear
-            (tau, dtau, gamma - tau / G)
+            (tau, dtau, dtau_dtheta, gamma - tau / G)
         };
+        // the heat: D = τ · (g − gₙ), zero in stick; in slip g = γ − τ/G, so
+        // dD = dτ · Δg + τ · (dγ − dτ/G + τ dG/G²), dG/dF = G'(J) J F⁻ᵀ
+        let step = new_slip - slip;
+        let mut ddissipated_dF = Matrix3::zeros();
+        let mut ddissipated_dtheta = 0.0;
+        if slipping {
+            for (k, L) in (0..9).map(|c| (c / 3, c % 3)) {
+                let c = 3 * k + L;
+                let dGc = dG * J * Finv[(L, k)];
+                let mut d = 0.0;
+                for I in 0..3 {
+                    let dslip = dgamma[(I, c)] - dtau[(I, c)] / G + tau[I] * dGc / (G * G);
+                    d += dtau[(I, c)] * step[I] + tau[I] * dslip;
+                }
+                ddissipated_dF[(k, L)] = d;
+            }
+            ddissipated_dtheta = dtau_dtheta.dot(&step) - tau.dot(&dtau_dtheta) / G;
+        }
         let S = N * tau.transpose() + tau * N.transpose();
         // A_iJkL = δ_ik S_LJ + (F N)_i dτ_J/dF_kL + (F dτ/dF)_i,kL N_J
         let Fdtau = F * dtau;
@@ -141,14 +173,18 @@ impl Friction {
             A[(3 * i + Jc, 3 * k + L)] =
                 d + FN[i] * dtau[(Jc, 3 * k + L)] + Fdtau[(i, 3 * k + L)] * N[Jc];
         }
+        let S_theta = N * dtau_dtheta.transpose() + dtau_dtheta * N.transpose();
         Some(FrictionResponse {
             P: F * S,
             dP_dF: A,
+            dP_dtheta: F * S_theta,
             tau,
             slip: new_slip,
             p_n,
             slipping,
-            dissipated: tau.dot(&(new_slip - slip)),
+            dissipated: tau.dot(&step),
+            ddissipated_dF,
+            ddissipated_dtheta,
         })
     }
 }
@@ -163,9 +199,11 @@ mod tests {
     const MEDIUM: ThermoElastic = ThermoElastic {
         K: 0.02,
         mu: 0.01,
-        alpha: 0.0,
+        alpha: 0.05,
         theta0: 0.0,
     };
+    /// The temperature the checks run at: the medium expands a little.
+    const THETA: f64 = 0.4;
     const C_F: f64 = 1.0;
 
     fn plane(dim: usize) -> Friction {
@@ -177,15 +215,25 @@ mod tests {
         Friction { mu: 0.3, normal }
     }
 
-    /// The whole chain at F: medium stress, modulus at J(F), friction.
-    fn respond(law: &Friction, F: &Matrix3<f64>, slip: &Vector3<f64>) -> FrictionResponse {
-        let m = MEDIUM.stress(F, 0.0).unwrap();
+    /// The whole chain at F and θ: medium stress, modulus at J(F), friction.
+    fn respond_at(
+        law: &Friction,
+        F: &Matrix3<f64>,
+        theta: f64,
+        slip: &Vector3<f64>,
+    ) -> FrictionResponse {
+        let m = MEDIUM.stress(F, theta).unwrap();
         let modulus = shear_modulus(C_F, MEDIUM.K, m.J);
         let medium = MediumStress {
             P: &m.P,
             dP_dF: &m.dP_dF,
+            dP_dtheta: &m.dP_dtheta,
         };
         law.respond(F, slip, modulus, &medium).unwrap()
+    }
+
+    fn respond(law: &Friction, F: &Matrix3<f64>, slip: &Vector3<f64>) -> FrictionResponse {
+        respond_at(law, F, THETA, slip)
     }
 
     /// A layer normal to N closed to thickness `closed` (of 1), slid `slide` along T, then
@@ -215,12 +263,13 @@ mod tests {
                 assert!(r.p_n > 0.0, "the layer is pressed");
                 let h = 1e-7;
                 let scale = r.dP_dF.amax();
+                let heat_scale = r.ddissipated_dF.amax().max(1e-300);
                 for c in 0..9 {
                     let (mut p, mut m) = (F, F);
                     p[(c / 3, c % 3)] += h;
                     m[(c / 3, c % 3)] -= h;
-                    let dP = (respond(&law, &p, &previous).P - respond(&law, &m, &previous).P)
-                        / (2.0 * h);
+                    let (rp, rm) = (respond(&law, &p, &previous), respond(&law, &m, &previous));
+                    let dP = (rp.P - rm.P) / (2.0 * h);
                     for a in 0..9 {
                         let exact = r.dP_dF[(a, c)];
                         assert!(
@@ -229,7 +278,36 @@ mod tests {
                             dP[(a / 3, a % 3)]
                         );
                     }
+                    let dD = (rp.dissipated - rm.dissipated) / (2.0 * h);
+                    let exact = r.ddissipated_dF[(c / 3, c % 3)];
+                    assert!(
+                        (dD - exact).abs() < 1e-6 * heat_scale,
+                        "{dim}D slipping {slips}: dD/dF[{c}] = {exact}, FD {dD}"
+                    );
                 }
+                // in θ: through the Coulomb limit while slipping, not at all in stick
+                let (rp, rm) = (
+                    respond_at(&law, &F, THETA + h, &previous),
+                    respond_at(&law, &F, THETA - h, &previous),
+                );
+                let dP = (rp.P - rm.P) / (2.0 * h);
+                assert!(
+                    (dP - r.dP_dtheta).amax() < 1e-6 * r.P.amax(),
+                    "{dim}D slipping {slips}: dP/dθ {} FD {dP}",
+                    r.dP_dtheta
+                );
+                let dD = (rp.dissipated - rm.dissipated) / (2.0 * h);
+                assert!(
+                    (dD - r.ddissipated_dtheta).abs() < 1e-6 * r.dissipated.abs().max(1e-12),
+                    "{dim}D slipping {slips}: dD/dθ {} FD {dD}",
+                    r.ddissipated_dtheta
+                );
+                assert_eq!(
+                    r.dP_dtheta.amax() > 0.0,
+                    slips,
+                    "θ moves the limit only in slip"
+                );
+                assert_eq!(r.dissipated > 0.0, slips);
             }
         }
     }
@@ -253,7 +331,11 @@ mod tests {
         // a medium under a pressure of 1 (P = −J F⁻ᵀ): with μ this large, far inside the cone
         let P = -F.try_inverse().unwrap().transpose() * F.determinant();
         let A = Tensor4::zeros();
-        let medium = MediumStress { P: &P, dP_dF: &A };
+        let medium = MediumStress {
+            P: &P,
+            dP_dF: &A,
+            dP_dtheta: &Matrix3::zeros(),
+        };
         let r = law.respond(&F, &g, (G, 0.0), &medium).unwrap();
         assert!(!r.slipping);
         let h = 1e-6;
