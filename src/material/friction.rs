@@ -1,4 +1,4 @@
-//! Coulomb friction in a slip plane of the third medium (the law alone: not yet assembled).
+//! Coulomb friction in a slip plane of the third medium.
 //!
 //! Everything is measured in the reference configuration, so it stays well conditioned where
 //! the medium has closed to J ≈ 1e-3. With N the plane's unit normal, P = I − N⊗N and
@@ -9,11 +9,14 @@
 //! Slip g_p lies in the plane, one per point, committed at accepted steps; the elastic shear is
 //! γ_e = γ − g_p and the shear traction per reference area τ = G_f(J) γ_e, with G_f rising as
 //! the medium closes ([`shear_modulus`]). Its virtual work τ · δγ gives the second
-//! Piola–Kirchhoff stress S_f = N⊗τ + τ⊗N and P_f = F S_f. Coulomb's condition is
-//! |τ| ≤ μ p_n, with p_n = −n · (P_m N) the compressive normal traction per reference area
-//! that the medium's own stress P_m carries across the plane (n = F⁻ᵀN / |F⁻ᵀN|, the plane's
-//! current normal); an open medium (p_n ≤ 0) resists no slip. The return to the Coulomb cone is
-//! closed form: at fixed F, τ is linear in g_p and p_n does not depend on it. G_f(J) is a
+//! Piola–Kirchhoff stress S_f = N⊗τ + τ⊗N and P_f = F S_f, whose traction on the plane,
+//! P_f N = F τ, is tangential to it in the current configuration (F τ · F⁻ᵀN = τ · N = 0).
+//! Coulomb's condition bounds that traction: |F τ| ≤ μ p_n, with p_n = −n · (P_m N) the
+//! compressive normal traction per reference area that the medium's own stress P_m carries
+//! across the plane (n = F⁻ᵀN / |F⁻ᵀN|, the plane's current normal), so tangential over
+//! normal traction is μ however the plane stretches; an open medium (p_n ≤ 0) resists no slip.
+//! The return is closed form: at fixed F, τ is linear in g_p and p_n does not depend on it, so
+//! the trial shear τ* = G_f (γ − gₙ) is scaled back along itself, τ = τ* μ p_n / |F τ*|. G_f(J) is a
 //! coefficient, not differentiated as part of an energy, so the shear puts no pressure on the
 //! plane; the tangent is unsymmetric, as Coulomb friction's always is. The slip of a step
 //! dissipates τ · Δg_p per reference volume (the frictional heat).
@@ -114,17 +117,30 @@ impl Friction {
         let t = medium.P * N;
         let p_n = -n.dot(&t);
         let limit = self.mu * p_n.max(0.0);
+        // the trial's traction on the plane, F τ*, and its size
+        let a = F * trial;
+        let size = a.norm();
         // on the cone to round-off (γ − gₙ cancels digits where the layer is closed) is stick
-        let slipping = trial.norm() > limit * (1.0 + YIELD_TOLERANCE);
+        let slipping = size > limit * (1.0 + YIELD_TOLERANCE);
         // while slipping: τ and its derivatives in F and θ, and the slip that leaves exactly τ
         // as elastic shear
         let (tau, dtau, dtau_dtheta, new_slip) = if !slipping {
             (trial, dtrial, Vector3::zeros(), *slip)
         } else {
-            let size = trial.norm();
+            let scale = limit / size;
+            let tau = trial * scale;
+            // d|a| = a · (dF τ* + F dτ*) / |a|
+            let Fdtrial = F * dtrial;
+            let mut dtau = dtrial * scale;
+            for (k, L) in (0..9).map(|c| (c / 3, c % 3)) {
+                let c = 3 * k + L;
+                let dsize = (a[k] * trial[L] + a.dot(&Fdtrial.column(c))) / size;
+                for I in 0..3 {
+                    dtau[(I, c)] -= tau[I] * dsize / size;
+                }
+            }
+            // ∂τ/∂(μ p_n)
             let e = trial / size;
-            let tau = e * limit;
-            let mut dtau = (Pn - e * e.transpose()) * dtrial * (limit / size);
             let mut dtau_dtheta = Vector3::zeros();
             if p_n > 0.0 {
                 let project = (Matrix3::identity() - n * n.transpose()) / m.norm();
@@ -132,9 +148,9 @@ impl Friction {
                     let dm = -Finv.row(L).transpose() * m[k];
                     let dn = project * dm;
                     let mut dt = Vector3::zeros();
-                    for a in 0..3 {
-                        dt[a] = (0..3)
-                            .map(|A| medium.dP_dF[(3 * a + A, 3 * k + L)] * N[A])
+                    for i in 0..3 {
+                        dt[i] = (0..3)
+                            .map(|A| medium.dP_dF[(3 * i + A, 3 * k + L)] * N[A])
                             .sum();
                     }
                     let dp = -dn.dot(&t) - n.dot(&dt);
@@ -377,15 +393,18 @@ mod tests {
             let F = layer(law.normal, 1e-2, 0.3, 0.4, 1e-3);
             let r = respond(&law, &F, &Vector3::zeros());
             assert!(r.slipping && r.p_n > 0.0);
-            // on the cone, in the plane, and the slip leaves τ as elastic shear
-            assert!((r.tau.norm() - law.mu * r.p_n).abs() < 1e-12 * r.p_n);
+            // on the cone (the traction F τ is μ p_n), in the plane, and tangential to the
+            // plane in the current configuration
+            assert!(((F * r.tau).norm() - law.mu * r.p_n).abs() < 1e-12 * r.p_n);
+            let n = F.try_inverse().unwrap().transpose() * law.normal;
+            assert!((F * r.tau).dot(&n).abs() < 1e-12 * r.tau.norm() * n.norm());
             assert!(r.tau.dot(&law.normal).abs() < 1e-12 * r.tau.norm());
             // from the returned slip, the same state sticks
             let again = respond(&law, &F, &r.slip);
             assert!(!again.slipping && again.dissipated == 0.0);
             assert!((again.tau - r.tau).norm() < 1e-9 * r.tau.norm());
-            // heat: τ · Δg = μ p_n |Δg| > 0
-            let expected = law.mu * r.p_n * r.slip.norm();
+            // heat: the slip is along τ, τ · Δg = |τ| |Δg| > 0
+            let expected = r.tau.norm() * r.slip.norm();
             assert!((r.dissipated - expected).abs() < 1e-12 * expected);
             // an open medium resists no slip
             let open = layer(law.normal, 1.3, 0.3, 0.0, 0.0);
