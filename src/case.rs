@@ -93,6 +93,31 @@ pub struct Region {
     /// Heat capacity ρc per reference volume: with `[time]`, the region stores heat
     /// (ρc θ̇ by backward Euler); without, it is stationary.
     pub rho_c: Option<Spanned<f64>>,
+    /// Coulomb friction in a slip plane of the medium (medium regions only).
+    pub friction: Option<Spanned<FrictionKey>>,
+}
+
+/// `friction = { mu = 0.3, normal = [0, 1] }` of a medium region.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FrictionKey {
+    /// Coulomb coefficient μ_f ≥ 0.
+    pub mu: Spanned<f64>,
+    /// The slip plane's normal in the undeformed mesh, of the mesh's dimension (need not be of
+    /// unit length).
+    pub normal: Spanned<Vec<f64>>,
+    /// Fraction of the dissipated work that becomes heat, in [0, 1] (default 1); heat is made
+    /// only in scenes with `[time]` that conduct.
+    pub heat_fraction: Option<Spanned<f64>>,
+    /// Stick stiffness factor c_f > 0 of the friction modulus c_f K (1 − ln J)/J² (default 1).
+    pub c_f: Option<Spanned<f64>>,
+}
+
+impl FrictionKey {
+    /// The fraction of the dissipation that becomes heat.
+    pub fn heat_fraction(&self) -> f64 {
+        self.heat_fraction.as_ref().map_or(1.0, |v| *v.get_ref())
+    }
 }
 
 /// `[[bc]]`: conditions on one physical group of the boundary (or of points).
@@ -654,6 +679,18 @@ impl Case {
                     ),
                 );
             }
+            if let Some(fr) = &r.friction {
+                if r.kind == RegionKind::Solid {
+                    return self.error(
+                        fr.span(),
+                        format!(
+                            "region[{i}] (\"{name}\"): `friction` acts in a medium's slip plane; \
+                             this region is a solid (give it to the medium region between the bodies)"
+                        ),
+                    );
+                }
+                self.check_friction(i, name, fr.get_ref())?;
+            }
             match r.kind {
                 RegionKind::Solid => {
                     need("K", &r.K)?;
@@ -685,6 +722,56 @@ impl Case {
                     }
                 }
             }
+        }
+        Ok(())
+    }
+
+    /// A medium region's `friction`: μ ≥ 0, a normal of 2 or 3 finite components not all
+    /// zero, `heat_fraction` in [0, 1], `c_f` positive (the normal's dimension is checked
+    /// against the mesh's in [`Case::validate`]).
+    fn check_friction(&self, i: usize, name: &str, fr: &FrictionKey) -> Result<(), CaseError> {
+        let key = |k: &str| format!("region[{i}] (\"{name}\"): `friction.{k}`");
+        let mu = *fr.mu.get_ref();
+        if !(mu >= 0.0 && mu.is_finite()) {
+            return self.error(
+                fr.mu.span(),
+                format!("{} must be finite and ≥ 0, got {mu}", key("mu")),
+            );
+        }
+        let n = fr.normal.get_ref();
+        let length = n.iter().map(|v| v * v).sum::<f64>().sqrt();
+        if !(2..=3).contains(&n.len()) || !n.iter().all(|v| v.is_finite()) || !(length > 0.0) {
+            return self.error(
+                fr.normal.span(),
+                format!(
+                    "{} must be a vector of 2 (2D) or 3 (3D) finite components, not all zero; got {n:?}",
+                    key("normal")
+                ),
+            );
+        }
+        if let Some(v) = &fr.heat_fraction
+            && !(0.0..=1.0).contains(v.get_ref())
+        {
+            return self.error(
+                v.span(),
+                format!(
+                    "{} must be in [0, 1], got {}",
+                    key("heat_fraction"),
+                    v.get_ref()
+                ),
+            );
+        }
+        if let Some(v) = &fr.c_f
+            && !(*v.get_ref() > 0.0 && v.get_ref().is_finite())
+        {
+            return self.error(
+                v.span(),
+                format!(
+                    "{} must be positive and finite, got {}",
+                    key("c_f"),
+                    v.get_ref()
+                ),
+            );
         }
         Ok(())
     }
@@ -1031,6 +1118,19 @@ impl Case {
                     r.group.span(),
                     format!("region[{i}]: group \"{name}\" is given twice"),
                 );
+            }
+            if let Some(fr) = &r.friction {
+                let n = fr.get_ref().normal.get_ref();
+                if n.len() != mesh.dim {
+                    return self.error(
+                        fr.get_ref().normal.span(),
+                        format!(
+                            "region[{i}] (\"{name}\"): `friction.normal` has {} components; the mesh is {}D",
+                            n.len(),
+                            mesh.dim
+                        ),
+                    );
+                }
             }
             region_groups.push(g);
         }

@@ -7,6 +7,7 @@ use super::scatter::{Shared, Slots, local_dofs};
 use super::{AssemblyError, MIN_PART_CELLS, cell_error};
 use crate::dofs::{CellState, Layout, NONE, gather};
 use crate::element::RefElement;
+use crate::kernel::friction::FrictionMaterial;
 use crate::kernel::{self, Active, CellMaterial, KernelError, bulk, capacity, facet, lanes};
 use crate::material::Convection;
 use crate::mesh::Block;
@@ -236,6 +237,27 @@ impl Cells<'_> {
         let (lay, act) = (self.lay, self.act);
         self.each_cell::<N>(cells, |_, s, r, k| {
             facet::convection::<N, D, E>(law, &lay, s, act, r, k)
+        })
+    }
+
+    /// Add the friction term of the cells `cells` (global numbers, all of this block) with
+    /// `heat_rate` = η/Δt and the block's history.
+    pub(super) fn run_friction<const N: usize, const D: usize, E: RefElement<N, D>>(
+        self,
+        mat: &FrictionMaterial,
+        heat_rate: f64,
+        slab: &SlabView,
+        cells: &[u32],
+    ) -> Result<bool, (KernelError, usize)> {
+        let (lay, act, w) = (self.lay, self.act, slab.width);
+        self.each_cell::<N>(cells, |cell, s, r, k| {
+            let committed = &slab.committed[cell * w..(cell + 1) * w];
+            // SAFETY: each cell writes only its own values of the trial history, and a cell
+            // runs once per assembly
+            let trial = unsafe { std::slice::from_raw_parts_mut(slab.trial.at(cell * w), w) };
+            kernel::friction::friction::<N, D, E>(
+                mat, heat_rate, &lay, s, committed, trial, act, r, k,
+            )
         })
     }
 

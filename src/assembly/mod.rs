@@ -24,6 +24,7 @@ pub use cells::check_inversion;
 
 use crate::dofs::{Layout, Pattern, build_pattern};
 use crate::element::RefElement;
+use crate::kernel::friction::HISTORY_PER_POINT;
 use crate::kernel::{Active, KernelError};
 use crate::mesh::{Block, centroid};
 use crate::model::{FacetBlock, Model};
@@ -369,6 +370,19 @@ fn run_block(
             Err(AssemblyError::NotFinite)
         }
     };
+    if let Some(fi) = friction_index(model, bi) {
+        let fb = &model.friction_blocks[fi];
+        let slab = &history[model.capacity_blocks.len() + fi];
+        let heat_rate = fb.heat_fraction * inv_dt;
+        let res = crate::with_cell!(blk.kind, |N, D, E| job
+            .run_friction::<N, D, E>(&fb.mat, heat_rate, slab, these));
+        let ok = res.map_err(|(e, cell)| {
+            let at = centroid(&model.mesh.coords, blk.cell(cell));
+            cell_error_in(&model.regions[fb.region].0, e, cell, at)
+        })?;
+        finite(ok)?;
+        return Ok(AssemblyStats::EMPTY);
+    }
     if let Some(ci) = capacity_index(model, bi) {
         let cb = &model.capacity_blocks[ci];
         let res = crate::with_cell!(blk.kind, |N, D, E| job.run_capacity::<N, D, E>(
@@ -404,19 +418,35 @@ fn run_block(
     Ok(stats)
 }
 
-/// Blocks the assembler runs: the model's cell blocks, its facet blocks, then its capacity
-/// blocks (the cells that store heat, once more for that term).
+/// Blocks the assembler runs: the model's cell blocks, its facet blocks, its capacity blocks
+/// (the cells that store heat, once more for that term), then its friction blocks (the medium
+/// cells with friction, once more for the slip term).
 fn n_blocks(model: &Model) -> usize {
+    friction_start(model) + model.friction_blocks.len()
+}
+
+/// The first friction block's assembler number.
+fn friction_start(model: &Model) -> usize {
     model.blocks.len() + model.facet_blocks.len() + model.capacity_blocks.len()
 }
 
 /// The capacity block of assembler block `bi`, if it is one.
 fn capacity_index(model: &Model, bi: usize) -> Option<usize> {
     bi.checked_sub(model.blocks.len() + model.facet_blocks.len())
+        .filter(|&ci| ci < model.capacity_blocks.len())
+}
+
+/// The friction block of assembler block `bi`, if it is one.
+fn friction_index(model: &Model, bi: usize) -> Option<usize> {
+    bi.checked_sub(friction_start(model))
 }
 
 /// Connectivity and local layout of assembler block `bi` (see [`n_blocks`]).
 fn block(model: &Model, bi: usize) -> (&Block, Layout) {
+    if let Some(fi) = friction_index(model, bi) {
+        let fb = &model.friction_blocks[fi];
+        return (&model.mesh.cells[fb.block], fb.layout);
+    }
     if let Some(ci) = capacity_index(model, bi) {
         let cb = &model.capacity_blocks[ci];
         return (&model.mesh.cells[cb.block], cb.layout);
@@ -430,17 +460,22 @@ fn block(model: &Model, bi: usize) -> (&Block, Layout) {
     }
 }
 
-/// The history of the capacity blocks at the initial state: θ0 at every point.
+/// Quadrature points per cell of a block.
+fn points_per_cell(blk: &Block) -> usize {
+    crate::with_cell!(blk.kind, |N, D, E| <E as RefElement<N, D>>::quadrature()
+        .len())
+}
+
+/// The history at the initial state: of the capacity blocks, θ0 at every point; of the
+/// friction blocks, no slip and no work dissipated.
 fn initial_history(model: &Model) -> PointHistory {
     let x0 = model.initial_state();
-    let slabs = model
+    let mut slabs: Vec<Slab> = model
         .capacity_blocks
         .iter()
         .map(|cb| {
             let blk = &model.mesh.cells[cb.block];
-            let width =
-                crate::with_cell!(blk.kind, |N, D, E| <E as RefElement<N, D>>::quadrature()
-                    .len());
+            let width = points_per_cell(blk);
             let mut slab = Slab::new(blk.n_cells(), width, 0.0);
             for c in 0..blk.n_cells() {
                 let nodes = blk.cell(c);
@@ -454,6 +489,10 @@ fn initial_history(model: &Model) -> PointHistory {
             slab
         })
         .collect();
+    slabs.extend(model.friction_blocks.iter().map(|fb| {
+        let blk = &model.mesh.cells[fb.block];
+        Slab::new(blk.n_cells(), HISTORY_PER_POINT * points_per_cell(blk), 0.0)
+    }));
     PointHistory { slabs }
 }
 
@@ -489,11 +528,17 @@ fn facet_error(model: &Model, fb: &FacetBlock, e: KernelError, facet: usize) -> 
 
 /// The assembly error of a kernel's failure in cell `cell` of model block `bi`.
 pub(crate) fn cell_error(model: &Model, bi: usize, e: KernelError, cell: usize) -> AssemblyError {
-    let region = || model.regions[model.blocks[bi].region].0.clone();
+    let region = &model.regions[model.blocks[bi].region].0;
     let at = centroid(
         &model.mesh.coords,
         model.mesh.cells[model.blocks[bi].block].cell(cell),
     );
+    cell_error_in(region, e, cell, at)
+}
+
+/// The assembly error of a kernel's failure in cell `cell` (centre `at`) of `region`.
+fn cell_error_in(region: &str, e: KernelError, cell: usize, at: [f64; 3]) -> AssemblyError {
+    let region = || region.to_string();
     match e {
         KernelError::Inverted { J } => AssemblyError::Inverted {
             region: region(),
@@ -508,6 +553,37 @@ pub(crate) fn cell_error(model: &Model, bi: usize, e: KernelError, cell: usize) 
         },
         KernelError::Singular => AssemblyError::Singular { region: region() },
     }
+}
+
+/// The work dissipated by friction so far, per friction block (indexed like
+/// `model.friction_blocks`), from the committed history: Σ ∫ w dV.
+pub fn friction_work(model: &Model, history: &PointHistory) -> Vec<f64> {
+    let nc = model.capacity_blocks.len();
+    // the work is per reference volume: only the cells' undeformed geometry is needed
+    let x0 = model.initial_state();
+    model
+        .friction_blocks
+        .iter()
+        .zip(&history.slabs[nc..])
+        .map(|(fb, slab)| {
+            let blk = &model.mesh.cells[fb.block];
+            (0..blk.n_cells())
+                .map(|c| {
+                    let h = &slab.committed[c * slab.width..(c + 1) * slab.width];
+                    crate::with_cell!(blk.kind, |N, D, E| {
+                        let s = crate::dofs::gather::<N>(
+                            &model.mesh.coords,
+                            &model.dofs,
+                            blk.cell(c),
+                            &x0,
+                        );
+                        crate::kernel::friction::dissipated_work::<N, D, E>(&s, h)
+                    })
+                    .unwrap_or(f64::NAN)
+                })
+                .sum()
+        })
+        .collect()
 }
 
 /// Heat supplied to the body through each convecting group at the state `x`, indexed like

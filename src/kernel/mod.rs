@@ -18,6 +18,7 @@ pub mod bulk;
 pub mod capacity;
 pub mod facet;
 pub mod fields;
+pub mod friction;
 pub mod lanes;
 mod point;
 pub mod regularization;

@@ -3,14 +3,17 @@
 #![allow(non_snake_case)]
 
 use super::{
-    BcGroup, BlockInfo, CapacityBlock, FacetBlock, FluxGroup, LoadPath, Model, Physics,
-    decide_physics, facet_weights,
+    BcGroup, BlockInfo, CapacityBlock, FacetBlock, FluxGroup, FrictionBlock, LoadPath, Model,
+    Physics, decide_physics, facet_weights,
 };
 use crate::case::{Bc, Case, CaseError, RegionKind};
 use crate::dofs::{Constraints, DofMap, Field, Layout, NONE, Prescribed};
 use crate::kernel::CellMaterial;
+use crate::kernel::friction::FrictionMaterial;
+use crate::material::friction::Friction;
 use crate::material::{Conductivity, Convection, Regularization, ThermoElastic};
 use crate::mesh::Mesh;
+use nalgebra::Vector3;
 
 /// Build the model. The case must already be validated against the mesh.
 pub fn build(case: &Case, mesh: Mesh) -> Result<Model, CaseError> {
@@ -43,6 +46,7 @@ pub fn build(case: &Case, mesh: Mesh) -> Result<Model, CaseError> {
     let (f_ramp, f_full, mut flux_groups) = external_loads(case, &mesh, &dofs, &blocks, &cons);
     let facet_blocks = convection_blocks(case, &mesh, &physics, &mut flux_groups);
     let capacity_blocks = capacity_blocks(case, &mesh, &physics, &blocks);
+    let friction_blocks = friction_blocks(case, &physics, &blocks);
     debug_assert!(cons.eq.iter().filter(|&&e| e != NONE).count() == cons.n_eq);
     let mut model = Model {
         physics,
@@ -52,6 +56,7 @@ pub fn build(case: &Case, mesh: Mesh) -> Result<Model, CaseError> {
         facet_blocks,
         flux_groups,
         capacity_blocks,
+        friction_blocks,
         regions: case
             .file
             .region
@@ -454,6 +459,43 @@ fn capacity_blocks(
                     has_u: false,
                     has_theta: true,
                     np: 0,
+                },
+            })
+        })
+        .collect()
+}
+
+/// The cell blocks of the medium regions with `friction`, in a scene that deforms.
+fn friction_blocks(case: &Case, physics: &Physics, blocks: &[BlockInfo]) -> Vec<FrictionBlock> {
+    if !physics.friction {
+        return Vec::new();
+    }
+    blocks
+        .iter()
+        .filter_map(|info| {
+            let fr = case.file.region[info.region].friction.as_ref()?.get_ref();
+            let n = fr.normal.get_ref();
+            let mut normal = Vector3::zeros();
+            normal.as_mut_slice()[..n.len()].copy_from_slice(n);
+            Some(FrictionBlock {
+                block: info.block,
+                region: info.region,
+                mat: FrictionMaterial {
+                    law: Friction {
+                        mu: *fr.mu.get_ref(),
+                        normal: normal.normalize(),
+                    },
+                    medium: info.mat.law,
+                    c_f: fr.c_f.as_ref().map_or(1.0, |v| *v.get_ref()),
+                },
+                heat_fraction: if physics.frictional_heating {
+                    fr.heat_fraction()
+                } else {
+                    0.0
+                },
+                layout: Layout {
+                    np: 0,
+                    ..info.layout
                 },
             })
         })

@@ -14,6 +14,7 @@ pub use physics::{Physics, decide_physics};
 use crate::case::RegionKind;
 use crate::dofs::{Constraints, DofMap, Field, Layout};
 use crate::kernel::CellMaterial;
+use crate::kernel::friction::FrictionMaterial;
 use crate::material::Convection;
 use crate::mesh::Mesh;
 
@@ -62,6 +63,20 @@ pub struct CapacityBlock {
     pub layout: Layout,
 }
 
+/// The cells of a medium region with friction, for the slip term and its heat, with the
+/// region's layout without p (the friction term does not touch the regularization).
+#[derive(Clone, Debug)]
+pub struct FrictionBlock {
+    /// Index into `mesh.cells`.
+    pub block: usize,
+    /// Index into the case's regions.
+    pub region: usize,
+    pub mat: FrictionMaterial,
+    /// Fraction of the dissipated work that becomes heat (0 where no heat is made).
+    pub heat_fraction: f64,
+    pub layout: Layout,
+}
+
 /// A boundary group with a flux condition (traction, heat flux, convection): its force and
 /// heat on the body are reported with the Dirichlet groups' reactions.
 #[derive(Clone, Debug)]
@@ -88,6 +103,8 @@ pub struct Model {
     pub flux_groups: Vec<FluxGroup>,
     /// Cells that store heat (transient scenes only), after the facets in the assembly.
     pub capacity_blocks: Vec<CapacityBlock>,
+    /// Medium cells with friction, after the capacity blocks in the assembly.
+    pub friction_blocks: Vec<FrictionBlock>,
     /// Region names and kinds, in case order.
     pub regions: Vec<(String, RegionKind)>,
     /// The load factor and the groups' own amplitudes over pseudo-time.

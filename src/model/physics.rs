@@ -21,6 +21,11 @@ pub struct Physics {
     pub regularization: bool,
     /// Heat is stored (ρc θ̇): the case has `[time]`, conducts, and some region has `rho_c`.
     pub transient: bool,
+    /// Some medium region has `friction` and the scene deforms: slip history per point.
+    pub friction: bool,
+    /// Friction makes heat: the scene has friction, conducts, has `[time]` (slip has a rate),
+    /// and some friction's `heat_fraction` is not 0.
+    pub frictional_heating: bool,
 }
 
 /// Decide the active physics from the case.
@@ -45,7 +50,12 @@ pub fn decide_physics(case: &Case) -> Physics {
         .region
         .iter()
         .any(|r| r.heat_source.is_some_and(|q| q != 0.0));
-    let expansion = f.region.iter().any(|r| r.alpha != 0.0) && conduction && theta_varies;
+    let with_friction = || f.region.iter().filter_map(|r| r.friction.as_ref());
+    let heating = conduction
+        && f.time.is_some()
+        && with_friction().any(|fr| fr.get_ref().heat_fraction() > 0.0);
+    let expansion =
+        f.region.iter().any(|r| r.alpha != 0.0) && conduction && (theta_varies || heating);
     let mechanical_load =
         f.bc.iter()
             .any(|b| b.ux.is_some() || b.uy.is_some() || b.uz.is_some() || b.traction.is_some())
@@ -65,5 +75,7 @@ pub fn decide_physics(case: &Case) -> Physics {
         // every medium element is linear so far, and p only regularizes a deforming medium
         regularization: medium && mechanics,
         transient: f.time.is_some() && conduction && f.region.iter().any(|r| r.rho_c.is_some()),
+        friction: mechanics && with_friction().next().is_some(),
+        frictional_heating: mechanics && heating,
     }
 }

@@ -1,0 +1,305 @@
+//! Friction in a medium cell: the Coulomb slip term of [`crate::material::friction`] added to
+//! the medium's own terms (which the bulk kernel assembles), and the heat its slip makes.
+//!
+//! r_u(I,i) = ∫ P_f,iJ ∂N_I/∂X_J dV,   r_θ(I) = −∫ (η/Δt) D N_I dV,
+//!
+//! with D = τ · (g − gₙ) the step's dissipation per reference volume and η the fraction of it
+//! that becomes heat. The tangent is exact and unsymmetric (Coulomb's limit moves with the
+//! normal traction). History per quadrature point: the slip g (3 values) and the work
+//! dissipated so far (1 value), read from the last accepted step and written for the trial.
+#![allow(non_snake_case)]
+
+use super::point::{Point, point};
+use super::{Active, KernelError};
+use crate::dofs::{CellState, Layout};
+use crate::element::{RefElement, physical_gradients};
+use crate::material::ThermoElastic;
+use crate::material::friction::{Friction, MediumStress, shear_modulus};
+use nalgebra::Vector3;
+
+/// History values per quadrature point: the slip (x, y, z) and the work dissipated so far.
+pub const HISTORY_PER_POINT: usize = 4;
+
+/// The friction of a medium region.
+#[derive(Clone, Copy, Debug)]
+pub struct FrictionMaterial {
+    pub law: Friction,
+    /// The medium's own law: the normal traction across the plane is its stress, and the
+    /// friction modulus scales with its bulk modulus.
+    pub medium: ThermoElastic,
+    /// c_f of the friction modulus G_f = c_f K (1 − ln J)/J².
+    pub c_f: f64,
+}
+
+/// Residual and (optionally) tangent of the friction term of one medium cell, from the history
+/// `committed` of the last accepted step; writes the trial history to `trial`. `heat_rate` is
+/// η/Δt (0 where no heat is made). `r` and `k` (row-major, the cell's u (and θ) layout) are
+/// overwritten.
+#[allow(clippy::too_many_arguments)]
+pub fn friction<const N: usize, const D: usize, E: RefElement<N, D>>(
+    mat: &FrictionMaterial,
+    heat_rate: f64,
+    lay: &Layout,
+    s: &CellState<N>,
+    committed: &[f64],
+    trial: &mut [f64],
+    act: Active,
+    r: &mut [f64],
+    mut k: Option<&mut [f64]>,
+) -> Result<(), KernelError> {
+    let nd = lay.ndof();
+    super::zero_local(nd, r, k.as_deref_mut());
+    let mechanics = lay.has_u && act.mechanics;
+    let heat = lay.has_theta && act.heat && heat_rate > 0.0;
+    for (q, (xi, w)) in E::quadrature().iter().enumerate() {
+        let Point {
+            g,
+            Nv,
+            dV,
+            F,
+            theta,
+            ..
+        } = point::<N, D, E>(xi, *w, lay, s, mat.medium.theta0)?;
+        let inverted = KernelError::Inverted { J: F.determinant() };
+        let m = mat.medium.stress(&F, theta).ok_or(inverted)?;
+        let h = &committed[q * HISTORY_PER_POINT..(q + 1) * HISTORY_PER_POINT];
+        let slip = Vector3::new(h[0], h[1], h[2]);
+        let medium = MediumStress {
+            P: &m.P,
+            dP_dF: &m.dP_dF,
+            dP_dtheta: &m.dP_dtheta,
+        };
+        let f = mat
+            .law
+            .respond(
+                &F,
+                &slip,
+                shear_modulus(mat.c_f, mat.medium.K, m.J),
+                &medium,
+            )
+            .ok_or(inverted)?;
+        let now = &mut trial[q * HISTORY_PER_POINT..(q + 1) * HISTORY_PER_POINT];
+        now[..3].copy_from_slice(f.slip.as_slice());
+        now[3] = h[3] + f.dissipated;
+        if mechanics {
+            for I in 0..N {
+                for i in 0..D {
+                    let v: f64 = (0..D).map(|J| f.P[(i, J)] * g[I][J]).sum();
+                    r[lay.u(I, i)] += v * dV;
+                }
+            }
+        }
+        if heat {
+            let source = heat_rate * f.dissipated * dV;
+            for I in 0..N {
+                r[lay.theta(I)] -= source * Nv[I];
+            }
+        }
+        let Some(k) = k.as_deref_mut() else {
+            continue;
+        };
+        if mechanics {
+            for I in 0..N {
+                for i in 0..D {
+                    let row = lay.u(I, i) * nd;
+                    for K in 0..N {
+                        for kk in 0..D {
+                            let mut v = 0.0;
+                            for J in 0..D {
+                                for L in 0..D {
+                                    v += g[I][J] * f.dP_dF[(3 * i + J, 3 * kk + L)] * g[K][L];
+                                }
+                            }
+                            k[row + lay.u(K, kk)] += v * dV;
+                        }
+                    }
+                    if lay.has_theta {
+                        let v: f64 = (0..D).map(|J| f.dP_dtheta[(i, J)] * g[I][J]).sum();
+                        for K in 0..N {
+                            k[row + lay.theta(K)] += v * Nv[K] * dV;
+                        }
+                    }
+                }
+            }
+        }
+        if heat {
+            let c = heat_rate * dV;
+            for I in 0..N {
+                let row = lay.theta(I) * nd;
+                for K in 0..N {
+                    k[row + lay.theta(K)] -= c * f.ddissipated_dtheta * Nv[I] * Nv[K];
+                    if mechanics {
+                        for kk in 0..D {
+                            let v: f64 = (0..D).map(|L| f.ddissipated_dF[(kk, L)] * g[K][L]).sum();
+                            k[row + lay.u(K, kk)] -= c * v * Nv[I];
+                        }
+                    }
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The work dissipated by slip in one cell so far, ∫ w dV, from its history.
+pub fn dissipated_work<const N: usize, const D: usize, E: RefElement<N, D>>(
+    s: &CellState<N>,
+    history: &[f64],
+) -> Result<f64, KernelError> {
+    let mut e = 0.0;
+    for (q, (xi, w)) in E::quadrature().iter().enumerate() {
+        let (_, detJ) =
+            physical_gradients::<N, D>(&E::grad(xi), &s.X).ok_or(KernelError::BadGeometry)?;
+        e += history[q * HISTORY_PER_POINT + 3] * w * detJ;
+    }
+    Ok(e)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::element::{Hex8, Quad4, Tet4, Tri3};
+
+    const MATERIAL: FrictionMaterial = FrictionMaterial {
+        law: Friction {
+            mu: 0.3,
+            normal: Vector3::new(0.0, 1.0, 0.0),
+        },
+        medium: ThermoElastic {
+            K: 1e-2,
+            mu: 1e-2,
+            alpha: 1e-2,
+            theta0: 10.0,
+        },
+        c_f: 1.0,
+    };
+
+    /// A cell closed to a fifth of its height, slid along x and distorted a little, at
+    /// temperatures that vary over it; every point's previous slip is 0.01 along x.
+    fn state<const N: usize, const D: usize, E: RefElement<N, D>>() -> (CellState<N>, Vec<f64>) {
+        let mut s = CellState::<N>::zero();
+        for (I, xi) in E::nodes().iter().enumerate() {
+            for d in 0..D {
+                s.X[I][d] = 0.5 * xi[d] + 0.04 * ((I * 7 + d * 3) % 5) as f64 / 5.0;
+            }
+            let y = s.X[I][1];
+            s.u[I][0] = 0.3 * y + 0.01 * ((I * 3) % 4) as f64;
+            s.u[I][1] = -0.8 * y + 0.005 * ((I * 5) % 3) as f64;
+            s.theta[I] = 10.0 + 30.0 * ((I * 5) % 4) as f64;
+        }
+        let nq = E::quadrature().len();
+        let mut h = vec![0.0; nq * HISTORY_PER_POINT];
+        for q in 0..nq {
+            h[q * HISTORY_PER_POINT] = 0.01;
+            h[q * HISTORY_PER_POINT + 3] = 0.7;
+        }
+        (s, h)
+    }
+
+    /// Central differences of the residual (u rows and the heat) against the tangent, for a
+    /// material under which the cell `slips` or sticks.
+    fn check<const N: usize, const D: usize, E: RefElement<N, D>>(
+        mat: &FrictionMaterial,
+        slips: bool,
+    ) {
+        let lay = Layout {
+            n: N,
+            dim: D,
+            has_u: true,
+            has_theta: true,
+            np: 0,
+        };
+        let nd = lay.ndof();
+        let (s, committed) = state::<N, D, E>();
+        let mut trial = committed.clone();
+        let (mut r, mut k) = (vec![0.0; nd], vec![0.0; nd * nd]);
+        let heat_rate = 2.5;
+        friction::<N, D, E>(
+            mat,
+            heat_rate,
+            &lay,
+            &s,
+            &committed,
+            &mut trial,
+            Active::ALL,
+            &mut r,
+            Some(&mut k),
+        )
+        .unwrap();
+        // whether the points slipped: their slip moved and work was dissipated
+        for q in 0..E::quadrature().len() {
+            let h = &trial[q * HISTORY_PER_POINT..];
+            assert_eq!(h[0] != 0.01, slips, "{N} nodes: point {q} slip {}", h[0]);
+            assert_eq!(h[3] > 0.7, slips, "{N} nodes: point {q} work {}", h[3]);
+        }
+        let scale = k.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        let h = 1e-7;
+        let (mut rp, mut rm) = (vec![0.0; nd], vec![0.0; nd]);
+        let mut scratch = committed.clone();
+        for b in 0..nd {
+            let perturb = |e: f64| {
+                let mut t = s;
+                if b < N * D {
+                    t.u[b / D][b % D] += e;
+                } else {
+                    t.theta[b - N * D] += e;
+                }
+                t
+            };
+            for (out, e) in [(&mut rp, h), (&mut rm, -h)] {
+                let t = perturb(e);
+                friction::<N, D, E>(
+                    mat,
+                    heat_rate,
+                    &lay,
+                    &t,
+                    &committed,
+                    &mut scratch,
+                    Active::ALL,
+                    out,
+                    None,
+                )
+                .unwrap();
+            }
+            for a in 0..nd {
+                let fd = (rp[a] - rm[a]) / (2.0 * h);
+                assert!(
+                    (fd - k[a * nd + b]).abs() < 1e-6 * scale,
+                    "{N} nodes, slipping {slips}: K[{a},{b}] = {} vs FD {fd}",
+                    k[a * nd + b]
+                );
+            }
+        }
+        // the heat rows: the source while slipping, nothing in stick
+        let heat: f64 = (0..N).map(|I| -r[lay.theta(I)]).sum();
+        assert_eq!(heat > 0.0, slips, "heat {heat}");
+        if slips {
+            // Σ_I of the source is the rate times the step's dissipation, ∫ D dV
+            let work = dissipated_work::<N, D, E>(&s, &trial).unwrap()
+                - dissipated_work::<N, D, E>(&s, &committed).unwrap();
+            assert!(
+                (heat - heat_rate * work).abs() < 1e-12 * heat,
+                "{heat} vs {work}"
+            );
+        }
+    }
+
+    #[test]
+    fn the_friction_tangent_is_the_derivative_of_its_residual_in_slip_and_in_stick() {
+        // μ = 0.3: the sheared cell slides; μ = 100: it sticks
+        let stuck = FrictionMaterial {
+            law: Friction {
+                mu: 100.0,
+                ..MATERIAL.law
+            },
+            ..MATERIAL
+        };
+        check::<3, 2, Tri3>(&MATERIAL, true);
+        check::<4, 2, Quad4>(&MATERIAL, true);
+        check::<4, 3, Tet4>(&MATERIAL, true);
+        check::<8, 3, Hex8>(&MATERIAL, true);
+        check::<3, 2, Tri3>(&stuck, false);
+        check::<4, 2, Quad4>(&stuck, false);
+        check::<8, 3, Hex8>(&stuck, false);
+    }
+}
