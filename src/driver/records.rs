@@ -68,8 +68,15 @@ pub struct Summary {
     /// Transient scenes: heat stored at the end, ∫ ρc (θ − θ0) dV (`null` otherwise).
     pub heat_stored: Option<f64>,
     /// Transient scenes: heat supplied over the run through every group and source, less what
-    /// convected out, Σ Δt × rate by backward Euler. Equals `heat_stored` (the balance).
+    /// convected out, Σ Δt × rate by backward Euler. With `friction_heat`, equals
+    /// `heat_stored` (the balance).
     pub heat_in: Option<f64>,
+    /// Scenes with friction: the work dissipated by slip so far, Σ ∫ τ · Δg dV (`null`
+    /// otherwise).
+    pub friction_work: Option<f64>,
+    /// Scenes with frictional heating: the heat friction made so far, Σ η ∫ τ · Δg dV, counted
+    /// besides `heat_in` (`null` otherwise).
+    pub friction_heat: Option<f64>,
     pub output: String,
     /// The units the case names in `[units]` (and energy and power made from them), by
     /// quantity: "length", "force", "time", "temperature", "energy", "power".
@@ -134,6 +141,8 @@ impl Summary {
             external_work: 0.0,
             heat_stored: None,
             heat_in: None,
+            friction_work: None,
+            friction_heat: None,
             output: out_dir.display().to_string(),
             units: Quantity::ALL
                 .into_iter()
@@ -255,18 +264,23 @@ pub struct StepRow {
     pub work: f64,
     /// Transient scenes: (heat stored, heat supplied so far).
     pub heat: Option<(f64, f64)>,
+    /// Scenes with friction: (work dissipated by slip, heat it made, so far).
+    pub friction: Option<(f64, f64)>,
     /// Seconds since the run started, when the step was accepted.
     pub wall: f64,
 }
 
 /// The columns of one model's `history.csv`: the step columns, `energy`, the probes, the
 /// reactions (`R_group_x`, `Q_group`), the solver columns and `work`; in transient scenes
-/// then `heat_stored` and `heat_in`; last `wall_seconds`.
+/// then `heat_stored` and `heat_in`; with friction `friction_work`, with frictional heating
+/// `friction_heat`; last `wall_seconds`.
 pub struct HistoryLayout {
     pub columns: Vec<String>,
     /// What each column measures (`None`: a count, a ratio or λ).
     pub quantities: Vec<Option<Quantity>>,
     transient: bool,
+    friction: bool,
+    frictional_heating: bool,
     /// (group, component) of each reaction column.
     reactions: Vec<(String, String)>,
 }
@@ -320,6 +334,14 @@ impl HistoryLayout {
             columns.push(("heat_stored".into(), Some(Energy)));
             columns.push(("heat_in".into(), Some(Energy)));
         }
+        let (friction, frictional_heating) =
+            (model.physics.friction, model.physics.frictional_heating);
+        if friction {
+            columns.push(("friction_work".into(), Some(Energy)));
+        }
+        if frictional_heating {
+            columns.push(("friction_heat".into(), Some(Energy)));
+        }
         // seconds of this machine's clock, whatever the case's units
         columns.push(("wall_seconds".into(), None));
         let (columns, quantities) = columns.into_iter().unzip();
@@ -327,6 +349,8 @@ impl HistoryLayout {
             columns,
             quantities,
             transient,
+            friction,
+            frictional_heating,
             reactions,
         }
     }
@@ -357,6 +381,13 @@ impl HistoryLayout {
         if self.transient {
             let (stored, supplied) = s.heat.unwrap_or((0.0, 0.0));
             row.extend([stored, supplied]);
+        }
+        let (work, heat) = s.friction.unwrap_or((0.0, 0.0));
+        if self.friction {
+            row.push(work);
+        }
+        if self.frictional_heating {
+            row.push(heat);
         }
         row.push(s.wall);
         row

@@ -4,9 +4,9 @@
 
 use super::checkpoint::{self, Checkpoint};
 use super::records::{HistoryLayout, Reactions, StepRow, Summary, group_flows, peak_memory_mb};
-use super::strategy::{Strategy, choose_linear, choose_strategy, describe};
+use super::strategy::{Strategy, choose_linear, choose_strategy, describe, symmetric_tangent};
 use super::{SolveError, SolveOptions};
-use crate::assembly::{Assembler, AssemblyError, convection_heat, heat_stored};
+use crate::assembly::{Assembler, AssemblyError, convection_heat, friction_work, heat_stored};
 use crate::case::Case;
 use crate::dofs::{Field, equation_structure};
 use crate::model::Model;
@@ -85,10 +85,18 @@ pub(super) struct Plan {
 impl Plan {
     pub(super) fn new(case: &Case, model: &Model, opts: &SolveOptions) -> Result<Plan, SolveError> {
         let kind = choose_linear(case.file.solver.linear, &model.physics);
-        if kind == LinearKind::Ldlt && model.physics.mechanics && model.physics.conduction {
+        if kind == LinearKind::Ldlt && !symmetric_tangent(&model.physics) {
             let span = case.file.mesh.span();
+            let why = if model.physics.friction {
+                "this scene has friction"
+            } else {
+                "this scene couples mechanics and conduction"
+            };
             return Err(case
-                .error::<()>(span, "[solver] linear = \"ldlt\" needs a symmetric tangent, but this scene couples mechanics and conduction")
+                .error::<()>(
+                    span,
+                    format!("[solver] linear = \"ldlt\" needs a symmetric tangent, but {why}"),
+                )
                 .unwrap_err()
                 .into());
         }
@@ -338,6 +346,9 @@ impl<'a> Run<'a> {
         if model.physics.transient {
             self.account_heat(target, dt, convected.iter().sum())?;
         }
+        if model.physics.friction {
+            self.account_friction();
+        }
         let f_now = self.forces(target);
         let tot = &mut self.totals;
         tot.work += self
@@ -365,6 +376,10 @@ impl<'a> Run<'a> {
             time: target,
             work: self.totals.work,
             heat: self.summary.heat_stored.zip(self.summary.heat_in),
+            friction: self
+                .summary
+                .friction_work
+                .map(|w| (w, self.summary.friction_heat.unwrap_or(0.0))),
             wall: self.start.elapsed().as_secs_f64(),
         };
         let values = self
@@ -488,6 +503,19 @@ impl<'a> Run<'a> {
         self.summary.heat_in = Some(self.totals.heat_in);
         self.summary.heat_stored = Some(heat_stored(model, &self.x).map_err(invalid)?);
         Ok(())
+    }
+
+    /// The work friction dissipated and the heat it made up to the step just committed.
+    fn account_friction(&mut self) {
+        let model = self.model;
+        let works = friction_work(model, &self.asm.history);
+        let heat = works
+            .iter()
+            .zip(&model.friction_blocks)
+            .map(|(w, fb)| w * fb.heat_fraction)
+            .sum();
+        self.summary.friction_work = Some(works.iter().sum());
+        self.summary.friction_heat = model.physics.frictional_heating.then_some(heat);
     }
 
     /// The step's line (with `--verbose`, the Newton table too) and the progress bar.

@@ -10,7 +10,7 @@ use serde::Serialize;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Strategy {
-    /// One field only (mechanics or conduction): one symmetric system.
+    /// One field only (mechanics or conduction): one system, symmetric unless with friction.
     SingleField,
     /// Mechanics drives conduction, not back: per step, Newton on (u, p), then the (linear)
     /// conduction on the deformed state.
@@ -20,11 +20,13 @@ pub enum Strategy {
 }
 
 /// The strategy the physics allows, unless the case forces the monolithic one (or a
-/// whole-system linear solver).
+/// whole-system linear solver). Friction makes the mechanics unsymmetric, which the one-way
+/// split's symmetric factorisations cannot take: with both fields it is solved whole.
 pub fn choose_strategy(solver: &crate::case::Solver, physics: &Physics) -> Strategy {
     if !(physics.mechanics && physics.conduction) {
         Strategy::SingleField
     } else if physics.heat_to_mechanics
+        || physics.friction
         || solver.coupling == CouplingChoice::Monolithic
         || matches!(solver.linear, LinearChoice::Lu | LinearChoice::Gmres)
     {
@@ -53,12 +55,20 @@ pub fn describe(physics: &Physics, strategy: Strategy) -> String {
     if physics.regularization {
         on.push("regularization p");
     }
+    if physics.friction {
+        on.push(if physics.frictional_heating {
+            "friction with frictional heating"
+        } else {
+            "friction"
+        });
+    }
     let coupling = match (physics.mechanics_to_heat, physics.heat_to_mechanics) {
         (true, true) => "two-way coupled",
         (true, false) => "one-way coupled (deformation → heat)",
         _ => "uncoupled",
     };
     let how = match strategy {
+        Strategy::SingleField if physics.friction => "one unsymmetric system",
         Strategy::SingleField => "one symmetric system",
         Strategy::OneWay => "mechanics, then heat per step, symmetric factorisations",
         Strategy::Monolithic => "monolithic Newton",
@@ -66,17 +76,26 @@ pub fn describe(physics: &Physics, strategy: Strategy) -> String {
     format!("physics: {}; {coupling}; {how}", on.join(" + "))
 }
 
-/// Choose the whole-system linear solver: LDLᵀ where the tangent is symmetric, GMRES with the
-/// block-triangular preconditioner where it is not (LU or LDLᵀ when the case asks).
+/// Whether the whole tangent is symmetric: one field, and no friction (Coulomb's limit moves
+/// with the normal traction).
+pub fn symmetric_tangent(physics: &Physics) -> bool {
+    !(physics.friction || physics.mechanics && physics.conduction)
+}
+
+/// Choose the whole-system linear solver: LDLᵀ where the tangent is symmetric, LU with
+/// friction (whose mechanical block is unsymmetric, which the block preconditioner's
+/// symmetric factorisations cannot take), GMRES with the block-triangular preconditioner
+/// otherwise (LU or LDLᵀ when the case asks).
 pub fn choose_linear(choice: LinearChoice, physics: &Physics) -> LinearKind {
-    let symmetric = !(physics.mechanics && physics.conduction);
     match choice {
         LinearChoice::Lu => LinearKind::Lu,
         LinearChoice::Ldlt => LinearKind::Ldlt,
         LinearChoice::Gmres => LinearKind::BlockGmres,
         LinearChoice::Auto => {
-            if symmetric {
+            if symmetric_tangent(physics) {
                 LinearKind::Ldlt
+            } else if physics.friction {
+                LinearKind::Lu
             } else {
                 LinearKind::BlockGmres
             }

@@ -165,6 +165,9 @@ pub struct Newton {
     pub idle: IdleThreads,
 }
 
+/// Halvings of an update whose residual grew, in scenes with friction.
+const MAX_DAMPING: usize = 3;
+
 impl Newton {
     pub fn new(model: &Model, tol: f64, max_iter: usize) -> Newton {
         let mut eq_field = vec![Field::U; model.cons.n_eq];
@@ -284,6 +287,7 @@ impl Newton {
             // its last tangent would be thrown away: then the residual is assembled alone, and
             // the tangent only if the residual turns out not converged after all.
             let mut tangent = first || !expect_converged;
+            let mut damped = 0;
             let (stats, pending, rel, residual_ok) = loop {
                 let (stats, pending) =
                     match self.assemble_admissible(&mut st, model, asm, x, t, tangent, first) {
@@ -295,6 +299,24 @@ impl Newton {
                     };
                 let rel = self.relative_residual(&mut st, model, asm, pending, first);
                 let residual_ok = rel.iter().all(|&r| r <= self.tol);
+                // friction's stick–slip switches can make a full update overshoot: while the
+                // residual grows, halve the update (a few times, then go on regardless)
+                let worst = |h: &FieldNorms| h.iter().fold(0.0f64, |a, &v| a.max(v));
+                let grew = st
+                    .history
+                    .last()
+                    .is_some_and(|last| worst(&rel) > worst(last));
+                if model.physics.friction && !first && !residual_ok && grew && damped < MAX_DAMPING
+                {
+                    damped += 1;
+                    st.cuts += 1;
+                    for (xi, a) in x.iter_mut().zip(st.applied.iter_mut()) {
+                        *a *= 0.5;
+                        *xi -= *a;
+                    }
+                    tangent = true;
+                    continue;
+                }
                 if !tangent && (!residual_ok || pending) {
                     tangent = true;
                     continue;
