@@ -475,3 +475,92 @@ fn studies_refuse_what_they_cannot_measure_or_keep_apart() {
         &["variant \"k\"", "Kk"],
     );
 }
+
+#[test]
+fn bad_friction_is_named_by_file_line_and_key() {
+    let dir = scratch("bad-friction");
+    let out = dir.join("out");
+    let block = |name: &str, friction: &str, solid_friction: &str| {
+        let p = dir.join(format!("{name}.toml"));
+        std::fs::write(
+            &p,
+            format!(
+                "mesh = \"{}\"\n[mesh_options]\nparams = {{ n = 4, m = 2, l = 1 }}\n\
+                 [[region]]\ngroup = \"solid\"\nkind = \"solid\"\nK = 20.0\nmu = 10.0\n{solid_friction}\n\
+                 [[region]]\ngroup = \"medium\"\nkind = \"medium\"\ngamma = 1e-4\n{friction}\n\
+                 [[bc]]\ngroup = \"bottom\"\nux = 0.0\nuy = 0.0\n\
+                 [[bc]]\ngroup = \"top\"\nuy = -0.1\n",
+                root().join("geo/block.geo").display()
+            ),
+        )
+        .unwrap();
+        p
+    };
+    for (tag, friction, solid, words) in [
+        (
+            "negative",
+            "friction = { mu = -0.1, normal = [0, 1] }",
+            "",
+            vec![
+                "negative.toml:14",
+                "`friction.mu` must be finite and ≥ 0, got -0.1",
+            ],
+        ),
+        (
+            "nan",
+            "friction = { mu = nan, normal = [0, 1] }",
+            "",
+            vec![
+                "nan.toml:14",
+                "`friction.mu` must be finite and ≥ 0, got NaN",
+            ],
+        ),
+        (
+            "zero-normal",
+            "friction = { mu = 0.3, normal = [0, 0] }",
+            "",
+            vec!["zero-normal.toml:14", "`friction.normal`", "not all zero"],
+        ),
+        (
+            "normal-3d",
+            "friction = { mu = 0.3, normal = [0, 0, 1] }",
+            "",
+            vec![
+                "normal-3d.toml:14",
+                "`friction.normal` has 3 components; the mesh is 2D",
+            ],
+        ),
+        (
+            "fraction",
+            "friction = { mu = 0.3, normal = [0, 1], heat_fraction = 1.5 }",
+            "",
+            vec![
+                "fraction.toml:14",
+                "`friction.heat_fraction` must be in [0, 1]",
+            ],
+        ),
+        (
+            "typo",
+            "friction = { mu = 0.3, normal = [0, 1], muu = 1 }",
+            "",
+            vec!["typo.toml", "muu"],
+        ),
+        (
+            "on-solid",
+            "",
+            "friction = { mu = 0.3, normal = [0, 1] }",
+            vec![
+                "on-solid.toml:9",
+                "region[0] (\"solid\"): `friction`",
+                "this region is a solid",
+            ],
+        ),
+    ] {
+        let case = block(tag, friction, solid);
+        let e = fails_with(&solve(&case, &out), &words);
+        assert!(
+            !out.join("step_0000.vtu").exists(),
+            "{tag}: nothing written: {e}"
+        );
+    }
+}

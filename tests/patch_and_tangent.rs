@@ -132,7 +132,8 @@ fn patch_test_hex8_mesh() {
 }
 
 /// K v against (r(x + h v) − r(x − h v)) / 2h on the free equations, coupled and unsymmetric.
-fn tangent_check(model: &Model) {
+/// Returns the assembler of the state checked (its trial history is that state's).
+fn tangent_check(model: &Model) -> Assembler {
     if model.physics.regularization {
         assert!(model.dofs.count(tmc::dofs::Field::P) > 0);
     }
@@ -206,6 +207,7 @@ fn tangent_check(model: &Model) {
         }
     }
     assert!(asym > 1e-8, "two-way coupled tangent should be unsymmetric");
+    asm
 }
 
 #[test]
@@ -304,6 +306,54 @@ fn assembled_tangent_with_regularized_medium_h1() {
         "tangent-medium-3d",
     );
     tangent_check(&model);
+}
+
+#[test]
+fn assembled_tangent_with_friction_and_its_heat_q1_t1_h1() {
+    // friction in a tilted plane, heat made in one unit of time: the slip term, its heat
+    // source and their derivatives in u and θ, some points slipping and some sticking
+    for (dim, geo, params, normal) in [
+        (
+            2,
+            "block.geo",
+            vec![("n", 4.0), ("m", 2.0), ("l", 2.0)],
+            "[0.3, 1]",
+        ),
+        (
+            2,
+            "block.geo",
+            vec![("n", 4.0), ("m", 2.0), ("l", 2.0), ("tri", 1.0)],
+            "[0.3, 1]",
+        ),
+        (
+            3,
+            "block-plate-3d.geo",
+            vec![("n", 2.0), ("nb", 1.0), ("nm", 1.0), ("nq", 1.0)],
+            "[0.3, 0.2, 1]",
+        ),
+    ] {
+        let text = medium_case(dim).replace(
+            "beta2 = 0.1\n",
+            &format!("beta2 = 0.1\nfriction = {{ mu = 2.0, normal = {normal} }}\n"),
+        ) + "[time]\nend = 1.0\ndt = 1.0\n";
+        let (_, model) = model_with(&text, geo, &params, "tangent-friction");
+        assert!(model.physics.frictional_heating && !model.friction_blocks.is_empty());
+        let asm = tangent_check(&model);
+        let nc = model.capacity_blocks.len();
+        let points = || {
+            asm.history.slabs[nc..]
+                .iter()
+                .flat_map(|s| s.trial.chunks(4))
+        };
+        let slipped = points()
+            .filter(|h| h[0] != 0.0 || h[1] != 0.0 || h[2] != 0.0)
+            .count();
+        let points = points().count();
+        assert!(
+            slipped > 0 && slipped < points,
+            "{dim}D: {slipped} of {points} points slip"
+        );
+    }
 }
 
 /// Move every node that carries no Dirichlet condition by up to `a` × (smallest cell size) in

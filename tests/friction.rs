@@ -1,0 +1,348 @@
+//! Friction in the third medium: a block pressed onto a rigid base through a medium layer,
+//! then dragged along it (geo/block.geo in 2D, Q1 and T1; geo/block3d.geo in 3D, H1). The
+//! physics asserted: tangential over normal reaction in full slip is μ_f, stick below it,
+//! μ_f = 0 is frictionless, the force curve converges in the step, drag and drag back make a
+//! hysteresis loop whose area is the dissipated work.
+
+mod common;
+
+use common::{history, solve_text};
+use std::path::Path;
+
+/// The block scene without heat: press the top 0.3 down, then (from pseudo-time 1 to 2) drag
+/// it `drag` along x (or along `path` of the drag's own amplitude), friction `mu` in the
+/// medium, Δλ at most `step`.
+fn drag_case(dim: usize, mu: Option<f64>, drag: f64, path: &str, step: f64) -> String {
+    let (normal, held, down) = if dim == 2 {
+        ("[0, 1]", "ux = 0.0\nuy = 0.0", "uy = -0.3")
+    } else {
+        (
+            "[0, 0, 1]",
+            "ux = 0.0\nuy = 0.0\nuz = 0.0",
+            "uy = 0.0\nuz = -0.3",
+        )
+    };
+    let friction = mu.map_or(String::new(), |mu| {
+        format!("friction = {{ mu = {mu}, normal = {normal} }}\n")
+    });
+    let n = path.matches(',').count();
+    format!(
+        r#"
+[[region]]
+group = "solid"
+kind = "solid"
+K = 20.0
+mu = 10.0
+
+[[region]]
+group = "medium"
+kind = "medium"
+gamma = 1e-4
+beta1 = 1.0
+beta2 = 1e-2
+{friction}
+[[bc]]
+group = "bottom"
+{held}
+
+[[bc]]
+group = "top"
+{down}
+path = [0.0{ones}]
+
+[[bc]]
+group = "top"
+ux = {drag}
+path = {path}
+
+[steps]
+initial = {step}
+max = {step}
+path = [0.0{ones}]
+"#,
+        ones = ", 1.0".repeat(n),
+    )
+}
+
+/// Column `name` of a history.
+fn column(cols: &[String], rows: &[Vec<f64>], name: &str) -> Vec<f64> {
+    let i = cols
+        .iter()
+        .position(|c| c == name)
+        .unwrap_or_else(|| panic!("no column {name} in {cols:?}"));
+    rows.iter().map(|r| r[i]).collect()
+}
+
+/// (pseudo-time, tangential reaction, normal reaction) of the top at every step.
+fn top_forces(out: &Path, dim: usize) -> Vec<(f64, f64, f64)> {
+    let (cols, rows) = history(out);
+    let t = column(&cols, &rows, "time");
+    let fx = column(&cols, &rows, "R_top_x");
+    let fnormal = column(&cols, &rows, if dim == 2 { "R_top_y" } else { "R_top_z" });
+    (0..t.len()).map(|i| (t[i], fx[i], -fnormal[i])).collect()
+}
+
+/// Largest tangential over normal reaction while dragging: the block slides in full slip once
+/// the ratio stops rising.
+fn slip_ratio(out: &Path, dim: usize) -> f64 {
+    top_forces(out, dim)
+        .iter()
+        .filter(|(t, _, _)| *t > 1.0)
+        .map(|(_, ft, fnormal)| ft / fnormal)
+        .fold(0.0, f64::max)
+}
+
+const DRAG: &str = "[0.0, 0.0, 1.0]";
+const COARSE: &str = "n = 16, m = 8, l = 4";
+
+#[test]
+fn in_full_slip_the_force_ratio_is_mu_q1() {
+    // dragged until past the onset of full slip (on this coarse mesh, Newton loses its way
+    // soon after that point at μ = 0.5)
+    for (mu, drag) in [(0.1, 0.15), (0.3, 0.15), (0.5, 0.125)] {
+        let (s, out) = solve_text(
+            &format!("friction-q1-{mu}"),
+            "block.geo",
+            COARSE,
+            &drag_case(2, Some(mu), drag, DRAG, 0.025),
+        );
+        assert!(s.converged && s.physics.friction);
+        let ratio = slip_ratio(&out, 2);
+        println!("Q1 μ = {mu}: F_t / F_n = {ratio:.4}");
+        assert!((ratio / mu - 1.0).abs() < 0.03, "μ = {mu}: ratio {ratio}");
+        assert!(s.friction_work.unwrap() > 0.0);
+    }
+}
+
+#[test]
+fn in_full_slip_the_force_ratio_is_mu_t1_and_h1() {
+    let mu = 0.3;
+    let (s, out) = solve_text(
+        "friction-t1",
+        "block.geo",
+        &format!("{COARSE}, tri = 1"),
+        &drag_case(2, Some(mu), 0.15, DRAG, 0.025),
+    );
+    assert!(s.converged && s.cells.contains_key("T1 (tri3)"));
+    let ratio = slip_ratio(&out, 2);
+    println!("T1 μ = {mu}: F_t / F_n = {ratio:.4}");
+    assert!((ratio / mu - 1.0).abs() < 0.03, "T1: ratio {ratio}");
+    let (s, out) = solve_text(
+        "friction-h1",
+        "block3d.geo",
+        "n = 8, nb = 2, m = 4, l = 2",
+        &drag_case(3, Some(mu), 0.15, DRAG, 0.025),
+    );
+    assert!(s.converged && s.cells.contains_key("H1 (hex8)"));
+    let ratio = slip_ratio(&out, 3);
+    println!("H1 μ = {mu}: F_t / F_n = {ratio:.4}");
+    assert!((ratio / mu - 1.0).abs() < 0.03, "H1: ratio {ratio}");
+}
+
+#[test]
+fn below_the_coulomb_limit_the_block_sticks() {
+    // drag 0.01: far below the force that slides it
+    let drag = 0.01;
+    let case = drag_case(2, Some(0.5), drag, DRAG, 0.05).replace(
+        "[steps]",
+        "[[probe]]\nname = \"interface_x\"\nfield = \"ux\"\nat = [1.0, 0.25]\n[steps]",
+    );
+    let (s, out) = solve_text("friction-stick", "block.geo", COARSE, &case);
+    assert!(s.converged);
+    let (_, ft, fnormal) = *top_forces(&out, 2).last().unwrap();
+    assert!(ft > 0.0 && ft < 0.5 * fnormal, "F_t {ft} F_n {fnormal}");
+    // slip dissipates F_t × (slip distance): the slip is below 1 % of the drag if the work
+    // dissipated is below 1 % of F_t × drag
+    let slip = s.friction_work.unwrap() / ft;
+    // the interface also moves by the medium's elastic shear (stick is a stiff penalty)
+    let moved = s.probes["interface_x"];
+    println!(
+        "stick: F_t/F_n {:.3}, slip {:.2e} and interface motion {moved:.2e} of the {drag} applied",
+        ft / fnormal,
+        slip
+    );
+    assert!(slip < 0.01 * drag, "slip {slip}");
+    assert!(moved.abs() < 0.05 * drag, "interface moved {moved}");
+}
+
+#[test]
+fn without_friction_coefficient_the_drag_is_frictionless() {
+    let (a, out_a) = solve_text(
+        "friction-mu0",
+        "block.geo",
+        COARSE,
+        &drag_case(2, Some(0.0), 0.2, DRAG, 0.025),
+    );
+    let (b, out_b) = solve_text(
+        "friction-none",
+        "block.geo",
+        COARSE,
+        &drag_case(2, None, 0.2, DRAG, 0.025),
+    );
+    assert!(a.physics.friction && !b.physics.friction);
+    assert_eq!(a.load_steps, b.load_steps);
+    let (fa, fb) = (top_forces(&out_a, 2), top_forces(&out_b, 2));
+    let scale = fb.iter().map(|f| f.2.abs()).fold(0.0, f64::max);
+    for (x, y) in fa.iter().zip(&fb) {
+        assert_eq!(x.0, y.0);
+        assert!((x.1 - y.1).abs() < 1e-8 * scale, "F_t {} vs {}", x.1, y.1);
+        assert!((x.2 - y.2).abs() < 1e-8 * scale, "F_n {} vs {}", x.2, y.2);
+    }
+    assert_eq!(a.friction_work, Some(0.0));
+    assert_eq!(b.friction_work, None);
+}
+
+#[test]
+fn halving_the_step_changes_the_force_curve_little() {
+    let curves: Vec<Vec<(f64, f64, f64)>> = [0.025, 0.0125]
+        .iter()
+        .map(|&step| {
+            let (s, out) = solve_text(
+                &format!("friction-step-{step}"),
+                "block.geo",
+                COARSE,
+                &drag_case(2, Some(0.3), 0.2, DRAG, step),
+            );
+            assert!(s.converged);
+            top_forces(&out, 2)
+        })
+        .collect();
+    // the coarse run's forces against the fine run's at the same pseudo-times
+    let scale = curves[1].iter().map(|f| f.1.abs()).fold(0.0, f64::max);
+    let mut worst = 0.0f64;
+    for &(t, ft, _) in &curves[0] {
+        let Some(fine) = curves[1].iter().find(|f| (f.0 - t).abs() < 1e-12) else {
+            continue;
+        };
+        worst = worst.max((ft - fine.1).abs() / scale);
+    }
+    println!(
+        "halving Δλ: tangential force moves by {:.2} % of its largest",
+        100.0 * worst
+    );
+    assert!(worst < 0.02, "{worst}");
+}
+
+#[test]
+fn drag_stop_and_drag_back_is_a_hysteresis_loop_whose_area_is_the_dissipated_work() {
+    // press; drag to 0.15; hold; drag back to −0.15; back to 0
+    let path = "[0.0, 0.0, 1.0, 1.0, -1.0, 0.0]";
+    let (s, out) = solve_text(
+        "friction-loop",
+        "block.geo",
+        COARSE,
+        &drag_case(2, Some(0.3), 0.15, path, 0.05),
+    );
+    assert!(s.converged, "{}", s.message);
+    let f = top_forces(&out, 2);
+    let (cols, rows) = history(&out);
+    let t = column(&cols, &rows, "time");
+    let ux = |t: f64| {
+        let amp = [0.0, 0.0, 1.0, 1.0, -1.0, 0.0];
+        let i = (t.floor() as usize).min(4);
+        0.15 * (amp[i] + (amp[i + 1] - amp[i]) * (t - i as f64))
+    };
+    // forward at the Coulomb limit, backward at minus it (in full slip: the largest ratios
+    // of each drag)
+    let ratio = |from: f64, to: f64| {
+        f.iter()
+            .filter(|x| x.0 > from && x.0 <= to)
+            .map(|x| x.1 / x.2)
+            .fold(0.0f64, |a, r| if r.abs() > a.abs() { r } else { a })
+    };
+    let (fwd, back) = (ratio(1.0, 2.0), ratio(3.0, 4.0));
+    println!("loop: F_t/F_n {fwd:.4} forward, {back:.4} back");
+    assert!((fwd - 0.3).abs() < 0.03 * 0.3, "{fwd}");
+    assert!((back + 0.3).abs() < 0.03 * 0.3, "{back}");
+    // the force changes sign while the drag reverses, and holds while it stops
+    let hold = ratio(2.0, 3.0);
+    assert!(hold > 0.0, "{hold}");
+    // the work of the tangential force over the loop (trapezoids) is the work dissipated,
+    // plus the elastic energy the loop leaves in the block (it ends sliding forward, with
+    // F_t at the limit: not where it started)
+    let mut loop_work = 0.0;
+    for i in 1..t.len() {
+        if t[i] > 1.0 {
+            loop_work += 0.5 * (f[i].1 + f[i - 1].1) * (ux(t[i]) - ux(t[i - 1]));
+        }
+    }
+    let energy = column(&cols, &rows, "energy");
+    let pressed = t.iter().position(|&t| t == 1.0).unwrap();
+    let stored = energy[energy.len() - 1] - energy[pressed];
+    let dissipated = s.friction_work.unwrap();
+    println!(
+        "loop: ∮ F_t du = {loop_work:.5e}, dissipated {dissipated:.5e} + stored {stored:.5e}: \
+         {:.2e} of the work unaccounted",
+        (loop_work - dissipated - stored) / loop_work
+    );
+    assert!(stored < 0.1 * dissipated, "the loop is nearly closed");
+    assert!(
+        (loop_work - dissipated - stored).abs() < 0.01 * loop_work,
+        "∮ F_t du {loop_work} vs dissipated {dissipated} + stored {stored}"
+    );
+}
+
+/// `cases/friction-heating.toml` with the drag lasting `duration` (the press, t ∈ [0, 1], as
+/// shipped).
+fn heating_case(duration: f64) -> String {
+    let end = 1.0 + duration;
+    common::case_body("friction-heating")
+        .replace("end = 1.5", &format!("end = {end}"))
+        .replace("[1.5, 1.0]]", &format!("[{end}, 1.0]]"))
+        .lines()
+        .filter(|l| !l.starts_with("params") && !l.starts_with("[mesh_options]"))
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+#[test]
+fn friction_heats_the_interface_more_the_faster_it_slides_and_the_heat_balances() {
+    let mut flash = Vec::new();
+    for duration in [2.0, 0.5, 0.1] {
+        let (s, _) = solve_text(
+            &format!("friction-heating-{duration}"),
+            "block.geo",
+            COARSE,
+            &heating_case(duration),
+        );
+        assert!(s.converged && s.physics.frictional_heating && s.physics.transient);
+        let (work, heat) = (s.friction_work.unwrap(), s.friction_heat.unwrap());
+        let (stored, heat_in) = (s.heat_stored.unwrap(), s.heat_in.unwrap());
+        // all of the dissipated work becomes heat (η = 1), and the heat is stored or leaves
+        // through the cooled top
+        let generated = stored - heat_in;
+        println!(
+            "drag over {duration}: work {work:.6e}, heat made {heat:.6e}, stored {stored:.6e}, \
+             in {heat_in:.6e}: stored − in − made = {:.1e} of made; θ interface {:.4}",
+            (generated - heat) / heat,
+            s.probes["theta_interface"]
+        );
+        assert_eq!(heat, work);
+        assert!(
+            ((generated - heat) / heat).abs() < 1e-8,
+            "stored {stored} − in {heat_in} vs made {heat}"
+        );
+        // the work is μ F_n d whatever the speed: the same within the slip's build-up
+        assert!((work / 0.13105 - 1.0).abs() < 0.01, "work {work}");
+        // the interface no hotter than on a semi-infinite body under the same flux,
+        // 2 q √(t / π k ρc), q = μ F_n v / W (the cooled top and the mesh only lower it)
+        let q = 0.3 * 3.26 / 2.0 * 0.2 / duration;
+        let bound = 2.0 * q * (duration / std::f64::consts::PI).sqrt();
+        let theta = s.probes["theta_interface"];
+        assert!(theta < bound && theta > 0.5 * bound, "θ {theta} vs {bound}");
+        flash.push(theta);
+    }
+    assert!(flash[0] < flash[1] && flash[1] < flash[2], "{flash:?}");
+}
+
+#[test]
+fn the_shipped_heating_scene_reaches_its_flash_temperature() {
+    let (s, _) = common::solve_case("friction-heating");
+    assert!(s.converged);
+    let theta = s.probes["theta_interface"];
+    println!(
+        "friction-heating: θ interface {theta:.5}, {} steps",
+        s.load_steps
+    );
+    assert!((theta - 0.12459).abs() < 1e-3 * 0.12459, "{theta}");
+}
