@@ -145,6 +145,28 @@ fn tangential_sliding_is_frictionless() {
 }
 
 #[test]
+fn sliding_with_friction_resists_at_the_coulomb_limit() {
+    let (s, rows) = solve_checked(&case("sliding-friction"));
+    let (rx, ry) = (column(&rows, "R_top_x"), column(&rows, "R_top_y"));
+    let t = column(&rows, "time");
+    // while dragging (after the press)
+    let ratio = (0..rx.len())
+        .filter(|&i| t[i] > 1.0)
+        .map(|i| rx[i] / -ry[i])
+        .fold(0.0, f64::max);
+    assert!((ratio - 0.3).abs() < 0.03 * 0.3, "F_t / F_n {ratio}");
+    // the work done beyond the stored energy is the work dissipated by slip
+    let dissipated = s.friction_work.unwrap();
+    let rel = (s.external_work - s.energy - dissipated).abs() / dissipated;
+    assert!(
+        rel < 0.02,
+        "work {} − energy {} vs dissipated {dissipated}",
+        s.external_work,
+        s.energy
+    );
+}
+
+#[test]
 fn distorted_and_very_coarse_media_close_like_the_regular_one() {
     let (regular, _) = solve_checked(&case("squeeze"));
     for name in ["distorted", "very-coarse"] {

@@ -78,6 +78,24 @@ pub fn all() -> Vec<Hard> {
             energy_tol: Some(0.01),
         },
         Hard {
+            name: "sliding-friction".into(),
+            what: "press 0.3, then drag 0.15 with Coulomb friction μ = 0.3 in the medium",
+            geo: "block.geo",
+            params: coarse,
+            body: block_mech(
+                "[[bc]]\ngroup = \"top\"\nuy = -0.3\npath = [0.0, 1.0, 1.0]\n\
+                 [[bc]]\ngroup = \"top\"\nux = 0.15\npath = [0.0, 0.0, 1.0]\n\
+                 [steps]\ninitial = 0.025\nmax = 0.025\npath = [0.0, 1.0, 1.0]\n",
+            )
+            .replace("GAMMA", "1e-4")
+            .replace(
+                "beta2 = 1e-2\n",
+                "beta2 = 1e-2\nfriction = { mu = 0.3, normal = [0, 1] }\n",
+            ),
+            // friction dissipates: the work exceeds the stored energy by what slid
+            energy_tol: None,
+        },
+        Hard {
             name: "distorted".into(),
             what: "medium cells graded 1.15 per cell in opposite directions (slanted)",
             geo: "block.geo",
