@@ -58,6 +58,21 @@ pub(super) struct SlabView<'a> {
     pub(super) trial: Shared,
 }
 
+impl SlabView<'_> {
+    /// Cell `cell`'s committed values, and its trial values to write.
+    ///
+    /// # Safety
+    /// No other thread may hold cell `cell`'s trial values (each cell runs once per assembly,
+    /// and writes only its own).
+    #[allow(clippy::mut_from_ref)]
+    unsafe fn cell(&self, cell: usize) -> (&[f64], &mut [f64]) {
+        let w = self.width;
+        // SAFETY: in bounds by construction; exclusive by the caller's promise
+        let trial = unsafe { std::slice::from_raw_parts_mut(self.trial.at(cell * w), w) };
+        (&self.committed[cell * w..(cell + 1) * w], trial)
+    }
+}
+
 /// What the cells (or facets) of one assembler block need to add their part.
 #[derive(Clone, Copy)]
 pub(super) struct Cells<'a> {
@@ -249,12 +264,10 @@ impl Cells<'_> {
         slab: &SlabView,
         cells: &[u32],
     ) -> Result<bool, (KernelError, usize)> {
-        let (lay, act, w) = (self.lay, self.act, slab.width);
+        let (lay, act) = (self.lay, self.act);
         self.each_cell::<N>(cells, |cell, s, r, k| {
-            let committed = &slab.committed[cell * w..(cell + 1) * w];
-            // SAFETY: each cell writes only its own values of the trial history, and a cell
-            // runs once per assembly
-            let trial = unsafe { std::slice::from_raw_parts_mut(slab.trial.at(cell * w), w) };
+            // SAFETY: a cell runs once per assembly
+            let (committed, trial) = unsafe { slab.cell(cell) };
             kernel::friction::friction::<N, D, E>(
                 mat, heat_rate, &lay, s, committed, trial, act, r, k,
             )
@@ -269,12 +282,10 @@ impl Cells<'_> {
         slab: &SlabView,
         cells: &[u32],
     ) -> Result<bool, (KernelError, usize)> {
-        let (lay, act, w) = (self.lay, self.act, slab.width);
+        let (lay, act) = (self.lay, self.act);
         self.each_cell::<N>(cells, |cell, s, r, k| {
-            let theta_n = &slab.committed[cell * w..(cell + 1) * w];
-            // SAFETY: each cell writes only its own values of the trial history, and a cell
-            // runs once per assembly
-            let theta_now = unsafe { std::slice::from_raw_parts_mut(slab.trial.at(cell * w), w) };
+            // SAFETY: a cell runs once per assembly
+            let (theta_n, theta_now) = unsafe { slab.cell(cell) };
             capacity::capacity::<N, D, E>(c, &lay, s, theta_n, theta_now, act, r, k)
         })
     }
