@@ -165,6 +165,11 @@ pub struct Newton {
     pub idle: IdleThreads,
 }
 
+/// The largest of the fields' relative residuals.
+fn worst(h: &FieldNorms) -> f64 {
+    h.iter().fold(0.0f64, |a, &v| a.max(v))
+}
+
 /// Halvings of an update whose residual grew, in scenes with friction.
 const MAX_DAMPING: usize = 3;
 
@@ -301,7 +306,6 @@ impl Newton {
                 let residual_ok = rel.iter().all(|&r| r <= self.tol);
                 // friction's stick–slip switches can make a full update overshoot: while the
                 // residual grows, halve the update (a few times, then go on regardless)
-                let worst = |h: &FieldNorms| h.iter().fold(0.0f64, |a, &v| a.max(v));
                 let grew = st
                     .history
                     .last()
@@ -310,10 +314,7 @@ impl Newton {
                 {
                     damped += 1;
                     st.cuts += 1;
-                    for (xi, a) in x.iter_mut().zip(st.applied.iter_mut()) {
-                        *a *= 0.5;
-                        *xi -= *a;
-                    }
+                    st.halve_update(x);
                     tangent = true;
                     continue;
                 }
@@ -416,10 +417,7 @@ impl Newton {
                 }
                 Err(_) => {
                     halvings += 1;
-                    for (xi, a) in x.iter_mut().zip(st.applied.iter_mut()) {
-                        *a *= 0.5;
-                        *xi -= *a;
-                    }
+                    st.halve_update(x);
                 }
             }
         }
@@ -557,7 +555,6 @@ impl Newton {
                 || last_update[f] <= self.update_floor[f]
         });
         // and the residual, falling at its last rate, would be below tolerance
-        let worst = |h: &FieldNorms| h.iter().fold(0.0f64, |a, &v| a.max(v));
         let falling = match st.history.as_slice() {
             [.., a, b] => worst(b) * worst(b) <= self.tol * worst(a),
             _ => false,
@@ -607,6 +604,14 @@ impl StepState {
             step_ref: [0.0; 3],
             du_ref: [0.0; 3],
             cuts: 0,
+        }
+    }
+
+    /// Take back half of the update applied last.
+    fn halve_update(&mut self, x: &mut [f64]) {
+        for (xi, a) in x.iter_mut().zip(self.applied.iter_mut()) {
+            *a *= 0.5;
+            *xi -= *a;
         }
     }
 
