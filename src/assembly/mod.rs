@@ -559,8 +559,6 @@ fn cell_error_in(region: &str, e: KernelError, cell: usize, at: [f64; 3]) -> Ass
 /// `model.friction_blocks`), from the committed history: Σ ∫ w dV.
 pub fn friction_work(model: &Model, history: &PointHistory) -> Vec<f64> {
     let nc = model.capacity_blocks.len();
-    // the work is per reference volume: only the cells' undeformed geometry is needed
-    let x0 = model.initial_state();
     model
         .friction_blocks
         .iter()
@@ -570,14 +568,11 @@ pub fn friction_work(model: &Model, history: &PointHistory) -> Vec<f64> {
             (0..blk.n_cells())
                 .map(|c| {
                     let h = &slab.committed[c * slab.width..(c + 1) * slab.width];
+                    // per reference volume: the cell's undeformed coordinates are enough
+                    let nodes = blk.cell(c);
                     crate::with_cell!(blk.kind, |N, D, E| {
-                        let s = crate::dofs::gather::<N>(
-                            &model.mesh.coords,
-                            &model.dofs,
-                            blk.cell(c),
-                            &x0,
-                        );
-                        crate::kernel::friction::dissipated_work::<N, D, E>(&s, h)
+                        let X = std::array::from_fn(|i| model.mesh.coords[nodes[i]]);
+                        crate::kernel::friction::dissipated_work::<N, D, E>(&X, h)
                     })
                     .unwrap_or(f64::NAN)
                 })

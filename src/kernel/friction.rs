@@ -141,15 +141,16 @@ pub fn friction<const N: usize, const D: usize, E: RefElement<N, D>>(
     Ok(())
 }
 
-/// The work dissipated by slip in one cell so far, ∫ w dV, from its history.
+/// The work dissipated by slip in one cell of undeformed node coordinates `X` so far, ∫ w dV,
+/// from its history.
 pub fn dissipated_work<const N: usize, const D: usize, E: RefElement<N, D>>(
-    s: &CellState<N>,
+    X: &[[f64; 3]; N],
     history: &[f64],
 ) -> Result<f64, KernelError> {
     let mut e = 0.0;
     for (q, (xi, w)) in E::quadrature().iter().enumerate() {
         let (_, detJ) =
-            physical_gradients::<N, D>(&E::grad(xi), &s.X).ok_or(KernelError::BadGeometry)?;
+            physical_gradients::<N, D>(&E::grad(xi), X).ok_or(KernelError::BadGeometry)?;
         e += history[q * HISTORY_PER_POINT + 3] * w * detJ;
     }
     Ok(e)
@@ -275,8 +276,8 @@ mod tests {
         assert_eq!(heat > 0.0, slips, "heat {heat}");
         if slips {
             // Σ_I of the source is the rate times the step's dissipation, ∫ D dV
-            let work = dissipated_work::<N, D, E>(&s, &trial).unwrap()
-                - dissipated_work::<N, D, E>(&s, &committed).unwrap();
+            let work = dissipated_work::<N, D, E>(&s.X, &trial).unwrap()
+                - dissipated_work::<N, D, E>(&s.X, &committed).unwrap();
             assert!(
                 (heat - heat_rate * work).abs() < 1e-12 * heat,
                 "{heat} vs {work}"
