@@ -47,6 +47,15 @@ fn block_mech(extra: &str) -> String {
     b
 }
 
+/// Press the top 0.3 down, then (pseudo-time 1 to 2) slide it `ux` along x, Δλ ≤ 0.025.
+fn press_and_slide(ux: f64) -> String {
+    format!(
+        "[[bc]]\ngroup = \"top\"\nuy = -0.3\npath = [0.0, 1.0, 1.0]\n\
+         [[bc]]\ngroup = \"top\"\nux = {ux}\npath = [0.0, 0.0, 1.0]\n\
+         [steps]\ninitial = 0.025\nmax = 0.025\npath = [0.0, 1.0, 1.0]\n"
+    )
+}
+
 const PRESS: &str = "[[bc]]\ngroup = \"top\"\nux = 0.0\nuy = -0.4\n";
 const FINE_STEPS: &str = "[steps]\ninitial = 0.05\nmax = 0.05\n";
 
@@ -69,12 +78,7 @@ pub fn all() -> Vec<Hard> {
             what: "press 0.3, then slide 0.6 (30 % of the width) along the interface",
             geo: "block.geo",
             params: coarse,
-            body: block_mech(
-                "[[bc]]\ngroup = \"top\"\nuy = -0.3\npath = [0.0, 1.0, 1.0]\n\
-                 [[bc]]\ngroup = \"top\"\nux = 0.6\npath = [0.0, 0.0, 1.0]\n\
-                 [steps]\ninitial = 0.025\nmax = 0.025\npath = [0.0, 1.0, 1.0]\n",
-            )
-            .replace("GAMMA", "1e-4"),
+            body: block_mech(&press_and_slide(0.6)).replace("GAMMA", "1e-4"),
             energy_tol: Some(0.01),
         },
         Hard {
@@ -82,16 +86,12 @@ pub fn all() -> Vec<Hard> {
             what: "press 0.3, then drag 0.15 with Coulomb friction μ = 0.3 in the medium",
             geo: "block.geo",
             params: coarse,
-            body: block_mech(
-                "[[bc]]\ngroup = \"top\"\nuy = -0.3\npath = [0.0, 1.0, 1.0]\n\
-                 [[bc]]\ngroup = \"top\"\nux = 0.15\npath = [0.0, 0.0, 1.0]\n\
-                 [steps]\ninitial = 0.025\nmax = 0.025\npath = [0.0, 1.0, 1.0]\n",
-            )
-            .replace("GAMMA", "1e-4")
-            .replace(
-                "beta2 = 1e-2\n",
-                "beta2 = 1e-2\nfriction = { mu = 0.3, normal = [0, 1] }\n",
-            ),
+            body: block_mech(&press_and_slide(0.15))
+                .replace("GAMMA", "1e-4")
+                .replace(
+                    "beta2 = 1e-2\n",
+                    "beta2 = 1e-2\nfriction = { mu = 0.3, normal = [0, 1] }\n",
+                ),
             // friction dissipates: the work exceeds the stored energy by what slid
             energy_tol: None,
         },
