@@ -97,20 +97,28 @@ pub struct Region {
     pub friction: Option<Spanned<FrictionKey>>,
 }
 
-/// `friction = { mu = 0.3, normal = [0, 1] }` of a medium region.
+/// `friction = { mu = 0.3, normal = [0, 1] }` (or `normal = "auto"`) of a medium region.
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FrictionKey {
     /// Coulomb coefficient μ_f ≥ 0.
     pub mu: Spanned<f64>,
-    /// The slip plane's normal in the undeformed mesh, of the mesh's dimension (need not be of
-    /// unit length).
-    pub normal: Spanned<Vec<f64>>,
+    /// The slip plane's normal in the undeformed mesh: a vector of the mesh's dimension (need
+    /// not be of unit length), or `"auto"`: each cell's from the solid surface nearest to it.
+    pub normal: Spanned<SlipNormal>,
     /// Fraction of the dissipated work that becomes heat, in [0, 1] (default 1); heat is made
     /// only in scenes with `[time]` that conduct.
     pub heat_fraction: Option<Spanned<f64>>,
     /// Stick stiffness factor c_f > 0 of the friction modulus c_f K (1 − ln J)/J² (default 1).
     pub c_f: Option<Spanned<f64>>,
+}
+
+/// `normal` of a `friction`: given, or `"auto"` (any other word is an error at validation).
+#[derive(Clone, Debug, Deserialize)]
+#[serde(untagged)]
+pub enum SlipNormal {
+    Given(Vec<f64>),
+    Word(String),
 }
 
 impl FrictionKey {
@@ -727,7 +735,7 @@ impl Case {
     }
 
     /// A medium region's `friction`: μ ≥ 0, a normal of 2 or 3 finite components not all
-    /// zero, `heat_fraction` in [0, 1], `c_f` positive (the normal's dimension is checked
+    /// zero or "auto", `heat_fraction` in [0, 1], `c_f` positive (the normal's dimension is checked
     /// against the mesh's in [`Case::validate`]).
     fn check_friction(&self, i: usize, name: &str, fr: &FrictionKey) -> Result<(), CaseError> {
         let key = |k: &str| format!("region[{i}] (\"{name}\"): `friction.{k}`");
@@ -738,16 +746,27 @@ impl Case {
                 format!("{} must be finite and ≥ 0, got {mu}", key("mu")),
             );
         }
-        let n = fr.normal.get_ref();
-        let length = n.iter().map(|v| v * v).sum::<f64>().sqrt();
-        if !(2..=3).contains(&n.len()) || !n.iter().all(|v| v.is_finite()) || !(length > 0.0) {
-            return self.error(
+        let bad_normal = |got: String| {
+            self.error(
                 fr.normal.span(),
                 format!(
-                    "{} must be a vector of 2 (2D) or 3 (3D) finite components, not all zero; got {n:?}",
+                    "{} must be \"auto\" or a vector of 2 (2D) or 3 (3D) finite components, not all zero; got {got}",
                     key("normal")
                 ),
-            );
+            )
+        };
+        match fr.normal.get_ref() {
+            SlipNormal::Given(n) => {
+                let length = n.iter().map(|v| v * v).sum::<f64>().sqrt();
+                if !(2..=3).contains(&n.len())
+                    || !n.iter().all(|v| v.is_finite())
+                    || !(length > 0.0)
+                {
+                    return bad_normal(format!("{n:?}"));
+                }
+            }
+            SlipNormal::Word(w) if w != "auto" => return bad_normal(format!("\"{w}\"")),
+            SlipNormal::Word(_) => {}
         }
         if let Some(v) = &fr.heat_fraction
             && !(0.0..=1.0).contains(v.get_ref())
@@ -1119,18 +1138,18 @@ impl Case {
                     format!("region[{i}]: group \"{name}\" is given twice"),
                 );
             }
-            if let Some(fr) = &r.friction {
-                let n = fr.get_ref().normal.get_ref();
-                if n.len() != mesh.dim {
-                    return self.error(
-                        fr.get_ref().normal.span(),
-                        format!(
-                            "region[{i}] (\"{name}\"): `friction.normal` has {} components; the mesh is {}D",
-                            n.len(),
-                            mesh.dim
-                        ),
-                    );
-                }
+            if let Some(fr) = &r.friction
+                && let SlipNormal::Given(n) = fr.get_ref().normal.get_ref()
+                && n.len() != mesh.dim
+            {
+                return self.error(
+                    fr.get_ref().normal.span(),
+                    format!(
+                        "region[{i}] (\"{name}\"): `friction.normal` has {} components; the mesh is {}D",
+                        n.len(),
+                        mesh.dim
+                    ),
+                );
             }
             region_groups.push(g);
         }

@@ -540,6 +540,16 @@ fn bad_friction_is_named_by_file_line_and_key() {
             ],
         ),
         (
+            "word",
+            "friction = { mu = 0.3, normal = \"up\" }",
+            "",
+            vec![
+                "word.toml:14",
+                "`friction.normal` must be \"auto\" or a vector",
+                "got \"up\"",
+            ],
+        ),
+        (
             "typo",
             "friction = { mu = 0.3, normal = [0, 1], muu = 1 }",
             "",
@@ -563,4 +573,22 @@ fn bad_friction_is_named_by_file_line_and_key() {
             "{tag}: nothing written: {e}"
         );
     }
+    // "auto" needs a solid surface: here the block is medium too
+    let case = block("no-solid", "friction = { mu = 0.3, normal = \"auto\" }", "");
+    let text = std::fs::read_to_string(&case).unwrap().replacen(
+        "kind = \"solid\"\nK = 20.0\nmu = 10.0",
+        "kind = \"medium\"\ngamma = 1e-4",
+        1,
+    );
+    std::fs::write(&case, text).unwrap();
+    let e = fails_with(
+        &solve(&case, &out),
+        &[
+            "no-solid.toml:13",
+            "region[1] (\"medium\")",
+            "`friction.normal = \"auto\"`",
+            "no solid region borders a medium region",
+        ],
+    );
+    assert!(!out.join("step_0000.vtu").exists(), "nothing written: {e}");
 }

@@ -140,6 +140,44 @@ fn in_full_slip_the_force_ratio_is_mu_t1_and_h1() {
 }
 
 #[test]
+fn the_auto_normal_finds_the_flat_interface_and_gives_the_given_normals_answer() {
+    // Q1 and H1: each medium cell's nearest solid face is the block's bottom, so "auto" must
+    // give the same slip planes, and the drag the same forces, as the normal given by hand
+    for (dim, geo, params, normal) in [
+        (2, "block.geo", COARSE, "[0, 1]"),
+        (3, "block3d.geo", "n = 8, nb = 2, m = 4, l = 2", "[0, 0, 1]"),
+    ] {
+        let given = drag_case(dim, Some(0.3), 0.15, DRAG, 0.025);
+        let auto = given.replace(&format!("normal = {normal}"), "normal = \"auto\"");
+        assert_ne!(auto, given);
+        let (a, out_a) = solve_text(&format!("friction-auto-{dim}"), geo, params, &auto);
+        let (b, out_b) = solve_text(&format!("friction-given-{dim}"), geo, params, &given);
+        assert!(a.converged && b.converged);
+        assert_eq!(a.load_steps, b.load_steps);
+        assert_eq!(a.newton_iterations, b.newton_iterations);
+        let (fa, fb) = (top_forces(&out_a, dim), top_forces(&out_b, dim));
+        let scale = fb.iter().map(|f| f.2.abs()).fold(0.0, f64::max);
+        for (x, y) in fa.iter().zip(&fb) {
+            assert!(
+                (x.1 - y.1).abs() < 1e-12 * scale,
+                "{dim}D F_t {} vs {}",
+                x.1,
+                y.1
+            );
+            assert!(
+                (x.2 - y.2).abs() < 1e-12 * scale,
+                "{dim}D F_n {} vs {}",
+                x.2,
+                y.2
+            );
+        }
+        // and it slid: the comparison is of a scene where friction acts
+        let ratio = slip_ratio(&out_a, dim);
+        assert!((ratio / 0.3 - 1.0).abs() < 0.03, "{dim}D: ratio {ratio}");
+    }
+}
+
+#[test]
 fn below_the_coulomb_limit_the_block_sticks() {
     // drag 0.01: far below the force that slides it
     let drag = 0.01;
@@ -345,4 +383,77 @@ fn the_shipped_heating_scene_reaches_its_flash_temperature() {
         s.load_steps
     );
     assert!((theta - 0.12459).abs() < 1e-3 * 0.12459, "{theta}");
+}
+
+#[test]
+fn on_curved_surfaces_the_auto_normals_are_the_surfaces_normals() {
+    // the medium cells next to the discs: each cell's plane normal is the disc's radial
+    // direction, to the angle a face of h = 0.12 spans on the disc
+    let text = common::case_body("discs-ellipse-friction");
+    let (_, model) = common::model_with(&text, "discs-ellipse.geo", &[("h", 0.12)], "auto-discs");
+    let fb = &model.friction_blocks[0];
+    let blk = &model.mesh.cells[fb.block];
+    let mut near = 0;
+    for c in 0..blk.n_cells() {
+        let x = tmc::mesh::centroid(&model.mesh.coords, blk.cell(c));
+        for (centre, r) in [([0.0, 0.0], 0.90), ([1.95, 0.05], 0.95)] {
+            let d = [x[0] - centre[0], x[1] - centre[1]];
+            let rho = d[0].hypot(d[1]);
+            // within half a cell of the disc, and nearer it than the other bodies
+            if rho > r && rho < r + 0.04 && x[1] < 0.6 {
+                let n = fb.normals.of(c);
+                let radial = (n[0] * d[0] + n[1] * d[1]).abs() / rho;
+                assert!(radial > 0.98, "cell at {x:?}: normal {n:?}");
+                assert!((n.norm() - 1.0).abs() < 1e-12 && n[2] == 0.0);
+                near += 1;
+            }
+        }
+    }
+    println!("{near} medium cells next to the discs checked");
+    assert!(near > 20, "{near} cells checked");
+}
+
+#[test]
+fn with_friction_the_discs_no_longer_slide_apart() {
+    let (s, out) = common::solve_case("discs-ellipse-friction");
+    assert!(s.converged && s.physics.friction);
+    // the same scene without friction, on the same mesh
+    let frictionless = common::case_body("discs-ellipse-friction")
+        .replace("friction = { mu = 0.3, normal = \"auto\" }\n", "");
+    let (f, out_f) = solve_text(
+        "discs-frictionless",
+        "discs-ellipse.geo",
+        "h = 0.12",
+        &frictionless,
+    );
+    assert!(f.converged && !f.physics.friction);
+    let (p, q) = (&s.probes, &f.probes);
+    let force = |out: &Path| {
+        let (cols, rows) = history(out);
+        -*column(&cols, &rows, "R_ellipse_top_y").last().unwrap()
+    };
+    let (pushed, pushed_free) = (force(&out), force(&out_f));
+    println!(
+        "discs-ellipse, h = 0.12: with μ = 0.3 discs move {:.4} and {:.4}, push {pushed:.3}, \
+         work dissipated {:.3e}; without friction {:.4} and {:.4}, push {pushed_free:.3}; {} steps, \
+         {} iterations",
+        p["disc_left_ux"],
+        p["disc_right_ux"],
+        s.friction_work.unwrap(),
+        q["disc_left_ux"],
+        q["disc_right_ux"],
+        s.load_steps,
+        s.newton_iterations
+    );
+    // without friction they are wedged apart to the walls, 0.1 away
+    assert!(
+        q["disc_left_ux"] < -0.09 && q["disc_right_ux"] > 0.09,
+        "{q:?}"
+    );
+    // with it they are held where the press left them (known numbers; h = 0.06 gives
+    // −0.0104 and 0.0324), and pushing down the same distance takes more force
+    assert!((p["disc_left_ux"] + 0.0094).abs() < 1e-3, "{p:?}");
+    assert!((p["disc_right_ux"] - 0.0324).abs() < 1e-3, "{p:?}");
+    assert!(pushed > 1.05 * pushed_free, "{pushed} vs {pushed_free}");
+    assert!(s.friction_work.unwrap() > 0.0);
 }

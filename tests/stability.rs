@@ -255,6 +255,23 @@ fn discs_are_wedged_apart_and_heated() {
 }
 
 #[test]
+fn with_friction_the_discs_are_held_and_still_heated() {
+    let (s, _) = solve_checked(&case("discs-ellipse-friction"));
+    let p = &s.probes;
+    // held: a third of the frictionless spread at most (which is 0.10 each)
+    assert!(
+        p["disc_left_ux"].abs() < 0.03 && p["disc_right_ux"].abs() < 0.05,
+        "{p:?}"
+    );
+    assert!((p["tip_uy"] + 0.9).abs() < 0.05, "{p:?}");
+    assert!(s.friction_work.unwrap() > 0.0);
+    assert!(
+        p["theta_disc_left"] > 10.0 && p["theta_disc_right"] > 10.0,
+        "{p:?}"
+    );
+}
+
+#[test]
 fn rough_surfaces_touch_at_two_spots_then_everywhere() {
     let (_, rows) = solve_checked(&case("micro-contact"));
     let lambda = column(&rows, "lambda");

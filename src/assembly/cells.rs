@@ -11,7 +11,7 @@ use crate::kernel::friction::FrictionMaterial;
 use crate::kernel::{self, Active, CellMaterial, KernelError, bulk, capacity, facet, lanes};
 use crate::material::Convection;
 use crate::mesh::Block;
-use crate::model::Model;
+use crate::model::{Model, SlipNormals};
 use rayon::prelude::*;
 
 /// The first medium cell (in block and cell order, whatever the threads) that `x` inverts,
@@ -260,6 +260,7 @@ impl Cells<'_> {
     pub(super) fn run_friction<const N: usize, const D: usize, E: RefElement<N, D>>(
         self,
         mat: &FrictionMaterial,
+        normals: &SlipNormals,
         heat_rate: f64,
         slab: &SlabView,
         cells: &[u32],
@@ -269,7 +270,16 @@ impl Cells<'_> {
             // SAFETY: a cell runs once per assembly
             let (committed, trial) = unsafe { slab.cell(cell) };
             kernel::friction::friction::<N, D, E>(
-                mat, heat_rate, &lay, s, committed, trial, act, r, k,
+                mat,
+                normals.of(cell),
+                heat_rate,
+                &lay,
+                s,
+                committed,
+                trial,
+                act,
+                r,
+                k,
             )
         })
     }

@@ -374,8 +374,13 @@ fn run_block(
         let fb = &model.friction_blocks[fi];
         let slab = &history[model.capacity_blocks.len() + fi];
         let heat_rate = fb.heat_fraction * inv_dt;
-        let res = crate::with_cell!(blk.kind, |N, D, E| job
-            .run_friction::<N, D, E>(&fb.mat, heat_rate, slab, these));
+        let res = crate::with_cell!(blk.kind, |N, D, E| job.run_friction::<N, D, E>(
+            &fb.mat,
+            &fb.normals,
+            heat_rate,
+            slab,
+            these
+        ));
         let ok = res.map_err(|(e, cell)| {
             let at = centroid(&model.mesh.coords, blk.cell(cell));
             cell_error_in(&model.regions[fb.region].0, e, cell, at)

@@ -20,10 +20,12 @@ use nalgebra::Vector3;
 /// History values per quadrature point: the slip (x, y, z) and the work dissipated so far.
 pub const HISTORY_PER_POINT: usize = 4;
 
-/// The friction of a medium region.
+/// The friction of a medium region (its slip planes are per cell: see `normal` of
+/// [`friction`]).
 #[derive(Clone, Copy, Debug)]
 pub struct FrictionMaterial {
-    pub law: Friction,
+    /// Coulomb's coefficient μ_f ≥ 0.
+    pub mu: f64,
     /// The medium's own law: the normal traction across the plane is its stress, and the
     /// friction modulus scales with its bulk modulus.
     pub medium: ThermoElastic,
@@ -31,13 +33,15 @@ pub struct FrictionMaterial {
     pub c_f: f64,
 }
 
-/// Residual and (optionally) tangent of the friction term of one medium cell, from the history
-/// `committed` of the last accepted step; writes the trial history to `trial`. `heat_rate` is
+/// Residual and (optionally) tangent of the friction term of one medium cell with slip-plane
+/// unit normal `normal`, from the history `committed` of the last accepted step; writes the
+/// trial history to `trial`. `heat_rate` is
 /// η/Δt (0 where no heat is made). `r` and `k` (row-major, the cell's u (and θ) layout) are
 /// overwritten.
 #[allow(clippy::too_many_arguments)]
 pub fn friction<const N: usize, const D: usize, E: RefElement<N, D>>(
     mat: &FrictionMaterial,
+    normal: &Vector3<f64>,
     heat_rate: f64,
     lay: &Layout,
     s: &CellState<N>,
@@ -51,6 +55,10 @@ pub fn friction<const N: usize, const D: usize, E: RefElement<N, D>>(
     super::zero_local(nd, r, k.as_deref_mut());
     let mechanics = lay.has_u && act.mechanics;
     let heat = lay.has_theta && act.heat && heat_rate > 0.0;
+    let law = Friction {
+        mu: mat.mu,
+        normal: *normal,
+    };
     for (q, (xi, w)) in E::quadrature().iter().enumerate() {
         let Point {
             g,
@@ -69,8 +77,7 @@ pub fn friction<const N: usize, const D: usize, E: RefElement<N, D>>(
             dP_dF: &m.dP_dF,
             dP_dtheta: &m.dP_dtheta,
         };
-        let f = mat
-            .law
+        let f = law
             .respond(
                 &F,
                 &slip,
@@ -161,11 +168,9 @@ mod tests {
     use super::*;
     use crate::element::{Hex8, Quad4, Tet4, Tri3};
 
+    const NORMAL: Vector3<f64> = Vector3::new(0.0, 1.0, 0.0);
     const MATERIAL: FrictionMaterial = FrictionMaterial {
-        law: Friction {
-            mu: 0.3,
-            normal: Vector3::new(0.0, 1.0, 0.0),
-        },
+        mu: 0.3,
         medium: ThermoElastic {
             K: 1e-2,
             mu: 1e-2,
@@ -217,6 +222,7 @@ mod tests {
         let heat_rate = 2.5;
         friction::<N, D, E>(
             mat,
+            &NORMAL,
             heat_rate,
             &lay,
             &s,
@@ -251,6 +257,7 @@ mod tests {
                 let t = perturb(e);
                 friction::<N, D, E>(
                     mat,
+                    &NORMAL,
                     heat_rate,
                     &lay,
                     &t,
@@ -289,10 +296,7 @@ mod tests {
     fn the_friction_tangent_is_the_derivative_of_its_residual_in_slip_and_in_stick() {
         // μ = 0.3: the sheared cell slides; μ = 100: it sticks
         let stuck = FrictionMaterial {
-            law: Friction {
-                mu: 100.0,
-                ..MATERIAL.law
-            },
+            mu: 100.0,
             ..MATERIAL
         };
         check::<3, 2, Tri3>(&MATERIAL, true);

@@ -4,15 +4,16 @@
 
 use super::{
     BcGroup, BlockInfo, CapacityBlock, FacetBlock, FluxGroup, FrictionBlock, LoadPath, Model,
-    Physics, decide_physics, facet_weights,
+    Physics, SlipNormals, decide_physics, facet_weights,
 };
-use crate::case::{Bc, Case, CaseError, RegionKind};
+use crate::case::{Bc, Case, CaseError, RegionKind, SlipNormal};
 use crate::dofs::{Constraints, DofMap, Field, Layout, NONE, Prescribed};
 use crate::kernel::CellMaterial;
 use crate::kernel::friction::FrictionMaterial;
-use crate::material::friction::Friction;
 use crate::material::{Conductivity, Convection, Regularization, ThermoElastic};
 use crate::mesh::Mesh;
+use crate::mesh::centroid;
+use crate::mesh::faces::{Face, NearestFace, shared_faces};
 use nalgebra::Vector3;
 
 /// Build the model. The case must already be validated against the mesh.
@@ -46,7 +47,7 @@ pub fn build(case: &Case, mesh: Mesh) -> Result<Model, CaseError> {
     let (f_ramp, f_full, mut flux_groups) = external_loads(case, &mesh, &dofs, &blocks, &cons);
     let facet_blocks = convection_blocks(case, &mesh, &physics, &mut flux_groups);
     let capacity_blocks = capacity_blocks(case, &mesh, &physics, &blocks);
-    let friction_blocks = friction_blocks(case, &physics, &blocks);
+    let friction_blocks = friction_blocks(case, &mesh, &physics, &blocks)?;
     debug_assert!(cons.eq.iter().filter(|&&e| e != NONE).count() == cons.n_eq);
     let mut model = Model {
         physics,
@@ -466,38 +467,94 @@ fn capacity_blocks(
 }
 
 /// The cell blocks of the medium regions with `friction`, in a scene that deforms.
-fn friction_blocks(case: &Case, physics: &Physics, blocks: &[BlockInfo]) -> Vec<FrictionBlock> {
+fn friction_blocks(
+    case: &Case,
+    mesh: &Mesh,
+    physics: &Physics,
+    blocks: &[BlockInfo],
+) -> Result<Vec<FrictionBlock>, CaseError> {
     if !physics.friction {
-        return Vec::new();
+        return Ok(Vec::new());
     }
-    blocks
-        .iter()
-        .filter_map(|info| {
-            let fr = case.file.region[info.region].friction.as_ref()?.get_ref();
-            let n = fr.normal.get_ref();
-            let mut normal = Vector3::zeros();
-            normal.as_mut_slice()[..n.len()].copy_from_slice(n);
-            Some(FrictionBlock {
-                block: info.block,
-                region: info.region,
-                mat: FrictionMaterial {
-                    law: Friction {
-                        mu: *fr.mu.get_ref(),
-                        normal: normal.normalize(),
-                    },
-                    medium: info.mat.law,
-                    c_f: fr.c_f.as_ref().map_or(1.0, |v| *v.get_ref()),
-                },
-                heat_fraction: if physics.frictional_heating {
-                    fr.heat_fraction()
-                } else {
-                    0.0
-                },
-                layout: Layout {
-                    np: 0,
-                    ..info.layout
-                },
-            })
+    // the solids' surfaces against the medium, found once if some region asks for them
+    let mut surface: Option<Vec<Face>> = None;
+    let mut out = Vec::new();
+    for info in blocks {
+        let region = &case.file.region[info.region];
+        let Some(fr) = region.friction.as_ref().map(|f| f.get_ref()) else {
+            continue;
+        };
+        let normals = match fr.normal.get_ref() {
+            SlipNormal::Given(n) => {
+                let mut normal = Vector3::zeros();
+                normal.as_mut_slice()[..n.len()].copy_from_slice(n);
+                SlipNormals::Given(normal.normalize())
+            }
+            SlipNormal::Word(_) => {
+                let faces = surface.get_or_insert_with(|| solid_surface(case, mesh, blocks));
+                if faces.is_empty() {
+                    return case.error(
+                        fr.normal.span(),
+                        format!(
+                            "region[{}] (\"{}\"): `friction.normal = \"auto\"` takes each cell's \
+                             normal from the nearest solid surface, but no solid region borders a \
+                             medium region; give the normal as a vector",
+                            info.region,
+                            region.group.get_ref()
+                        ),
+                    );
+                }
+                SlipNormals::PerCell(nearest_normals(mesh, info.block, faces))
+            }
+        };
+        out.push(FrictionBlock {
+            block: info.block,
+            region: info.region,
+            mat: FrictionMaterial {
+                mu: *fr.mu.get_ref(),
+                medium: info.mat.law,
+                c_f: fr.c_f.as_ref().map_or(1.0, |v| *v.get_ref()),
+            },
+            normals,
+            heat_fraction: if physics.frictional_heating {
+                fr.heat_fraction()
+            } else {
+                0.0
+            },
+            layout: Layout {
+                np: 0,
+                ..info.layout
+            },
+        });
+    }
+    Ok(out)
+}
+
+/// The faces where a solid region's cells meet a medium region's, normals out of the solid.
+fn solid_surface(case: &Case, mesh: &Mesh, blocks: &[BlockInfo]) -> Vec<Face> {
+    let of_kind = |kind: RegionKind| -> Vec<usize> {
+        blocks
+            .iter()
+            .filter(|b| case.file.region[b.region].kind == kind)
+            .map(|b| b.block)
+            .collect()
+    };
+    shared_faces(
+        mesh,
+        &of_kind(RegionKind::Solid),
+        &of_kind(RegionKind::Medium),
+    )
+}
+
+/// Each cell of mesh block `block`: the normal of the face of `faces` nearest to its centre.
+fn nearest_normals(mesh: &Mesh, block: usize, faces: &[Face]) -> Vec<Vector3<f64>> {
+    let near = NearestFace::new(faces);
+    let blk = &mesh.cells[block];
+    (0..blk.n_cells())
+        .map(|c| {
+            let x = centroid(&mesh.coords, &blk.cell(c)[..blk.kind.corners()]);
+            let f = near.to(&x).expect("faces is not empty");
+            Vector3::from(f.normal)
         })
         .collect()
 }

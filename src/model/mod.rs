@@ -17,6 +17,7 @@ use crate::kernel::CellMaterial;
 use crate::kernel::friction::FrictionMaterial;
 use crate::material::Convection;
 use crate::mesh::Mesh;
+use nalgebra::Vector3;
 
 /// One cell block of the mesh with its material and local layout.
 #[derive(Clone, Debug)]
@@ -72,9 +73,29 @@ pub struct FrictionBlock {
     /// Index into the case's regions.
     pub region: usize,
     pub mat: FrictionMaterial,
+    /// The slip plane's unit normal in each cell.
+    pub normals: SlipNormals,
     /// Fraction of the dissipated work that becomes heat (0 where no heat is made).
     pub heat_fraction: f64,
     pub layout: Layout,
+}
+
+/// The slip planes' unit normals (reference configuration) of a friction block: the region's
+/// given one for all its cells, or one per cell from the nearest solid surface (`"auto"`).
+#[derive(Clone, Debug)]
+pub enum SlipNormals {
+    Given(Vector3<f64>),
+    PerCell(Vec<Vector3<f64>>),
+}
+
+impl SlipNormals {
+    /// The normal of the block's cell `c`.
+    pub fn of(&self, c: usize) -> &Vector3<f64> {
+        match self {
+            SlipNormals::Given(n) => n,
+            SlipNormals::PerCell(n) => &n[c],
+        }
+    }
 }
 
 /// A boundary group with a flux condition (traction, heat flux, convection): its force and

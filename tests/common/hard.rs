@@ -24,11 +24,17 @@ fn cases_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("cases")
 }
 
-/// A shipped case's body, without its `mesh` key and comments.
+/// A shipped case's body, without its `mesh` key, its mesh parameters and comments (a hard
+/// case gives its own).
 pub fn body_of(name: &str) -> String {
     let text = std::fs::read_to_string(cases_dir().join(format!("{name}.toml"))).unwrap();
+    let own = |l: &str| {
+        ["mesh =", "#", "[mesh_options]", "params ="]
+            .iter()
+            .any(|k| l.starts_with(k))
+    };
     text.lines()
-        .filter(|l| !l.starts_with("mesh =") && !l.starts_with('#'))
+        .filter(|l| !own(l))
         .collect::<Vec<_>>()
         .join("\n")
         + "\n"
@@ -136,6 +142,14 @@ pub fn all() -> Vec<Hard> {
             geo: "discs-ellipse.geo",
             params: "h = 0.12",
             body: body_of("discs-ellipse"),
+            energy_tol: None,
+        },
+        Hard {
+            name: "discs-ellipse-friction".into(),
+            what: "the discs-ellipse with friction μ = 0.3, slip planes found by tmc (h = 0.12)",
+            geo: "discs-ellipse.geo",
+            params: "h = 0.12",
+            body: body_of("discs-ellipse-friction"),
             energy_tol: None,
         },
         Hard {

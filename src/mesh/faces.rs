@@ -1,0 +1,300 @@
+//! The faces between two sets of cells (a solid's surface against the medium), their unit
+//! normals, and the nearest of them to a point.
+//!
+//! A face is a cell's side of one dimension less: an edge of a 2D cell, a triangle or a
+//! quadrilateral of a 3D one, found by its corner nodes (quadratic cells' mid-side nodes play
+//! no part: a face is taken as flat between its corners).
+
+use super::{Block, CellKind, Mesh, centroid};
+use std::collections::HashMap;
+
+/// A face shared by a cell of one set and a cell of the other.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Face {
+    /// Mean of the corners.
+    pub centre: [f64; 3],
+    /// Unit normal, pointing out of the first set's cell.
+    pub normal: [f64; 3],
+}
+
+/// The sides of a cell, as its local corner numbers (gmsh's node order).
+pub fn sides(kind: CellKind) -> &'static [&'static [usize]] {
+    match kind {
+        CellKind::Tri3 | CellKind::Tri6 => &[&[0, 1], &[1, 2], &[2, 0]],
+        CellKind::Quad4 | CellKind::Quad8 | CellKind::Quad9 => {
+            &[&[0, 1], &[1, 2], &[2, 3], &[3, 0]]
+        }
+        CellKind::Tet4 | CellKind::Tet10 => &[&[0, 2, 1], &[0, 1, 3], &[0, 3, 2], &[1, 2, 3]],
+        CellKind::Hex8 | CellKind::Hex20 | CellKind::Hex27 => &[
+            &[0, 3, 2, 1],
+            &[0, 1, 5, 4],
+            &[0, 4, 7, 3],
+            &[1, 2, 6, 5],
+            &[2, 3, 7, 6],
+            &[4, 5, 6, 7],
+        ],
+        CellKind::Point1 | CellKind::Line2 | CellKind::Line3 => &[],
+    }
+}
+
+/// The faces where a cell of the blocks `a` meets a cell of the blocks `b` (indices into
+/// `mesh.cells`), each once, in the order of `a`'s cells, normals out of `a`.
+pub fn shared_faces(mesh: &Mesh, a: &[usize], b: &[usize]) -> Vec<Face> {
+    let key = |nodes: &[usize], side: &[usize]| {
+        let mut k: Vec<usize> = side.iter().map(|&i| nodes[i]).collect();
+        k.sort_unstable();
+        k
+    };
+    let mut in_b: HashMap<Vec<usize>, ()> = HashMap::new();
+    for blk in b.iter().map(|&i| &mesh.cells[i]) {
+        for c in 0..blk.n_cells() {
+            for side in sides(blk.kind) {
+                in_b.insert(key(blk.cell(c), side), ());
+            }
+        }
+    }
+    let mut out = Vec::new();
+    for blk in a.iter().map(|&i| &mesh.cells[i]) {
+        for c in 0..blk.n_cells() {
+            let nodes = blk.cell(c);
+            for side in sides(blk.kind) {
+                if in_b.remove(&key(nodes, side)).is_some() {
+                    out.push(face(mesh, blk, nodes, side));
+                }
+            }
+        }
+    }
+    out
+}
+
+/// The face `side` of the cell `nodes` of `blk`, its normal out of the cell.
+fn face(mesh: &Mesh, blk: &Block, nodes: &[usize], side: &[usize]) -> Face {
+    let x = |i: usize| mesh.coords[nodes[side[i]]];
+    let sub = |p: [f64; 3], q: [f64; 3]| [p[0] - q[0], p[1] - q[1], p[2] - q[2]];
+    let corners: Vec<usize> = side.iter().map(|&i| nodes[i]).collect();
+    let centre = centroid(&mesh.coords, &corners);
+    let mut n = match side.len() {
+        // an edge of a 2D cell: its direction turned by a right angle
+        2 => {
+            let t = sub(x(1), x(0));
+            [t[1], -t[0], 0.0]
+        }
+        // a triangle: the cross product of two edges; a quadrilateral: of its diagonals
+        k => {
+            let (p, q) = if k == 3 {
+                (sub(x(1), x(0)), sub(x(2), x(0)))
+            } else {
+                (sub(x(2), x(0)), sub(x(3), x(1)))
+            };
+            [
+                p[1] * q[2] - p[2] * q[1],
+                p[2] * q[0] - p[0] * q[2],
+                p[0] * q[1] - p[1] * q[0],
+            ]
+        }
+    };
+    let inward = sub(centroid(&mesh.coords, &nodes[..blk.kind.corners()]), centre);
+    let dot: f64 = (0..3).map(|i| n[i] * inward[i]).sum();
+    let length = n.iter().map(|v| v * v).sum::<f64>().sqrt();
+    let sign = if dot > 0.0 { -1.0 } else { 1.0 };
+    n = n.map(|v| sign * v / length);
+    Face { centre, normal: n }
+}
+
+/// The faces sorted along x, for the nearest one to a point.
+pub struct NearestFace<'a> {
+    faces: &'a [Face],
+    /// Face numbers sorted by their centres' x.
+    by_x: Vec<usize>,
+}
+
+impl<'a> NearestFace<'a> {
+    pub fn new(faces: &'a [Face]) -> Self {
+        let mut by_x: Vec<usize> = (0..faces.len()).collect();
+        by_x.sort_by(|&i, &j| faces[i].centre[0].total_cmp(&faces[j].centre[0]));
+        NearestFace { faces, by_x }
+    }
+
+    /// The face whose centre is nearest to `x` (`None` with no faces): from the faces nearest
+    /// in x outwards, until the distance in x alone exceeds the best found.
+    pub fn to(&self, x: &[f64; 3]) -> Option<&'a Face> {
+        let start = self
+            .by_x
+            .partition_point(|&i| self.faces[i].centre[0] < x[0]);
+        let distance2 = |f: &Face| (0..3).map(|i| (f.centre[i] - x[i]).powi(2)).sum::<f64>();
+        let mut best: Option<(f64, usize)> = None;
+        let (mut up, mut down) = (start, start);
+        loop {
+            let gap_up = self.by_x.get(up).map(|&i| self.faces[i].centre[0] - x[0]);
+            let gap_down = down
+                .checked_sub(1)
+                .map(|d| x[0] - self.faces[self.by_x[d]].centre[0]);
+            // the nearer side in x next
+            let (gap, i) = match (gap_up, gap_down) {
+                (None, None) => break,
+                (Some(u), Some(d)) if d < u => {
+                    down -= 1;
+                    (d, self.by_x[down])
+                }
+                (Some(u), _) => {
+                    up += 1;
+                    (u, self.by_x[up - 1])
+                }
+                (None, Some(d)) => {
+                    down -= 1;
+                    (d, self.by_x[down])
+                }
+            };
+            if best.is_some_and(|(b, _)| gap * gap > b) {
+                break;
+            }
+            let d2 = distance2(&self.faces[i]);
+            // ties go to the lower face number, whichever side they were met from
+            if best.is_none_or(|(b, j)| d2 < b || (d2 == b && i < j)) {
+                best = Some((d2, i));
+            }
+        }
+        best.map(|(_, i)| &self.faces[i])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn brute(faces: &[Face], x: &[f64; 3]) -> usize {
+        let d2 = |f: &Face| (0..3).map(|i| (f.centre[i] - x[i]).powi(2)).sum::<f64>();
+        (0..faces.len())
+            .min_by(|&i, &j| d2(&faces[i]).total_cmp(&d2(&faces[j])).then(i.cmp(&j)))
+            .unwrap()
+    }
+
+    #[test]
+    fn the_nearest_face_is_the_one_a_search_of_all_finds() {
+        // centres on a scrambled spiral, queries on a grid around it
+        let faces: Vec<Face> = (0..200)
+            .map(|k| {
+                let t = (k * 37 % 200) as f64 * 0.1;
+                Face {
+                    centre: [
+                        t.cos() * (1.0 + 0.05 * t),
+                        t.sin() * (1.0 + 0.05 * t),
+                        0.3 * t,
+                    ],
+                    normal: [1.0, 0.0, 0.0],
+                }
+            })
+            .collect();
+        let near = NearestFace::new(&faces);
+        for q in 0..400 {
+            let x = [
+                -2.5 + 0.25 * (q % 20) as f64,
+                -2.5 + 0.25 * (q / 20) as f64,
+                0.1 * (q % 7) as f64,
+            ];
+            let found = near.to(&x).unwrap() as *const Face;
+            assert_eq!(found, &faces[brute(&faces, &x)] as *const Face, "at {x:?}");
+        }
+        assert!(NearestFace::new(&[]).to(&[0.0; 3]).is_none());
+    }
+
+    fn mesh(dim: usize, coords: Vec<[f64; 3]>, cells: Vec<Block>) -> Mesh {
+        Mesh {
+            dim,
+            coords,
+            cells,
+            facets: Vec::new(),
+            groups: Vec::new(),
+            source: "test".into(),
+            warnings: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn a_tilted_edge_between_a_quad_and_a_triangle_has_its_normal_out_of_the_first() {
+        // a quad (0,0) (1,0) (1.5,1) (0,1) and a triangle on its slanted right side
+        let coords = vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.5, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [2.0, 0.0, 0.0],
+        ];
+        let quad = Block {
+            kind: CellKind::Quad4,
+            groups: vec![],
+            conn: vec![0, 1, 2, 3],
+        };
+        let tri = Block {
+            kind: CellKind::Tri3,
+            groups: vec![],
+            conn: vec![1, 4, 2],
+        };
+        let m = mesh(2, coords, vec![quad, tri]);
+        let faces = shared_faces(&m, &[0], &[1]);
+        assert_eq!(faces.len(), 1);
+        let s = 1.0 / 1.25f64.sqrt();
+        let want = [s, -0.5 * s, 0.0];
+        for i in 0..3 {
+            assert!(
+                (faces[0].normal[i] - want[i]).abs() < 1e-15,
+                "{:?}",
+                faces[0]
+            );
+        }
+        assert_eq!(faces[0].centre, [1.25, 0.5, 0.0]);
+        // out of the triangle, the other way
+        let back = shared_faces(&m, &[1], &[0]);
+        assert_eq!(back[0].normal.map(|v| -v), faces[0].normal);
+    }
+
+    #[test]
+    fn the_face_between_two_stacked_hexes_points_up_out_of_the_lower() {
+        // unit cubes at z in [0, 1] and [1, 2], gmsh's node order
+        let mut coords = Vec::new();
+        for z in 0..3 {
+            for (x, y) in [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)] {
+                coords.push([x, y, z as f64]);
+            }
+        }
+        let hex = |lo: usize| Block {
+            kind: CellKind::Hex8,
+            groups: vec![],
+            conn: (lo..lo + 8).collect(),
+        };
+        let m = mesh(3, coords, vec![hex(0), hex(4)]);
+        let faces = shared_faces(&m, &[0], &[1]);
+        assert_eq!(faces.len(), 1);
+        assert_eq!(faces[0].normal, [0.0, 0.0, 1.0]);
+        assert_eq!(faces[0].centre, [0.5, 0.5, 1.0]);
+        // tetrahedra: the faces of one tet against another sharing (1, 2, 3)
+        let tets = mesh(
+            3,
+            vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [0.0, 0.0, 1.0],
+                [1.0, 1.0, 1.0],
+            ],
+            vec![
+                Block {
+                    kind: CellKind::Tet4,
+                    groups: vec![],
+                    conn: vec![0, 1, 2, 3],
+                },
+                Block {
+                    kind: CellKind::Tet4,
+                    groups: vec![],
+                    conn: vec![4, 2, 1, 3],
+                },
+            ],
+        );
+        let f = shared_faces(&tets, &[0], &[1]);
+        assert_eq!(f.len(), 1);
+        let s = 1.0 / 3f64.sqrt();
+        for v in f[0].normal {
+            assert!((v - s).abs() < 1e-15, "{:?}", f[0]);
+        }
+    }
+}
