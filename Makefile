@@ -31,6 +31,7 @@ bench: deps
 	$(CARGO) bench --bench strategies
 	$(CARGO) bench --bench table2
 	$(CARGO) bench --bench stability
+	$(CARGO) bench --bench friction
 	$(CARGO) bench --bench kernel
 	$(CARGO) bench --bench assembly
 	$(CARGO) bench --bench output

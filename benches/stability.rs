@@ -8,7 +8,7 @@ mod hard;
 fn main() {
     let root = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/bench-stability");
     println!(
-        "\n{:<14} {:>6} {:>5} {:>6} {:>10} {:>10} {:>9} {:>7}  result / what",
+        "\n{:<22} {:>6} {:>5} {:>6} {:>10} {:>10} {:>9} {:>7}  result / what",
         "case", "steps", "rej", "its", "min J sol", "min J med", "W/E - 1", "wall s"
     );
     for h in hard::all() {
@@ -17,7 +17,7 @@ fn main() {
         let wall = t.elapsed().as_secs_f64();
         match r {
             Ok(s) => println!(
-                "{:<14} {:>6} {:>5} {:>6} {:>10.2e} {:>10.2e} {:>9} {:>7.1}  λ = {} reached; {}",
+                "{:<22} {:>6} {:>5} {:>6} {:>10.2e} {:>10.2e} {:>9} {:>7.1}  λ = {} reached; {}",
                 h.name,
                 s.load_steps,
                 s.rejected_steps,
@@ -33,7 +33,7 @@ fn main() {
                 s.lambda,
                 h.what
             ),
-            Err(e) => println!("{:<14} failed: {e}", h.name),
+            Err(e) => println!("{:<22} failed: {e}", h.name),
         }
     }
 }
