@@ -89,6 +89,15 @@ fn solve_checked(h: &Hard) -> (Summary, Rows) {
 }
 
 fn path_end(h: &Hard) -> f64 {
+    // in physical time, `[time] end`
+    let end = h
+        .body
+        .lines()
+        .skip_while(|l| l.trim() != "[time]")
+        .find_map(|l| l.trim().strip_prefix("end = "));
+    if let Some(end) = end {
+        return end.parse().unwrap();
+    }
     // the end of pseudo-time: one less than the number of values in `[steps] path`
     let n = h
         .body
@@ -268,6 +277,25 @@ fn with_friction_the_discs_are_held_and_still_heated() {
     assert!(
         p["theta_disc_left"] > 10.0 && p["theta_disc_right"] > 10.0,
         "{p:?}"
+    );
+}
+
+#[test]
+fn friction_heats_the_sliding_block_and_the_heat_balances() {
+    let (s, _) = solve_checked(&case("friction-heating"));
+    let theta = s.probes["theta_interface"];
+    // the shipped scene's flash temperature (tests/friction.rs), hotter than the block above
+    assert!((theta - 0.12459).abs() < 1e-3 * 0.12459, "{theta}");
+    assert!(s.probes["theta_block"] < theta);
+    let (made, stored, heat_in) = (
+        s.friction_heat.unwrap(),
+        s.heat_stored.unwrap(),
+        s.heat_in.unwrap(),
+    );
+    assert!(made > 0.0);
+    assert!(
+        (stored - heat_in - made).abs() < 1e-8 * made,
+        "stored {stored}, in {heat_in}, made {made}"
     );
 }
 

@@ -153,6 +153,14 @@ pub fn all() -> Vec<Hard> {
             energy_tol: None,
         },
         Hard {
+            name: "friction-heating".into(),
+            what: "a block dragged 0.2 in 0.5 s with friction μ = 0.3: the slip heats it",
+            geo: "block.geo",
+            params: coarse,
+            body: body_of("friction-heating"),
+            energy_tol: None,
+        },
+        Hard {
             name: "micro-contact".into(),
             what: "rough surfaces: no contact, two spots, full contact",
             geo: "micro-contact.geo",
