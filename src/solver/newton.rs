@@ -16,6 +16,7 @@ use super::idle::IdleThreads;
 use super::linear::{LinearError, LinearSolver};
 use crate::assembly::{Assembler, AssemblyError, AssemblyStats};
 use crate::dofs::{Field, NONE};
+use crate::material::Conductivity;
 use crate::model::Model;
 
 /// Norms per field, indexed by `Field as usize`.
@@ -151,10 +152,11 @@ pub struct Newton {
     /// Totals over every step attempt so far, converged or not.
     pub spent: Spent,
     run_ref: FieldNorms,
-    /// Residual per field below which it has converged whatever its reference (u and p; 0 for
-    /// θ): round-off for the stiffest body. A step that loads a field with nothing (the equilibrium at λ = 0 under
-    /// temperatures held in full) leaves it only round-off residuals, which no reference built
-    /// from that step's own loads can judge.
+    /// Residual per field below which it has converged whatever its reference: round-off for
+    /// the stiffest body (u and p), for the most conductive one (θ). A step that loads a field
+    /// with nothing (the equilibrium at λ = 0 under temperatures held in full; the heat of a
+    /// first, tiny slip in a scene that is nowhere warm yet) leaves it only round-off
+    /// residuals, which no reference built from that step's own loads can judge.
     floor: FieldNorms,
     /// Update per field below which it is negligible whatever the step's updates (u and p; 0
     /// for θ): a displacement of 1e-12 of the body's extent.
@@ -168,6 +170,28 @@ pub struct Newton {
 /// The largest of the fields' relative residuals.
 fn worst(h: &FieldNorms) -> f64 {
     h.iter().fold(0.0f64, |a, &v| a.max(v))
+}
+
+/// The heat flow that a temperature difference of 1e-12 of the scene's temperatures (its
+/// largest initial or prescribed |θ|, at least one degree) drives through the most
+/// conductive body across its extent: a θ residual below it is round-off.
+fn heat_floor(model: &Model) -> f64 {
+    let k = model
+        .blocks
+        .iter()
+        .map(|b| match b.mat.cond {
+            Conductivity::Constant(k) => k,
+            Conductivity::Medium { k_max, .. } => k_max,
+        })
+        .fold(0.0, f64::max);
+    let prescribed = (model.cons.prescribed.iter().zip(&model.dofs.field))
+        .filter(|(_, f)| **f == Field::Theta)
+        .filter_map(|(p, _)| p.as_ref())
+        .flat_map(|p| [p.value, p.start]);
+    let theta = (model.theta_init.iter().copied())
+        .chain(prescribed)
+        .fold(1.0, |a: f64, t| a.max(t.abs()));
+    1e-12 * k * theta * model.d.powi(model.mesh.dim as i32 - 2)
 }
 
 /// Halvings of an update whose residual grew, in scenes with friction.
@@ -192,6 +216,7 @@ impl Newton {
         let mut floor = [0.0; 3];
         floor[idx(Field::U)] = force;
         floor[idx(Field::P)] = force;
+        floor[idx(Field::Theta)] = heat_floor(model);
         let mut update_floor = [0.0; 3];
         update_floor[idx(Field::U)] = 1e-12 * model.d;
         update_floor[idx(Field::P)] = 1e-12 * model.d;
@@ -459,12 +484,18 @@ impl Newton {
             } else {
                 0.0
             };
-            if res[f] <= self.floor[f] {
-                rel.min(self.tol * res[f] / self.floor[f])
-            } else {
-                rel
-            }
+            self.floored(f, res[f], rel)
         })
+    }
+
+    /// The relative residual `rel` of field `f`, or less where its residual `res` is below
+    /// the field's floor (round-off: converged whatever its reference).
+    fn floored(&self, f: usize, res: f64, rel: f64) -> f64 {
+        if res <= self.floor[f] {
+            rel.min(self.tol * res / self.floor[f])
+        } else {
+            rel
+        }
     }
 
     /// Solve for the update into `st.rhs`, with a new factorisation unless `reuse` allows the
@@ -521,7 +552,9 @@ impl Newton {
         let mut r = vec![0.0; model.cons.n_eq];
         self.free_residual(model, st.part, &asm.r_full, &mut r);
         let th = idx(Field::Theta);
-        let rel = self.norms(&r)[th] / st.step_ref[th].max(self.run_ref[th]).max(f64::MIN_POSITIVE);
+        let res = self.norms(&r)[th];
+        let rel = res / st.step_ref[th].max(self.run_ref[th]).max(f64::MIN_POSITIVE);
+        let rel = self.floored(th, res, rel);
         if !(rel <= self.tol) {
             return Err(StepFailure::NotConverged {
                 iterations: 1,
