@@ -327,10 +327,6 @@ fn heating_case(duration: f64) -> String {
     common::case_body("friction-heating")
         .replace("end = 1.5", &format!("end = {end}"))
         .replace("[1.5, 1.0]]", &format!("[{end}, 1.0]]"))
-        .lines()
-        .filter(|l| !l.starts_with("params") && !l.starts_with("[mesh_options]"))
-        .collect::<Vec<_>>()
-        .join("\n")
 }
 
 #[test]
@@ -371,18 +367,6 @@ fn friction_heats_the_interface_more_the_faster_it_slides_and_the_heat_balances(
         flash.push(theta);
     }
     assert!(flash[0] < flash[1] && flash[1] < flash[2], "{flash:?}");
-}
-
-#[test]
-fn the_shipped_heating_scene_reaches_its_flash_temperature() {
-    let (s, _) = common::solve_case("friction-heating");
-    assert!(s.converged);
-    let theta = s.probes["theta_interface"];
-    println!(
-        "friction-heating: θ interface {theta:.5}, {} steps",
-        s.load_steps
-    );
-    assert!((theta - 0.12459).abs() < 1e-3 * 0.12459, "{theta}");
 }
 
 #[test]

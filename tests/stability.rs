@@ -252,11 +252,16 @@ fn discs_are_wedged_apart_and_heated() {
         p["disc_left_ux"] < -0.02 && p["disc_right_ux"] > 0.02,
         "{p:?}"
     );
+    tip_follows_and_discs_are_heated(p);
+}
+
+/// The ellipse's tip follows its top down, and heat reached the discs through the closed
+/// medium.
+fn tip_follows_and_discs_are_heated(p: &std::collections::BTreeMap<String, f64>) {
     assert!(
         (p["tip_uy"] + 0.9).abs() < 0.05,
         "the tip follows the top: {p:?}"
     );
-    // heat reached the discs through the closed medium
     assert!(
         p["theta_disc_left"] > 10.0 && p["theta_disc_right"] > 10.0,
         "{p:?}"
@@ -272,19 +277,20 @@ fn with_friction_the_discs_are_held_and_still_heated() {
         p["disc_left_ux"].abs() < 0.03 && p["disc_right_ux"].abs() < 0.05,
         "{p:?}"
     );
-    assert!((p["tip_uy"] + 0.9).abs() < 0.05, "{p:?}");
     assert!(s.friction_work.unwrap() > 0.0);
-    assert!(
-        p["theta_disc_left"] > 10.0 && p["theta_disc_right"] > 10.0,
-        "{p:?}"
-    );
+    tip_follows_and_discs_are_heated(p);
 }
 
 #[test]
 fn friction_heats_the_sliding_block_and_the_heat_balances() {
     let (s, _) = solve_checked(&case("friction-heating"));
     let theta = s.probes["theta_interface"];
-    // the shipped scene's flash temperature (tests/friction.rs), hotter than the block above
+    println!(
+        "friction-heating: θ interface {theta:.5}, {} steps",
+        s.load_steps
+    );
+    // the shipped scene's flash temperature (the suite runs it as shipped: its mesh, its
+    // steps), hotter than the block above
     assert!((theta - 0.12459).abs() < 1e-3 * 0.12459, "{theta}");
     assert!(s.probes["theta_block"] < theta);
     let (made, stored, heat_in) = (

@@ -6,7 +6,7 @@
 //! no part: a face is taken as flat between its corners).
 
 use super::{Block, CellKind, Mesh, centroid};
-use std::collections::HashMap;
+use std::collections::HashSet;
 
 /// A face shared by a cell of one set and a cell of the other.
 #[derive(Clone, Debug, PartialEq)]
@@ -45,11 +45,11 @@ pub fn shared_faces(mesh: &Mesh, a: &[usize], b: &[usize]) -> Vec<Face> {
         k.sort_unstable();
         k
     };
-    let mut in_b: HashMap<Vec<usize>, ()> = HashMap::new();
+    let mut in_b: HashSet<Vec<usize>> = HashSet::new();
     for blk in b.iter().map(|&i| &mesh.cells[i]) {
         for c in 0..blk.n_cells() {
             for side in sides(blk.kind) {
-                in_b.insert(key(blk.cell(c), side), ());
+                in_b.insert(key(blk.cell(c), side));
             }
         }
     }
@@ -58,7 +58,7 @@ pub fn shared_faces(mesh: &Mesh, a: &[usize], b: &[usize]) -> Vec<Face> {
         for c in 0..blk.n_cells() {
             let nodes = blk.cell(c);
             for side in sides(blk.kind) {
-                if in_b.remove(&key(nodes, side)).is_some() {
+                if in_b.remove(&key(nodes, side)) {
                     out.push(face(mesh, blk, nodes, side));
                 }
             }
