@@ -12,8 +12,9 @@ deps:
 deps-demo:
 	@scripts/install-deps.sh demo
 
+# With the distributed engine (PETSc over MPI): `mpirun -n N target/release/tmc solve CASE`.
 build: deps
-	$(CARGO) build --release
+	$(CARGO) build --release --features petsc
 
 # Mesh and solve the default scene, then say where the results are (installs only what tmc
 # itself needs).
@@ -22,9 +23,10 @@ demo: deps-demo
 	$(TMC) solve cases/block.toml --verbose
 	@echo "results in results/block/: open block.pvd in ParaView"
 
-# Every test: unit, analytical, patch, tangent, end-to-end, bad input.
+# Every test: unit, analytical, patch, tangent, end-to-end, bad input, and the PETSc engine
+# on one and two ranks.
 test: deps
-	$(CARGO) test --release
+	$(CARGO) test --release --features petsc
 
 # Benchmarks print tables (tests never assert wall time).
 bench: deps
@@ -35,6 +37,7 @@ bench: deps
 	$(CARGO) bench --bench kernel
 	$(CARGO) bench --bench assembly
 	$(CARGO) bench --bench output
+	$(CARGO) bench --features petsc --bench distributed
 
 # tmc against FEniCSx on six scenes (T1, T2, Q1, tet4, H1, H2); writes validation/fenicsx/RESULTS.md.
 validate: build

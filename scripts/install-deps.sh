@@ -4,11 +4,14 @@
 # python3-matplotlib to read and render results, python3-gmsh and python3-dolfinx (FEniCSx 0.5.2)
 # for the validation against FEniCSx. Idempotent: installs only missing packages.
 # `install-deps.sh demo` installs only what building and running tmc needs (no Python, no
-# FEniCSx, about 1 GB less); without an argument, also what the tests and validation need.
+# FEniCSx, about 1 GB less); without an argument, also what the tests and validation need,
+# with the distributed engine: PETSc (petsc-dev, with MUMPS and hypre), Open MPI (its headers
+# and mpirun) and libclang (which the mpi crate's build reads MPI's header with).
 set -euo pipefail
 packages=(gmsh libgmsh-dev pkg-config fonts-dejavu-core)
 if [ "${1:-all}" != "demo" ]; then
   packages+=(python3-meshio python3-matplotlib python3-gmsh python3-dolfinx)
+  packages+=(petsc-dev libopenmpi-dev openmpi-bin libclang-dev)
 fi
 need=()
 for pkg in "${packages[@]}"; do

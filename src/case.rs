@@ -327,6 +327,28 @@ pub struct Solver {
     pub linear: LinearChoice,
     /// "auto" (one-way coupled scenes solve mechanics, then heat, per step) or "monolithic".
     pub coupling: CouplingChoice,
+    /// "faer" (one process, the default) or "petsc" (the distributed engine; what `mpirun`
+    /// runs on whatever this says).
+    pub engine: EngineChoice,
+    /// `[solver.petsc]`: the PETSc engine's options.
+    pub petsc: PetscOptions,
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, Default, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum EngineChoice {
+    #[default]
+    Faer,
+    Petsc,
+}
+
+/// `[solver.petsc]`.
+#[derive(Clone, Debug, Deserialize, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct PetscOptions {
+    /// PETSc's own options, as on its command line (`"-ksp_type cg -pc_type gamg"`); added to
+    /// those of the `PETSC_OPTIONS` environment variable, and taking precedence over them.
+    pub options: Option<Spanned<String>>,
 }
 
 #[derive(Clone, Copy, Debug, Deserialize, Default, PartialEq, Eq)]

@@ -26,6 +26,7 @@ pub mod material;
 pub mod mesh;
 pub mod model;
 pub mod output;
+pub mod parallel;
 pub mod plot;
 pub mod solver;
 pub mod study;

@@ -167,6 +167,50 @@ fn main() -> ExitCode {
         eprintln!("error: {e}");
         return ExitCode::FAILURE;
     }
+    if let Err(e) = start_ranks() {
+        eprintln!("error: {e}");
+        return ExitCode::FAILURE;
+    }
+    let code = command(cli);
+    #[cfg(feature = "petsc")]
+    tmc::parallel::petsc::finish();
+    code
+}
+
+/// Under `mpirun -n N` (N > 1): MPI started, the cores shared among the ranks (unless
+/// `RAYON_NUM_THREADS` says otherwise), progress and errors from rank 0 only.
+fn start_ranks() -> Result<(), String> {
+    let Some(n) = tmc::parallel::launched_size().filter(|&n| n > 1) else {
+        return Ok(());
+    };
+    #[cfg(not(feature = "petsc"))]
+    return Err(format!("mpirun -n {n}: {}", tmc::parallel::NOT_BUILT));
+    #[cfg(feature = "petsc")]
+    {
+        let ranks = tmc::parallel::petsc::start_mpi();
+        if std::env::var_os("RAYON_NUM_THREADS").is_none() {
+            let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
+            let threads = (cores / n).max(1);
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build_global()
+                .map_err(|e| e.to_string())?;
+        }
+        if !ranks.is_root() {
+            SILENT.store(true, std::sync::atomic::Ordering::Relaxed);
+        }
+        Ok(())
+    }
+}
+
+/// Set on ranks other than 0: they print nothing (rank 0 speaks for the run).
+static SILENT: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+fn silent() -> bool {
+    SILENT.load(std::sync::atomic::Ordering::Relaxed)
+}
+
+fn command(cli: Cli) -> ExitCode {
     match cli.command {
         Command::Study {
             study,
@@ -238,7 +282,7 @@ fn main() -> ExitCode {
             tmc::driver::stop_on_signals();
             let opts = SolveOptions {
                 out_dir: output,
-                quiet,
+                quiet: quiet || silent(),
                 verbose,
                 idle_threads,
                 sets: set,
@@ -315,7 +359,9 @@ fn check_command(case: &std::path::Path, sets: Vec<(String, String)>) -> ExitCod
             ExitCode::SUCCESS
         }
         Err(e) => {
-            print_chain(&e);
+            if !silent() {
+                print_chain(&e);
+            }
             ExitCode::FAILURE
         }
     }
@@ -356,7 +402,9 @@ fn study_command(study: &std::path::Path, output: Option<PathBuf>, quiet: bool) 
             }
         }
         Err(e) => {
-            print_chain(&e);
+            if !silent() {
+                print_chain(&e);
+            }
             ExitCode::FAILURE
         }
     }
@@ -388,7 +436,9 @@ fn solve_command(case: &std::path::Path, opts: &SolveOptions) -> ExitCode {
             ExitCode::SUCCESS
         }
         Err(e) => {
-            print_chain(&e);
+            if !silent() {
+                print_chain(&e);
+            }
             ExitCode::FAILURE
         }
     }

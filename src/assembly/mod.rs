@@ -26,8 +26,10 @@ use crate::dofs::{Layout, Pattern, build_pattern};
 use crate::element::RefElement;
 use crate::kernel::friction::HISTORY_PER_POINT;
 use crate::kernel::{Active, KernelError};
+use crate::mesh::partition::Partition;
 use crate::mesh::{Block, centroid};
 use crate::model::{FacetBlock, Model};
+use crate::parallel::Ranks;
 use cells::{Arrays, Cells, SlabView};
 use history::{PointHistory, Slab};
 use rayon::prelude::*;
@@ -103,7 +105,75 @@ fn point(p: &[f64; 3]) -> String {
     format!("({:.4}, {:.4}, {:.4})", p[0], p[1], p[2])
 }
 
+/// Separates the fields of an error sent to the other ranks.
+const SEP: char = '\u{1f}';
+
 impl AssemblyError {
+    /// The error as text, for the other ranks ([`AssemblyError::decode`] reads it back).
+    fn encode(&self) -> String {
+        let f = |v: &[String]| v.join(&SEP.to_string());
+        match self {
+            AssemblyError::Inverted {
+                region,
+                J,
+                cell,
+                at,
+            } => f(&[
+                "inverted".into(),
+                region.clone(),
+                J.to_string(),
+                cell.to_string(),
+                at[0].to_string(),
+                at[1].to_string(),
+                at[2].to_string(),
+            ]),
+            AssemblyError::BadMesh { region, cell, at } => f(&[
+                "bad_mesh".into(),
+                region.clone(),
+                cell.to_string(),
+                at[0].to_string(),
+                at[1].to_string(),
+                at[2].to_string(),
+            ]),
+            AssemblyError::Singular { region } => f(&["singular".into(), region.clone()]),
+            AssemblyError::BadFacet { group, facet } => {
+                f(&["bad_facet".into(), group.clone(), facet.to_string()])
+            }
+            AssemblyError::NotFinite => "not_finite".into(),
+        }
+    }
+
+    /// The error [`AssemblyError::encode`] wrote (not finite if the text is not one).
+    fn decode(text: &str) -> AssemblyError {
+        let v: Vec<&str> = text.split(SEP).collect();
+        let num = |i: usize| {
+            v.get(i)
+                .and_then(|s| s.parse::<f64>().ok())
+                .unwrap_or(f64::NAN)
+        };
+        let int = |i: usize| v.get(i).and_then(|s| s.parse::<usize>().ok()).unwrap_or(0);
+        let name = || v.get(1).map_or(String::new(), |s| s.to_string());
+        match v[0] {
+            "inverted" => AssemblyError::Inverted {
+                region: name(),
+                J: num(2),
+                cell: int(3),
+                at: [num(4), num(5), num(6)],
+            },
+            "bad_mesh" => AssemblyError::BadMesh {
+                region: name(),
+                cell: int(2),
+                at: [num(3), num(4), num(5)],
+            },
+            "singular" => AssemblyError::Singular { region: name() },
+            "bad_facet" => AssemblyError::BadFacet {
+                group: name(),
+                facet: int(2),
+            },
+            _ => AssemblyError::NotFinite,
+        }
+    }
+
     /// The state is outside the admissible set (a shorter update may be fine), as opposed to a
     /// broken mesh.
     pub fn is_inadmissible(&self) -> bool {
@@ -154,6 +224,11 @@ pub struct Assembler {
     pub history: PointHistory,
     /// Time of the last accepted (committed) state: a step to t is Δt = t − this long.
     t_committed: f64,
+    /// This rank and the ranks of the cells (`None`: one rank, every cell): a rank runs its
+    /// own cells, then the ranks sum their residuals and agree on errors and statistics, so
+    /// that every rank holds the whole residual; the tangent keeps this rank's cells' part.
+    pub ranks: Ranks,
+    partition: Option<Partition>,
 }
 
 /// Length of the pieces the whole-array passes below are cut into, one task each.
@@ -167,6 +242,15 @@ fn all_finite(v: &[f64]) -> bool {
 
 impl Assembler {
     pub fn new(model: &Model) -> Assembler {
+        Self::with_ranks(model, Ranks::SERIAL, None)
+    }
+
+    /// The assembler of rank `ranks.rank`: its cells are those `partition` gives it.
+    pub fn distributed(model: &Model, ranks: Ranks, partition: Partition) -> Assembler {
+        Self::with_ranks(model, ranks, Some(partition))
+    }
+
+    fn with_ranks(model: &Model, ranks: Ranks, partition: Option<Partition>) -> Assembler {
         let pattern = build_pattern(&model.mesh, &model.dofs, &model.cons);
         assert!(
             pattern.nnz() < FIRST as usize,
@@ -192,7 +276,19 @@ impl Assembler {
             let bi = first_cell.partition_point(|&f| f <= g) - 1;
             block(model, bi).0.cell((g - first_cell[bi]) as usize)
         };
-        let cells = (0..*first_cell.last().unwrap()).collect();
+        let mine = |bi: usize, c: usize| {
+            partition
+                .as_ref()
+                .is_none_or(|p| block_rank(model, p, bi, c) == ranks.rank)
+        };
+        let cells = (0..n_blocks(model))
+            .flat_map(|bi| {
+                let first = first_cell[bi];
+                (0..block(model, bi).0.n_cells())
+                    .filter(move |&c| mine(bi, c))
+                    .map(move |c| first + c as u32)
+            })
+            .collect();
         let (mut mark, mut stamp) = (vec![0u32; mesh.coords.len()], 0);
         let schedule = Schedule::build(&nodes, &mesh.coords, cells, depth, &mut mark, &mut stamp);
         let mut order = Vec::new();
@@ -219,7 +315,38 @@ impl Assembler {
             schedule,
             first_cell,
             prefetch: true,
+            ranks,
+            partition,
         }
+    }
+
+    /// Whether cell `c` of mesh cell block `block` is assembled here.
+    pub fn owns_cell(&self, block: usize, c: usize) -> bool {
+        self.partition
+            .as_ref()
+            .is_none_or(|p| p.cell_rank[block][c] as usize == self.ranks.rank)
+    }
+
+    /// The nodes this rank's cells and facets touch (`None` on one rank: all): the tangent
+    /// entries it writes are between these nodes.
+    pub fn nodes_touched(&self, model: &Model) -> Option<Vec<bool>> {
+        let p = self.partition.as_ref()?;
+        let mut touched = vec![false; model.mesh.coords.len()];
+        for bi in 0..n_blocks(model) {
+            let blk = block(model, bi).0;
+            for c in (0..blk.n_cells()).filter(|&c| block_rank(model, p, bi, c) == self.ranks.rank)
+            {
+                for &n in blk.cell(c) {
+                    touched[n] = true;
+                }
+            }
+        }
+        Some(touched)
+    }
+
+    /// The partition of a distributed run.
+    pub fn partition(&self) -> Option<&Partition> {
+        self.partition.as_ref()
     }
 
     /// A step to time `t` was accepted at the state last assembled: its history becomes the
@@ -328,11 +455,22 @@ impl Assembler {
             }
             Ok(stats)
         };
-        let stats = self.schedule.run(&run, &combine)?;
-        // the tangent's entries were checked as they were written
-        let finite = all_finite(&self.r_full) && all_finite(&self.lift);
-        if !finite {
-            return Err(AssemblyError::NotFinite);
+        let stats = self.schedule.run(&run, &combine).and_then(|stats| {
+            // the tangent's entries were checked as they were written
+            if all_finite(&self.r_full) && all_finite(&self.lift) {
+                Ok(stats)
+            } else {
+                Err(AssemblyError::NotFinite)
+            }
+        });
+        let ranks = self.ranks;
+        let mut stats = ranks.agree(stats, AssemblyError::encode, AssemblyError::decode)?;
+        if !ranks.is_serial() {
+            ranks.sum_into(&mut self.r_full);
+            ranks.sum_into(&mut self.lift);
+            stats.min_J_solid = ranks.min(stats.min_J_solid);
+            stats.min_J_medium = ranks.min(stats.min_J_medium);
+            stats.energy = ranks.sum(stats.energy);
         }
         let mut fe = vec![0.0; model.dofs.n_dofs];
         model.f_ext(t, &mut fe);
@@ -465,6 +603,22 @@ fn block(model: &Model, bi: usize) -> (&Block, Layout) {
     }
 }
 
+/// The rank of cell `c` of assembler block `bi`: a facet's from the facets' ranks, any other's
+/// from the cells' (capacity and friction blocks run cells of the mesh's cell blocks again).
+fn block_rank(model: &Model, p: &Partition, bi: usize, c: usize) -> usize {
+    let mesh_block = if let Some(fi) = friction_index(model, bi) {
+        model.friction_blocks[fi].block
+    } else if let Some(ci) = capacity_index(model, bi) {
+        model.capacity_blocks[ci].block
+    } else if let Some(info) = model.blocks.get(bi) {
+        info.block
+    } else {
+        let fb = &model.facet_blocks[bi - model.blocks.len()];
+        return p.facet_rank[fb.block][c] as usize;
+    };
+    p.cell_rank[mesh_block][c] as usize
+}
+
 /// Quadrature points per cell of a block.
 fn points_per_cell(blk: &Block) -> usize {
     crate::with_cell!(blk.kind, |N, D, E| <E as RefElement<N, D>>::quadrature()
@@ -561,16 +715,17 @@ fn cell_error_in(region: &str, e: KernelError, cell: usize, at: [f64; 3]) -> Ass
 }
 
 /// The work dissipated by friction so far, per friction block (indexed like
-/// `model.friction_blocks`), from the committed history: Σ ∫ w dV.
-pub fn friction_work(model: &Model, history: &PointHistory) -> Vec<f64> {
+/// `model.friction_blocks`), from the committed history: Σ ∫ w dV (of every rank's cells).
+pub fn friction_work(model: &Model, asm: &Assembler) -> Vec<f64> {
     let nc = model.capacity_blocks.len();
-    model
+    let mut work: Vec<f64> = model
         .friction_blocks
         .iter()
-        .zip(&history.slabs[nc..])
+        .zip(&asm.history.slabs[nc..])
         .map(|(fb, slab)| {
             let blk = &model.mesh.cells[fb.block];
             (0..blk.n_cells())
+                .filter(|&c| asm.owns_cell(fb.block, c))
                 .map(|c| {
                     let h = &slab.committed[c * slab.width..(c + 1) * slab.width];
                     // per reference volume: the cell's undeformed coordinates are enough
@@ -583,7 +738,9 @@ pub fn friction_work(model: &Model, history: &PointHistory) -> Vec<f64> {
                 })
                 .sum()
         })
-        .collect()
+        .collect();
+    asm.ranks.sum_into(&mut work);
+    work
 }
 
 /// Heat supplied to the body through each convecting group at the state `x`, indexed like

@@ -18,6 +18,7 @@ use crate::mesh::msh::{MshError, read_msh};
 use crate::model::{Model, build};
 use crate::output::probes::{self, Probe};
 use crate::output::{OutputError, RunFolder, werr};
+use crate::parallel::Ranks;
 use crate::solver::idle::IdleThreads;
 use crate::solver::linear::LinearError;
 use run::Run;
@@ -182,6 +183,10 @@ fn model_on(case: &Case, mesh: Mesh, quiet: bool) -> Result<(Model, Vec<Probe>),
 pub fn run(case_path: &Path, opts: &SolveOptions) -> Result<Summary, SolveError> {
     let start = Instant::now();
     let case = Case::read(case_path)?.with_sets(&opts.sets)?;
+    let ranks = Ranks::world();
+    if !ranks.is_serial() {
+        return run_ranks(&case, opts, ranks, start);
+    }
     let out_dir = opts
         .out_dir
         .clone()
@@ -192,15 +197,89 @@ pub fn run(case_path: &Path, opts: &SolveOptions) -> Result<Summary, SolveError>
     }
     let (mut model, probes, staged) = checked_model(&case, &out_dir, opts.quiet)?;
     folder.replace_previous()?;
+    commit_mesh(&mut folder, &mut model, staged)?;
+    solve_model(&case, model, &probes, folder, opts, start, None)
+}
+
+/// The mesh meshed for this run, if any, moved to `mesh.msh` in the run's folder: errors so far
+/// named the .geo; from now on the mesh is the file written.
+fn commit_mesh(
+    folder: &mut RunFolder,
+    model: &mut Model,
+    staged: Option<StagedMesh>,
+) -> Result<(), SolveError> {
     if let Some(staged) = staged {
-        // errors so far named the .geo; from now on the mesh is the file written
         folder.record("mesh.msh")?;
-        model.mesh.source = out_dir.join("mesh.msh");
+        model.mesh.source = folder.dir().join("mesh.msh");
         staged
             .commit(&model.mesh.source)
             .map_err(|e| SolveError::Output(werr(&model.mesh.source, e)))?;
     }
-    solve_model(&case, model, &probes, folder, opts, start, None)
+    Ok(())
+}
+
+/// A run on several ranks. Rank 0 does what a serial run does before it steps (takes the
+/// output folder, meshes, checks the case and the model) and then tells the others the mesh
+/// to read (the one it wrote for a `.geo`), or that it failed; every rank then builds the same
+/// model, and they step together, rank 0 writing the files.
+fn run_ranks(
+    case: &Case,
+    opts: &SolveOptions,
+    ranks: Ranks,
+    start: Instant,
+) -> Result<Summary, SolveError> {
+    let out_dir = opts
+        .out_dir
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("results").join(case.name()));
+    let root = if ranks.is_root() {
+        let setup = (|| {
+            if opts.restart {
+                return Err(SolveError::Setup(
+                    "--restart continues a run on one process (runs on several ranks write no \
+                     checkpoint)"
+                        .into(),
+                ));
+            }
+            let mut folder = RunFolder::open(&out_dir)?;
+            let (mut model, probes, staged) = checked_model(case, &out_dir, opts.quiet)?;
+            folder.replace_previous()?;
+            commit_mesh(&mut folder, &mut model, staged)?;
+            Ok((model, probes, folder))
+        })();
+        Some(setup)
+    } else {
+        None
+    };
+    // rank 0's verdict: the mesh file to read, or empty when it failed
+    let mut mesh_file = match &root {
+        Some(Ok((model, ..))) => model
+            .mesh
+            .source
+            .to_string_lossy()
+            .into_owned()
+            .into_bytes(),
+        _ => Vec::new(),
+    };
+    ranks.broadcast(0, &mut mesh_file);
+    let (model, probes, folder) = match root {
+        Some(setup) => {
+            let (model, probes, folder) = setup?;
+            (model, probes, Some(folder))
+        }
+        None if mesh_file.is_empty() => {
+            return Err(SolveError::Setup("rank 0 failed to set the run up".into()));
+        }
+        None => {
+            let mut mesh = read_msh(Path::new(&*String::from_utf8_lossy(&mesh_file)))?;
+            mesh.source = PathBuf::from(String::from_utf8_lossy(&mesh_file).into_owned());
+            let (model, probes) = model_on(case, mesh, true)?;
+            (model, probes, None)
+        }
+    };
+    let mut run = Run::new(case, &model, &probes, folder, out_dir, opts, start)?;
+    run.record_initial()?;
+    step_to_end(run)
 }
 
 /// Continue the run in `folder` from its checkpoint, on the mesh it ran on (the folder's
@@ -234,13 +313,19 @@ fn solve_model(
     start: Instant,
     from: Option<checkpoint::Checkpoint>,
 ) -> Result<Summary, SolveError> {
-    let mut run = Run::new(case, &model, probes, folder, opts, start)?;
+    let out_dir = folder.dir().to_owned();
+    let mut run = Run::new(case, &model, probes, Some(folder), out_dir, opts, start)?;
     match from {
         Some(cp) => run.resume(cp),
         None => run.record_initial()?,
     }
+    step_to_end(run)
+}
+
+/// Step until the end of the load path, or a stop.
+fn step_to_end(mut run: Run) -> Result<Summary, SolveError> {
     while !run.ctl.done() {
-        if interrupted() {
+        if run.ranks().max(f64::from(u8::from(interrupted()))) > 0.0 {
             return run.interrupt();
         }
         let target = run.ctl.target();

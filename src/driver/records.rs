@@ -83,6 +83,14 @@ pub struct Summary {
     pub units: BTreeMap<String, String>,
     /// What each column of history.csv with a physical dimension measures: column → quantity.
     pub quantities: BTreeMap<String, String>,
+    /// Processes the run ran on (1 unless started by `mpirun`).
+    pub ranks: usize,
+    /// "faer" or "petsc".
+    pub engine: String,
+    /// On PETSc, its solver and preconditioner as `ksp_type/pc_type`.
+    pub petsc_solver: Option<String>,
+    /// On several ranks, each rank's peak resident memory (MB); `peak_memory_mb` is rank 0's.
+    pub peak_memory_mb_ranks: Option<Vec<f64>>,
 }
 
 impl Summary {
@@ -143,6 +151,10 @@ impl Summary {
             heat_in: None,
             friction_work: None,
             friction_heat: None,
+            ranks: 1,
+            engine: "faer".into(),
+            petsc_solver: None,
+            peak_memory_mb_ranks: None,
             output: out_dir.display().to_string(),
             units: Quantity::ALL
                 .into_iter()

@@ -7,11 +7,12 @@ use super::records::{HistoryLayout, Reactions, StepRow, Summary, group_flows, pe
 use super::strategy::{Strategy, choose_linear, choose_strategy, describe, symmetric_tangent};
 use super::{SolveError, SolveOptions};
 use crate::assembly::{Assembler, AssemblyError, convection_heat, friction_work, heat_stored};
-use crate::case::Case;
+use crate::case::{Case, EngineChoice};
 use crate::dofs::{Field, equation_structure};
 use crate::model::Model;
 use crate::output::probes::Probe;
 use crate::output::{History, RunFolder, Series, write_atomic};
+use crate::parallel::Ranks;
 use crate::solver::linear::{LinearKind, LinearSolver};
 use crate::solver::newton::{Newton, Part, StepFailure, StepReport};
 use crate::solver::stepping::Controller;
@@ -43,7 +44,8 @@ pub(super) struct Run<'a> {
     model: &'a Model,
     probes: &'a [Probe],
     opts: &'a SolveOptions,
-    folder: RunFolder,
+    /// The output folder, on the rank that writes (rank 0); `None` on the others.
+    folder: Option<RunFolder>,
     out_dir: PathBuf,
     start: Instant,
     asm: Assembler,
@@ -101,9 +103,13 @@ impl Plan {
                 .into());
         }
         let strategy = choose_strategy(&case.file.solver, &model.physics);
-        let asm = Assembler::new(model);
         let steps = &case.file.steps;
         let mut newton = Newton::new(model, steps.tol, steps.max_iter);
+        let ranks = Ranks::world();
+        if case.file.solver.engine == EngineChoice::Petsc || !ranks.is_serial() {
+            return Self::on_petsc(case, model, strategy, newton);
+        }
+        let asm = Assembler::new(model);
         newton.idle = opts.idle_threads;
         let solvers = Self::solvers(model, &asm, &newton, strategy, kind)?;
         Ok(Plan {
@@ -112,6 +118,95 @@ impl Plan {
             newton,
             solvers,
         })
+    }
+
+    /// The plan on the PETSc engine: the mesh cut into one part per rank, each rank's
+    /// assembler running its part, PETSc systems for the strategy's parts (symmetric ones
+    /// marked so, for Cholesky or CG).
+    #[cfg(feature = "petsc")]
+    fn on_petsc(
+        case: &Case,
+        model: &Model,
+        strategy: Strategy,
+        mut newton: Newton,
+    ) -> Result<Plan, SolveError> {
+        use crate::mesh::partition::Partition;
+        use crate::parallel::petsc;
+        use crate::solver::petsc::Ownership;
+        let solver = &case.file.solver;
+        if solver.linear != crate::case::LinearChoice::Auto {
+            let span = case.file.mesh.span();
+            return Err(case
+                .error::<()>(
+                    span,
+                    "[solver] linear chooses faer's solvers; on the PETSc engine choose with \
+                     [solver.petsc] options (e.g. \"-ksp_type gmres -pc_type gamg\")",
+                )
+                .unwrap_err()
+                .into());
+        }
+        let engine = |e: petsc::PetscError| SolveError::Setup(e.to_string());
+        let ranks = petsc::start().map_err(engine)?;
+        if let Some(o) = &solver.petsc.options {
+            petsc::insert_options(o.get_ref()).map_err(|e| {
+                let msg = format!("[solver.petsc] options: {e}");
+                SolveError::from(case.error::<()>(o.span(), msg).unwrap_err())
+            })?;
+        }
+        let asm = if ranks.is_serial() {
+            Assembler::new(model)
+        } else {
+            let partition = Partition::new(&model.mesh, ranks.size)
+                .map_err(|e| SolveError::Setup(format!("mpirun -n {}: {e}", ranks.size)))?;
+            Assembler::distributed(model, ranks, partition)
+        };
+        // PETSc's calls stay on this thread: no idle-thread runner around the solves
+        newton.idle = crate::solver::idle::IdleThreads::Sleep;
+        let structure = equation_structure(&model.dofs, &model.cons);
+        let touched = asm.nodes_touched(model);
+        let own = Ownership {
+            ranks,
+            node_rank: asm.partition().map(|p| &p.node_rank[..]),
+            touched: touched.as_deref(),
+        };
+        let system = |p: Part, symmetric: bool| -> Result<(Part, LinearSolver), SolveError> {
+            let eqs = newton.equations(p);
+            let s = LinearSolver::petsc(&asm.pattern, &structure, &eqs, &own, symmetric)?;
+            Ok((p, s))
+        };
+        let solvers = match strategy {
+            Strategy::OneWay => vec![system(Part::Mechanics, true)?, system(Part::Heat, true)?],
+            _ => vec![system(Part::All, symmetric_tangent(&model.physics))?],
+        };
+        Ok(Plan {
+            strategy,
+            asm,
+            newton,
+            solvers,
+        })
+    }
+
+    #[cfg(not(feature = "petsc"))]
+    fn on_petsc(
+        case: &Case,
+        _model: &Model,
+        _strategy: Strategy,
+        _newton: Newton,
+    ) -> Result<Plan, SolveError> {
+        if !Ranks::world().is_serial() || crate::parallel::launched_size().unwrap_or(1) > 1 {
+            return Err(SolveError::Setup(crate::parallel::NOT_BUILT.into()));
+        }
+        let span = case.file.mesh.span();
+        Err(case
+            .error::<()>(
+                span,
+                format!(
+                    "[solver] engine = \"petsc\": {}",
+                    crate::parallel::NOT_BUILT
+                ),
+            )
+            .unwrap_err()
+            .into())
     }
 
     /// The linear solvers of `strategy`: one for the whole system of `kind`, or symmetric block
@@ -146,11 +241,11 @@ impl<'a> Run<'a> {
         case: &'a Case,
         model: &'a Model,
         probes: &'a [Probe],
-        mut folder: RunFolder,
+        mut folder: Option<RunFolder>,
+        out_dir: PathBuf,
         opts: &'a SolveOptions,
         start: Instant,
     ) -> Result<Run<'a>, SolveError> {
-        let out_dir = folder.dir().to_owned();
         let Plan {
             strategy,
             asm,
@@ -167,10 +262,18 @@ impl<'a> Run<'a> {
             "summary.json",
             &format!("{}.pvd", case.name()),
         ] {
-            folder.record(name)?;
+            if let Some(folder) = &mut folder {
+                folder.record(name)?;
+            }
         }
         let history = History::new(&out_dir.join("history.csv"), &layout.columns);
-        let summary = Summary::start(case, model, solvers[0].1.kind, strategy, &layout, &out_dir);
+        let mut summary =
+            Summary::start(case, model, solvers[0].1.kind, strategy, &layout, &out_dir);
+        summary.ranks = asm.ranks.size;
+        if let Some(solver) = solvers[0].1.engine_solver() {
+            summary.engine = "petsc".into();
+            summary.petsc_solver = Some(solver);
+        }
         let series = Series::new(&out_dir, &case.name(), model);
         Ok(Run {
             model,
@@ -240,8 +343,10 @@ impl<'a> Run<'a> {
             wall: self.start.elapsed().as_secs_f64(),
             ..StepRow::default()
         };
-        self.history
-            .row(&self.layout.row(&row, &self.probe_values(), &r0))?;
+        if self.folder.is_some() {
+            self.history
+                .row(&self.layout.row(&row, &self.probe_values(), &r0))?;
+        }
         self.totals.reactions = r0;
         self.totals.f_last = self.forces(0.0);
         self.save_checkpoint()
@@ -275,6 +380,11 @@ impl<'a> Run<'a> {
                 Err(err)
             }
         }
+    }
+
+    /// The run's ranks (their decisions to stop are taken together).
+    pub(super) fn ranks(&self) -> Ranks {
+        self.asm.ranks
     }
 
     /// The probes at the last accepted state.
@@ -390,7 +500,9 @@ impl<'a> Run<'a> {
         if self.ctl.accepted.is_multiple_of(self.every) {
             self.write_step()?;
         }
-        self.history.row(&values)?;
+        if self.folder.is_some() {
+            self.history.row(&values)?;
+        }
         self.save_checkpoint()?;
         self.report_step(&row, &rep);
         Ok(())
@@ -398,6 +510,10 @@ impl<'a> Run<'a> {
 
     /// `restart.json` of the last accepted state (after its `.vtu` and history row).
     fn save_checkpoint(&mut self) -> Result<(), SolveError> {
+        // on several ranks each holds its own cells' history per point: no one file has it all
+        if self.folder.is_none() || !self.asm.ranks.is_serial() {
+            return Ok(());
+        }
         let tot = &self.totals;
         let finite = |v: f64| v.is_finite().then_some(v);
         let cp = Checkpoint {
@@ -434,7 +550,9 @@ impl<'a> Run<'a> {
             history: self.history.text().to_string(),
             wall: self.start.elapsed().as_secs_f64(),
         };
-        self.folder.record(checkpoint::FILE)?;
+        if let Some(folder) = &mut self.folder {
+            folder.record(checkpoint::FILE)?;
+        }
         write_atomic(&Checkpoint::path(&self.out_dir), cp.to_json().as_bytes())?;
         Ok(())
     }
@@ -508,7 +626,7 @@ impl<'a> Run<'a> {
     /// The work friction dissipated and the heat it made up to the step just committed.
     fn account_friction(&mut self) {
         let model = self.model;
-        let works = friction_work(model, &self.asm.history);
+        let works = friction_work(model, &self.asm);
         let heat = works
             .iter()
             .zip(&model.friction_blocks)
@@ -569,8 +687,10 @@ impl<'a> Run<'a> {
         if self.written == Some(step) {
             return Ok(());
         }
-        self.folder.record(&Series::file_name(step))?;
-        self.series.write(self.model, step, &self.x, self.ctl.t)?;
+        if let Some(folder) = &mut self.folder {
+            folder.record(&Series::file_name(step))?;
+            self.series.write(self.model, step, &self.x, self.ctl.t)?;
+        }
         self.written = Some(step);
         Ok(())
     }
@@ -659,6 +779,13 @@ impl<'a> Run<'a> {
         s.assembly_seconds = spent.assembly + tot.t_reactions;
         s.solver_seconds = spent.solve;
         s.peak_memory_mb = peak_memory_mb();
+        let ranks = self.asm.ranks;
+        if !ranks.is_serial() {
+            let mut each = vec![0.0; ranks.size];
+            each[ranks.rank] = s.peak_memory_mb.unwrap_or(f64::NAN);
+            ranks.sum_into(&mut each);
+            s.peak_memory_mb_ranks = Some(each);
+        }
         s.probes = self
             .probes
             .iter()
@@ -669,8 +796,10 @@ impl<'a> Run<'a> {
         s.min_J_solid = finite(tot.min_J.0);
         s.min_J_medium = finite(tot.min_J.1);
         s.min_J = finite(tot.min_J.0.min(tot.min_J.1)).unwrap_or(1.0);
-        let json = serde_json::to_string_pretty(&*s).expect("serialisable");
-        write_atomic(&self.out_dir.join("summary.json"), json.as_bytes())?;
+        if self.folder.is_some() {
+            let json = serde_json::to_string_pretty(&*s).expect("serialisable");
+            write_atomic(&self.out_dir.join("summary.json"), json.as_bytes())?;
+        }
         Ok(())
     }
 

@@ -6,6 +6,7 @@ pub mod faces;
 pub mod geo_text;
 pub mod gmsh;
 pub mod msh;
+pub mod partition;
 
 use std::path::PathBuf;
 

@@ -31,6 +31,8 @@ pub enum LinearKind {
     Lu,
     Ldlt,
     BlockGmres,
+    /// PETSc's KSP, chosen by its options (`[solver] engine = "petsc"`, or several ranks).
+    Petsc,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -41,6 +43,9 @@ pub enum LinearError {
     Factor(String),
     #[error("GMRES did not converge in {iterations} iterations (relative residual {residual:.1e})")]
     Krylov { iterations: usize, residual: f64 },
+    /// The distributed engine failed, or was asked for without being built in.
+    #[error("{0}")]
+    Engine(String),
 }
 
 /// Relative residual at which GMRES stops, and its iteration budget.
@@ -70,6 +75,8 @@ enum Backend {
     Lu(Box<LuFactor>),
     Ldlt(Box<SymFactor>),
     BlockGmres(Box<BlockTriangular>),
+    #[cfg(feature = "petsc")]
+    Petsc(Box<super::petsc::PetscSystem>),
 }
 
 impl LinearSolver {
@@ -79,6 +86,8 @@ impl LinearSolver {
     pub fn factor_entries(&self) -> Option<usize> {
         match &self.backend {
             Backend::Lu(_) => None,
+            #[cfg(feature = "petsc")]
+            Backend::Petsc(_) => None,
             Backend::Ldlt(f) => Some(f.symbolic.len_val()),
             Backend::BlockGmres(b) => Some(
                 [&b.fm, &b.ft]
@@ -100,6 +109,11 @@ impl LinearSolver {
             }
             LinearKind::Ldlt => return Self::block_ldlt(p, s, &(0..p.n).collect::<Vec<_>>()),
             LinearKind::BlockGmres => Backend::BlockGmres(Box::new(BlockTriangular::new(p, s)?)),
+            LinearKind::Petsc => {
+                return Err(LinearError::Engine(
+                    "the PETSc engine is built by LinearSolver::petsc".into(),
+                ));
+            }
         };
         Ok(Self::with(kind, backend))
     }
@@ -115,6 +129,34 @@ impl LinearSolver {
         let sub = SubMatrix::new(p, eqs, eqs);
         let backend = Backend::Ldlt(Box::new(SymFactor::new(sub, &nodes, Precision::Double)?));
         Ok(Self::with(LinearKind::Ldlt, backend))
+    }
+
+    /// The equations `eqs` (increasing) solved on PETSc, each rank holding the rows of the
+    /// nodes it owns: `factor` takes this rank's part of the whole system's values, `solve`
+    /// vectors of `eqs.len()` (the same on every rank).
+    #[cfg(feature = "petsc")]
+    pub fn petsc(
+        p: &Pattern,
+        s: &Structure,
+        eqs: &[usize],
+        own: &super::petsc::Ownership,
+        symmetric: bool,
+    ) -> Result<LinearSolver, LinearError> {
+        let system = super::petsc::PetscSystem::new(p, s, eqs, own, symmetric)
+            .map_err(|e| LinearError::Engine(e.0))?;
+        Ok(Self::with(
+            LinearKind::Petsc,
+            Backend::Petsc(Box::new(system)),
+        ))
+    }
+
+    /// PETSc's solver and preconditioner (`ksp_type/pc_type`), on the PETSc engine.
+    pub fn engine_solver(&self) -> Option<String> {
+        match &self.backend {
+            #[cfg(feature = "petsc")]
+            Backend::Petsc(p) => Some(p.describe()),
+            _ => None,
+        }
     }
 
     fn with(kind: LinearKind, backend: Backend) -> LinearSolver {
@@ -142,6 +184,8 @@ impl LinearSolver {
                 f.factor()?;
             }
             Backend::BlockGmres(b) => b.factor(values)?,
+            #[cfg(feature = "petsc")]
+            Backend::Petsc(p) => p.factor(values).map_err(|e| LinearError::Engine(e.0))?,
         }
         Ok(())
     }
@@ -159,6 +203,12 @@ impl LinearSolver {
             Backend::Ldlt(f) => f.solve(b),
             Backend::BlockGmres(bt) => {
                 let its = bt.solve(b)?;
+                self.krylov_last = its;
+                self.krylov_count += its;
+            }
+            #[cfg(feature = "petsc")]
+            Backend::Petsc(p) => {
+                let its = p.solve(b).map_err(|e| LinearError::Engine(e.0))?;
                 self.krylov_last = its;
                 self.krylov_count += its;
             }
@@ -448,10 +498,9 @@ fn nested_dissection(p: &SymbolicSparseColMat<usize>, node: &[u32]) -> (Vec<usiz
         let mut perm = vec![0i32; nv];
         let mut iperm = vec![0i32; nv];
         let mut options = [-1i32; metis_sys::METIS_NOPTIONS as usize];
-        // METIS (its GKlib random generator and memory core) keeps process-wide statics:
-        // concurrent calls race, giving orderings that depend on other threads, or crash.
-        static METIS: std::sync::Mutex<()> = std::sync::Mutex::new(());
-        let _one_at_a_time = METIS.lock().unwrap_or_else(|e| e.into_inner());
+        let _one_at_a_time = crate::mesh::partition::METIS
+            .lock()
+            .unwrap_or_else(|e| e.into_inner());
         // SAFETY: METIS reads xadj/adjncy (a valid CSR graph without self loops) and writes
         // nv entries of perm and iperm; options is set to defaults (−1) before the call.
         let status = unsafe {

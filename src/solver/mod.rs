@@ -5,4 +5,6 @@
 pub mod idle;
 pub mod linear;
 pub mod newton;
+#[cfg(feature = "petsc")]
+pub mod petsc;
 pub mod stepping;

@@ -1,0 +1,193 @@
+//! The PETSc calls tmc makes, declared by hand against the installed headers (PETSc 3.18,
+//! `petscsys.h`, `petscvec.h`, `petscmat.h`, `petscksp.h`, `petscpc.h`, `petscis.h`,
+//! `petscoptions.h`, `petscerror.h`). `build.rs` checks the scalar and index sizes assumed here.
+#![allow(non_camel_case_types, dead_code)]
+
+use mpi::ffi::MPI_Comm;
+use std::os::raw::{c_char, c_int, c_void};
+
+#[cfg(not(petsc_int64))]
+pub type PetscInt = i32;
+#[cfg(petsc_int64)]
+pub type PetscInt = i64;
+pub type PetscScalar = f64;
+pub type PetscReal = f64;
+pub type PetscErrorCode = c_int;
+/// `PetscBool` is a C enum: `PETSC_FALSE` = 0, `PETSC_TRUE` = 1.
+pub type PetscBool = c_int;
+pub const PETSC_FALSE: PetscBool = 0;
+pub const PETSC_TRUE: PetscBool = 1;
+
+pub type Mat = *mut c_void;
+pub type Vec = *mut c_void;
+pub type KSP = *mut c_void;
+pub type PC = *mut c_void;
+pub type IS = *mut c_void;
+pub type VecScatter = *mut c_void;
+pub type MatNullSpace = *mut c_void;
+pub type PetscOptions = *mut c_void;
+
+/// `InsertMode`.
+pub const INSERT_VALUES: c_int = 1;
+pub const ADD_VALUES: c_int = 2;
+/// `MatAssemblyType`.
+pub const MAT_FINAL_ASSEMBLY: c_int = 0;
+/// `ScatterMode`.
+pub const SCATTER_FORWARD: c_int = 0;
+/// `PetscCopyMode`.
+pub const PETSC_COPY_VALUES: c_int = 0;
+/// `MatOption`.
+pub const MAT_SYMMETRIC: c_int = 1;
+pub const MAT_SYMMETRY_ETERNAL: c_int = 10;
+pub const MAT_NEW_NONZERO_ALLOCATION_ERR: c_int = 19;
+/// `PETSC_DEFAULT` for tolerances and iteration counts.
+pub const PETSC_DEFAULT: c_int = -2;
+
+pub type ErrorHandler = unsafe extern "C" fn(
+    MPI_Comm,
+    c_int,
+    *const c_char,
+    *const c_char,
+    PetscErrorCode,
+    c_int,
+    *const c_char,
+    *mut c_void,
+) -> PetscErrorCode;
+
+unsafe extern "C" {
+    pub fn PetscInitializeNoArguments() -> PetscErrorCode;
+    pub fn PetscInitialized(flag: *mut PetscBool) -> PetscErrorCode;
+    pub fn PetscFinalize() -> PetscErrorCode;
+    pub fn PetscErrorMessage(
+        code: c_int,
+        text: *mut *const c_char,
+        specific: *mut *mut c_char,
+    ) -> PetscErrorCode;
+    pub fn PetscPushErrorHandler(handler: ErrorHandler, ctx: *mut c_void) -> PetscErrorCode;
+    pub fn PetscReturnErrorHandler(
+        comm: MPI_Comm,
+        line: c_int,
+        fun: *const c_char,
+        file: *const c_char,
+        n: PetscErrorCode,
+        p: c_int,
+        mess: *const c_char,
+        ctx: *mut c_void,
+    ) -> PetscErrorCode;
+    pub fn PetscMemoryGetMaximumUsage(mem: *mut f64) -> PetscErrorCode;
+    pub fn PetscMemorySetGetMaximumUsage() -> PetscErrorCode;
+
+    pub fn PetscOptionsInsertString(options: PetscOptions, s: *const c_char) -> PetscErrorCode;
+    pub fn PetscOptionsLeftGet(
+        options: PetscOptions,
+        n: *mut PetscInt,
+        names: *mut *mut *mut c_char,
+        values: *mut *mut *mut c_char,
+    ) -> PetscErrorCode;
+    pub fn PetscOptionsLeftRestore(
+        options: PetscOptions,
+        n: *mut PetscInt,
+        names: *mut *mut *mut c_char,
+        values: *mut *mut *mut c_char,
+    ) -> PetscErrorCode;
+
+    pub fn MatCreate(comm: MPI_Comm, m: *mut Mat) -> PetscErrorCode;
+    pub fn MatSetSizes(
+        m: Mat,
+        rl: PetscInt,
+        cl: PetscInt,
+        r: PetscInt,
+        c: PetscInt,
+    ) -> PetscErrorCode;
+    pub fn MatSetType(m: Mat, t: *const c_char) -> PetscErrorCode;
+    pub fn MatSeqAIJSetPreallocation(m: Mat, nz: PetscInt, nnz: *const PetscInt) -> PetscErrorCode;
+    pub fn MatMPIAIJSetPreallocation(
+        m: Mat,
+        d_nz: PetscInt,
+        d_nnz: *const PetscInt,
+        o_nz: PetscInt,
+        o_nnz: *const PetscInt,
+    ) -> PetscErrorCode;
+    pub fn MatSetOption(m: Mat, op: c_int, flg: PetscBool) -> PetscErrorCode;
+    pub fn MatSetBlockSize(m: Mat, bs: PetscInt) -> PetscErrorCode;
+    pub fn MatSetValues(
+        m: Mat,
+        nr: PetscInt,
+        rows: *const PetscInt,
+        nc: PetscInt,
+        cols: *const PetscInt,
+        v: *const PetscScalar,
+        mode: c_int,
+    ) -> PetscErrorCode;
+    pub fn MatZeroEntries(m: Mat) -> PetscErrorCode;
+    pub fn MatAssemblyBegin(m: Mat, t: c_int) -> PetscErrorCode;
+    pub fn MatAssemblyEnd(m: Mat, t: c_int) -> PetscErrorCode;
+    pub fn MatCreateVecs(m: Mat, right: *mut Vec, left: *mut Vec) -> PetscErrorCode;
+    pub fn MatSetNearNullSpace(m: Mat, sp: MatNullSpace) -> PetscErrorCode;
+    pub fn MatNullSpaceCreate(
+        comm: MPI_Comm,
+        has_cnst: PetscBool,
+        n: PetscInt,
+        vecs: *const Vec,
+        sp: *mut MatNullSpace,
+    ) -> PetscErrorCode;
+    pub fn MatNullSpaceDestroy(sp: *mut MatNullSpace) -> PetscErrorCode;
+    pub fn MatDestroy(m: *mut Mat) -> PetscErrorCode;
+
+    pub fn VecDuplicate(v: Vec, w: *mut Vec) -> PetscErrorCode;
+    pub fn VecSet(v: Vec, a: PetscScalar) -> PetscErrorCode;
+    pub fn VecGetArray(v: Vec, a: *mut *mut PetscScalar) -> PetscErrorCode;
+    pub fn VecRestoreArray(v: Vec, a: *mut *mut PetscScalar) -> PetscErrorCode;
+    pub fn VecGetArrayRead(v: Vec, a: *mut *const PetscScalar) -> PetscErrorCode;
+    pub fn VecRestoreArrayRead(v: Vec, a: *mut *const PetscScalar) -> PetscErrorCode;
+    pub fn VecScatterCreateToAll(v: Vec, ctx: *mut VecScatter, all: *mut Vec) -> PetscErrorCode;
+    pub fn VecScatterBegin(
+        ctx: VecScatter,
+        x: Vec,
+        y: Vec,
+        mode: c_int,
+        smode: c_int,
+    ) -> PetscErrorCode;
+    pub fn VecScatterEnd(
+        ctx: VecScatter,
+        x: Vec,
+        y: Vec,
+        mode: c_int,
+        smode: c_int,
+    ) -> PetscErrorCode;
+    pub fn VecScatterDestroy(ctx: *mut VecScatter) -> PetscErrorCode;
+    pub fn VecDestroy(v: *mut Vec) -> PetscErrorCode;
+
+    pub fn ISCreateGeneral(
+        comm: MPI_Comm,
+        n: PetscInt,
+        idx: *const PetscInt,
+        mode: c_int,
+        is: *mut IS,
+    ) -> PetscErrorCode;
+    pub fn ISDestroy(is: *mut IS) -> PetscErrorCode;
+
+    pub fn KSPCreate(comm: MPI_Comm, ksp: *mut KSP) -> PetscErrorCode;
+    pub fn KSPSetOperators(ksp: KSP, a: Mat, p: Mat) -> PetscErrorCode;
+    pub fn KSPSetType(ksp: KSP, t: *const c_char) -> PetscErrorCode;
+    pub fn KSPGetType(ksp: KSP, t: *mut *const c_char) -> PetscErrorCode;
+    pub fn KSPSetTolerances(
+        ksp: KSP,
+        rtol: PetscReal,
+        abstol: PetscReal,
+        dtol: PetscReal,
+        maxits: PetscInt,
+    ) -> PetscErrorCode;
+    pub fn KSPSetOptionsPrefix(ksp: KSP, prefix: *const c_char) -> PetscErrorCode;
+    pub fn KSPSetFromOptions(ksp: KSP) -> PetscErrorCode;
+    pub fn KSPSetReusePreconditioner(ksp: KSP, flg: PetscBool) -> PetscErrorCode;
+    pub fn KSPSolve(ksp: KSP, b: Vec, x: Vec) -> PetscErrorCode;
+    pub fn KSPGetIterationNumber(ksp: KSP, its: *mut PetscInt) -> PetscErrorCode;
+    pub fn KSPGetConvergedReason(ksp: KSP, reason: *mut c_int) -> PetscErrorCode;
+    pub fn KSPGetPC(ksp: KSP, pc: *mut PC) -> PetscErrorCode;
+    pub fn KSPDestroy(ksp: *mut KSP) -> PetscErrorCode;
+    pub fn PCSetType(pc: PC, t: *const c_char) -> PetscErrorCode;
+    pub fn PCGetType(pc: PC, t: *mut *const c_char) -> PetscErrorCode;
+    pub fn PCFactorSetMatSolverType(pc: PC, t: *const c_char) -> PetscErrorCode;
+    pub fn PCFieldSplitSetIS(pc: PC, name: *const c_char, is: IS) -> PetscErrorCode;
+}

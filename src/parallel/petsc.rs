@@ -1,0 +1,447 @@
+//! The engine: MPI, then PETSc, started once per process ([`start`]) and ended before it exits
+//! ([`finish`]); PETSc's objects as owned values that destroy themselves; PETSc's errors as
+//! [`PetscError`] values (PETSc's own handler, which prints a traceback, is replaced by one
+//! that only returns the code).
+
+use super::Ranks;
+use super::ffi::{self, PetscInt};
+use mpi::collective::{CommunicatorCollectives, Root, SystemOperation};
+use mpi::topology::{Communicator, SimpleCommunicator};
+use mpi::traits::AsRaw;
+use std::ffi::{CStr, CString};
+use std::sync::Mutex;
+
+/// MPI's universe while the engine runs (dropping it ends MPI), and whether PETSc is up.
+static ENGINE: Mutex<Option<(mpi::environment::Universe, bool)>> = Mutex::new(None);
+
+/// A PETSc call that failed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("PETSc: {call} failed: {message} (error {code})")]
+pub struct PetscError {
+    pub call: &'static str,
+    pub code: i32,
+    pub message: String,
+}
+
+/// `Ok` for PETSc's 0, else the error with PETSc's text for `code`.
+pub fn check(call: &'static str, code: ffi::PetscErrorCode) -> Result<(), PetscError> {
+    if code == 0 {
+        return Ok(());
+    }
+    let mut text: *const std::os::raw::c_char = std::ptr::null();
+    let message = unsafe {
+        if ffi::PetscErrorMessage(code, &mut text, std::ptr::null_mut()) == 0 && !text.is_null() {
+            CStr::from_ptr(text).to_string_lossy().into_owned()
+        } else {
+            "unknown error".into()
+        }
+    };
+    Err(PetscError {
+        call,
+        code,
+        message,
+    })
+}
+
+/// Start MPI if it is not running yet (idempotent): the ranks of the world.
+pub fn start_mpi() -> Ranks {
+    let mut engine = ENGINE.lock().expect("engine lock");
+    if engine.is_none() {
+        let universe = mpi::initialize().expect("MPI starts once per process");
+        *engine = Some((universe, false));
+    }
+    drop(engine);
+    world().expect("MPI is running")
+}
+
+/// Start MPI and PETSc if they are not running yet (idempotent). PETSc reads the
+/// `PETSC_OPTIONS` environment variable here.
+pub fn start() -> Result<Ranks, PetscError> {
+    let ranks = start_mpi();
+    let mut engine = ENGINE.lock().expect("engine lock");
+    let (_, petsc) = engine.as_mut().expect("MPI is running");
+    if !*petsc {
+        unsafe {
+            check("PetscInitialize", ffi::PetscInitializeNoArguments())?;
+            check(
+                "PetscPushErrorHandler",
+                ffi::PetscPushErrorHandler(ffi::PetscReturnErrorHandler, std::ptr::null_mut()),
+            )?;
+            check(
+                "PetscMemorySetGetMaximumUsage",
+                ffi::PetscMemorySetGetMaximumUsage(),
+            )?;
+        }
+        *petsc = true;
+    }
+    Ok(ranks)
+}
+
+/// End PETSc, then MPI, if they were started. PETSc's objects must be gone by then.
+pub fn finish() {
+    let mut engine = ENGINE.lock().expect("engine lock");
+    if let Some((universe, petsc)) = engine.take() {
+        if petsc {
+            unsafe { ffi::PetscFinalize() };
+        }
+        drop(universe);
+    }
+}
+
+/// The world's ranks while MPI runs.
+pub fn world() -> Option<Ranks> {
+    let engine = ENGINE.lock().expect("engine lock");
+    engine.as_ref()?;
+    let w = SimpleCommunicator::world();
+    Some(Ranks {
+        rank: w.rank() as usize,
+        size: w.size() as usize,
+    })
+}
+
+/// Peak resident memory of this process so far, in bytes, as PETSc measures it (0 before
+/// PETSc starts).
+pub fn peak_memory() -> f64 {
+    let mut m = 0.0;
+    unsafe { ffi::PetscMemoryGetMaximumUsage(&mut m) };
+    m
+}
+
+pub(super) enum Reduce {
+    Sum,
+    Min,
+}
+
+/// `v` reduced over the world, on every rank.
+pub(super) fn all_reduce(v: &mut [f64], op: Reduce) {
+    let w = SimpleCommunicator::world();
+    let send = v.to_vec();
+    match op {
+        Reduce::Sum => w.all_reduce_into(&send[..], v, SystemOperation::sum()),
+        Reduce::Min => w.all_reduce_into(&send[..], v, SystemOperation::min()),
+    }
+}
+
+/// `bytes` of `root` on every rank.
+pub(super) fn broadcast(root: usize, bytes: &mut Vec<u8>) {
+    let w = SimpleCommunicator::world();
+    let p = w.process_at_rank(root as i32);
+    let mut len = [bytes.len() as u64];
+    p.broadcast_into(&mut len[..]);
+    bytes.resize(len[0] as usize, 0);
+    p.broadcast_into(&mut bytes[..]);
+}
+
+fn comm() -> mpi::ffi::MPI_Comm {
+    SimpleCommunicator::world().as_raw()
+}
+
+fn cstring(s: &str) -> CString {
+    CString::new(s).expect("no NUL in PETSc names")
+}
+
+/// Add `options` (PETSc's command-line syntax) to PETSc's options.
+pub fn insert_options(options: &str) -> Result<(), PetscError> {
+    let s = cstring(options);
+    check("PetscOptionsInsertString", unsafe {
+        ffi::PetscOptionsInsertString(std::ptr::null_mut(), s.as_ptr())
+    })
+}
+
+/// The options given that no PETSc object has read so far, as `-name value`.
+pub fn unused_options() -> Vec<String> {
+    let mut n: PetscInt = 0;
+    let mut names: *mut *mut std::os::raw::c_char = std::ptr::null_mut();
+    let mut values: *mut *mut std::os::raw::c_char = std::ptr::null_mut();
+    let mut out = Vec::new();
+    unsafe {
+        if ffi::PetscOptionsLeftGet(std::ptr::null_mut(), &mut n, &mut names, &mut values) != 0 {
+            return out;
+        }
+        for i in 0..n as usize {
+            let name = CStr::from_ptr(*names.add(i)).to_string_lossy();
+            let value = *values.add(i);
+            out.push(if value.is_null() {
+                format!("-{name}")
+            } else {
+                format!("-{name} {}", CStr::from_ptr(value).to_string_lossy())
+            });
+        }
+        ffi::PetscOptionsLeftRestore(std::ptr::null_mut(), &mut n, &mut names, &mut values);
+    }
+    out
+}
+
+/// A parallel AIJ matrix with `local` rows (and columns) on this rank.
+pub struct Matrix(pub(crate) ffi::Mat);
+
+impl Matrix {
+    /// Rows `local` of `global` here, preallocated with `diag[i]` entries of row i in this
+    /// rank's columns and `off[i]` in the others'. Inserting outside the preallocation is an
+    /// error, not a silent slow-down.
+    pub fn aij(
+        global: usize,
+        local: usize,
+        diag: &[PetscInt],
+        off: &[PetscInt],
+        symmetric: bool,
+    ) -> Result<Matrix, PetscError> {
+        let mut m: ffi::Mat = std::ptr::null_mut();
+        unsafe {
+            check("MatCreate", ffi::MatCreate(comm(), &mut m))?;
+            let me = Matrix(m);
+            let (l, g) = (local as PetscInt, global as PetscInt);
+            check("MatSetSizes", ffi::MatSetSizes(m, l, l, g, g))?;
+            check("MatSetType", ffi::MatSetType(m, cstring("aij").as_ptr()))?;
+            check(
+                "MatSeqAIJSetPreallocation",
+                ffi::MatSeqAIJSetPreallocation(m, 0, diag.as_ptr()),
+            )?;
+            check(
+                "MatMPIAIJSetPreallocation",
+                ffi::MatMPIAIJSetPreallocation(m, 0, diag.as_ptr(), 0, off.as_ptr()),
+            )?;
+            check(
+                "MatSetOption",
+                ffi::MatSetOption(m, ffi::MAT_NEW_NONZERO_ALLOCATION_ERR, ffi::PETSC_TRUE),
+            )?;
+            if symmetric {
+                for op in [ffi::MAT_SYMMETRIC, ffi::MAT_SYMMETRY_ETERNAL] {
+                    check("MatSetOption", ffi::MatSetOption(m, op, ffi::PETSC_TRUE))?;
+                }
+            }
+            Ok(me)
+        }
+    }
+
+    pub fn zero(&mut self) -> Result<(), PetscError> {
+        check("MatZeroEntries", unsafe { ffi::MatZeroEntries(self.0) })
+    }
+
+    /// Add `values` at rows `rows` of column `col` (global numbers; rows of other ranks go to
+    /// them at [`Matrix::assemble`]).
+    pub fn add_column(
+        &mut self,
+        rows: &[PetscInt],
+        col: PetscInt,
+        values: &[f64],
+    ) -> Result<(), PetscError> {
+        check("MatSetValues", unsafe {
+            ffi::MatSetValues(
+                self.0,
+                rows.len() as PetscInt,
+                rows.as_ptr(),
+                1,
+                &col,
+                values.as_ptr(),
+                ffi::ADD_VALUES,
+            )
+        })
+    }
+
+    /// Exchange the entries added for other ranks' rows and finish the matrix (collective).
+    pub fn assemble(&mut self) -> Result<(), PetscError> {
+        unsafe {
+            check(
+                "MatAssemblyBegin",
+                ffi::MatAssemblyBegin(self.0, ffi::MAT_FINAL_ASSEMBLY),
+            )?;
+            check(
+                "MatAssemblyEnd",
+                ffi::MatAssemblyEnd(self.0, ffi::MAT_FINAL_ASSEMBLY),
+            )
+        }
+    }
+
+    /// A vector laid out like the matrix's rows.
+    pub fn vector(&self) -> Result<Vector, PetscError> {
+        let mut v: ffi::Vec = std::ptr::null_mut();
+        check("MatCreateVecs", unsafe {
+            ffi::MatCreateVecs(self.0, std::ptr::null_mut(), &mut v)
+        })?;
+        Ok(Vector(v))
+    }
+}
+
+impl Drop for Matrix {
+    fn drop(&mut self) {
+        unsafe { ffi::MatDestroy(&mut self.0) };
+    }
+}
+
+/// A parallel vector.
+pub struct Vector(pub(crate) ffi::Vec);
+
+impl Vector {
+    /// This rank's entries, to read and write.
+    pub fn with_local<T>(&mut self, f: impl FnOnce(&mut [f64]) -> T, len: usize) -> T {
+        let mut a: *mut f64 = std::ptr::null_mut();
+        unsafe {
+            ffi::VecGetArray(self.0, &mut a);
+            let out = f(std::slice::from_raw_parts_mut(a, len));
+            ffi::VecRestoreArray(self.0, &mut a);
+            out
+        }
+    }
+}
+
+impl Drop for Vector {
+    fn drop(&mut self) {
+        unsafe { ffi::VecDestroy(&mut self.0) };
+    }
+}
+
+/// A whole parallel vector copied to every rank.
+pub struct ToAll {
+    scatter: ffi::VecScatter,
+    all: Vector,
+}
+
+impl ToAll {
+    pub fn new(like: &Vector) -> Result<ToAll, PetscError> {
+        let mut scatter: ffi::VecScatter = std::ptr::null_mut();
+        let mut all: ffi::Vec = std::ptr::null_mut();
+        check("VecScatterCreateToAll", unsafe {
+            ffi::VecScatterCreateToAll(like.0, &mut scatter, &mut all)
+        })?;
+        Ok(ToAll {
+            scatter,
+            all: Vector(all),
+        })
+    }
+
+    /// Every entry of `v`, in global order, handed to `f` (collective).
+    pub fn gather<T>(
+        &mut self,
+        v: &Vector,
+        global: usize,
+        f: impl FnOnce(&[f64]) -> T,
+    ) -> Result<T, PetscError> {
+        unsafe {
+            let mode = (ffi::INSERT_VALUES, ffi::SCATTER_FORWARD);
+            check(
+                "VecScatterBegin",
+                ffi::VecScatterBegin(self.scatter, v.0, self.all.0, mode.0, mode.1),
+            )?;
+            check(
+                "VecScatterEnd",
+                ffi::VecScatterEnd(self.scatter, v.0, self.all.0, mode.0, mode.1),
+            )?;
+            let mut a: *const f64 = std::ptr::null();
+            check("VecGetArrayRead", ffi::VecGetArrayRead(self.all.0, &mut a))?;
+            let out = f(std::slice::from_raw_parts(a, global));
+            ffi::VecRestoreArrayRead(self.all.0, &mut a);
+            Ok(out)
+        }
+    }
+}
+
+impl Drop for ToAll {
+    fn drop(&mut self) {
+        unsafe { ffi::VecScatterDestroy(&mut self.scatter) };
+    }
+}
+
+/// A Krylov solver with its preconditioner (PETSc's KSP and PC).
+pub struct Krylov(pub(crate) ffi::KSP);
+
+/// What a solve did: iterations, and PETSc's reason (negative: diverged).
+#[derive(Clone, Copy, Debug)]
+pub struct KrylovReport {
+    pub iterations: usize,
+    pub reason: i32,
+}
+
+impl Krylov {
+    /// A solver of `a` with `ksp_type`/`pc_type` (and the factor package, if any) unless the
+    /// options (prefix `prefix`) say otherwise, relative tolerance `rtol`.
+    pub fn new(
+        a: &Matrix,
+        prefix: &str,
+        ksp_type: &str,
+        pc_type: &str,
+        factor_package: Option<&str>,
+        rtol: f64,
+    ) -> Result<Krylov, PetscError> {
+        let mut k: ffi::KSP = std::ptr::null_mut();
+        unsafe {
+            check("KSPCreate", ffi::KSPCreate(comm(), &mut k))?;
+            let me = Krylov(k);
+            check("KSPSetOperators", ffi::KSPSetOperators(k, a.0, a.0))?;
+            if !prefix.is_empty() {
+                check(
+                    "KSPSetOptionsPrefix",
+                    ffi::KSPSetOptionsPrefix(k, cstring(prefix).as_ptr()),
+                )?;
+            }
+            check("KSPSetType", ffi::KSPSetType(k, cstring(ksp_type).as_ptr()))?;
+            let mut pc: ffi::PC = std::ptr::null_mut();
+            check("KSPGetPC", ffi::KSPGetPC(k, &mut pc))?;
+            check("PCSetType", ffi::PCSetType(pc, cstring(pc_type).as_ptr()))?;
+            if let Some(pkg) = factor_package {
+                check(
+                    "PCFactorSetMatSolverType",
+                    ffi::PCFactorSetMatSolverType(pc, cstring(pkg).as_ptr()),
+                )?;
+            }
+            check(
+                "KSPSetTolerances",
+                ffi::KSPSetTolerances(
+                    k,
+                    rtol,
+                    ffi::PETSC_DEFAULT as f64,
+                    ffi::PETSC_DEFAULT as f64,
+                    1000,
+                ),
+            )?;
+            check("KSPSetFromOptions", ffi::KSPSetFromOptions(k))?;
+            Ok(me)
+        }
+    }
+
+    /// Solve `a x = b` (collective).
+    pub fn solve(&mut self, b: &Vector, x: &mut Vector) -> Result<KrylovReport, PetscError> {
+        let (mut its, mut reason): (PetscInt, i32) = (0, 0);
+        unsafe {
+            check("KSPSolve", ffi::KSPSolve(self.0, b.0, x.0))?;
+            check(
+                "KSPGetIterationNumber",
+                ffi::KSPGetIterationNumber(self.0, &mut its),
+            )?;
+            check(
+                "KSPGetConvergedReason",
+                ffi::KSPGetConvergedReason(self.0, &mut reason),
+            )?;
+        }
+        Ok(KrylovReport {
+            iterations: its as usize,
+            reason,
+        })
+    }
+
+    /// The solver and preconditioner types in use, as `ksp_type/pc_type`.
+    pub fn describe(&self) -> String {
+        unsafe {
+            let (mut kt, mut pt): (*const std::os::raw::c_char, *const std::os::raw::c_char) =
+                (std::ptr::null(), std::ptr::null());
+            let mut pc: ffi::PC = std::ptr::null_mut();
+            ffi::KSPGetType(self.0, &mut kt);
+            ffi::KSPGetPC(self.0, &mut pc);
+            ffi::PCGetType(pc, &mut pt);
+            let s = |p: *const std::os::raw::c_char| {
+                if p.is_null() {
+                    "?".to_string()
+                } else {
+                    CStr::from_ptr(p).to_string_lossy().into_owned()
+                }
+            };
+            format!("{}/{}", s(kt), s(pt))
+        }
+    }
+}
+
+impl Drop for Krylov {
+    fn drop(&mut self) {
+        unsafe { ffi::KSPDestroy(&mut self.0) };
+    }
+}

@@ -1,0 +1,210 @@
+//! The linear systems of a run on PETSc (the `petsc` feature): one parallel matrix whose rows
+//! are cut into one contiguous range per rank, each rank's range the equations of its nodes
+//! (see `mesh::partition`). Each rank adds the entries of its own cells, PETSc sends those of
+//! other ranks' rows where they belong, and its KSP solves; the solution is then copied to
+//! every rank, so that each holds the whole state and takes the same Newton decisions.
+//!
+//! PETSc's options (`[solver.petsc] options`, the `PETSC_OPTIONS` environment) choose the
+//! solver; without them, tmc's defaults: MUMPS, Cholesky for a symmetric system and LU
+//! otherwise.
+
+use crate::dofs::{Pattern, Structure};
+use crate::parallel::Ranks;
+use crate::parallel::ffi::PetscInt;
+use crate::parallel::petsc::{Krylov, Matrix, PetscError, ToAll, Vector, unused_options};
+
+/// A PETSc system that failed: a PETSc call, a solve that did not converge, or options it
+/// did not use.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct EngineError(pub String);
+
+impl From<PetscError> for EngineError {
+    fn from(e: PetscError) -> EngineError {
+        EngineError(e.to_string())
+    }
+}
+
+/// Who owns each node, and which nodes this rank's cells touch (`None`: one rank, all).
+pub struct Ownership<'a> {
+    pub ranks: Ranks,
+    pub node_rank: Option<&'a [u32]>,
+    pub touched: Option<&'a [bool]>,
+}
+
+/// One linear system on PETSc: the equations `eqs` of the whole system's pattern.
+pub struct PetscSystem {
+    /// PETSc's row of each of `eqs`.
+    row: Vec<PetscInt>,
+    /// For each of this rank's rows, its place in `eqs`.
+    local: Vec<usize>,
+    /// The entries this rank adds, column by column: (PETSc column, end of its entries in
+    /// `slots` and `rows`).
+    columns: Vec<(PetscInt, usize)>,
+    /// Per entry, its place in the whole pattern's values and its PETSc row.
+    slots: Vec<usize>,
+    rows: Vec<PetscInt>,
+    mat: Matrix,
+    ksp: Krylov,
+    b: Vector,
+    x: Vector,
+    to_all: ToAll,
+    solves: usize,
+    /// The solver is a direct one (PETSc's "preonly"): its iteration is not a Krylov one.
+    direct: bool,
+}
+
+// SAFETY: PETSc's objects are plain heap objects that may be used from any one thread at a
+// time; a `PetscSystem` is only ever used through `&mut`, and runs (see `driver::run`) keep
+// its calls on the thread that started MPI (no idle-thread runner around PETSc solves).
+unsafe impl Send for PetscSystem {}
+
+impl PetscSystem {
+    pub fn new(
+        p: &Pattern,
+        s: &Structure,
+        eqs: &[usize],
+        own: &Ownership,
+        symmetric: bool,
+    ) -> Result<PetscSystem, EngineError> {
+        let me = own.ranks.rank as u32;
+        let mut place = vec![usize::MAX; p.n];
+        for (k, &e) in eqs.iter().enumerate() {
+            place[e] = k;
+        }
+        let owner = |e: usize| own.node_rank.map_or(0, |r| r[s.node[e] as usize]);
+        // rows in rank order, each rank's in equation order
+        let mut order: Vec<usize> = (0..eqs.len()).collect();
+        order.sort_by_key(|&k| (owner(eqs[k]), k));
+        let mut row = vec![0 as PetscInt; eqs.len()];
+        for (r, &k) in order.iter().enumerate() {
+            row[k] = r as PetscInt;
+        }
+        let local: Vec<usize> = order
+            .iter()
+            .copied()
+            .filter(|&k| owner(eqs[k]) == me)
+            .collect();
+        let first = local.first().map_or(0, |&k| row[k]);
+        let mine = |r: PetscInt| r >= first && r < first + local.len() as PetscInt;
+        // the pattern is structurally symmetric: row e's columns are column e's rows
+        let (mut diag, mut off) = (Vec::new(), Vec::new());
+        for &k in &local {
+            let e = eqs[k];
+            let (mut d, mut o) = (0, 0);
+            for &i in &p.row_idx[p.col_ptr[e]..p.col_ptr[e + 1]] {
+                if place[i] != usize::MAX {
+                    if mine(row[place[i]]) {
+                        d += 1;
+                    } else {
+                        o += 1;
+                    }
+                }
+            }
+            diag.push(d);
+            off.push(o);
+        }
+        let touched_eq: Vec<bool> = (0..p.n)
+            .map(|e| own.touched.is_none_or(|t| t[s.node[e] as usize]))
+            .collect();
+        // this rank's cells write only entries between nodes they touch
+        let (mut columns, mut slots, mut rows) = (Vec::new(), Vec::new(), Vec::new());
+        for (k, &e) in eqs.iter().enumerate() {
+            if !touched_eq[e] {
+                continue;
+            }
+            for j in p.col_ptr[e]..p.col_ptr[e + 1] {
+                let i = p.row_idx[j];
+                if place[i] != usize::MAX && touched_eq[i] {
+                    slots.push(j);
+                    rows.push(row[place[i]]);
+                }
+            }
+            columns.push((row[k], slots.len()));
+        }
+        let mat = Matrix::aij(eqs.len(), local.len(), &diag, &off, symmetric)?;
+        let factor = if symmetric { "cholesky" } else { "lu" };
+        let ksp = Krylov::new(&mat, "", "preonly", factor, Some("mumps"), 1e-10)?;
+        let direct = ksp.describe().starts_with("preonly/");
+        let b = mat.vector()?;
+        let x = mat.vector()?;
+        let to_all = ToAll::new(&x)?;
+        Ok(PetscSystem {
+            row,
+            local,
+            columns,
+            slots,
+            rows,
+            mat,
+            ksp,
+            b,
+            x,
+            to_all,
+            solves: 0,
+            direct,
+        })
+    }
+
+    /// The matrix of this rank's entries `values` (of the whole pattern), summed over the
+    /// ranks (collective).
+    pub fn factor(&mut self, values: &[f64]) -> Result<(), EngineError> {
+        self.mat.zero()?;
+        let mut vals = Vec::new();
+        let mut start = 0;
+        for &(col, end) in &self.columns {
+            vals.clear();
+            vals.extend(self.slots[start..end].iter().map(|&k| values[k]));
+            self.mat.add_column(&self.rows[start..end], col, &vals)?;
+            start = end;
+        }
+        self.mat.assemble()?;
+        Ok(())
+    }
+
+    /// Solve with the last matrix: `b` (every rank's the same) becomes the solution on every
+    /// rank. Returns the Krylov iterations (0 for a direct solve).
+    pub fn solve(&mut self, b: &mut [f64]) -> Result<usize, EngineError> {
+        let (local, n) = (&self.local, self.local.len());
+        self.b.with_local(
+            |a| {
+                for (v, &k) in a.iter_mut().zip(local) {
+                    *v = b[k];
+                }
+            },
+            n,
+        );
+        let report = self.ksp.solve(&self.b, &mut self.x)?;
+        if report.reason < 0 {
+            return Err(EngineError(format!(
+                "PETSc's {} did not converge (reason {}) after {} iterations",
+                self.ksp.describe(),
+                report.reason,
+                report.iterations
+            )));
+        }
+        let row = &self.row;
+        self.to_all.gather(&self.x, row.len(), |all| {
+            for (v, &r) in b.iter_mut().zip(row) {
+                *v = all[r as usize];
+            }
+        })?;
+        self.solves += 1;
+        if self.solves == 1 {
+            let left = unused_options();
+            if !left.is_empty() {
+                return Err(EngineError(format!(
+                    "PETSc did not use the option(s) {} with its {} solver: misspelt, or for \
+                     another solver or preconditioner",
+                    left.join(", "),
+                    self.ksp.describe()
+                )));
+            }
+        }
+        Ok(if self.direct { 0 } else { report.iterations })
+    }
+
+    /// PETSc's solver and preconditioner, as `ksp_type/pc_type`.
+    pub fn describe(&self) -> String {
+        self.ksp.describe()
+    }
+}
