@@ -6,17 +6,14 @@
 //! the mesh on block-plate-3d. The engines of a row run one after another (interleaved), once.
 
 mod common;
-use common::{case_text, root};
+use common::{case_text, root, solve_on};
 use std::path::Path;
-use std::process::Command;
 
 /// The multigrid options measured: GMRES with PETSc's smoothed-aggregation AMG.
 const MULTIGRID: &str = "-ksp_type gmres -pc_type gamg -ksp_rtol 1e-10 -ksp_gmres_restart 200";
 
 /// Solve `text` on `ranks` (0: faer, serial) with PETSc `options`: (succeeded, summary).
 fn solve(dir: &Path, text: &str, ranks: usize, options: Option<&str>) -> (bool, serde_json::Value) {
-    std::fs::create_dir_all(dir).unwrap();
-    let case = dir.join("case.toml");
     let mut text = text.to_string();
     if ranks > 0 {
         text.push_str("\n[solver]\nengine = \"petsc\"\n");
@@ -24,33 +21,7 @@ fn solve(dir: &Path, text: &str, ranks: usize, options: Option<&str>) -> (bool, 
             text.push_str(&format!("[solver.petsc]\noptions = \"{o}\"\n"));
         }
     }
-    std::fs::write(&case, text).unwrap();
-    let out = dir.join("out");
-    let tmc = env!("CARGO_BIN_EXE_tmc");
-    let mut cmd = if ranks > 1 {
-        let mut c = Command::new("mpirun");
-        c.args(["-n", &ranks.to_string(), tmc]);
-        c
-    } else {
-        Command::new(tmc)
-    };
-    let ok = cmd
-        .args([
-            "solve",
-            case.to_str().unwrap(),
-            "-q",
-            "-o",
-            out.to_str().unwrap(),
-        ])
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-        .status()
-        .unwrap()
-        .success();
-    let s = std::fs::read_to_string(out.join("summary.json"))
-        .map(|t| serde_json::from_str(&t).unwrap())
-        .unwrap_or(serde_json::Value::Null);
-    (ok, s)
+    solve_on(dir, &text, ranks.max(1))
 }
 
 fn row(label: &str, ok: bool, s: &serde_json::Value) -> String {

@@ -271,8 +271,8 @@ fn run_ranks(
             return Err(SolveError::Setup("rank 0 failed to set the run up".into()));
         }
         None => {
-            let mut mesh = read_msh(Path::new(&*String::from_utf8_lossy(&mesh_file)))?;
-            mesh.source = PathBuf::from(String::from_utf8_lossy(&mesh_file).into_owned());
+            // read_msh names the mesh by the path it read
+            let mesh = read_msh(Path::new(&*String::from_utf8_lossy(&mesh_file)))?;
             let (model, probes) = model_on(case, mesh, true)?;
             (model, probes, None)
         }

@@ -1,7 +1,7 @@
 //! The PETSc calls tmc makes, declared by hand against the installed headers (PETSc 3.18,
-//! `petscsys.h`, `petscvec.h`, `petscmat.h`, `petscksp.h`, `petscpc.h`, `petscis.h`,
-//! `petscoptions.h`, `petscerror.h`). `build.rs` checks the scalar and index sizes assumed here.
-#![allow(non_camel_case_types, dead_code)]
+//! `petscsys.h`, `petscvec.h`, `petscmat.h`, `petscksp.h`, `petscpc.h`,
+//! `petscoptions.h`, `petscerror.h`); only those, so that each is used. `build.rs` checks the scalar and index sizes assumed here.
+#![allow(non_camel_case_types)]
 
 use mpi::ffi::MPI_Comm;
 use std::os::raw::{c_char, c_int, c_void};
@@ -22,9 +22,7 @@ pub type Mat = *mut c_void;
 pub type Vec = *mut c_void;
 pub type KSP = *mut c_void;
 pub type PC = *mut c_void;
-pub type IS = *mut c_void;
 pub type VecScatter = *mut c_void;
-pub type MatNullSpace = *mut c_void;
 pub type PetscOptions = *mut c_void;
 
 /// `InsertMode`.
@@ -34,8 +32,6 @@ pub const ADD_VALUES: c_int = 2;
 pub const MAT_FINAL_ASSEMBLY: c_int = 0;
 /// `ScatterMode`.
 pub const SCATTER_FORWARD: c_int = 0;
-/// `PetscCopyMode`.
-pub const PETSC_COPY_VALUES: c_int = 0;
 /// `MatOption`.
 pub const MAT_SYMMETRIC: c_int = 1;
 pub const MAT_SYMMETRY_ETERNAL: c_int = 10;
@@ -56,7 +52,6 @@ pub type ErrorHandler = unsafe extern "C" fn(
 
 unsafe extern "C" {
     pub fn PetscInitializeNoArguments() -> PetscErrorCode;
-    pub fn PetscInitialized(flag: *mut PetscBool) -> PetscErrorCode;
     pub fn PetscFinalize() -> PetscErrorCode;
     pub fn PetscErrorMessage(
         code: c_int,
@@ -74,8 +69,6 @@ unsafe extern "C" {
         mess: *const c_char,
         ctx: *mut c_void,
     ) -> PetscErrorCode;
-    pub fn PetscMemoryGetMaximumUsage(mem: *mut f64) -> PetscErrorCode;
-    pub fn PetscMemorySetGetMaximumUsage() -> PetscErrorCode;
 
     pub fn PetscOptionsInsertString(options: PetscOptions, s: *const c_char) -> PetscErrorCode;
     pub fn PetscOptionsLeftGet(
@@ -109,7 +102,6 @@ unsafe extern "C" {
         o_nnz: *const PetscInt,
     ) -> PetscErrorCode;
     pub fn MatSetOption(m: Mat, op: c_int, flg: PetscBool) -> PetscErrorCode;
-    pub fn MatSetBlockSize(m: Mat, bs: PetscInt) -> PetscErrorCode;
     pub fn MatSetValues(
         m: Mat,
         nr: PetscInt,
@@ -123,19 +115,8 @@ unsafe extern "C" {
     pub fn MatAssemblyBegin(m: Mat, t: c_int) -> PetscErrorCode;
     pub fn MatAssemblyEnd(m: Mat, t: c_int) -> PetscErrorCode;
     pub fn MatCreateVecs(m: Mat, right: *mut Vec, left: *mut Vec) -> PetscErrorCode;
-    pub fn MatSetNearNullSpace(m: Mat, sp: MatNullSpace) -> PetscErrorCode;
-    pub fn MatNullSpaceCreate(
-        comm: MPI_Comm,
-        has_cnst: PetscBool,
-        n: PetscInt,
-        vecs: *const Vec,
-        sp: *mut MatNullSpace,
-    ) -> PetscErrorCode;
-    pub fn MatNullSpaceDestroy(sp: *mut MatNullSpace) -> PetscErrorCode;
     pub fn MatDestroy(m: *mut Mat) -> PetscErrorCode;
 
-    pub fn VecDuplicate(v: Vec, w: *mut Vec) -> PetscErrorCode;
-    pub fn VecSet(v: Vec, a: PetscScalar) -> PetscErrorCode;
     pub fn VecGetArray(v: Vec, a: *mut *mut PetscScalar) -> PetscErrorCode;
     pub fn VecRestoreArray(v: Vec, a: *mut *mut PetscScalar) -> PetscErrorCode;
     pub fn VecGetArrayRead(v: Vec, a: *mut *const PetscScalar) -> PetscErrorCode;
@@ -158,15 +139,6 @@ unsafe extern "C" {
     pub fn VecScatterDestroy(ctx: *mut VecScatter) -> PetscErrorCode;
     pub fn VecDestroy(v: *mut Vec) -> PetscErrorCode;
 
-    pub fn ISCreateGeneral(
-        comm: MPI_Comm,
-        n: PetscInt,
-        idx: *const PetscInt,
-        mode: c_int,
-        is: *mut IS,
-    ) -> PetscErrorCode;
-    pub fn ISDestroy(is: *mut IS) -> PetscErrorCode;
-
     pub fn KSPCreate(comm: MPI_Comm, ksp: *mut KSP) -> PetscErrorCode;
     pub fn KSPSetOperators(ksp: KSP, a: Mat, p: Mat) -> PetscErrorCode;
     pub fn KSPSetType(ksp: KSP, t: *const c_char) -> PetscErrorCode;
@@ -178,9 +150,7 @@ unsafe extern "C" {
         dtol: PetscReal,
         maxits: PetscInt,
     ) -> PetscErrorCode;
-    pub fn KSPSetOptionsPrefix(ksp: KSP, prefix: *const c_char) -> PetscErrorCode;
     pub fn KSPSetFromOptions(ksp: KSP) -> PetscErrorCode;
-    pub fn KSPSetReusePreconditioner(ksp: KSP, flg: PetscBool) -> PetscErrorCode;
     pub fn KSPSolve(ksp: KSP, b: Vec, x: Vec) -> PetscErrorCode;
     pub fn KSPGetIterationNumber(ksp: KSP, its: *mut PetscInt) -> PetscErrorCode;
     pub fn KSPGetConvergedReason(ksp: KSP, reason: *mut c_int) -> PetscErrorCode;
@@ -189,5 +159,4 @@ unsafe extern "C" {
     pub fn PCSetType(pc: PC, t: *const c_char) -> PetscErrorCode;
     pub fn PCGetType(pc: PC, t: *mut *const c_char) -> PetscErrorCode;
     pub fn PCFactorSetMatSolverType(pc: PC, t: *const c_char) -> PetscErrorCode;
-    pub fn PCFieldSplitSetIS(pc: PC, name: *const c_char, is: IS) -> PetscErrorCode;
 }

@@ -67,10 +67,6 @@ pub fn start() -> Result<Ranks, PetscError> {
                 "PetscPushErrorHandler",
                 ffi::PetscPushErrorHandler(ffi::PetscReturnErrorHandler, std::ptr::null_mut()),
             )?;
-            check(
-                "PetscMemorySetGetMaximumUsage",
-                ffi::PetscMemorySetGetMaximumUsage(),
-            )?;
         }
         *petsc = true;
     }
@@ -97,14 +93,6 @@ pub fn world() -> Option<Ranks> {
         rank: w.rank() as usize,
         size: w.size() as usize,
     })
-}
-
-/// Peak resident memory of this process so far, in bytes, as PETSc measures it (0 before
-/// PETSc starts).
-pub fn peak_memory() -> f64 {
-    let mut m = 0.0;
-    unsafe { ffi::PetscMemoryGetMaximumUsage(&mut m) };
-    m
 }
 
 pub(super) enum Reduce {
@@ -354,10 +342,9 @@ pub struct KrylovReport {
 
 impl Krylov {
     /// A solver of `a` with `ksp_type`/`pc_type` (and the factor package, if any) unless the
-    /// options (prefix `prefix`) say otherwise, relative tolerance `rtol`.
+    /// options say otherwise, relative tolerance `rtol`.
     pub fn new(
         a: &Matrix,
-        prefix: &str,
         ksp_type: &str,
         pc_type: &str,
         factor_package: Option<&str>,
@@ -368,12 +355,6 @@ impl Krylov {
             check("KSPCreate", ffi::KSPCreate(comm(), &mut k))?;
             let me = Krylov(k);
             check("KSPSetOperators", ffi::KSPSetOperators(k, a.0, a.0))?;
-            if !prefix.is_empty() {
-                check(
-                    "KSPSetOptionsPrefix",
-                    ffi::KSPSetOptionsPrefix(k, cstring(prefix).as_ptr()),
-                )?;
-            }
             check("KSPSetType", ffi::KSPSetType(k, cstring(ksp_type).as_ptr()))?;
             let mut pc: ffi::PC = std::ptr::null_mut();
             check("KSPGetPC", ffi::KSPGetPC(k, &mut pc))?;

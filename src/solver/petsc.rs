@@ -124,7 +124,7 @@ impl PetscSystem {
         }
         let mat = Matrix::aij(eqs.len(), local.len(), &diag, &off, symmetric)?;
         let factor = if symmetric { "cholesky" } else { "lu" };
-        let ksp = Krylov::new(&mat, "", "preonly", factor, Some("mumps"), 1e-10)?;
+        let ksp = Krylov::new(&mat, "preonly", factor, Some("mumps"), 1e-10)?;
         let direct = ksp.describe().starts_with("preonly/");
         let b = mat.vector()?;
         let x = mat.vector()?;
