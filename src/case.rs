@@ -349,6 +349,17 @@ pub struct PetscOptions {
     /// PETSc's own options, as on its command line (`"-ksp_type cg -pc_type gamg"`); added to
     /// those of the `PETSC_OPTIONS` environment variable, and taking precedence over them.
     pub options: Option<Spanned<String>>,
+    /// tmc's defaults under the options: "direct" (MUMPS) or "multigrid" (GMRES with a field
+    /// split: smoothed-aggregation multigrid on the mechanics, BoomerAMG on heat).
+    pub method: PetscMethod,
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, Default, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum PetscMethod {
+    #[default]
+    Direct,
+    Multigrid,
 }
 
 #[derive(Clone, Copy, Debug, Deserialize, Default, PartialEq, Eq)]

@@ -37,8 +37,8 @@ fn last_vtu(dir: &Path) -> PathBuf {
 }
 
 /// Run `name` three ways (faer, PETSc on one process, PETSc on two ranks) and compare the
-/// last states and the counts.
-fn same_answers(name: &str, extra: &[&str]) {
+/// last states and the counts; the PETSc runs' summaries.
+fn same_answers(name: &str, extra: &[&str]) -> [serde_json::Value; 2] {
     let case = root().join("cases").join(format!("{name}.toml"));
     let tag = format!("distributed-{name}-{}", extra.len());
     let dirs = [1, 2, 3].map(|i| scratch(&format!("{tag}-{i}")));
@@ -83,11 +83,48 @@ fn same_answers(name: &str, extra: &[&str]) {
     } else {
         panic!("{name}: no memory per rank");
     }
+    [summary(&dirs[1]), summary(&dirs[2])]
 }
 
 #[test]
 fn the_block_is_the_same_on_petsc_and_on_two_ranks() {
     same_answers("block", &[]);
+}
+
+#[test]
+fn multigrid_gives_the_direct_answers_on_the_closing_block() {
+    // one-way: GMRES + GAMG (rigid motions as near-kernel) on the mechanics, CG + BoomerAMG
+    // on heat; the medium closes to a gap of 2.94e-4
+    for s in same_answers("block", &["--set", "solver.petsc.method=\"multigrid\""]) {
+        assert_eq!(s["petsc_solver"], "gmres/gamg");
+        let per_update =
+            s["krylov_iterations"].as_f64().unwrap() / s["linear_solves"].as_f64().unwrap();
+        assert!(
+            per_update >= 1.0,
+            "{per_update} Krylov iterations per update"
+        );
+        let gap = s["probes"]["gap"].as_f64().unwrap();
+        assert!((gap - 2.9420e-4).abs() < 1e-8, "gap {gap}");
+    }
+}
+
+#[test]
+fn multigrid_splits_the_coupled_3d_system() {
+    // monolithic: the field split's blocks are found (u + p, θ) and the first steps, before
+    // the medium closes, give the direct answers
+    let s = same_answers(
+        "block-plate-3d",
+        &[
+            "--set",
+            "solver.petsc.method=\"multigrid\"",
+            "--set",
+            "steps.path=[0.0, 0.3]",
+        ],
+    );
+    for s in s {
+        assert_eq!(s["petsc_solver"], "gmres/fieldsplit");
+        assert!(s["krylov_iterations"].as_f64().unwrap() > s["linear_solves"].as_f64().unwrap());
+    }
 }
 
 #[test]

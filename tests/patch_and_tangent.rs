@@ -584,3 +584,79 @@ fn reassembly_leaves_nothing_of_the_previous_tangent() {
     reused.assemble(&model, &x2, 0.5, true, None).unwrap();
     assert_eq!(reused.values, fresh.values);
 }
+
+/// The rigid motions of `model::rigid` (with the regularization fields a rotation implies) are
+/// the tangent's kernel at the undeformed state: K m = 0 on every equation whose cells hold
+/// no prescribed value, to round-off of K's size; and they are not all zero there.
+fn rigid_motions_are_the_kernel(model: &Model) {
+    let mut asm = Assembler::new(model);
+    let x = model.initial_state();
+    asm.assemble(model, &x, 0.0, true, None).unwrap();
+    let (p, k) = (&asm.pattern, &asm.values);
+    let node_of_dof = model.dofs.node_of_dof();
+    let mut held = vec![false; model.mesh.coords.len()];
+    for (d, c) in model.cons.prescribed.iter().enumerate() {
+        if c.is_some() {
+            held[node_of_dof[d] as usize] = true;
+        }
+    }
+    let mut near = vec![false; held.len()];
+    for b in &model.mesh.cells {
+        for c in 0..b.n_cells() {
+            if b.cell(c).iter().any(|&n| held[n]) {
+                b.cell(c).iter().for_each(|&n| near[n] = true);
+            }
+        }
+    }
+    let mut node_of_eq = vec![0usize; p.n];
+    for (d, &e) in model.cons.eq.iter().enumerate() {
+        if e != NONE {
+            node_of_eq[e as usize] = node_of_dof[d] as usize;
+        }
+    }
+    let scale = k.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+    let modes = tmc::model::rigid::rigid_motions(model);
+    assert_eq!(modes.len(), if model.mesh.dim == 2 { 3 } else { 6 });
+    for (i, m) in modes.iter().enumerate() {
+        let size = m.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+        assert!(size > 0.1, "mode {i} vanishes");
+        let mut km = vec![0.0; p.n];
+        for j in 0..p.n {
+            for q in p.col_ptr[j]..p.col_ptr[j + 1] {
+                km[p.row_idx[q]] += k[q] * m[j];
+            }
+        }
+        let (mut worst, mut rows) = (0.0f64, 0);
+        for (e, v) in km.iter().enumerate() {
+            if !near[node_of_eq[e]] {
+                worst = worst.max(v.abs());
+                rows += 1;
+            }
+        }
+        assert!(rows > 0);
+        assert!(
+            worst < 1e-10 * scale * size,
+            "mode {i}: |K m| = {worst:.3e} on {rows} free rows (|K| {scale:.3e})"
+        );
+    }
+}
+
+#[test]
+fn rigid_motions_are_the_tangent_s_kernel_2d_and_3d() {
+    let (_, model) = model_with(
+        &medium_case(2),
+        "block.geo",
+        &[("n", 4.0), ("m", 2.0), ("l", 2.0)],
+        "rigid-medium-2d",
+    );
+    assert!(model.physics.regularization);
+    rigid_motions_are_the_kernel(&model);
+    let (_, model) = model_with(
+        &medium_case(3),
+        "block-plate-3d.geo",
+        &[("n", 2.0), ("nb", 2.0), ("nm", 1.0), ("nq", 1.0)],
+        "rigid-medium-3d",
+    );
+    assert!(model.physics.regularization);
+    rigid_motions_are_the_kernel(&model);
+}

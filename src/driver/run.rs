@@ -169,9 +169,18 @@ impl Plan {
             node_rank: asm.partition().map(|p| &p.node_rank[..]),
             touched: touched.as_deref(),
         };
+        let rigid = crate::model::rigid::rigid_motions(model);
         let system = |p: Part, symmetric: bool| -> Result<(Part, LinearSolver), SolveError> {
             let eqs = newton.equations(p);
-            let s = LinearSolver::petsc(&asm.pattern, &structure, &eqs, &own, symmetric)?;
+            let s = LinearSolver::petsc(
+                &asm.pattern,
+                &structure,
+                &eqs,
+                &own,
+                symmetric,
+                &rigid,
+                solver.petsc.method,
+            )?;
             Ok((p, s))
         };
         let solvers = match strategy {

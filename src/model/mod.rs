@@ -6,6 +6,7 @@ pub mod build;
 pub mod held;
 pub mod loads;
 pub mod physics;
+pub mod rigid;
 
 pub use build::build;
 pub use loads::{LoadPath, facet_weights};

@@ -24,6 +24,9 @@ pub type KSP = *mut c_void;
 pub type PC = *mut c_void;
 pub type VecScatter = *mut c_void;
 pub type PetscOptions = *mut c_void;
+pub type IS = *mut c_void;
+pub type MatNullSpace = *mut c_void;
+pub type PetscObject = *mut c_void;
 
 /// `InsertMode`.
 pub const INSERT_VALUES: c_int = 1;
@@ -38,6 +41,10 @@ pub const MAT_SYMMETRY_ETERNAL: c_int = 10;
 pub const MAT_NEW_NONZERO_ALLOCATION_ERR: c_int = 19;
 /// `PETSC_DEFAULT` for tolerances and iteration counts.
 pub const PETSC_DEFAULT: c_int = -2;
+/// `PETSC_DETERMINE` for a global size PETSc sums from the local ones.
+pub const PETSC_DETERMINE: PetscInt = -1;
+/// `PetscCopyMode`.
+pub const PETSC_COPY_VALUES: c_int = 0;
 
 pub type ErrorHandler = unsafe extern "C" fn(
     MPI_Comm,
@@ -159,4 +166,41 @@ unsafe extern "C" {
     pub fn PCSetType(pc: PC, t: *const c_char) -> PetscErrorCode;
     pub fn PCGetType(pc: PC, t: *mut *const c_char) -> PetscErrorCode;
     pub fn PCFactorSetMatSolverType(pc: PC, t: *const c_char) -> PetscErrorCode;
+    pub fn PCFieldSplitSetIS(pc: PC, name: *const c_char, is: IS) -> PetscErrorCode;
+    pub fn KSPSetReusePreconditioner(ksp: KSP, flag: PetscBool) -> PetscErrorCode;
+
+    pub fn ISCreateGeneral(
+        comm: MPI_Comm,
+        n: PetscInt,
+        idx: *const PetscInt,
+        mode: c_int,
+        is: *mut IS,
+    ) -> PetscErrorCode;
+    pub fn ISDestroy(is: *mut IS) -> PetscErrorCode;
+    pub fn VecCreateMPI(comm: MPI_Comm, n: PetscInt, nn: PetscInt, v: *mut Vec) -> PetscErrorCode;
+    pub fn MatNullSpaceCreate(
+        comm: MPI_Comm,
+        has_cnst: PetscBool,
+        n: PetscInt,
+        vecs: *const Vec,
+        sp: *mut MatNullSpace,
+    ) -> PetscErrorCode;
+    pub fn MatNullSpaceDestroy(sp: *mut MatNullSpace) -> PetscErrorCode;
+    pub fn MatSetNearNullSpace(m: Mat, sp: MatNullSpace) -> PetscErrorCode;
+    pub fn PetscObjectCompose(
+        obj: PetscObject,
+        name: *const c_char,
+        other: PetscObject,
+    ) -> PetscErrorCode;
+    pub fn PetscOptionsHasName(
+        options: PetscOptions,
+        prefix: *const c_char,
+        name: *const c_char,
+        set: *mut PetscBool,
+    ) -> PetscErrorCode;
+    pub fn PetscOptionsSetValue(
+        options: PetscOptions,
+        name: *const c_char,
+        value: *const c_char,
+    ) -> PetscErrorCode;
 }

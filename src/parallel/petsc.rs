@@ -136,7 +136,40 @@ pub fn insert_options(options: &str) -> Result<(), PetscError> {
     })
 }
 
-/// The options given that no PETSc object has read so far, as `-name value`.
+/// Options tmc set as defaults ([`default_option`]): not the user's, so never reported unused.
+static DEFAULTS: Mutex<Vec<String>> = Mutex::new(Vec::new());
+
+/// Set option `-name value` unless the user's options (or an earlier default) set it.
+pub fn default_option(name: &str, value: &str) -> Result<(), PetscError> {
+    let key = cstring(&format!("-{name}"));
+    let mut set: ffi::PetscBool = ffi::PETSC_FALSE;
+    unsafe {
+        check(
+            "PetscOptionsHasName",
+            ffi::PetscOptionsHasName(
+                std::ptr::null_mut(),
+                std::ptr::null(),
+                key.as_ptr(),
+                &mut set,
+            ),
+        )?;
+        if set == ffi::PETSC_FALSE {
+            let v = cstring(value);
+            check(
+                "PetscOptionsSetValue",
+                ffi::PetscOptionsSetValue(std::ptr::null_mut(), key.as_ptr(), v.as_ptr()),
+            )?;
+            DEFAULTS
+                .lock()
+                .expect("defaults lock")
+                .push(name.to_string());
+        }
+    }
+    Ok(())
+}
+
+/// The options given that no PETSc object has read so far, as `-name value` (tmc's own
+/// defaults left out: they may be for a solver the user's options replaced).
 pub fn unused_options() -> Vec<String> {
     let mut n: PetscInt = 0;
     let mut names: *mut *mut std::os::raw::c_char = std::ptr::null_mut();
@@ -146,8 +179,12 @@ pub fn unused_options() -> Vec<String> {
         if ffi::PetscOptionsLeftGet(std::ptr::null_mut(), &mut n, &mut names, &mut values) != 0 {
             return out;
         }
+        let defaults = DEFAULTS.lock().expect("defaults lock");
         for i in 0..n as usize {
             let name = CStr::from_ptr(*names.add(i)).to_string_lossy();
+            if defaults.iter().any(|d| *d == name) {
+                continue;
+            }
             let value = *values.add(i);
             out.push(if value.is_null() {
                 format!("-{name}")
@@ -241,6 +278,13 @@ impl Matrix {
         }
     }
 
+    /// The near-kernel an algebraic multigrid of this matrix keeps on its coarse levels.
+    pub fn set_near_kernel(&mut self, k: &NearKernel) -> Result<(), PetscError> {
+        check("MatSetNearNullSpace", unsafe {
+            ffi::MatSetNearNullSpace(self.0, k.0)
+        })
+    }
+
     /// A vector laid out like the matrix's rows.
     pub fn vector(&self) -> Result<Vector, PetscError> {
         let mut v: ffi::Vec = std::ptr::null_mut();
@@ -254,6 +298,81 @@ impl Matrix {
 impl Drop for Matrix {
     fn drop(&mut self) {
         unsafe { ffi::MatDestroy(&mut self.0) };
+    }
+}
+
+/// This rank's rows of one block of a field split (PETSc's IS).
+pub struct IndexSet(ffi::IS);
+
+impl IndexSet {
+    /// The global rows `rows`, all of this rank (collective).
+    pub fn new(rows: &[PetscInt]) -> Result<IndexSet, PetscError> {
+        let mut is: ffi::IS = std::ptr::null_mut();
+        check("ISCreateGeneral", unsafe {
+            ffi::ISCreateGeneral(
+                comm(),
+                rows.len() as PetscInt,
+                rows.as_ptr(),
+                ffi::PETSC_COPY_VALUES,
+                &mut is,
+            )
+        })?;
+        Ok(IndexSet(is))
+    }
+
+    /// Give the block these rows select the near-kernel `k`: PETSc's field split hands it to
+    /// the block's matrix, where an algebraic multigrid finds it.
+    pub fn set_near_kernel(&self, k: &NearKernel) -> Result<(), PetscError> {
+        let name = cstring("nearnullspace");
+        check("PetscObjectCompose", unsafe {
+            ffi::PetscObjectCompose(self.0, name.as_ptr(), k.0)
+        })
+    }
+}
+
+impl Drop for IndexSet {
+    fn drop(&mut self) {
+        unsafe { ffi::ISDestroy(&mut self.0) };
+    }
+}
+
+/// The modes a matrix maps to nearly zero (PETSc's near null space; for elasticity the rigid
+/// motions), which a smoothed-aggregation multigrid must keep on its coarse levels.
+pub struct NearKernel(ffi::MatNullSpace);
+
+impl NearKernel {
+    /// From `modes`, each this rank's `local` entries of one vector, orthonormal over all
+    /// ranks (collective).
+    pub fn new(local: usize, modes: &[Vec<f64>]) -> Result<NearKernel, PetscError> {
+        let mut vecs = Vec::with_capacity(modes.len());
+        for m in modes {
+            let mut v: ffi::Vec = std::ptr::null_mut();
+            check("VecCreateMPI", unsafe {
+                ffi::VecCreateMPI(comm(), local as PetscInt, ffi::PETSC_DETERMINE, &mut v)
+            })?;
+            let mut v = Vector(v);
+            v.with_local(|a| a.copy_from_slice(m), local);
+            vecs.push(v);
+        }
+        let raw: Vec<ffi::Vec> = vecs.iter().map(|v| v.0).collect();
+        let mut sp: ffi::MatNullSpace = std::ptr::null_mut();
+        check("MatNullSpaceCreate", unsafe {
+            ffi::MatNullSpaceCreate(
+                comm(),
+                ffi::PETSC_FALSE,
+                raw.len() as PetscInt,
+                raw.as_ptr(),
+                &mut sp,
+            )
+        })?;
+        // the null space holds its own references to the vectors
+        Ok(NearKernel(sp))
+    }
+}
+
+impl Drop for NearKernel {
+    fn drop(&mut self) {
+        unsafe { ffi::MatNullSpaceDestroy(&mut self.0) };
     }
 }
 
@@ -342,13 +461,15 @@ pub struct KrylovReport {
 
 impl Krylov {
     /// A solver of `a` with `ksp_type`/`pc_type` (and the factor package, if any) unless the
-    /// options say otherwise, relative tolerance `rtol`.
+    /// options say otherwise, relative tolerance `rtol`. `splits` name the blocks of a field
+    /// split, used if the preconditioner is one (`-fieldsplit_NAME_` options configure each).
     pub fn new(
         a: &Matrix,
         ksp_type: &str,
         pc_type: &str,
         factor_package: Option<&str>,
         rtol: f64,
+        splits: &[(&str, &IndexSet)],
     ) -> Result<Krylov, PetscError> {
         let mut k: ffi::KSP = std::ptr::null_mut();
         unsafe {
@@ -376,6 +497,18 @@ impl Krylov {
                 ),
             )?;
             check("KSPSetFromOptions", ffi::KSPSetFromOptions(k))?;
+            if !splits.is_empty() {
+                // a no-op unless the options made the preconditioner a field split; then the
+                // blocks' solvers read their options
+                for (name, is) in splits {
+                    let name = cstring(name);
+                    check(
+                        "PCFieldSplitSetIS",
+                        ffi::PCFieldSplitSetIS(pc, name.as_ptr(), is.0),
+                    )?;
+                }
+                check("KSPSetFromOptions", ffi::KSPSetFromOptions(k))?;
+            }
             Ok(me)
         }
     }
@@ -397,6 +530,19 @@ impl Krylov {
         Ok(KrylovReport {
             iterations: its as usize,
             reason,
+        })
+    }
+
+    /// Keep the preconditioner built for an earlier matrix (`true`) or rebuild it for the
+    /// current one at the next solve.
+    pub fn reuse_preconditioner(&mut self, reuse: bool) -> Result<(), PetscError> {
+        let flag = if reuse {
+            ffi::PETSC_TRUE
+        } else {
+            ffi::PETSC_FALSE
+        };
+        check("KSPSetReusePreconditioner", unsafe {
+            ffi::KSPSetReusePreconditioner(self.0, flag)
         })
     }
 

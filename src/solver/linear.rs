@@ -141,8 +141,10 @@ impl LinearSolver {
         eqs: &[usize],
         own: &super::petsc::Ownership,
         symmetric: bool,
+        rigid: &[Vec<f64>],
+        method: crate::case::PetscMethod,
     ) -> Result<LinearSolver, LinearError> {
-        let system = super::petsc::PetscSystem::new(p, s, eqs, own, symmetric)
+        let system = super::petsc::PetscSystem::new(p, s, eqs, own, symmetric, rigid, method)
             .map_err(|e| LinearError::Engine(e.0))?;
         Ok(Self::with(
             LinearKind::Petsc,

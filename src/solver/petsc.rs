@@ -8,10 +8,13 @@
 //! solver; without them, tmc's defaults: MUMPS, Cholesky for a symmetric system and LU
 //! otherwise.
 
+use crate::case::PetscMethod;
 use crate::dofs::{Pattern, Structure};
 use crate::parallel::Ranks;
 use crate::parallel::ffi::PetscInt;
-use crate::parallel::petsc::{Krylov, Matrix, PetscError, ToAll, Vector, unused_options};
+use crate::parallel::petsc::{
+    IndexSet, Krylov, Matrix, NearKernel, PetscError, ToAll, Vector, default_option, unused_options,
+};
 
 /// A PETSc system that failed: a PETSc call, a solve that did not converge, or options it
 /// did not use.
@@ -34,6 +37,10 @@ pub struct Ownership<'a> {
 
 /// One linear system on PETSc: the equations `eqs` of the whole system's pattern.
 pub struct PetscSystem {
+    /// The mechanical (u and p) and thermal rows of a coupled system, for a field split
+    /// (PETSc holds its own references; kept for the system's life).
+    _splits: Vec<IndexSet>,
+    _near_kernel: Option<NearKernel>,
     /// PETSc's row of each of `eqs`.
     row: Vec<PetscInt>,
     /// For each of this rank's rows, its place in `eqs`.
@@ -52,6 +59,23 @@ pub struct PetscSystem {
     solves: usize,
     /// The solver is a direct one (PETSc's "preonly"): its iteration is not a Krylov one.
     direct: bool,
+    /// Keep the preconditioner across matrices while it works (the multigrid method): the
+    /// iterations of the solve after its last build, and of the last solve.
+    reuse: Option<Reuse>,
+}
+
+/// A preconditioner kept for later matrices: rebuilt when a solve with it takes more than
+/// twice the iterations of the first solve after its build (and at least 10 more), or fails.
+#[derive(Clone, Copy, Debug, Default)]
+struct Reuse {
+    fresh: Option<usize>,
+    last: usize,
+}
+
+impl Reuse {
+    fn keep(&self) -> bool {
+        self.fresh.is_some_and(|f| self.last <= (2 * f).max(f + 10))
+    }
 }
 
 // SAFETY: PETSc's objects are plain heap objects that may be used from any one thread at a
@@ -60,12 +84,16 @@ pub struct PetscSystem {
 unsafe impl Send for PetscSystem {}
 
 impl PetscSystem {
+    /// The system of equations `eqs`; `rigid` holds the rigid motions of all equations
+    /// (see `model::rigid`), the near-kernel of the mechanical rows for a multigrid.
     pub fn new(
         p: &Pattern,
         s: &Structure,
         eqs: &[usize],
         own: &Ownership,
         symmetric: bool,
+        rigid: &[Vec<f64>],
+        method: PetscMethod,
     ) -> Result<PetscSystem, EngineError> {
         let me = own.ranks.rank as u32;
         let mut place = vec![usize::MAX; p.n];
@@ -122,14 +150,52 @@ impl PetscSystem {
             }
             columns.push((row[k], slots.len()));
         }
-        let mat = Matrix::aij(eqs.len(), local.len(), &diag, &off, symmetric)?;
-        let factor = if symmetric { "cholesky" } else { "lu" };
-        let ksp = Krylov::new(&mat, "preonly", factor, Some("mumps"), 1e-10)?;
+        let mut mat = Matrix::aij(eqs.len(), local.len(), &diag, &off, symmetric)?;
+        // the mechanical rows with their rigid motions, the thermal rows
+        let (mech, heat): (Vec<usize>, Vec<usize>) =
+            local.iter().partition(|&&k| !s.thermal[eqs[k]]);
+        // collective decisions: some rank may hold no rows of a field
+        let anywhere =
+            |rows: &[usize]| own.ranks.max(if rows.is_empty() { 0.0 } else { 1.0 }) > 0.0;
+        let near_kernel = if !anywhere(&mech) {
+            None
+        } else {
+            let modes = orthonormal(
+                &own.ranks,
+                rigid
+                    .iter()
+                    .map(|m| mech.iter().map(|&k| m[eqs[k]]).collect())
+                    .collect(),
+            );
+            Some(NearKernel::new(mech.len(), &modes)?)
+        };
+        let mut splits = Vec::new();
+        if near_kernel.is_some() && anywhere(&heat) {
+            let rows = |ks: &[usize]| -> Vec<PetscInt> { ks.iter().map(|&k| row[k]).collect() };
+            let (up, theta) = (IndexSet::new(&rows(&mech))?, IndexSet::new(&rows(&heat))?);
+            if let Some(k) = &near_kernel {
+                up.set_near_kernel(k)?;
+            }
+            splits = vec![up, theta];
+        } else if let Some(k) = &near_kernel {
+            mat.set_near_kernel(k)?;
+        }
+        let named: Vec<(&str, &IndexSet)> = ["up", "theta"].into_iter().zip(&splits).collect();
+        let (ksp_type, pc_type, package) = match method {
+            PetscMethod::Direct if symmetric => ("preonly", "cholesky", Some("mumps")),
+            PetscMethod::Direct => ("preonly", "lu", Some("mumps")),
+            PetscMethod::Multigrid => {
+                multigrid_defaults(!splits.is_empty(), near_kernel.is_some())?
+            }
+        };
+        let ksp = Krylov::new(&mat, ksp_type, pc_type, package, 1e-10, &named)?;
         let direct = ksp.describe().starts_with("preonly/");
         let b = mat.vector()?;
         let x = mat.vector()?;
         let to_all = ToAll::new(&x)?;
         Ok(PetscSystem {
+            _splits: splits,
+            _near_kernel: near_kernel,
             row,
             local,
             columns,
@@ -142,6 +208,7 @@ impl PetscSystem {
             to_all,
             solves: 0,
             direct,
+            reuse: (method == PetscMethod::Multigrid).then(Reuse::default),
         })
     }
 
@@ -173,7 +240,23 @@ impl PetscSystem {
             },
             n,
         );
-        let report = self.ksp.solve(&self.b, &mut self.x)?;
+        let keep = self.reuse.is_some_and(|r| r.keep());
+        self.ksp.reuse_preconditioner(keep)?;
+        let mut report = self.ksp.solve(&self.b, &mut self.x)?;
+        let (mut built, mut wasted) = (!keep, 0);
+        if keep && report.reason < 0 {
+            // the kept preconditioner no longer serves: build it for this matrix
+            wasted = report.iterations;
+            self.ksp.reuse_preconditioner(false)?;
+            report = self.ksp.solve(&self.b, &mut self.x)?;
+            built = true;
+        }
+        if let Some(r) = &mut self.reuse {
+            if built {
+                r.fresh = Some(report.iterations);
+            }
+            r.last = report.iterations;
+        }
         if report.reason < 0 {
             return Err(EngineError(format!(
                 "PETSc's {} did not converge (reason {}) after {} iterations",
@@ -200,11 +283,68 @@ impl PetscSystem {
                 )));
             }
         }
-        Ok(if self.direct { 0 } else { report.iterations })
+        Ok(if self.direct {
+            0
+        } else {
+            wasted + report.iterations
+        })
     }
 
     /// PETSc's solver and preconditioner, as `ksp_type/pc_type`.
     pub fn describe(&self) -> String {
         self.ksp.describe()
     }
+}
+
+/// `vectors` (this rank's entries of each) made orthonormal over all ranks by modified
+/// Gram–Schmidt (collective); vectors that vanish in the span of the earlier ones are dropped.
+fn orthonormal(ranks: &Ranks, vectors: Vec<Vec<f64>>) -> Vec<Vec<f64>> {
+    let dot = |a: &[f64], b: &[f64]| ranks.sum(a.iter().zip(b).map(|(x, y)| x * y).sum());
+    let mut out: Vec<Vec<f64>> = Vec::new();
+    for mut v in vectors {
+        let before = dot(&v, &v).sqrt();
+        for q in &out {
+            let c = dot(&v, q);
+            v.iter_mut().zip(q).for_each(|(x, y)| *x -= c * y);
+        }
+        let norm = dot(&v, &v).sqrt();
+        if norm > 1e-10 * before && norm > 0.0 {
+            v.iter_mut().for_each(|x| *x /= norm);
+            out.push(v);
+        }
+    }
+    out
+}
+
+/// tmc's multigrid: for a coupled system GMRES with a multiplicative field split, one V-cycle
+/// of smoothed aggregation (GAMG, the rigid motions as near-kernel, weak couplings under 1 %
+/// dropped so aggregates do not straddle body and medium) on u and p, and BoomerAMG on θ; for
+/// mechanics alone GMRES with that GAMG; for heat alone CG with BoomerAMG. Options the user
+/// gives win. Returns the (ksp, pc, factor package) types.
+fn multigrid_defaults(
+    coupled: bool,
+    mechanics: bool,
+) -> Result<(&'static str, &'static str, Option<&'static str>), EngineError> {
+    default_option("ksp_gmres_restart", "100")?;
+    let gamg = |prefix: &str| -> Result<(), PetscError> {
+        default_option(&format!("{prefix}pc_gamg_threshold"), "0.01")?;
+        default_option(&format!("{prefix}pc_gamg_reuse_interpolation"), "true")
+    };
+    Ok(if coupled {
+        for (name, value) in [
+            ("fieldsplit_up_ksp_type", "preonly"),
+            ("fieldsplit_up_pc_type", "gamg"),
+            ("fieldsplit_theta_ksp_type", "preonly"),
+            ("fieldsplit_theta_pc_type", "hypre"),
+        ] {
+            default_option(name, value)?;
+        }
+        gamg("fieldsplit_up_")?;
+        ("gmres", "fieldsplit", None)
+    } else if mechanics {
+        gamg("")?;
+        ("gmres", "gamg", None)
+    } else {
+        ("cg", "hypre", None)
+    })
 }
