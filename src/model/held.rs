@@ -3,7 +3,7 @@
 //! nothing fixes, makes the tangent singular; the solver would only find out after every step
 //! cut. Said here per body, with the direction.
 
-use super::Model;
+use super::{Model, rigid};
 use crate::case::RegionKind;
 use crate::dofs::{Field, NONE};
 use crate::mesh::{centroid, point_text};
@@ -137,23 +137,11 @@ fn free_rigid_mode(model: &Model, nodes: &[usize], held: &[(usize, usize)]) -> O
         .map(|&n| (0..3).map(|i| (x[n][i] - c[i]).abs()).fold(0.0, f64::max))
         .fold(0.0, f64::max)
         .max(f64::MIN_POSITIVE);
-    let r = |n: usize, i: usize| (x[n][i] - c[i]) / h;
     // the rigid modes' value at (node, direction): translations, then rotations
-    let modes = if d == 2 { 3 } else { 6 };
+    let modes = rigid::count(d);
     let value = |n: usize, i: usize, m: usize| -> f64 {
-        if m < d {
-            return (m == i) as u8 as f64;
-        }
-        // rotation about axis a: ω × r, component i
-        let a = if d == 2 { 2 } else { m - 3 };
-        let (b, e) = ((a + 1) % 3, (a + 2) % 3);
-        if i == b {
-            -r(n, e)
-        } else if i == e {
-            r(n, b)
-        } else {
-            0.0
-        }
+        let r = std::array::from_fn(|k| (x[n][k] - c[k]) / h);
+        rigid::motion(d, m, &r)[i]
     };
     let mut g = DMatrix::<f64>::zeros(modes, modes);
     for &(n, i) in held {
@@ -191,7 +179,7 @@ fn free_rigid_mode(model: &Model, nodes: &[usize], held: &[(usize, usize)]) -> O
         .enumerate()
         .skip(d)
         .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))?;
-    let a = if d == 2 { 2 } else { m - 3 };
+    let a = rigid::axis(d, m);
     Some(format!(
         "rotate freely about an axis along {} (what holds it lies on one point or line)",
         axis[a]

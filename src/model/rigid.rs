@@ -5,66 +5,83 @@
 //! are that body's own rigid motions.
 
 use super::Model;
-use crate::dofs::{Field, NONE};
-use crate::material::regularization::{ROTATION_PLANES, rotation_measure_of};
+use crate::dofs::NONE;
+use crate::material::regularization::rotation_measure_of;
+use crate::mesh::centroid;
 
-/// The rigid motions (2 translations and 1 rotation in 2D, 3 and 3 in 3D) as values of every
-/// free equation, `modes[k][e]`; θ equations hold 0. Rotations are about the mesh's centroid.
+/// How many rigid motions a body has: 2 translations and 1 rotation in 2D, 3 and 3 in 3D.
+pub fn count(dim: usize) -> usize {
+    if dim == 2 { 3 } else { 6 }
+}
+
+/// The axis (0 = x, 1 = y, 2 = z) rigid motion `m ≥ dim` turns about: z in 2D.
+pub fn axis(dim: usize, m: usize) -> usize {
+    if dim == 2 { 2 } else { m - 3 }
+}
+
+/// The displacement of rigid motion `m` at `r` (from the centre of rotation): the unit vector
+/// of axis m for a translation (m < dim), else e_axis × r.
+pub fn motion(dim: usize, m: usize, r: &[f64; 3]) -> [f64; 3] {
+    let mut u = [0.0; 3];
+    if m < dim {
+        u[m] = 1.0;
+    } else {
+        let a = axis(dim, m);
+        let (b, e) = ((a + 1) % 3, (a + 2) % 3);
+        u[b] = -r[e];
+        u[e] = r[b];
+    }
+    u
+}
+
+/// The rigid motions as values of every free equation, `modes[k][e]` (see [`motion`]; θ
+/// equations hold 0), rotations about the mesh's centroid; empty without mechanics.
 pub fn rigid_motions(model: &Model) -> Vec<Vec<f64>> {
     let (dofs, cons, mesh) = (&model.dofs, &model.cons, &model.mesh);
-    let dim = dofs.dim;
-    let planes = if dim == 2 { 1 } else { 3 };
-    let n = mesh.coords.len().max(1) as f64;
-    let mut centroid = [0.0; 3];
-    for x in &mesh.coords {
-        for c in 0..3 {
-            centroid[c] += x[c] / n;
-        }
+    if dofs.u.is_empty() {
+        return Vec::new();
     }
-    // the regularization fields under rotation `r` (F = I + W, W skew in plane r): p_i = d f_i
-    let p_of = |r: usize, i: usize| -> f64 {
-        let (a, b) = ROTATION_PLANES[r];
-        let mut g = [[0.0; 3]; 3];
-        for (c, row) in g.iter_mut().enumerate() {
-            row[c] = 1.0;
-        }
-        g[a][b] = 1.0;
-        g[b][a] = -1.0;
-        model.d * rotation_measure_of(&g, i).f
+    let (dim, np) = (dofs.dim, dofs.np);
+    let all: Vec<usize> = (0..mesh.coords.len()).collect();
+    let c = centroid(&mesh.coords, &all);
+    // the regularization fields under each motion: p_i = d f_i(I + ∇u), ∇u constant
+    let p: Vec<Vec<f64>> = (0..count(dim))
+        .map(|m| {
+            let at_0 = motion(dim, m, &[0.0; 3]);
+            let mut g = [[0.0; 3]; 3];
+            for j in 0..3 {
+                let mut x = [0.0; 3];
+                x[j] = 1.0;
+                let u = motion(dim, m, &x);
+                for i in 0..3 {
+                    g[i][j] = (i == j) as u8 as f64 + u[i] - at_0[i];
+                }
+            }
+            (0..np)
+                .map(|i| model.d * rotation_measure_of(&g, i).f)
+                .collect()
+        })
+        .collect();
+    let mut modes = vec![vec![0.0; cons.n_eq]; count(dim)];
+    let eq = |d: u32| {
+        (d != NONE)
+            .then(|| cons.eq[d as usize])
+            .filter(|&e| e != NONE)
     };
-    let mut modes = vec![vec![0.0; cons.n_eq]; dim + planes];
-    let node_of_dof = dofs.node_of_dof();
-    for (d, &e) in cons.eq.iter().enumerate() {
-        if e == NONE {
-            continue;
-        }
-        let (e, node) = (e as usize, node_of_dof[d] as usize);
-        let x = mesh.coords[node];
-        match dofs.field[d] {
-            Field::U => {
-                let c = (0..dim)
-                    .find(|&c| dofs.u[node * dim + c] == d as u32)
-                    .unwrap();
-                modes[c][e] = 1.0;
-                for (r, &(a, b)) in ROTATION_PLANES[..planes].iter().enumerate() {
-                    // u_a = X_b, u_b = −X_a: ∂u_a/∂X_b = 1 = −∂u_b/∂X_a
-                    if c == a {
-                        modes[dim + r][e] = x[b] - centroid[b];
-                    } else if c == b {
-                        modes[dim + r][e] = -(x[a] - centroid[a]);
-                    }
+    for (node, x) in mesh.coords.iter().enumerate() {
+        let r = [x[0] - c[0], x[1] - c[1], x[2] - c[2]];
+        for (m, mode) in modes.iter_mut().enumerate() {
+            let u = motion(dim, m, &r);
+            for (k, &d) in dofs.u[node * dim..(node + 1) * dim].iter().enumerate() {
+                if let Some(e) = eq(d) {
+                    mode[e as usize] = u[k];
                 }
             }
-            Field::P => {
-                let np = dofs.np;
-                let i = (0..np)
-                    .find(|&i| dofs.p[node * np + i] == d as u32)
-                    .unwrap();
-                for r in 0..planes {
-                    modes[dim + r][e] = p_of(r, i);
+            for i in 0..np {
+                if let Some(e) = eq(dofs.p[node * np + i]) {
+                    mode[e as usize] = p[m][i];
                 }
             }
-            Field::Theta => {}
         }
     }
     modes

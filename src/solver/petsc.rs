@@ -37,10 +37,6 @@ pub struct Ownership<'a> {
 
 /// One linear system on PETSc: the equations `eqs` of the whole system's pattern.
 pub struct PetscSystem {
-    /// The mechanical (u and p) and thermal rows of a coupled system, for a field split
-    /// (PETSc holds its own references; kept for the system's life).
-    _splits: Vec<IndexSet>,
-    _near_kernel: Option<NearKernel>,
     /// PETSc's row of each of `eqs`.
     row: Vec<PetscInt>,
     /// For each of this rank's rows, its place in `eqs`.
@@ -188,14 +184,14 @@ impl PetscSystem {
                 multigrid_defaults(!splits.is_empty(), near_kernel.is_some())?
             }
         };
+        // the field split, the matrix and the index set keep their own references to the
+        // index sets and the near-kernel: ours go at the end of this function
         let ksp = Krylov::new(&mat, ksp_type, pc_type, package, 1e-10, &named)?;
         let direct = ksp.describe().starts_with("preonly/");
         let b = mat.vector()?;
         let x = mat.vector()?;
         let to_all = ToAll::new(&x)?;
         Ok(PetscSystem {
-            _splits: splits,
-            _near_kernel: near_kernel,
             row,
             local,
             columns,
