@@ -132,7 +132,7 @@ impl Plan {
     ) -> Result<Plan, SolveError> {
         use crate::mesh::partition::Partition;
         use crate::parallel::petsc;
-        use crate::solver::petsc::Ownership;
+        use crate::solver::petsc::{Hints, Ownership};
         let solver = &case.file.solver;
         if solver.linear != crate::case::LinearChoice::Auto {
             let span = case.file.mesh.span();
@@ -170,6 +170,11 @@ impl Plan {
             touched: touched.as_deref(),
         };
         let rigid = crate::model::rigid::rigid_motions(model);
+        let medium = model.medium_nodes();
+        let hints = Hints {
+            rigid: &rigid,
+            medium: &medium,
+        };
         let system = |p: Part, symmetric: bool| -> Result<(Part, LinearSolver), SolveError> {
             let eqs = newton.equations(p);
             let s = LinearSolver::petsc(
@@ -178,7 +183,7 @@ impl Plan {
                 &eqs,
                 &own,
                 symmetric,
-                &rigid,
+                &hints,
                 solver.petsc.method,
             )?;
             Ok((p, s))

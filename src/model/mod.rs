@@ -157,6 +157,21 @@ impl Model {
         x
     }
 
+    /// Per mesh node: whether a third-medium cell has it (the medium's own nodes and the
+    /// solids' faces towards it). Where the medium closes, its stiffness and conductivity across
+    /// the gap grow without bound: a multigrid hands these rows to a direct solver.
+    pub fn medium_nodes(&self) -> Vec<bool> {
+        let mut on = vec![false; self.mesh.coords.len()];
+        for info in &self.blocks {
+            if self.regions[info.region].1 == RegionKind::Medium {
+                for &n in &self.mesh.cells[info.block].conn {
+                    on[n] = true;
+                }
+            }
+        }
+        on
+    }
+
     /// External loads at pseudo-time `t`.
     pub fn f_ext(&self, t: f64, out: &mut [f64]) {
         let lambda = self.path.lambda(t);

@@ -141,10 +141,10 @@ impl LinearSolver {
         eqs: &[usize],
         own: &super::petsc::Ownership,
         symmetric: bool,
-        rigid: &[Vec<f64>],
+        hints: &super::petsc::Hints,
         method: crate::case::PetscMethod,
     ) -> Result<LinearSolver, LinearError> {
-        let system = super::petsc::PetscSystem::new(p, s, eqs, own, symmetric, rigid, method)
+        let system = super::petsc::PetscSystem::new(p, s, eqs, own, symmetric, hints, method)
             .map_err(|e| LinearError::Engine(e.0))?;
         Ok(Self::with(
             LinearKind::Petsc,

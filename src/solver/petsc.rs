@@ -35,6 +35,17 @@ pub struct Ownership<'a> {
     pub touched: Option<&'a [bool]>,
 }
 
+/// What a multigrid needs to know of the model, beyond the matrix.
+pub struct Hints<'a> {
+    /// The rigid motions of all equations (see `model::rigid`): the near-kernel of the
+    /// solids' mechanical rows.
+    pub rigid: &'a [Vec<f64>],
+    /// Per mesh node: whether a medium cell has it (`Model::medium_nodes`). Those rows form
+    /// a block of their own, solved directly: where the medium closes, its stiffness across
+    /// the gap grows without bound and smoothers and aggregates of a multigrid fail there.
+    pub medium: &'a [bool],
+}
+
 /// One linear system on PETSc: the equations `eqs` of the whole system's pattern.
 pub struct PetscSystem {
     /// PETSc's row of each of `eqs`.
@@ -80,15 +91,15 @@ impl Reuse {
 unsafe impl Send for PetscSystem {}
 
 impl PetscSystem {
-    /// The system of equations `eqs`; `rigid` holds the rigid motions of all equations
-    /// (see `model::rigid`), the near-kernel of the mechanical rows for a multigrid.
+    /// The system of equations `eqs`; `hints` say what a multigrid needs to know of the
+    /// model (which rows go to which block, and the near-kernel of the solids' mechanics).
     pub fn new(
         p: &Pattern,
         s: &Structure,
         eqs: &[usize],
         own: &Ownership,
         symmetric: bool,
-        rigid: &[Vec<f64>],
+        hints: &Hints,
         method: PetscMethod,
     ) -> Result<PetscSystem, EngineError> {
         let me = own.ranks.rank as u32;
@@ -147,10 +158,14 @@ impl PetscSystem {
             columns.push((row[k], slots.len()));
         }
         let mut mat = Matrix::aij(eqs.len(), local.len(), &diag, &off, symmetric)?;
-        // the mechanical rows with their rigid motions, the thermal rows
+        // the rows of the medium's nodes (every field), the solids' mechanical rows with their
+        // rigid motions, the solids' thermal rows
+        let (medium, solid): (Vec<usize>, Vec<usize>) = local
+            .iter()
+            .partition(|&&k| hints.medium[s.node[eqs[k]] as usize]);
         let (mech, heat): (Vec<usize>, Vec<usize>) =
-            local.iter().partition(|&&k| !s.thermal[eqs[k]]);
-        // collective decisions: some rank may hold no rows of a field
+            solid.iter().partition(|&&k| !s.thermal[eqs[k]]);
+        // collective decisions: some rank may hold no rows of a split
         let anywhere =
             |rows: &[usize]| own.ranks.max(if rows.is_empty() { 0.0 } else { 1.0 }) > 0.0;
         let near_kernel = if !anywhere(&mech) {
@@ -158,30 +173,41 @@ impl PetscSystem {
         } else {
             let modes = orthonormal(
                 &own.ranks,
-                rigid
+                hints
+                    .rigid
                     .iter()
                     .map(|m| mech.iter().map(|&k| m[eqs[k]]).collect())
                     .collect(),
             );
             Some(NearKernel::new(mech.len(), &modes)?)
         };
+        let present: Vec<(&str, &Vec<usize>)> =
+            [("up", &mech), ("theta", &heat), ("medium", &medium)]
+                .into_iter()
+                .filter(|(_, rows)| anywhere(rows))
+                .collect();
         let mut splits = Vec::new();
-        if near_kernel.is_some() && anywhere(&heat) {
-            let rows = |ks: &[usize]| -> Vec<PetscInt> { ks.iter().map(|&k| row[k]).collect() };
-            let (up, theta) = (IndexSet::new(&rows(&mech))?, IndexSet::new(&rows(&heat))?);
-            if let Some(k) = &near_kernel {
-                up.set_near_kernel(k)?;
+        if present.len() > 1 {
+            for (name, ks) in &present {
+                let rows: Vec<PetscInt> = ks.iter().map(|&k| row[k]).collect();
+                let is = IndexSet::new(&rows)?;
+                if *name == "up" {
+                    if let Some(k) = &near_kernel {
+                        is.set_near_kernel(k)?;
+                    }
+                }
+                splits.push((*name, is));
             }
-            splits = vec![up, theta];
         } else if let Some(k) = &near_kernel {
             mat.set_near_kernel(k)?;
         }
-        let named: Vec<(&str, &IndexSet)> = ["up", "theta"].into_iter().zip(&splits).collect();
+        let named: Vec<(&str, &IndexSet)> = splits.iter().map(|(n, is)| (*n, is)).collect();
         let (ksp_type, pc_type, package) = match method {
             PetscMethod::Direct if symmetric => ("preonly", "cholesky", Some("mumps")),
             PetscMethod::Direct => ("preonly", "lu", Some("mumps")),
             PetscMethod::Multigrid => {
-                multigrid_defaults(!splits.is_empty(), near_kernel.is_some())?
+                let names: Vec<&str> = splits.iter().map(|(n, _)| *n).collect();
+                multigrid_defaults(&names, near_kernel.is_some())?
             }
         };
         // the field split, the matrix and the index set keep their own references to the
@@ -312,13 +338,16 @@ fn orthonormal(ranks: &Ranks, vectors: Vec<Vec<f64>>) -> Vec<Vec<f64>> {
     out
 }
 
-/// tmc's multigrid: for a coupled system GMRES with a multiplicative field split, one V-cycle
-/// of smoothed aggregation (GAMG, the rigid motions as near-kernel, weak couplings under 1 %
-/// dropped so aggregates do not straddle body and medium) on u and p, and BoomerAMG on θ; for
-/// mechanics alone GMRES with that GAMG; for heat alone CG with BoomerAMG. Options the user
-/// gives win. Returns the (ksp, pc, factor package) types.
+/// tmc's multigrid: GMRES around a multiplicative field split of the rows `splits` names
+/// ("up": the solids' mechanics, "theta": the solids' temperatures, "medium": every row of the
+/// medium's nodes): one V-cycle of smoothed aggregation on the solids' mechanics (GAMG, the
+/// rigid motions as near-kernel, weak couplings under 1 % dropped so that aggregates do not
+/// straddle bodies), one BoomerAMG V-cycle on their temperatures, and a direct solve (MUMPS) of
+/// the medium's rows. Without a split: GMRES with that GAMG for mechanics alone, CG with
+/// BoomerAMG for heat alone. Options the user gives win. Returns the (ksp, pc, factor package)
+/// types.
 fn multigrid_defaults(
-    coupled: bool,
+    splits: &[&str],
     mechanics: bool,
 ) -> Result<(&'static str, &'static str, Option<&'static str>), EngineError> {
     default_option("ksp_gmres_restart", "100")?;
@@ -326,16 +355,25 @@ fn multigrid_defaults(
         default_option(&format!("{prefix}pc_gamg_threshold"), "0.01")?;
         default_option(&format!("{prefix}pc_gamg_reuse_interpolation"), "true")
     };
-    Ok(if coupled {
-        for (name, value) in [
-            ("fieldsplit_up_ksp_type", "preonly"),
-            ("fieldsplit_up_pc_type", "gamg"),
-            ("fieldsplit_theta_ksp_type", "preonly"),
-            ("fieldsplit_theta_pc_type", "hypre"),
-        ] {
-            default_option(name, value)?;
+    Ok(if !splits.is_empty() {
+        for name in splits {
+            default_option(&format!("fieldsplit_{name}_ksp_type"), "preonly")?;
+            let pc = format!("fieldsplit_{name}_pc_type");
+            match *name {
+                "up" => {
+                    default_option(&pc, "gamg")?;
+                    gamg("fieldsplit_up_")?;
+                }
+                "theta" => default_option(&pc, "hypre")?,
+                _ => {
+                    default_option(&pc, "lu")?;
+                    default_option(
+                        &format!("fieldsplit_{name}_pc_factor_mat_solver_type"),
+                        "mumps",
+                    )?;
+                }
+            }
         }
-        gamg("fieldsplit_up_")?;
         ("gmres", "fieldsplit", None)
     } else if mechanics {
         gamg("")?;
