@@ -191,10 +191,8 @@ impl PetscSystem {
             for (name, ks) in &present {
                 let rows: Vec<PetscInt> = ks.iter().map(|&k| row[k]).collect();
                 let is = IndexSet::new(&rows)?;
-                if *name == "up" {
-                    if let Some(k) = &near_kernel {
-                        is.set_near_kernel(k)?;
-                    }
+                if let Some(k) = near_kernel.as_ref().filter(|_| *name == "up") {
+                    is.set_near_kernel(k)?;
                 }
                 splits.push((*name, is));
             }
