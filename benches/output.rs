@@ -43,7 +43,7 @@ fn main() {
             series.write(&model, step, &x, step as f64).unwrap();
             best = best.min(t.elapsed().as_secs_f64());
         }
-        let size = std::fs::metadata(dir.join(Series::file_name(4)))
+        let size = std::fs::metadata(dir.join(series.file_name(4)))
             .unwrap()
             .len();
         println!("| {name} | {:.2} | {:.0} |", size as f64 / 1e6, best * 1e3);

@@ -459,12 +459,13 @@ fn geo_parameters_do_not_leak_into_the_next_mesh() {
 
 /// Quadratic cells are written in VTK's node order: meshio, which maps gmsh's order to VTK's
 /// on its own, reads the same cells (as sequences of node positions) from the `.msh` as from
-/// tmc's `.vtu`.
+/// tmc's `.vtu`, and as from the two parts a run on two ranks writes.
 #[test]
 fn quadratic_cells_reach_vtk_in_vtk_order() {
     use tmc::mesh::gmsh::{MeshOptions, mesh_geo};
     use tmc::mesh::msh::read_msh;
     use tmc::output::nodal::NodalFields;
+    use tmc::output::vtu::Piece;
     use tmc::output::{StepFields, write_vtu};
     let dir = scratch("vtk-order");
     for (geo, incomplete) in [
@@ -502,34 +503,51 @@ fn quadratic_cells_reach_vtk_in_vtk_order() {
             kind: &ints,
             region_names: &["all".into()],
         };
+        // the cells cut in two parts, every third to the second
+        let second: Vec<bool> = (0..mesh.n_cells()).map(|c| c % 3 == 0).collect();
+        let first: Vec<bool> = second.iter().map(|s| !s).collect();
+        let parts = [&first, &second].map(|mine| Piece::part(&mesh, mine));
+        let part_files = [0, 1].map(|k| dir.join(format!("{tag}_{k}.vtu")));
         // uncompressed and compressed, both read by meshio
         for level in [0, 1] {
-            write_vtu(&vtu, &mesh, &fields, level).unwrap();
+            write_vtu(&vtu, &mesh, &fields, &Piece::whole(&mesh), level).unwrap();
+            for (piece, file) in parts.iter().zip(&part_files) {
+                write_vtu(file, &mesh, &fields, piece, level).unwrap();
+            }
             let script = "import sys, meshio, numpy as np
 def cells(m, dim):
     out = {}
     for b in m.cells:
         if b.dim != dim: continue
         out.setdefault(b.type, []).extend(
-            sorted(tuple(map(tuple, np.round(m.points[c], 9))) for c in b.data))
+            tuple(map(tuple, np.round(m.points[c], 9))) for c in b.data)
+    return out
+def merged(ms, dim):
+    out = {}
+    for m in ms:
+        for k, v in cells(m, dim).items():
+            out.setdefault(k, []).extend(v)
     return {k: sorted(v) for k, v in out.items()}
-a, b = meshio.read(sys.argv[1]), meshio.read(sys.argv[2])
-dim = int(sys.argv[3])
-ca, cb = cells(a, dim), cells(b, dim)
+dim = int(sys.argv[1])
+ca = merged([meshio.read(sys.argv[2])], dim)
+cb = merged([meshio.read(f) for f in sys.argv[3:]], dim)
 print(sorted(ca), sorted(cb), 'same' if ca == cb else 'DIFFERENT')";
-            let o = Command::new("/usr/bin/python3")
-                .args(["-c", script])
-                .arg(&msh)
-                .arg(&vtu)
-                .arg(mesh.dim.to_string())
-                .output()
-                .unwrap();
-            let out = String::from_utf8_lossy(&o.stdout);
-            assert!(o.status.success(), "{}", stderr(&o));
-            assert!(
-                out.trim_end().ends_with("same"),
-                "{tag}, zlib {level}: {out}"
-            );
+            for written in [&[vtu.clone()][..], &part_files[..]] {
+                let o = Command::new("/usr/bin/python3")
+                    .args(["-c", script])
+                    .arg(mesh.dim.to_string())
+                    .arg(&msh)
+                    .args(written)
+                    .output()
+                    .unwrap();
+                let out = String::from_utf8_lossy(&o.stdout);
+                assert!(o.status.success(), "{}", stderr(&o));
+                assert!(
+                    out.trim_end().ends_with("same"),
+                    "{tag}, zlib {level}, {} file(s): {out}",
+                    written.len()
+                );
+            }
         }
     }
 }

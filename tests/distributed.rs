@@ -25,15 +25,73 @@ fn mpirun(ranks: usize, case: &Path, out: &Path, extra: &[&str]) -> std::process
         .unwrap()
 }
 
-/// The last step file of a run.
-fn last_vtu(dir: &Path) -> PathBuf {
+/// The last step file of a run: its `.vtu`, or on several ranks the `.pvtu` of its parts.
+fn last_step(dir: &Path) -> PathBuf {
     let mut steps: Vec<PathBuf> = std::fs::read_dir(dir)
         .unwrap()
         .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "vtu"))
+        .filter(|p| {
+            let name = p.file_name().unwrap().to_string_lossy().into_owned();
+            name.ends_with(".pvtu") || (name.ends_with(".vtu") && name.matches('_').count() == 1)
+        })
         .collect();
     steps.sort();
     steps.pop().expect("a step file")
+}
+
+/// A point array of a step: read from its `.vtu`, or put together from the parts its `.pvtu`
+/// names (each point carries its mesh node number), read by vtkio.
+fn step_points(step: &Path, name: &str) -> Vec<f64> {
+    use vtkio::model::{Attribute, DataSet, Piece};
+    if step.extension().is_some_and(|e| e == "vtu") {
+        return point_array(step, name);
+    }
+    let mut vtk = vtkio::Vtk::import(step).unwrap_or_else(|e| panic!("{}: {e}", step.display()));
+    vtk.load_all_pieces().unwrap();
+    let DataSet::UnstructuredGrid { pieces, .. } = vtk.data else {
+        panic!("not a grid")
+    };
+    assert!(pieces.len() > 1, "{}: one part", step.display());
+    let mut whole: Vec<Option<f64>> = Vec::new();
+    for piece in &pieces {
+        let Piece::Inline(p) = piece else {
+            panic!("part not loaded")
+        };
+        let array = |n: &str| -> (Vec<f64>, usize) {
+            p.data
+                .point
+                .iter()
+                .find_map(|a| match a {
+                    Attribute::DataArray(d) if d.name == n => Some((
+                        d.data.clone().cast_into::<f64>().unwrap(),
+                        d.elem.num_comp() as usize,
+                    )),
+                    _ => None,
+                })
+                .unwrap_or_else(|| panic!("no {n} in a part of {}", step.display()))
+        };
+        let (nodes, _) = array("node");
+        let (values, k) = array(name);
+        for (i, &n) in nodes.iter().enumerate() {
+            let n = n as usize;
+            if whole.len() < (n + 1) * k {
+                whole.resize((n + 1) * k, None);
+            }
+            for c in 0..k {
+                let v = values[i * k + c];
+                // a node on a cut is in both parts, with the same value
+                assert!(
+                    whole[n * k + c].is_none_or(|w| w == v),
+                    "{name} at node {n}"
+                );
+                whole[n * k + c] = Some(v);
+            }
+        }
+    }
+    whole
+        .into_iter()
+        .map(|v| v.expect("every node in some part"))
+        .collect()
 }
 
 /// Run `name` three ways (faer, PETSc on one process, PETSc on two ranks) and compare the
@@ -59,13 +117,34 @@ fn same_answers(name: &str, extra: &[&str]) -> [serde_json::Value; 2] {
         for key in ["load_steps", "rejected_steps", "newton_iterations"] {
             assert_eq!(s[key], serial[key], "{name} on {ranks} ranks: {key}");
         }
-        let (a, b) = (last_vtu(&dirs[0]), last_vtu(dir));
-        assert_eq!(a.file_name(), b.file_name());
+        let (a, b) = (last_step(&dirs[0]), last_step(dir));
+        assert_eq!(a.file_stem(), b.file_stem());
+        assert_eq!(
+            b.extension().unwrap(),
+            if ranks == 1 { "vtu" } else { "pvtu" }
+        );
+        if ranks == 2 {
+            // the collection lists the .pvtu files; the manifest, every part, so that the
+            // next run in this folder replaces them
+            let stem = b.file_stem().unwrap().to_string_lossy().into_owned();
+            let pvd = std::fs::read_to_string(dir.join(format!("{name}.pvd"))).unwrap();
+            assert!(pvd.contains(&format!("file=\"{stem}.pvtu\"")), "{pvd}");
+            assert!(!pvd.contains(".vtu\""), "{pvd}");
+            let manifest = std::fs::read_to_string(dir.join(".tmc-manifest")).unwrap();
+            for part in [0, 1] {
+                let file = format!("{stem}_{part}.vtu");
+                assert!(
+                    manifest.lines().any(|l| l == file),
+                    "{file} not in the manifest"
+                );
+                assert!(dir.join(&file).exists());
+            }
+        }
         for field in ["u", "theta", "p"]
             .into_iter()
             .filter(|f| serial["dofs"][f] != 0)
         {
-            let (x, y) = (point_array(&a, field), point_array(&b, field));
+            let (x, y) = (point_array(&a, field), step_points(&b, field));
             assert_eq!(x.len(), y.len(), "{name}: {field}");
             let scale = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
             let worst = x

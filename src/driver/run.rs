@@ -11,7 +11,7 @@ use crate::case::{Case, EngineChoice};
 use crate::dofs::{Field, equation_structure};
 use crate::model::Model;
 use crate::output::probes::Probe;
-use crate::output::{History, RunFolder, Series, write_atomic};
+use crate::output::{History, OutputError, RunFolder, Series, write_atomic};
 use crate::parallel::Ranks;
 use crate::solver::linear::{LinearKind, LinearSolver};
 use crate::solver::newton::{Newton, Part, StepFailure, StepReport};
@@ -288,7 +288,17 @@ impl<'a> Run<'a> {
             summary.engine = "petsc".into();
             summary.petsc_solver = Some(solver);
         }
-        let series = Series::new(&out_dir, &case.name(), model);
+        let mut series = Series::new(&out_dir, &case.name(), model);
+        if let Some(part) = asm.partition().filter(|p| p.parts > 1) {
+            let rank = asm.ranks.rank as u32;
+            let mine: Vec<bool> = part
+                .cell_rank
+                .iter()
+                .flatten()
+                .map(|&r| r == rank)
+                .collect();
+            series = series.in_parts(model, asm.ranks.rank, part.parts, &mine);
+        }
         Ok(Run {
             model,
             probes,
@@ -695,16 +705,26 @@ impl<'a> Run<'a> {
         ));
     }
 
-    /// The `.vtu` of the last accepted state, once.
+    /// The `.vtu` of the last accepted state, once: on several ranks each rank's part, the
+    /// first rank's `.pvtu` putting them together, and one error for all if any rank's failed.
     fn write_step(&mut self) -> Result<(), SolveError> {
         let step = self.ctl.accepted;
         if self.written == Some(step) {
             return Ok(());
         }
+        let mut written = Ok(());
         if let Some(folder) = &mut self.folder {
-            folder.record(&Series::file_name(step))?;
-            self.series.write(self.model, step, &self.x, self.ctl.t)?;
+            for file in self.series.files(step) {
+                written = written.and(folder.record(&file));
+            }
         }
+        let written =
+            written.and_then(|_| self.series.write(self.model, step, &self.x, self.ctl.t));
+        self.asm
+            .ranks
+            .agree(written, OutputError::to_string, |text| {
+                OutputError::OtherRank(text.into())
+            })?;
         self.written = Some(step);
         Ok(())
     }

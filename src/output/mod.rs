@@ -32,6 +32,9 @@ pub enum OutputError {
          elsewhere with -o"
     )]
     Busy { dir: PathBuf, pid: i32 },
+    /// Another rank's error, as that rank said it (a distributed run stops on all ranks).
+    #[error("{0}")]
+    OtherRank(String),
 }
 
 pub(crate) fn werr(path: &Path, e: impl std::fmt::Display) -> OutputError {

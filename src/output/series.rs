@@ -1,11 +1,13 @@
 //! The VTU series of a run: one `step_NNNN.vtu` per written state, and the `.pvd` that lists
 //! them with their (pseudo-)times, rewritten after each step so an interrupted run leaves a
-//! valid collection.
+//! valid collection. On several ranks each rank writes the part of its own cells,
+//! `step_NNNN_K.vtu` for rank K, and the first rank the `step_NNNN.pvtu` that puts them
+//! together, which the `.pvd` lists.
 
 use super::OutputError;
 use super::fields::all_cell_fields;
 use super::nodal::nodal_fields;
-use super::vtu::{StepFields, ZLIB_LEVEL, write_pvd, write_vtu};
+use super::vtu::{Piece, StepFields, ZLIB_LEVEL, write_pvd, write_pvtu, write_vtu};
 use crate::case::RegionKind;
 use crate::dofs::{Field, NONE};
 use crate::model::Model;
@@ -22,6 +24,10 @@ pub struct Series {
     region_names: Vec<String>,
     /// zlib level of the `.vtu` data (0: uncompressed); [`ZLIB_LEVEL`] unless changed.
     pub zlib_level: u32,
+    /// The cells this process writes: the whole mesh, or its rank's part.
+    piece: Piece,
+    /// On several ranks: (this rank, ranks).
+    ranks: Option<(usize, usize)>,
 }
 
 impl Series {
@@ -44,7 +50,17 @@ impl Series {
             kind,
             region_names: model.regions.iter().map(|r| r.0.clone()).collect(),
             zlib_level: ZLIB_LEVEL,
+            piece: Piece::whole(&model.mesh),
+            ranks: None,
         }
+    }
+
+    /// On several ranks: this process writes the cells `mine` (per cell, mesh block order)
+    /// as part `rank` of `ranks`.
+    pub fn in_parts(mut self, model: &Model, rank: usize, ranks: usize, mine: &[bool]) -> Series {
+        self.piece = Piece::part(&model.mesh, mine);
+        self.ranks = Some((rank, ranks));
+        self
     }
 
     /// (time, file name) of every state written so far.
@@ -57,9 +73,21 @@ impl Series {
         self.written = written;
     }
 
-    /// The file of step `step`.
-    pub fn file_name(step: usize) -> String {
-        format!("step_{step:04}.vtu")
+    /// The file of step `step` the `.pvd` lists.
+    pub fn file_name(&self, step: usize) -> String {
+        match self.ranks {
+            None => format!("step_{step:04}.vtu"),
+            Some(_) => format!("step_{step:04}.pvtu"),
+        }
+    }
+
+    /// Every file of step `step`: the one the `.pvd` lists and, on several ranks, the parts.
+    pub fn files(&self, step: usize) -> Vec<String> {
+        let mut files = vec![self.file_name(step)];
+        if let Some((_, ranks)) = self.ranks {
+            files.extend((0..ranks).map(|k| part_name(step, k)));
+        }
+        files
     }
 
     /// Write the state `x` as step `step` at `time`, and the updated `.pvd`.
@@ -97,23 +125,46 @@ impl Series {
         });
         let medium: Vec<bool> = self.kind.iter().map(|&k| k == 1).collect();
         let nodal = nodal_fields(&model.mesh, &cells, &medium);
-        let file = Series::file_name(step);
+        let fields = StepFields {
+            u: &u,
+            theta: theta.as_deref(),
+            p: p.as_deref().map(|p| (p, dofs.np)),
+            cells: &cells,
+            nodal: &nodal,
+            region: &self.region,
+            kind: &self.kind,
+            region_names: &self.region_names,
+        };
+        let file = self.file_name(step);
+        let own = match self.ranks {
+            None => file.clone(),
+            Some((rank, _)) => part_name(step, rank),
+        };
         write_vtu(
-            &self.dir.join(&file),
+            &self.dir.join(&own),
             &model.mesh,
-            &StepFields {
-                u: &u,
-                theta: theta.as_deref(),
-                p: p.as_deref().map(|p| (p, dofs.np)),
-                cells: &cells,
-                nodal: &nodal,
-                region: &self.region,
-                kind: &self.kind,
-                region_names: &self.region_names,
-            },
+            &fields,
+            &self.piece,
             self.zlib_level,
         )?;
+        match self.ranks {
+            Some((0, ranks)) => {
+                let parts: Vec<String> = (0..ranks).map(|k| part_name(step, k)).collect();
+                write_pvtu(&self.dir.join(&file), &fields, &parts)?;
+            }
+            Some(_) => {
+                // the first rank writes the collection
+                self.written.push((time, file));
+                return Ok(());
+            }
+            None => {}
+        }
         self.written.push((time, file));
         write_pvd(&self.pvd, &self.written)
     }
+}
+
+/// Rank `rank`'s part of step `step`.
+fn part_name(step: usize, rank: usize) -> String {
+    format!("step_{step:04}_{rank}.vtu")
 }

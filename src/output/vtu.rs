@@ -81,24 +81,83 @@ fn matrix(m: &[[f64; 3]; 3]) -> impl Iterator<Item = f64> + '_ {
     m.iter().flatten().copied()
 }
 
-/// Write one step's `.vtu`, its data compressed at zlib level `zlib_level` (0: uncompressed).
+/// The cells a `.vtu` holds: all of the mesh, or one rank's part of it (a piece of a
+/// `.pvtu`), with the nodes they use.
+pub struct Piece {
+    /// Cells, as indices in mesh block order (the order of `StepFields::cells`).
+    pub cells: Vec<usize>,
+    /// The nodes of those cells, increasing: the piece's points.
+    pub nodes: Vec<usize>,
+    /// Whether this is a part: then each point also carries its mesh node number (`node`),
+    /// by which the parts of a state are put together.
+    pub part: bool,
+}
+
+impl Piece {
+    /// The whole mesh.
+    pub fn whole(mesh: &Mesh) -> Piece {
+        Piece {
+            cells: (0..mesh.cells.iter().map(|b| b.n_cells()).sum()).collect(),
+            nodes: (0..mesh.coords.len()).collect(),
+            part: false,
+        }
+    }
+
+    /// The cells whose flag in `mine` (mesh block order) is set, and their nodes.
+    pub fn part(mesh: &Mesh, mine: &[bool]) -> Piece {
+        let mut used = vec![false; mesh.coords.len()];
+        let mut cells = Vec::new();
+        let all = mesh
+            .cells
+            .iter()
+            .flat_map(|b| (0..b.n_cells()).map(move |c| b.cell(c)));
+        for (i, (nodes, &m)) in all.zip(mine).enumerate() {
+            if m {
+                cells.push(i);
+                nodes.iter().for_each(|&n| used[n] = true);
+            }
+        }
+        Piece {
+            cells,
+            nodes: (0..used.len()).filter(|&n| used[n]).collect(),
+            part: true,
+        }
+    }
+}
+
+/// Write one step's `.vtu` of the cells of `piece`, its data compressed at zlib level
+/// `zlib_level` (0: uncompressed).
 pub fn write_vtu(
     path: &Path,
     mesh: &Mesh,
     f: &StepFields,
+    piece: &Piece,
     zlib_level: u32,
 ) -> Result<(), OutputError> {
-    let points = f64s("Points", 3, mesh.coords.iter().flatten().copied());
+    let (pn, pc) = (&piece.nodes, &piece.cells);
+    let mut local = vec![usize::MAX; if piece.part { mesh.coords.len() } else { 0 }];
+    for (l, &n) in pn.iter().enumerate() {
+        if piece.part {
+            local[n] = l;
+        }
+    }
+    let at = |n: usize| if piece.part { local[n] } else { n } as i64;
+    let points = f64s("Points", 3, pn.iter().flat_map(|&n| mesh.coords[n]));
     let (mut connectivity, mut offsets, mut types) = (Vec::new(), Vec::new(), Vec::new());
+    let mut wanted = pc.iter().peekable();
+    let mut index = 0;
     for b in &mesh.cells {
         for c in 0..b.n_cells() {
-            let cell = b.cell(c);
-            match b.kind.vtk_order() {
-                Some(order) => connectivity.extend(order.iter().map(|&i| cell[i] as i64)),
-                None => connectivity.extend(cell.iter().map(|&n| n as i64)),
+            if wanted.next_if_eq(&&index).is_some() {
+                let cell = b.cell(c);
+                match b.kind.vtk_order() {
+                    Some(order) => connectivity.extend(order.iter().map(|&i| at(cell[i]))),
+                    None => connectivity.extend(cell.iter().map(|&n| at(n))),
+                }
+                offsets.push(connectivity.len() as i64);
+                types.push(b.kind.vtk_id());
             }
-            offsets.push(connectivity.len() as i64);
-            types.push(b.kind.vtk_id());
+            index += 1;
         }
     }
     let cells = vec![
@@ -113,32 +172,44 @@ pub fn write_vtu(
     ];
 
     let ns = &f.nodal.sigma;
-    let position = mesh
-        .coords
-        .iter()
-        .zip(f.u)
-        .flat_map(|(x, u)| [x[0] + u[0], x[1] + u[1], x[2] + u[2]]);
+    let position = pn.iter().flat_map(|&n| {
+        let (x, u) = (mesh.coords[n], f.u[n]);
+        [x[0] + u[0], x[1] + u[1], x[2] + u[2]]
+    });
     let mut point = vec![
-        f64s("u", 3, f.u.iter().flatten().copied()),
+        f64s("u", 3, pn.iter().flat_map(|&n| f.u[n])),
         f64s("position", 3, position),
     ];
     if let Some(t) = f.theta {
-        point.push(f64s("theta", 1, t.iter().copied()));
+        point.push(f64s("theta", 1, pn.iter().map(|&n| t[n])));
     }
     if let Some((p, np)) = f.p {
-        point.push(f64s("p", np, p.iter().copied()));
+        point.push(f64s(
+            "p",
+            np,
+            pn.iter()
+                .flat_map(|&n| p[n * np..(n + 1) * np].iter().copied()),
+        ));
     }
-    point.push(f64s("sigma", 9, ns.iter().flat_map(matrix)));
-    point.push(f64s("von_mises", 1, ns.iter().map(von_mises)));
-    point.push(f64s("sigma_principal", 3, ns.iter().flat_map(principal)));
+    point.push(f64s("sigma", 9, pn.iter().flat_map(|&n| matrix(&ns[n]))));
+    point.push(f64s("von_mises", 1, pn.iter().map(|&n| von_mises(&ns[n]))));
+    point.push(f64s(
+        "sigma_principal",
+        3,
+        pn.iter().flat_map(|&n| principal(&ns[n])),
+    ));
     if f.theta.is_some() {
-        point.push(f64s("q", 3, f.nodal.q.iter().flatten().copied()));
+        point.push(f64s("q", 3, pn.iter().flat_map(|&n| f.nodal.q[n])));
+    }
+    if piece.part {
+        point.push(i64s("node", pn.iter().map(|&n| n as i64)));
     }
 
-    let c = f.cells;
+    let c: Vec<&CellFields> = pc.iter().map(|&i| &f.cells[i]).collect();
+    let pick = |v: &[i32]| -> Vec<i32> { pc.iter().map(|&i| v[i]).collect() };
     let mut cell = vec![
-        i32s("region", f.region),
-        i32s("region_kind", f.kind),
+        i32s("region", &pick(f.region)),
+        i32s("region_kind", &pick(f.kind)),
         f64s("J", 1, c.iter().map(|c| c.J)),
         f64s("sigma", 9, c.iter().flat_map(|c| matrix(&c.sigma))),
         f64s(
@@ -182,8 +253,8 @@ pub fn write_vtu(
     }
     xml.push_str(&format!(
         "</FieldData>\n<Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n",
-        mesh.coords.len(),
-        f.region.len()
+        pn.len(),
+        pc.len()
     ));
     for (tag, arrays) in ["Points", "Cells", "PointData", "CellData"]
         .iter()
@@ -259,6 +330,55 @@ fn xml_escape(s: &str) -> String {
         .replace('<', "&lt;")
         .replace('>', "&gt;")
         .replace('"', "&quot;")
+}
+
+/// Write the `.pvtu` that puts the parts `pieces` (file names, beside it) of one step
+/// together, declaring the arrays [`write_vtu`] writes for `fields`.
+pub fn write_pvtu(path: &Path, f: &StepFields, pieces: &[String]) -> Result<(), OutputError> {
+    let array = |ty: &str, name: &str, n: usize| {
+        let components = if n == 1 {
+            String::new()
+        } else {
+            format!(" NumberOfComponents=\"{n}\"")
+        };
+        format!("<PDataArray type=\"{ty}\" Name=\"{name}\"{components}/>\n")
+    };
+    let mut s = String::from(
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"PUnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n<PUnstructuredGrid GhostLevel=\"0\">\n<PPointData>\n",
+    );
+    s.push_str(&array("Float64", "u", 3));
+    s.push_str(&array("Float64", "position", 3));
+    if f.theta.is_some() {
+        s.push_str(&array("Float64", "theta", 1));
+    }
+    if let Some((_, np)) = f.p {
+        s.push_str(&array("Float64", "p", np));
+    }
+    s.push_str(&array("Float64", "sigma", 9));
+    s.push_str(&array("Float64", "von_mises", 1));
+    s.push_str(&array("Float64", "sigma_principal", 3));
+    if f.theta.is_some() {
+        s.push_str(&array("Float64", "q", 3));
+    }
+    s.push_str(&array("Int64", "node", 1));
+    s.push_str("</PPointData>\n<PCellData>\n");
+    s.push_str(&array("Int32", "region", 1));
+    s.push_str(&array("Int32", "region_kind", 1));
+    for (name, n) in [("J", 1), ("sigma", 9), ("pressure", 1), ("von_mises", 1)] {
+        s.push_str(&array("Float64", name, n));
+    }
+    if f.theta.is_some() {
+        s.push_str(&array("Float64", "q", 3));
+        s.push_str(&array("Float64", "k", 1));
+    }
+    s.push_str("</PCellData>\n<PPoints>\n");
+    s.push_str(&array("Float64", "Points", 3).replace(" Name=\"Points\"", ""));
+    s.push_str("</PPoints>\n");
+    for p in pieces {
+        s.push_str(&format!("<Piece Source=\"{}\"/>\n", xml_escape(p)));
+    }
+    s.push_str("</PUnstructuredGrid>\n</VTKFile>\n");
+    write_atomic(path, s.as_bytes())
 }
 
 /// Write the `.pvd` collection of (λ, file name) pairs.
