@@ -281,3 +281,35 @@ fn petsc_options_choose_the_solver() {
     let gap = s["probes"]["gap"].as_f64().unwrap();
     assert!((gap - 2.9420e-4).abs() < 1e-7, "gap {gap}");
 }
+
+/// A direct solver chosen by options under `method = "multigrid"` factorises every matrix:
+/// the multigrid's habit of keeping its preconditioner across Newton updates would make
+/// "preonly" solve with an old matrix (a modified Newton: more iterations, another path).
+#[test]
+fn a_direct_solver_under_the_multigrid_method_keeps_no_old_factor() {
+    let case = root().join("cases/block.toml");
+    let run = |tag: &str, extra: &[&str]| {
+        let out = scratch(tag);
+        let mut args = vec!["--set", "solver.engine=\"petsc\""];
+        args.extend_from_slice(extra);
+        let o = solve_cli(&case, &out, &args);
+        assert!(o.status.success(), "{tag}: {}", stderr(&o));
+        summary(&out)
+    };
+    let direct = run("distributed-direct", &[]);
+    let preonly = run(
+        "distributed-multigrid-preonly",
+        &[
+            "--set",
+            "solver.petsc.method=\"multigrid\"",
+            "--set",
+            "solver.petsc.options=\"-ksp_type preonly -pc_type lu -pc_factor_mat_solver_type mumps\"",
+        ],
+    );
+    assert_eq!(preonly["petsc_solver"], "preonly/lu");
+    for key in ["load_steps", "newton_iterations", "linear_solves"] {
+        assert_eq!(preonly[key], direct[key], "{key}");
+    }
+    let gap = |s: &serde_json::Value| s["probes"]["gap"].as_f64().unwrap();
+    assert!((gap(&preonly) - gap(&direct)).abs() < 1e-9 * gap(&direct));
+}

@@ -204,8 +204,8 @@ impl PetscSystem {
             PetscMethod::Direct if symmetric => ("preonly", "cholesky", Some("mumps")),
             PetscMethod::Direct => ("preonly", "lu", Some("mumps")),
             PetscMethod::Multigrid => {
-                let names: Vec<&str> = splits.iter().map(|(n, _)| *n).collect();
-                multigrid_defaults(&names, near_kernel.is_some())?
+                let names: Vec<&str> = present.iter().map(|(n, _)| *n).collect();
+                multigrid_defaults(&names)?
             }
         };
         // the field split, the matrix and the index set keep their own references to the
@@ -228,7 +228,8 @@ impl PetscSystem {
             to_all,
             solves: 0,
             direct,
-            reuse: (method == PetscMethod::Multigrid).then(Reuse::default),
+            // a kept factorisation under "preonly" would solve with an old matrix
+            reuse: (method == PetscMethod::Multigrid && !direct).then(Reuse::default),
         })
     }
 
@@ -336,25 +337,25 @@ fn orthonormal(ranks: &Ranks, vectors: Vec<Vec<f64>>) -> Vec<Vec<f64>> {
     out
 }
 
-/// tmc's multigrid: GMRES around a multiplicative field split of the rows `splits` names
-/// ("up": the solids' mechanics, "theta": the solids' temperatures, "medium": every row of the
-/// medium's nodes): one V-cycle of smoothed aggregation on the solids' mechanics (GAMG, the
-/// rigid motions as near-kernel, weak couplings under 1 % dropped so that aggregates do not
-/// straddle bodies), one BoomerAMG V-cycle on their temperatures, and a direct solve (MUMPS) of
-/// the medium's rows. Without a split: GMRES with that GAMG for mechanics alone, CG with
-/// BoomerAMG for heat alone. Options the user gives win. Returns the (ksp, pc, factor package)
-/// types.
+/// tmc's multigrid for a system whose rows fall in the blocks `blocks` names ("up": the
+/// solids' mechanics, "theta": the solids' temperatures, "medium": every row of the medium's
+/// nodes). Several: GMRES around a multiplicative field split, one V-cycle of smoothed
+/// aggregation on the solids' mechanics (GAMG, the rigid motions as near-kernel, weak
+/// couplings under 1 % dropped so that aggregates do not straddle bodies), one BoomerAMG
+/// V-cycle on their temperatures, and a direct solve (MUMPS) of the medium's rows. One: GMRES
+/// with that GAMG for the solids' mechanics, CG with BoomerAMG for their heat, MUMPS for a
+/// system of the medium alone. Options the user gives win. Returns the (ksp, pc, factor
+/// package) types.
 fn multigrid_defaults(
-    splits: &[&str],
-    mechanics: bool,
+    blocks: &[&str],
 ) -> Result<(&'static str, &'static str, Option<&'static str>), EngineError> {
     default_option("ksp_gmres_restart", "100")?;
     let gamg = |prefix: &str| -> Result<(), PetscError> {
         default_option(&format!("{prefix}pc_gamg_threshold"), "0.01")?;
         default_option(&format!("{prefix}pc_gamg_reuse_interpolation"), "true")
     };
-    Ok(if !splits.is_empty() {
-        for name in splits {
+    Ok(if blocks.len() > 1 {
+        for name in blocks {
             default_option(&format!("fieldsplit_{name}_ksp_type"), "preonly")?;
             let pc = format!("fieldsplit_{name}_pc_type");
             match *name {
@@ -373,10 +374,14 @@ fn multigrid_defaults(
             }
         }
         ("gmres", "fieldsplit", None)
-    } else if mechanics {
-        gamg("")?;
-        ("gmres", "gamg", None)
     } else {
-        ("cg", "hypre", None)
+        match blocks.first() {
+            Some(&"up") => {
+                gamg("")?;
+                ("gmres", "gamg", None)
+            }
+            Some(&"theta") => ("cg", "hypre", None),
+            _ => ("preonly", "lu", Some("mumps")),
+        }
     })
 }
