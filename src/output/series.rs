@@ -150,7 +150,7 @@ impl Series {
         match self.ranks {
             Some((0, ranks)) => {
                 let parts: Vec<String> = (0..ranks).map(|k| part_name(step, k)).collect();
-                write_pvtu(&self.dir.join(&file), &fields, &parts)?;
+                write_pvtu(&self.dir.join(&file), &model.mesh, &fields, &parts)?;
             }
             Some(_) => {
                 // the first rank writes the collection

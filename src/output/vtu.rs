@@ -125,52 +125,10 @@ impl Piece {
     }
 }
 
-/// Write one step's `.vtu` of the cells of `piece`, its data compressed at zlib level
-/// `zlib_level` (0: uncompressed).
-pub fn write_vtu(
-    path: &Path,
-    mesh: &Mesh,
-    f: &StepFields,
-    piece: &Piece,
-    zlib_level: u32,
-) -> Result<(), OutputError> {
+/// The point and cell data arrays of the nodes and cells of `piece`: what `write_vtu` writes
+/// and, from an empty part, what `write_pvtu` declares.
+fn data_arrays(mesh: &Mesh, f: &StepFields, piece: &Piece) -> (Vec<Array>, Vec<Array>) {
     let (pn, pc) = (&piece.nodes, &piece.cells);
-    let mut local = vec![usize::MAX; if piece.part { mesh.coords.len() } else { 0 }];
-    for (l, &n) in pn.iter().enumerate() {
-        if piece.part {
-            local[n] = l;
-        }
-    }
-    let at = |n: usize| if piece.part { local[n] } else { n } as i64;
-    let points = f64s("Points", 3, pn.iter().flat_map(|&n| mesh.coords[n]));
-    let (mut connectivity, mut offsets, mut types) = (Vec::new(), Vec::new(), Vec::new());
-    let mut wanted = pc.iter().peekable();
-    let mut index = 0;
-    for b in &mesh.cells {
-        for c in 0..b.n_cells() {
-            if wanted.next_if_eq(&&index).is_some() {
-                let cell = b.cell(c);
-                match b.kind.vtk_order() {
-                    Some(order) => connectivity.extend(order.iter().map(|&i| at(cell[i]))),
-                    None => connectivity.extend(cell.iter().map(|&n| at(n))),
-                }
-                offsets.push(connectivity.len() as i64);
-                types.push(b.kind.vtk_id());
-            }
-            index += 1;
-        }
-    }
-    let cells = vec![
-        i64s("connectivity", connectivity.into_iter()),
-        i64s("offsets", offsets.into_iter()),
-        Array {
-            name: "types",
-            ty: "UInt8",
-            components: 1,
-            bytes: types,
-        },
-    ];
-
     let ns = &f.nodal.sigma;
     let position = pn.iter().flat_map(|&n| {
         let (x, u) = (mesh.coords[n], f.u[n]);
@@ -225,6 +183,55 @@ pub fn write_vtu(
         cell.push(f64s("k", 1, c.iter().map(|c| c.k)));
     }
 
+    (point, cell)
+}
+
+/// Write one step's `.vtu` of the cells of `piece`, its data compressed at zlib level
+/// `zlib_level` (0: uncompressed).
+pub fn write_vtu(
+    path: &Path,
+    mesh: &Mesh,
+    f: &StepFields,
+    piece: &Piece,
+    zlib_level: u32,
+) -> Result<(), OutputError> {
+    let (pn, pc) = (&piece.nodes, &piece.cells);
+    let mut local = vec![usize::MAX; if piece.part { mesh.coords.len() } else { 0 }];
+    if piece.part {
+        pn.iter().enumerate().for_each(|(l, &n)| local[n] = l);
+    }
+    let at = |n: usize| if piece.part { local[n] } else { n } as i64;
+    let points = f64s("Points", 3, pn.iter().flat_map(|&n| mesh.coords[n]));
+    let (mut connectivity, mut offsets, mut types) = (Vec::new(), Vec::new(), Vec::new());
+    let mut wanted = pc.iter().peekable();
+    let mut index = 0;
+    for b in &mesh.cells {
+        for c in 0..b.n_cells() {
+            if wanted.next_if_eq(&&index).is_some() {
+                let cell = b.cell(c);
+                match b.kind.vtk_order() {
+                    Some(order) => connectivity.extend(order.iter().map(|&i| at(cell[i]))),
+                    None => connectivity.extend(cell.iter().map(|&n| at(n))),
+                }
+                offsets.push(connectivity.len() as i64);
+                types.push(b.kind.vtk_id());
+            }
+            index += 1;
+        }
+    }
+    let cells = vec![
+        i64s("connectivity", connectivity.into_iter()),
+        i64s("offsets", offsets.into_iter()),
+        Array {
+            name: "types",
+            ty: "UInt8",
+            components: 1,
+            bytes: types,
+        },
+    ];
+
+    let (point, cell) = data_arrays(mesh, f, piece);
+
     // the arrays are encoded in parallel; the document is put together in order
     let sections = [&[points][..], &cells, &point, &cell];
     let encoded: Vec<Vec<String>> = sections
@@ -270,8 +277,8 @@ pub fn write_vtu(
     write_atomic(path, xml.as_bytes())
 }
 
-/// One `<DataArray>` element with its data encoded.
-fn data_array(a: &Array, zlib_level: u32) -> String {
+/// An array's type, name and components as XML attributes.
+fn attributes(a: &Array) -> String {
     let name = if a.name == "Points" {
         String::new()
     } else {
@@ -282,10 +289,12 @@ fn data_array(a: &Array, zlib_level: u32) -> String {
         1 => String::new(),
         n => format!(" NumberOfComponents=\"{n}\""),
     };
-    let mut s = format!(
-        "<DataArray type=\"{}\"{name}{components} format=\"binary\">\n",
-        a.ty
-    );
+    format!(" type=\"{}\"{name}{components}", a.ty)
+}
+
+/// One `<DataArray>` element with its data encoded.
+fn data_array(a: &Array, zlib_level: u32) -> String {
+    let mut s = format!("<DataArray{} format=\"binary\">\n", attributes(a));
     let header: Vec<u64>;
     let mut data = Vec::new();
     if zlib_level == 0 {
@@ -333,47 +342,30 @@ fn xml_escape(s: &str) -> String {
 }
 
 /// Write the `.pvtu` that puts the parts `pieces` (file names, beside it) of one step
-/// together, declaring the arrays [`write_vtu`] writes for `fields`.
-pub fn write_pvtu(path: &Path, f: &StepFields, pieces: &[String]) -> Result<(), OutputError> {
-    let array = |ty: &str, name: &str, n: usize| {
-        let components = if n == 1 {
-            String::new()
-        } else {
-            format!(" NumberOfComponents=\"{n}\"")
-        };
-        format!("<PDataArray type=\"{ty}\" Name=\"{name}\"{components}/>\n")
+/// together, declaring the arrays [`write_vtu`] writes for `fields` of a part.
+pub fn write_pvtu(
+    path: &Path,
+    mesh: &Mesh,
+    f: &StepFields,
+    pieces: &[String],
+) -> Result<(), OutputError> {
+    let declare = |a: &Array| format!("<PDataArray{}/>\n", attributes(a));
+    let none = Piece {
+        cells: Vec::new(),
+        nodes: Vec::new(),
+        part: true,
     };
+    let (point, cell) = data_arrays(mesh, f, &none);
+    let points = f64s("Points", 3, std::iter::empty());
     let mut s = String::from(
-        "<?xml version=\"1.0\"?>\n<VTKFile type=\"PUnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n<PUnstructuredGrid GhostLevel=\"0\">\n<PPointData>\n",
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"PUnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n<PUnstructuredGrid GhostLevel=\"0\">\n",
     );
-    s.push_str(&array("Float64", "u", 3));
-    s.push_str(&array("Float64", "position", 3));
-    if f.theta.is_some() {
-        s.push_str(&array("Float64", "theta", 1));
+    for (tag, arrays) in [("PPointData", &point), ("PCellData", &cell)] {
+        s.push_str(&format!("<{tag}>\n"));
+        arrays.iter().for_each(|a| s.push_str(&declare(a)));
+        s.push_str(&format!("</{tag}>\n"));
     }
-    if let Some((_, np)) = f.p {
-        s.push_str(&array("Float64", "p", np));
-    }
-    s.push_str(&array("Float64", "sigma", 9));
-    s.push_str(&array("Float64", "von_mises", 1));
-    s.push_str(&array("Float64", "sigma_principal", 3));
-    if f.theta.is_some() {
-        s.push_str(&array("Float64", "q", 3));
-    }
-    s.push_str(&array("Int64", "node", 1));
-    s.push_str("</PPointData>\n<PCellData>\n");
-    s.push_str(&array("Int32", "region", 1));
-    s.push_str(&array("Int32", "region_kind", 1));
-    for (name, n) in [("J", 1), ("sigma", 9), ("pressure", 1), ("von_mises", 1)] {
-        s.push_str(&array("Float64", name, n));
-    }
-    if f.theta.is_some() {
-        s.push_str(&array("Float64", "q", 3));
-        s.push_str(&array("Float64", "k", 1));
-    }
-    s.push_str("</PCellData>\n<PPoints>\n");
-    s.push_str(&array("Float64", "Points", 3).replace(" Name=\"Points\"", ""));
-    s.push_str("</PPoints>\n");
+    s.push_str(&format!("<PPoints>\n{}</PPoints>\n", declare(&points)));
     for p in pieces {
         s.push_str(&format!("<Piece Source=\"{}\"/>\n", xml_escape(p)));
     }
