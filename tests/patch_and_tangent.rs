@@ -660,3 +660,45 @@ fn rigid_motions_are_the_tangent_s_kernel_2d_and_3d() {
     assert!(model.physics.regularization);
     rigid_motions_are_the_kernel(&model);
 }
+
+/// On several ranks each rank's pattern holds the entries of its own cells (every position
+/// the assembler writes there is in it), together the ranks' patterns are the whole one, and
+/// the whole rows of a rank's equations (for the parallel matrix's preallocation) are the
+/// whole pattern's columns of the equations of its nodes, other columns empty.
+#[test]
+fn each_rank_s_pattern_is_its_cells_part_of_the_whole() {
+    use tmc::mesh::partition::Partition;
+    use tmc::parallel::Ranks;
+    let (_, model) = model_from(&case_body("block"), "block.geo", "pattern-ranks");
+    let whole = Assembler::new(&model).pattern;
+    let column =
+        |p: &tmc::dofs::Pattern, e: usize| p.row_idx[p.col_ptr[e]..p.col_ptr[e + 1]].to_vec();
+    let node = tmc::dofs::equation_structure(&model.dofs, &model.cons).node;
+    for size in [2, 3] {
+        let partition = Partition::new(&model.mesh, size).unwrap();
+        let mut union = vec![std::collections::BTreeSet::new(); whole.n];
+        for rank in 0..size {
+            let asm = Assembler::distributed(&model, Ranks { rank, size }, partition.clone());
+            let (local, rows) = (&asm.pattern, asm.rows_owned(&model).unwrap());
+            assert_eq!((local.n, rows.n), (whole.n, whole.n));
+            assert!(
+                local.nnz() < whole.nnz(),
+                "{size} ranks: rank {rank} holds every entry"
+            );
+            for e in 0..whole.n {
+                union[e].extend(column(local, e));
+                let owned = partition.node_rank[node[e] as usize] as usize == rank;
+                let want = if owned { column(&whole, e) } else { vec![] };
+                assert_eq!(
+                    column(&rows, e),
+                    want,
+                    "{size} ranks: rank {rank}'s row {e}"
+                );
+            }
+        }
+        for e in 0..whole.n {
+            let got: Vec<usize> = union[e].iter().copied().collect();
+            assert_eq!(got, column(&whole, e), "{size} ranks: column {e}");
+        }
+    }
+}

@@ -22,7 +22,7 @@ mod schedule;
 
 pub use cells::check_inversion;
 
-use crate::dofs::{Layout, Pattern, build_pattern};
+use crate::dofs::{Layout, Pattern, build_pattern, build_pattern_of};
 use crate::element::RefElement;
 use crate::kernel::friction::HISTORY_PER_POINT;
 use crate::kernel::{Active, KernelError};
@@ -251,7 +251,25 @@ impl Assembler {
     }
 
     fn with_ranks(model: &Model, ranks: Ranks, partition: Option<Partition>) -> Assembler {
-        let pattern = build_pattern(&model.mesh, &model.dofs, &model.cons);
+        let mine = |bi: usize, c: usize| {
+            partition
+                .as_ref()
+                .is_none_or(|p| block_rank(model, p, bi, c) == ranks.rank)
+        };
+        // on several ranks, the entries of this rank's cells only
+        let pattern = match partition {
+            None => build_pattern(&model.mesh, &model.dofs, &model.cons),
+            Some(_) => {
+                let cells = (0..n_blocks(model)).flat_map(|bi| {
+                    let blk = block(model, bi).0;
+                    (0..blk.n_cells())
+                        .filter(move |&c| mine(bi, c))
+                        .map(move |c| blk.cell(c))
+                });
+                let nn = model.mesh.coords.len();
+                build_pattern_of(nn, cells, |_| true, &model.dofs, &model.cons)
+            }
+        };
         assert!(
             pattern.nnz() < FIRST as usize,
             "more than 2³¹ tangent entries"
@@ -259,7 +277,7 @@ impl Assembler {
         let mut slots: Vec<Slots> = (0..n_blocks(model))
             .map(|bi| {
                 let (blk, lay) = block(model, bi);
-                Slots::new(model, blk, lay, &pattern)
+                Slots::new(model, blk, lay, &pattern, |c| mine(bi, c))
             })
             .collect();
         // one level of halves per doubling of the threads
@@ -275,11 +293,6 @@ impl Assembler {
         let nodes = |g: u32| -> &[usize] {
             let bi = first_cell.partition_point(|&f| f <= g) - 1;
             block(model, bi).0.cell((g - first_cell[bi]) as usize)
-        };
-        let mine = |bi: usize, c: usize| {
-            partition
-                .as_ref()
-                .is_none_or(|p| block_rank(model, p, bi, c) == ranks.rank)
         };
         let cells = (0..n_blocks(model))
             .flat_map(|bi| {
@@ -327,21 +340,19 @@ impl Assembler {
             .is_none_or(|p| p.cell_rank[block][c] as usize == self.ranks.rank)
     }
 
-    /// The nodes this rank's cells and facets touch (`None` on one rank: all): the tangent
-    /// entries it writes are between these nodes.
-    pub fn nodes_touched(&self, model: &Model) -> Option<Vec<bool>> {
+    /// On several ranks, the whole rows of the equations of this rank's nodes (`None` on one
+    /// rank: the pattern's): what every rank's cells add to them, for a parallel matrix's
+    /// preallocation. Built from all cells, kept only for this rank's nodes.
+    pub fn rows_owned(&self, model: &Model) -> Option<Pattern> {
         let p = self.partition.as_ref()?;
-        let mut touched = vec![false; model.mesh.coords.len()];
-        for bi in 0..n_blocks(model) {
+        let me = self.ranks.rank as u32;
+        let cells = (0..n_blocks(model)).flat_map(|bi| {
             let blk = block(model, bi).0;
-            for c in (0..blk.n_cells()).filter(|&c| block_rank(model, p, bi, c) == self.ranks.rank)
-            {
-                for &n in blk.cell(c) {
-                    touched[n] = true;
-                }
-            }
-        }
-        Some(touched)
+            (0..blk.n_cells()).map(move |c| blk.cell(c))
+        });
+        let nn = model.mesh.coords.len();
+        let owned = |a: usize| p.node_rank[a] == me;
+        Some(build_pattern_of(nn, cells, owned, &model.dofs, &model.cons))
     }
 
     /// The partition of a distributed run.

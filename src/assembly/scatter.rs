@@ -69,8 +69,15 @@ pub(super) struct Slots {
 const NO_ROW: u8 = u8::MAX;
 
 impl Slots {
-    /// The slots of block `blk` (cells or facets) with local layout `lay`.
-    pub(super) fn new(model: &Model, blk: &Block, lay: Layout, pattern: &Pattern) -> Slots {
+    /// The slots of block `blk` (cells or facets) with local layout `lay`, for the cells
+    /// `mine` keeps (the others' stay `NO_SLOT`: `pattern` may lack their entries).
+    pub(super) fn new(
+        model: &Model,
+        blk: &Block,
+        lay: Layout,
+        pattern: &Pattern,
+        mine: impl Fn(usize) -> bool + Sync,
+    ) -> Slots {
         let eq = &model.cons.eq;
         let (n, nd) = (blk.kind.n_nodes(), lay.ndof());
         let mut node = vec![0; nd];
@@ -97,6 +104,9 @@ impl Slots {
                 .for_each_init(
                     || (vec![0u32; nd], vec![NONE; n]),
                     |(ld, first), (c, (base, offset))| {
+                        if !mine(c) {
+                            return;
+                        }
                         local_dofs(&model.dofs, &lay, blk.cell(c), ld);
                         // each node's first free equation
                         first.fill(NONE);

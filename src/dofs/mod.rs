@@ -6,7 +6,7 @@ pub mod local;
 pub mod pattern;
 
 pub use local::{CellState, Layout, gather};
-pub use pattern::{Pattern, Structure, build_pattern, equation_structure};
+pub use pattern::{Pattern, Structure, build_pattern, build_pattern_of, equation_structure};
 
 use crate::mesh::Mesh;
 

@@ -30,19 +30,36 @@ impl Pattern {
 /// Build the pattern from the node graph: every dof of a node couples with every dof of the
 /// nodes it shares a cell with.
 pub fn build_pattern(mesh: &Mesh, dofs: &DofMap, cons: &Constraints) -> Pattern {
-    let nn = mesh.coords.len();
+    let cells = mesh
+        .cells
+        .iter()
+        .flat_map(|b| (0..b.n_cells()).map(move |c| b.cell(c)));
+    build_pattern_of(mesh.coords.len(), cells, |_| true, dofs, cons)
+}
+
+/// The pattern of the couplings that `cells` (node lists, over `nn` nodes) make, in the
+/// columns of the equations of the nodes `column` keeps; the other columns are empty. The
+/// equations keep their numbers. With all cells and all nodes: [`build_pattern`]; with one
+/// rank's cells: the entries that rank adds; with all cells and one rank's nodes: the whole
+/// rows of its equations (the pattern is structurally symmetric), whatever cells add to them.
+pub fn build_pattern_of<'c>(
+    nn: usize,
+    cells: impl Iterator<Item = &'c [usize]>,
+    column: impl Fn(usize) -> bool,
+    dofs: &DofMap,
+    cons: &Constraints,
+) -> Pattern {
+    let kept: Vec<bool> = (0..nn).map(column).collect();
     let mut adj: Vec<Vec<u32>> = vec![Vec::new(); nn];
-    for b in &mesh.cells {
-        for c in 0..b.n_cells() {
-            let cell = b.cell(c);
-            for &a in cell {
-                adj[a].extend(cell.iter().map(|&x| x as u32));
-            }
+    for cell in cells {
+        for &a in cell.iter().filter(|&&a| kept[a]) {
+            adj[a].extend(cell.iter().map(|&x| x as u32));
         }
     }
     adj.par_iter_mut().for_each(|v| {
         v.sort_unstable();
         v.dedup();
+        v.shrink_to_fit();
     });
     let eq = &cons.eq;
     let mut node_eqs: Vec<Vec<usize>> = Vec::with_capacity(nn);
@@ -59,32 +76,41 @@ pub fn build_pattern(mesh: &Mesh, dofs: &DofMap, cons: &Constraints) -> Pattern 
         node_eqs.push(e);
     }
     let n = cons.n_eq;
-    // column of equation e (of node a) = equations of all neighbours of a
-    let mut col_of_eq: Vec<(usize, usize)> = Vec::with_capacity(n); // (node, unused)
-    col_of_eq.resize(n, (usize::MAX, 0));
+    // node of each equation
+    let mut node_of_eq = vec![usize::MAX; n];
     for (a, es) in node_eqs.iter().enumerate() {
         for &e in es {
-            col_of_eq[e] = (a, 0);
+            node_of_eq[e] = a;
         }
     }
-    let cols: Vec<Vec<usize>> = col_of_eq
-        .par_iter()
-        .map(|&(a, _)| {
-            let mut rows: Vec<usize> = adj[a]
-                .iter()
-                .flat_map(|&b| node_eqs[b as usize].iter().copied())
-                .collect();
-            rows.sort_unstable();
-            rows
-        })
-        .collect();
+    // column of equation e (of node a) = equations of all neighbours of a
+    let count = |a: usize| -> usize { adj[a].iter().map(|&b| node_eqs[b as usize].len()).sum() };
     let mut col_ptr = Vec::with_capacity(n + 1);
     col_ptr.push(0);
-    let mut row_idx = Vec::with_capacity(cols.iter().map(Vec::len).sum());
-    for c in cols {
-        row_idx.extend(c);
-        col_ptr.push(row_idx.len());
+    for &a in &node_of_eq {
+        col_ptr.push(col_ptr.last().unwrap() + count(a));
     }
+    let mut row_idx = vec![0usize; *col_ptr.last().unwrap()];
+    // fill the columns in parallel, each in its own slice of row_idx
+    let mut rest = &mut row_idx[..];
+    let mut slices = Vec::with_capacity(n);
+    for e in 0..n {
+        let (head, tail) = rest.split_at_mut(col_ptr[e + 1] - col_ptr[e]);
+        slices.push(head);
+        rest = tail;
+    }
+    slices
+        .into_par_iter()
+        .zip(node_of_eq.par_iter())
+        .for_each(|(col, &a)| {
+            let rows = adj[a]
+                .iter()
+                .flat_map(|&b| node_eqs[b as usize].iter().copied());
+            for (r, e) in col.iter_mut().zip(rows) {
+                *r = e;
+            }
+            col.sort_unstable();
+        });
     Pattern {
         n,
         col_ptr,

@@ -163,11 +163,11 @@ impl Plan {
         // PETSc's calls stay on this thread: no idle-thread runner around the solves
         newton.idle = crate::solver::idle::IdleThreads::Sleep;
         let structure = equation_structure(&model.dofs, &model.cons);
-        let touched = asm.nodes_touched(model);
+        let rows = asm.rows_owned(model);
         let own = Ownership {
             ranks,
             node_rank: asm.partition().map(|p| &p.node_rank[..]),
-            touched: touched.as_deref(),
+            rows: rows.as_ref(),
         };
         let rigid = crate::model::rigid::rigid_motions(model);
         let medium = model.medium_nodes();

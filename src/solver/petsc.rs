@@ -28,11 +28,12 @@ impl From<PetscError> for EngineError {
     }
 }
 
-/// Who owns each node, and which nodes this rank's cells touch (`None`: one rank, all).
+/// Who owns each node, and the whole rows of this rank's equations (`None`: one rank; the
+/// pattern of the system is then whole).
 pub struct Ownership<'a> {
     pub ranks: Ranks,
     pub node_rank: Option<&'a [u32]>,
-    pub touched: Option<&'a [bool]>,
+    pub rows: Option<&'a Pattern>,
 }
 
 /// What a multigrid needs to know of the model, beyond the matrix.
@@ -46,7 +47,8 @@ pub struct Hints<'a> {
     pub medium: &'a [bool],
 }
 
-/// One linear system on PETSc: the equations `eqs` of the whole system's pattern.
+/// One linear system on PETSc: the equations `eqs` of the system whose entries this rank adds
+/// have the pattern `p` (on several ranks, those of its own cells only).
 pub struct PetscSystem {
     /// PETSc's row of each of `eqs`.
     row: Vec<PetscInt>,
@@ -55,8 +57,8 @@ pub struct PetscSystem {
     /// The entries this rank adds, column by column: (PETSc column, end of its entries in
     /// `slots` and `rows`).
     columns: Vec<(PetscInt, usize)>,
-    /// Per entry, its place in the whole pattern's values and its PETSc row.
-    slots: Vec<usize>,
+    /// Per entry, its place in the pattern's values and its PETSc row.
+    slots: Vec<u32>,
     rows: Vec<PetscInt>,
     mat: Matrix,
     ksp: Krylov,
@@ -122,12 +124,14 @@ impl PetscSystem {
             .collect();
         let first = local.first().map_or(0, |&k| row[k]);
         let mine = |r: PetscInt| r >= first && r < first + local.len() as PetscInt;
-        // the pattern is structurally symmetric: row e's columns are column e's rows
+        // the pattern is structurally symmetric: row e's columns are column e's rows; on
+        // several ranks `p` has this rank's cells' entries only, `own.rows` the whole rows
+        let whole = own.rows.unwrap_or(p);
         let (mut diag, mut off) = (Vec::new(), Vec::new());
         for &k in &local {
             let e = eqs[k];
             let (mut d, mut o) = (0, 0);
-            for &i in &p.row_idx[p.col_ptr[e]..p.col_ptr[e + 1]] {
+            for &i in &whole.row_idx[whole.col_ptr[e]..whole.col_ptr[e + 1]] {
                 if place[i] != usize::MAX {
                     if mine(row[place[i]]) {
                         d += 1;
@@ -139,19 +143,15 @@ impl PetscSystem {
             diag.push(d);
             off.push(o);
         }
-        let touched_eq: Vec<bool> = (0..p.n)
-            .map(|e| own.touched.is_none_or(|t| t[s.node[e] as usize]))
-            .collect();
-        // this rank's cells write only entries between nodes they touch
         let (mut columns, mut slots, mut rows) = (Vec::new(), Vec::new(), Vec::new());
         for (k, &e) in eqs.iter().enumerate() {
-            if !touched_eq[e] {
+            if p.col_ptr[e] == p.col_ptr[e + 1] {
                 continue;
             }
             for j in p.col_ptr[e]..p.col_ptr[e + 1] {
                 let i = p.row_idx[j];
-                if place[i] != usize::MAX && touched_eq[i] {
-                    slots.push(j);
+                if place[i] != usize::MAX {
+                    slots.push(j as u32);
                     rows.push(row[place[i]]);
                 }
             }
@@ -233,15 +233,15 @@ impl PetscSystem {
         })
     }
 
-    /// The matrix of this rank's entries `values` (of the whole pattern), summed over the
-    /// ranks (collective).
+    /// The matrix of this rank's entries `values` (of its pattern), summed over the ranks
+    /// (collective).
     pub fn factor(&mut self, values: &[f64]) -> Result<(), EngineError> {
         self.mat.zero()?;
         let mut vals = Vec::new();
         let mut start = 0;
         for &(col, end) in &self.columns {
             vals.clear();
-            vals.extend(self.slots[start..end].iter().map(|&k| values[k]));
+            vals.extend(self.slots[start..end].iter().map(|&k| values[k as usize]));
             self.mat.add_column(&self.rows[start..end], col, &vals)?;
             start = end;
         }
