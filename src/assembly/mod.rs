@@ -260,13 +260,7 @@ impl Assembler {
         let pattern = match partition {
             None => build_pattern(&model.mesh, &model.dofs, &model.cons),
             Some(_) => {
-                let cells = (0..n_blocks(model)).flat_map(|bi| {
-                    let blk = block(model, bi).0;
-                    (0..blk.n_cells())
-                        .filter(move |&c| mine(bi, c))
-                        .map(move |c| blk.cell(c))
-                });
-                let nn = model.mesh.coords.len();
+                let (nn, cells) = (model.mesh.coords.len(), cells_of(model, mine));
                 build_pattern_of(nn, cells, |_| true, &model.dofs, &model.cons)
             }
         };
@@ -346,11 +340,7 @@ impl Assembler {
     pub fn rows_owned(&self, model: &Model) -> Option<Pattern> {
         let p = self.partition.as_ref()?;
         let me = self.ranks.rank as u32;
-        let cells = (0..n_blocks(model)).flat_map(|bi| {
-            let blk = block(model, bi).0;
-            (0..blk.n_cells()).map(move |c| blk.cell(c))
-        });
-        let nn = model.mesh.coords.len();
+        let (nn, cells) = (model.mesh.coords.len(), cells_of(model, |_, _| true));
         let owned = |a: usize| p.node_rank[a] == me;
         Some(build_pattern_of(nn, cells, owned, &model.dofs, &model.cons))
     }
@@ -593,6 +583,20 @@ fn capacity_index(model: &Model, bi: usize) -> Option<usize> {
 /// The friction block of assembler block `bi`, if it is one.
 fn friction_index(model: &Model, bi: usize) -> Option<usize> {
     bi.checked_sub(friction_start(model))
+}
+
+/// The node lists of the cells (and facets) of every assembler block that `keep` keeps, by
+/// (assembler block, cell).
+fn cells_of<'m>(
+    model: &'m Model,
+    keep: impl Fn(usize, usize) -> bool + Copy + 'm,
+) -> impl Iterator<Item = &'m [usize]> + 'm {
+    (0..n_blocks(model)).flat_map(move |bi| {
+        let blk = block(model, bi).0;
+        (0..blk.n_cells())
+            .filter(move |&c| keep(bi, c))
+            .map(move |c| blk.cell(c))
+    })
 }
 
 /// Connectivity and local layout of assembler block `bi` (see [`n_blocks`]).

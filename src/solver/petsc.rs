@@ -145,9 +145,7 @@ impl PetscSystem {
         }
         let (mut columns, mut slots, mut rows) = (Vec::new(), Vec::new(), Vec::new());
         for (k, &e) in eqs.iter().enumerate() {
-            if p.col_ptr[e] == p.col_ptr[e + 1] {
-                continue;
-            }
+            let start = slots.len();
             for j in p.col_ptr[e]..p.col_ptr[e + 1] {
                 let i = p.row_idx[j];
                 if place[i] != usize::MAX {
@@ -155,7 +153,10 @@ impl PetscSystem {
                     rows.push(row[place[i]]);
                 }
             }
-            columns.push((row[k], slots.len()));
+            // a column without entries here (another rank's cells') is not added
+            if slots.len() > start {
+                columns.push((row[k], slots.len()));
+            }
         }
         let mut mat = Matrix::aij(eqs.len(), local.len(), &diag, &off, symmetric)?;
         // the rows of the medium's nodes (every field), the solids' mechanical rows with their
