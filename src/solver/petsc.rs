@@ -143,7 +143,17 @@ impl PetscSystem {
             diag.push(d);
             off.push(o);
         }
-        let (mut columns, mut slots, mut rows) = (Vec::new(), Vec::new(), Vec::new());
+        // sized exactly: these two span every entry this rank adds, for the whole run
+        let entries = eqs
+            .iter()
+            .flat_map(|&e| &p.row_idx[p.col_ptr[e]..p.col_ptr[e + 1]])
+            .filter(|&&i| place[i] != usize::MAX)
+            .count();
+        let (mut columns, mut slots, mut rows) = (
+            Vec::new(),
+            Vec::with_capacity(entries),
+            Vec::with_capacity(entries),
+        );
         for (k, &e) in eqs.iter().enumerate() {
             let start = slots.len();
             for j in p.col_ptr[e]..p.col_ptr[e + 1] {
