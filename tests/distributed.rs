@@ -236,7 +236,12 @@ fn the_3d_monolithic_block_plate_is_the_same_on_petsc_and_on_two_ranks() {
 
 /// The block on PETSc (one process) with `--set KEY=VALUE` into `tag`: the run's output.
 fn block_on_petsc(tag: &str, key_value: &str) -> (std::process::Output, PathBuf) {
-    let case = root().join("cases/block.toml");
+    scene_on_petsc("block", tag, key_value)
+}
+
+/// `cases/SCENE.toml` on PETSc (one process) with `--set KEY=VALUE` into `tag`.
+fn scene_on_petsc(scene: &str, tag: &str, key_value: &str) -> (std::process::Output, PathBuf) {
+    let case = root().join(format!("cases/{scene}.toml"));
     let out = scratch(tag);
     let petsc = ["--set", "solver.engine=\"petsc\"", "--set", key_value];
     (solve_cli(&case, &out, &petsc), out)
@@ -244,16 +249,29 @@ fn block_on_petsc(tag: &str, key_value: &str) -> (std::process::Output, PathBuf)
 
 #[test]
 fn a_misspelt_petsc_option_is_an_error() {
-    let (o, _) = block_on_petsc(
-        "distributed-bad-option",
-        "solver.petsc.options=\"-ksp_typo cg\"",
-    );
-    assert!(!o.status.success());
-    let e = stderr(&o);
-    assert!(
-        e.contains("-ksp_typo cg") && e.contains("did not use"),
-        "{e}"
-    );
+    // the block holds a temperature in full from λ = 0 (its first solve settles step 0); the
+    // slab ramps everything (its first solve is step 1's): an engine's failure is no reason
+    // to cut a step, and ends the run either way
+    for scene in ["block", "slab-conduction"] {
+        let (o, out) = scene_on_petsc(
+            scene,
+            &format!("distributed-bad-option-{scene}"),
+            "solver.petsc.options=\"-ksp_typo cg\"",
+        );
+        assert!(!o.status.success(), "{scene}");
+        let e = stderr(&o);
+        assert!(
+            e.contains("-ksp_typo cg") && e.contains("did not use") && !e.contains("ramp"),
+            "{scene}: {e}"
+        );
+        let s = summary(&out);
+        assert_eq!(s["converged"], false, "{scene}");
+        assert_eq!(s["rejected_steps"], 0, "{scene}: {s}");
+        assert!(
+            s["message"].as_str().unwrap().contains("-ksp_typo cg"),
+            "{scene}: {s}"
+        );
+    }
 }
 
 #[test]

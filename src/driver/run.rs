@@ -392,6 +392,7 @@ impl<'a> Run<'a> {
                 self.summary.tangents_skipped += rep.tangents_skipped;
                 Ok(rep.iterations)
             }
+            Err(failure) if !failure.recoverable() => Err(self.fail(failure)?),
             Err(failure) => {
                 self.pb.finish_and_clear();
                 let err = SolveError::Setup(format!(
@@ -741,6 +742,9 @@ impl<'a> Run<'a> {
     /// A failed attempt: cut the step, or end the run below the minimum step (its summary
     /// written, the error returned).
     pub(super) fn reject(&mut self, target: f64, failure: StepFailure) -> Result<(), SolveError> {
+        if !failure.recoverable() {
+            return Err(self.fail(failure)?);
+        }
         self.totals.last_failure = failure.to_string();
         if self.opts.verbose {
             let lambda = self.model.path.lambda(target);
@@ -765,6 +769,19 @@ impl<'a> Run<'a> {
             return Err(err);
         }
         Ok(())
+    }
+
+    /// A failure no smaller step can mend (the engine's): the run ends at once, its summary
+    /// written with the reason. Returns the error to report.
+    fn fail(&mut self, failure: StepFailure) -> Result<SolveError, SolveError> {
+        self.pb.finish_and_clear();
+        self.asm.restore();
+        let err = match failure {
+            StepFailure::Linear(e) => SolveError::Linear(e),
+            other => SolveError::Setup(other.to_string()),
+        };
+        self.finish(false, err.to_string())?;
+        Ok(err)
     }
 
     /// A stop was asked for (a signal): write the summary of the steps so far and say so.

@@ -46,6 +46,27 @@ pub enum LinearError {
     /// The distributed engine failed, or was asked for without being built in.
     #[error("{0}")]
     Engine(String),
+    /// The distributed engine's iterative solver did not converge.
+    #[error("{0}")]
+    Diverged(String),
+}
+
+impl LinearError {
+    /// Whether a smaller load step may succeed where this failed: not when the set-up or the
+    /// engine itself failed, whatever the matrix.
+    pub fn recoverable(&self) -> bool {
+        !matches!(self, LinearError::Symbolic(_) | LinearError::Engine(_))
+    }
+}
+
+#[cfg(feature = "petsc")]
+impl From<super::petsc::EngineError> for LinearError {
+    fn from(e: super::petsc::EngineError) -> LinearError {
+        match e {
+            super::petsc::EngineError::Failed(m) => LinearError::Engine(m),
+            super::petsc::EngineError::Diverged(m) => LinearError::Diverged(m),
+        }
+    }
 }
 
 /// Relative residual at which GMRES stops, and its iteration budget.
@@ -144,8 +165,7 @@ impl LinearSolver {
         hints: &super::petsc::Hints,
         method: crate::case::PetscMethod,
     ) -> Result<LinearSolver, LinearError> {
-        let system = super::petsc::PetscSystem::new(p, s, eqs, own, symmetric, hints, method)
-            .map_err(|e| LinearError::Engine(e.0))?;
+        let system = super::petsc::PetscSystem::new(p, s, eqs, own, symmetric, hints, method)?;
         Ok(Self::with(
             LinearKind::Petsc,
             Backend::Petsc(Box::new(system)),
@@ -187,7 +207,7 @@ impl LinearSolver {
             }
             Backend::BlockGmres(b) => b.factor(values)?,
             #[cfg(feature = "petsc")]
-            Backend::Petsc(p) => p.factor(values).map_err(|e| LinearError::Engine(e.0))?,
+            Backend::Petsc(p) => p.factor(values)?,
         }
         Ok(())
     }
@@ -210,7 +230,7 @@ impl LinearSolver {
             }
             #[cfg(feature = "petsc")]
             Backend::Petsc(p) => {
-                let its = p.solve(b).map_err(|e| LinearError::Engine(e.0))?;
+                let its = p.solve(b)?;
                 self.krylov_last = its;
                 self.krylov_count += its;
             }

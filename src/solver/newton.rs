@@ -78,6 +78,17 @@ impl std::fmt::Display for StepFailure {
     }
 }
 
+impl StepFailure {
+    /// Whether a smaller load step may succeed where this attempt failed (see
+    /// [`LinearError::recoverable`]); a failure that is not ends the run.
+    pub fn recoverable(&self) -> bool {
+        match self {
+            StepFailure::Linear(e) => e.recoverable(),
+            _ => true,
+        }
+    }
+}
+
 impl StepReport {
     /// The report of this part of a step followed by `next` (the next part, same step).
     pub fn then(self, next: StepReport) -> StepReport {

@@ -16,15 +16,20 @@ use crate::parallel::petsc::{
     IndexSet, Krylov, Matrix, NearKernel, PetscError, ToAll, Vector, default_option, unused_options,
 };
 
-/// A PETSc system that failed: a PETSc call, a solve that did not converge, or options it
-/// did not use.
+/// A PETSc system that failed.
 #[derive(Debug, thiserror::Error)]
-#[error("{0}")]
-pub struct EngineError(pub String);
+pub enum EngineError {
+    /// A PETSc call failed, or PETSc did not use options it was given: the run cannot go on.
+    #[error("{0}")]
+    Failed(String),
+    /// PETSc's solver did not converge on this matrix: a smaller load step may.
+    #[error("{0}")]
+    Diverged(String),
+}
 
 impl From<PetscError> for EngineError {
     fn from(e: PetscError) -> EngineError {
-        EngineError(e.to_string())
+        EngineError::Failed(e.to_string())
     }
 }
 
@@ -290,7 +295,7 @@ impl PetscSystem {
             r.last = report.iterations;
         }
         if report.reason < 0 {
-            return Err(EngineError(format!(
+            return Err(EngineError::Diverged(format!(
                 "PETSc's {} did not converge (reason {}) after {} iterations",
                 self.ksp.describe(),
                 report.reason,
@@ -307,7 +312,7 @@ impl PetscSystem {
         if self.solves == 1 {
             let left = unused_options();
             if !left.is_empty() {
-                return Err(EngineError(format!(
+                return Err(EngineError::Failed(format!(
                     "PETSc did not use the option(s) {} with its {} solver: misspelt, or for \
                      another solver or preconditioner",
                     left.join(", "),
