@@ -134,26 +134,14 @@ impl PetscSystem {
         let whole = own.rows.unwrap_or(p);
         let (mut diag, mut off) = (Vec::new(), Vec::new());
         for &k in &local {
-            let e = eqs[k];
-            let (mut d, mut o) = (0, 0);
-            for &i in &whole.row_idx[whole.col_ptr[e]..whole.col_ptr[e + 1]] {
-                if place[i] != usize::MAX {
-                    if mine(row[place[i]]) {
-                        d += 1;
-                    } else {
-                        o += 1;
-                    }
-                }
-            }
+            let (d, o) = within(whole, &place, eqs[k]).fold((0, 0), |(d, o), (_, i)| {
+                if mine(row[i]) { (d + 1, o) } else { (d, o + 1) }
+            });
             diag.push(d);
             off.push(o);
         }
         // sized exactly: these two span every entry this rank adds, for the whole run
-        let entries = eqs
-            .iter()
-            .flat_map(|&e| &p.row_idx[p.col_ptr[e]..p.col_ptr[e + 1]])
-            .filter(|&&i| place[i] != usize::MAX)
-            .count();
+        let entries = eqs.iter().map(|&e| within(p, &place, e).count()).sum();
         let (mut columns, mut slots, mut rows) = (
             Vec::new(),
             Vec::with_capacity(entries),
@@ -161,12 +149,9 @@ impl PetscSystem {
         );
         for (k, &e) in eqs.iter().enumerate() {
             let start = slots.len();
-            for j in p.col_ptr[e]..p.col_ptr[e + 1] {
-                let i = p.row_idx[j];
-                if place[i] != usize::MAX {
-                    slots.push(j as u32);
-                    rows.push(row[place[i]]);
-                }
+            for (j, i) in within(p, &place, e) {
+                slots.push(j as u32);
+                rows.push(row[i]);
             }
             // a column without entries here (another rank's cells') is not added
             if slots.len() > start {
@@ -331,6 +316,19 @@ impl PetscSystem {
     pub fn describe(&self) -> String {
         self.ksp.describe()
     }
+}
+
+/// The entries of column `e` of `q` in the rows of the system's equations: (entry, the row's
+/// place among the equations), `place` giving that of each equation (`usize::MAX`: not one).
+fn within<'a>(
+    q: &'a Pattern,
+    place: &'a [usize],
+    e: usize,
+) -> impl Iterator<Item = (usize, usize)> + 'a {
+    (q.col_ptr[e]..q.col_ptr[e + 1]).filter_map(move |j| {
+        let i = place[q.row_idx[j]];
+        (i != usize::MAX).then_some((j, i))
+    })
 }
 
 /// `vectors` (this rank's entries of each) made orthonormal over all ranks by modified
