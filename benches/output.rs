@@ -40,7 +40,7 @@ fn main() {
         let mut best = f64::INFINITY;
         for step in 0..5 {
             let t = Instant::now();
-            series.write(&model, step, &x, step as f64).unwrap();
+            series.write(&model, step, &x, step as f64, None).unwrap();
             best = best.min(t.elapsed().as_secs_f64());
         }
         let size = std::fs::metadata(dir.join(series.file_name(4)))

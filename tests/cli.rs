@@ -502,6 +502,7 @@ fn quadratic_cells_reach_vtk_in_vtk_order() {
             region: &ints,
             kind: &ints,
             region_names: &["all".into()],
+            friction: None,
         };
         // the cells cut in two parts, every third to the second
         let second: Vec<bool> = (0..mesh.n_cells()).map(|c| c % 3 == 0).collect();

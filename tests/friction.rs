@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::{history, solve_text};
+use common::{cell_array, history, point_array, solve_text};
 use std::path::Path;
 
 /// The block scene without heat: press the top 0.3 down, then (from pseudo-time 1 to 2) drag
@@ -111,7 +111,67 @@ fn in_full_slip_the_force_ratio_is_mu_q1() {
         println!("Q1 μ = {mu}: F_t / F_n = {ratio:.4}");
         assert!((ratio / mu - 1.0).abs() < 0.03, "μ = {mu}: ratio {ratio}");
         assert!(s.friction_work.unwrap() > 0.0);
+        if mu == 0.3 {
+            slip_is_written_as_it_slid(&out);
+        }
     }
+}
+
+/// The last step's `.vtu` of a run.
+fn last_vtu(out: &Path) -> std::path::PathBuf {
+    let mut steps: Vec<_> = std::fs::read_dir(out)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "vtu"))
+        .collect();
+    steps.sort();
+    steps.pop().expect("no .vtu written")
+}
+
+/// The block (2D, medium 0.25 thick under it) dragged in full slip: the `.vtu`'s slip fields
+/// say so. Every medium cell has the plane's normal (0, 1) and slid forward in the last step;
+/// the slip, a shear per reference thickness, summed over the layer's thickness is how far the
+/// interface moved over the base. Not exactly: the elastic shear of stick is a fraction of a
+/// percent of it, but the slip is measured in the reference plane (γ = P C N counts the layer's
+/// lateral stretch) and the leading edge closes unevenly; measured 2.5 % apart at μ = 0.3.
+fn slip_is_written_as_it_slid(out: &Path) {
+    let vtu = last_vtu(out);
+    let kind = cell_array(&vtu, "region_kind");
+    let (slip, step) = (cell_array(&vtu, "slip"), cell_array(&vtu, "slip_increment"));
+    let (slipping, normal) = (
+        cell_array(&vtu, "slipping"),
+        cell_array(&vtu, "slip_normal"),
+    );
+    let medium: Vec<usize> = (0..kind.len()).filter(|&c| kind[c] == 1.0).collect();
+    for c in 0..kind.len() {
+        let expected = if kind[c] == 1.0 {
+            [0.0, 1.0, 0.0]
+        } else {
+            [0.0; 3]
+        };
+        assert_eq!(normal[3 * c..3 * c + 3], expected, "cell {c}");
+    }
+    let share = medium.iter().map(|&c| slipping[c]).sum::<f64>() / medium.len() as f64;
+    assert!(
+        medium
+            .iter()
+            .all(|&c| slipping[c] == 0.0 || step[3 * c] > 0.0),
+        "a slipping cell slid back"
+    );
+    // the mesh's medium cells are all alike: the layer's mean slip is their mean times 0.25
+    let slid = 0.25 * medium.iter().map(|&c| slip[3 * c]).sum::<f64>() / medium.len() as f64;
+    let (u, x) = (point_array(&vtu, "u"), point_array(&vtu, "position"));
+    let interface: Vec<f64> = (0..u.len() / 3)
+        .filter(|&n| (x[3 * n + 1] - u[3 * n + 1] - 0.25).abs() < 1e-9)
+        .map(|n| u[3 * n])
+        .collect();
+    let moved = interface.iter().sum::<f64>() / interface.len() as f64;
+    println!("slipping share {share:.3}, mean slip {slid:.5}, interface moved {moved:.5}");
+    assert!(share > 0.8, "slipping share {share}");
+    assert!(
+        (slid / moved - 1.0).abs() < 0.05,
+        "slip {slid} moved {moved}"
+    );
 }
 
 #[test]
@@ -201,6 +261,10 @@ fn below_the_coulomb_limit_the_block_sticks() {
     );
     assert!(slip < 0.01 * drag, "slip {slip}");
     assert!(moved.abs() < 0.05 * drag, "interface moved {moved}");
+    // and the output says every cell sticks
+    let vtu = last_vtu(&out);
+    assert!(cell_array(&vtu, "slipping").iter().all(|&s| s == 0.0));
+    assert!(cell_array(&vtu, "slip_increment").iter().all(|&s| s == 0.0));
 }
 
 #[test]
@@ -469,4 +533,30 @@ fn the_first_heat_of_a_cold_scene_converges() {
         (stored - heat_in - made).abs() < 1e-8 * made,
         "stored {stored}, in {heat_in}, made {made}"
     );
+}
+
+#[test]
+fn a_checkpoint_whose_slip_history_does_not_fit_is_refused() {
+    // a restart.json of another version (friction's history per point grew from 4 to 7
+    // values): the restart names the file and keeps the run's results
+    let case = drag_case(2, Some(0.5), 0.01, DRAG, 0.25);
+    let (s, out) = solve_text("friction-old-checkpoint", "block.geo", COARSE, &case);
+    assert!(s.converged);
+    let file = out.join("restart.json");
+    let mut cp: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&file).unwrap()).unwrap();
+    let history = cp["point_history"].as_array_mut().unwrap();
+    let friction = history.last_mut().unwrap().as_array_mut().unwrap();
+    let points = friction.len() / 7;
+    friction.truncate(points * 4);
+    std::fs::write(&file, cp.to_string()).unwrap();
+    let summary = std::fs::read(out.join("summary.json")).unwrap();
+    let o = common::solve_cli(&out.parent().unwrap().join("case.toml"), &out, &["--restart"]);
+    let e = common::stderr(&o);
+    assert!(!o.status.success(), "{e}");
+    assert!(
+        e.contains("cannot restart") && e.contains("restart.json") && e.contains("history"),
+        "{e}"
+    );
+    assert_eq!(std::fs::read(out.join("summary.json")).unwrap(), summary);
 }

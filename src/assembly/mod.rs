@@ -24,7 +24,7 @@ pub use cells::check_inversion;
 
 use crate::dofs::{Layout, Pattern, build_pattern, build_pattern_of};
 use crate::element::RefElement;
-use crate::kernel::friction::HISTORY_PER_POINT;
+use crate::kernel::friction::{HISTORY_PER_POINT, SlipFields};
 use crate::kernel::{Active, KernelError};
 use crate::mesh::partition::Partition;
 use crate::mesh::{Block, centroid};
@@ -729,33 +729,81 @@ fn cell_error_in(region: &str, e: KernelError, cell: usize, at: [f64; 3]) -> Ass
     }
 }
 
-/// The work dissipated by friction so far, per friction block (indexed like
-/// `model.friction_blocks`), from the committed history: Σ ∫ w dV (of every rank's cells).
-pub fn friction_work(model: &Model, asm: &Assembler) -> Vec<f64> {
+/// The committed history of every friction cell this rank owns: (friction block, cell, the
+/// cell's undeformed node coordinates, its history).
+fn committed_friction<'a>(
+    model: &'a Model,
+    asm: &'a Assembler,
+) -> impl Iterator<Item = (usize, usize, &'a [usize], &'a [f64])> + 'a {
     let nc = model.capacity_blocks.len();
-    let mut work: Vec<f64> = model
+    model
         .friction_blocks
         .iter()
         .zip(&asm.history.slabs[nc..])
-        .map(|(fb, slab)| {
+        .enumerate()
+        .flat_map(move |(f, (fb, slab))| {
             let blk = &model.mesh.cells[fb.block];
             (0..blk.n_cells())
-                .filter(|&c| asm.owns_cell(fb.block, c))
-                .map(|c| {
+                .filter(move |&c| asm.owns_cell(fb.block, c))
+                .map(move |c| {
                     let h = &slab.committed[c * slab.width..(c + 1) * slab.width];
-                    // per reference volume: the cell's undeformed coordinates are enough
-                    let nodes = blk.cell(c);
-                    crate::with_cell!(blk.kind, |N, D, E| {
-                        let X = std::array::from_fn(|i| model.mesh.coords[nodes[i]]);
-                        crate::kernel::friction::dissipated_work::<N, D, E>(&X, h)
-                    })
-                    .unwrap_or(f64::NAN)
+                    (f, c, blk.cell(c), h)
                 })
-                .sum()
         })
-        .collect();
+}
+
+/// The work dissipated by friction so far, per friction block (indexed like
+/// `model.friction_blocks`), from the committed history: Σ ∫ w dV (of every rank's cells).
+pub fn friction_work(model: &Model, asm: &Assembler) -> Vec<f64> {
+    let mut work = vec![0.0; model.friction_blocks.len()];
+    for (f, _, nodes, h) in committed_friction(model, asm) {
+        // per reference volume: the cell's undeformed coordinates are enough
+        let kind = model.mesh.cells[model.friction_blocks[f].block].kind;
+        work[f] += crate::with_cell!(kind, |N, D, E| {
+            let X = std::array::from_fn(|i| model.mesh.coords[nodes[i]]);
+            crate::kernel::friction::dissipated_work::<N, D, E>(&X, h)
+        })
+        .unwrap_or(f64::NAN);
+    }
     asm.ranks.sum_into(&mut work);
     work
+}
+
+/// A friction cell's slip state and its slip plane's unit normal, for output.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FrictionCell {
+    pub state: SlipFields,
+    pub normal: [f64; 3],
+}
+
+/// The slip state of every cell this rank owns at the last accepted step, in mesh block order
+/// (`None` for cells without friction, and for other ranks' cells).
+pub fn friction_cells(model: &Model, asm: &Assembler) -> Vec<Option<FrictionCell>> {
+    let mut first = Vec::with_capacity(model.mesh.cells.len());
+    let mut n = 0;
+    for b in &model.mesh.cells {
+        first.push(n);
+        n += b.n_cells();
+    }
+    let mut out = vec![None; n];
+    for (f, c, nodes, h) in committed_friction(model, asm) {
+        let fb = &model.friction_blocks[f];
+        let state = crate::with_cell!(model.mesh.cells[fb.block].kind, |N, D, E| {
+            let X = std::array::from_fn(|i| model.mesh.coords[nodes[i]]);
+            crate::kernel::friction::slip_fields::<N, D, E>(&X, h)
+        })
+        .unwrap_or(SlipFields {
+            slip: [f64::NAN; 3],
+            increment: [f64::NAN; 3],
+            slipping: f64::NAN,
+        });
+        let normal = fb.normals.of(c);
+        out[first[fb.block] + c] = Some(FrictionCell {
+            state,
+            normal: [normal[0], normal[1], normal[2]],
+        });
+    }
+    out
 }
 
 /// Heat supplied to the body through each convecting group at the state `x`, indexed like

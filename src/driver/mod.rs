@@ -316,7 +316,7 @@ fn solve_model(
     let out_dir = folder.dir().to_owned();
     let mut run = Run::new(case, &model, probes, Some(folder), out_dir, opts, start)?;
     match from {
-        Some(cp) => run.resume(cp),
+        Some(cp) => run.resume(cp)?,
         None => run.record_initial()?,
     }
     step_to_end(run)

@@ -6,7 +6,9 @@ use super::checkpoint::{self, Checkpoint};
 use super::records::{HistoryLayout, Reactions, StepRow, Summary, group_flows, peak_memory_mb};
 use super::strategy::{Strategy, choose_linear, choose_strategy, describe, symmetric_tangent};
 use super::{SolveError, SolveOptions};
-use crate::assembly::{Assembler, AssemblyError, convection_heat, friction_work, heat_stored};
+use crate::assembly::{
+    Assembler, AssemblyError, convection_heat, friction_cells, friction_work, heat_stored,
+};
 use crate::case::{Case, EngineChoice};
 use crate::dofs::{Field, equation_structure};
 use crate::model::Model;
@@ -584,7 +586,19 @@ impl<'a> Run<'a> {
 
     /// Continue from a checkpoint instead of recording the initial state: the run goes on as
     /// if it had never stopped.
-    pub(super) fn resume(&mut self, cp: Checkpoint) {
+    pub(super) fn resume(&mut self, cp: Checkpoint) -> Result<(), SolveError> {
+        // the history a point keeps is the build's (friction's grew from 4 to 7 values)
+        let slabs = &self.asm.history.slabs;
+        let kept: Vec<usize> = slabs.iter().map(|s| s.committed.len()).collect();
+        let read: Vec<usize> = cp.point_history.iter().map(Vec::len).collect();
+        if kept != read {
+            return Err(SolveError::Setup(format!(
+                "cannot restart: {} holds {read:?} history values per block of points where \
+                 this tmc keeps {kept:?} (a checkpoint of another version of tmc); run without \
+                 --restart to start over",
+                Checkpoint::path(&self.out_dir).display()
+            )));
+        }
         self.x = cp.x;
         self.asm.resume(&cp.point_history, cp.t);
         self.ctl.t = cp.t;
@@ -620,6 +634,7 @@ impl<'a> Run<'a> {
         self.start = Instant::now()
             .checked_sub(std::time::Duration::from_secs_f64(cp.wall))
             .unwrap_or(self.start);
+        Ok(())
     }
 
     /// Heat balance of a transient scene after an accepted step of length `dt` to `t`: the heat
@@ -719,8 +734,11 @@ impl<'a> Run<'a> {
                 written = written.and(folder.record(&file));
             }
         }
-        let written =
-            written.and_then(|_| self.series.write(self.model, step, &self.x, self.ctl.t));
+        let friction = (self.model.physics.friction).then(|| friction_cells(self.model, &self.asm));
+        let written = written.and_then(|_| {
+            self.series
+                .write(self.model, step, &self.x, self.ctl.t, friction.as_deref())
+        });
         self.asm
             .ranks
             .agree(written, OutputError::to_string, |text| {

@@ -5,8 +5,9 @@
 //!
 //! with D = τ · (g − gₙ) the step's dissipation per reference volume and η the fraction of it
 //! that becomes heat. The tangent is exact and unsymmetric (Coulomb's limit moves with the
-//! normal traction). History per quadrature point: the slip g (3 values) and the work
-//! dissipated so far (1 value), read from the last accepted step and written for the trial.
+//! normal traction). History per quadrature point: the slip g (3 values), the work
+//! dissipated so far (1 value) and the slip of the step, g − gₙ (3 values, for output), read
+//! from the last accepted step and written for the trial.
 #![allow(non_snake_case)]
 
 use super::point::{Point, point};
@@ -17,8 +18,9 @@ use crate::material::ThermoElastic;
 use crate::material::friction::{Friction, MediumStress, shear_modulus};
 use nalgebra::Vector3;
 
-/// History values per quadrature point: the slip (x, y, z) and the work dissipated so far.
-pub const HISTORY_PER_POINT: usize = 4;
+/// History values per quadrature point: the slip (x, y, z), the work dissipated so far and the
+/// slip of the step (x, y, z).
+pub const HISTORY_PER_POINT: usize = 7;
 
 /// The friction of a medium region (its slip planes are per cell: see `normal` of
 /// [`friction`]).
@@ -88,6 +90,9 @@ pub fn friction<const N: usize, const D: usize, E: RefElement<N, D>>(
         let now = &mut trial[q * HISTORY_PER_POINT..(q + 1) * HISTORY_PER_POINT];
         now[..3].copy_from_slice(f.slip.as_slice());
         now[3] = h[3] + f.dissipated;
+        for (d, (g1, g0)) in now[4..].iter_mut().zip(f.slip.iter().zip(&slip)) {
+            *d = g1 - g0;
+        }
         if mechanics {
             for I in 0..N {
                 for i in 0..D {
@@ -161,6 +166,46 @@ pub fn dissipated_work<const N: usize, const D: usize, E: RefElement<N, D>>(
         e += history[q * HISTORY_PER_POINT + 3] * w * detJ;
     }
     Ok(e)
+}
+
+/// A friction cell's state for output: volume averages over its points.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SlipFields {
+    /// The slip g, a shear per reference thickness of the medium (dimensionless).
+    pub slip: [f64; 3],
+    /// The slip of the last accepted step, g − gₙ.
+    pub increment: [f64; 3],
+    /// The share of the cell's volume that slipped in that step: 0 stick, 1 full slip.
+    pub slipping: f64,
+}
+
+/// The slip state of one cell of undeformed node coordinates `X` from its history.
+pub fn slip_fields<const N: usize, const D: usize, E: RefElement<N, D>>(
+    X: &[[f64; 3]; N],
+    history: &[f64],
+) -> Result<SlipFields, KernelError> {
+    let mut out = SlipFields::default();
+    let mut volume = 0.0;
+    for (q, (xi, w)) in E::quadrature().iter().enumerate() {
+        let (_, detJ) =
+            physical_gradients::<N, D>(&E::grad(xi), X).ok_or(KernelError::BadGeometry)?;
+        let dV = w * detJ;
+        let h = &history[q * HISTORY_PER_POINT..(q + 1) * HISTORY_PER_POINT];
+        for d in 0..3 {
+            out.slip[d] += h[d] * dV;
+            out.increment[d] += h[4 + d] * dV;
+        }
+        if h[4..].iter().any(|&d| d != 0.0) {
+            out.slipping += dV;
+        }
+        volume += dV;
+    }
+    for d in 0..3 {
+        out.slip[d] /= volume;
+        out.increment[d] /= volume;
+    }
+    out.slipping /= volume;
+    Ok(out)
 }
 
 #[cfg(test)]
@@ -238,6 +283,22 @@ mod tests {
             let h = &trial[q * HISTORY_PER_POINT..];
             assert_eq!(h[0] != 0.01, slips, "{N} nodes: point {q} slip {}", h[0]);
             assert_eq!(h[3] > 0.7, slips, "{N} nodes: point {q} work {}", h[3]);
+        }
+        // the cell's output: every point slipped or none did, by g − gₙ
+        let cell = slip_fields::<N, D, E>(&s.X, &trial).unwrap();
+        assert_eq!(cell.slipping, if slips { 1.0 } else { 0.0 }, "{N} nodes");
+        for d in 0..3 {
+            let before = if d == 0 { 0.01 } else { 0.0 };
+            let step = cell.slip[d] - before;
+            assert!(
+                (cell.increment[d] - step).abs() < 1e-14,
+                "{N} nodes: {cell:?}"
+            );
+            assert_eq!(
+                cell.increment[d] != 0.0,
+                slips && step != 0.0,
+                "{N} nodes: {cell:?}"
+            );
         }
         let scale = k.iter().fold(0.0f64, |a, v| a.max(v.abs()));
         let h = 1e-7;

@@ -8,6 +8,7 @@ use super::OutputError;
 use super::fields::all_cell_fields;
 use super::nodal::nodal_fields;
 use super::vtu::{Piece, StepFields, ZLIB_LEVEL, write_pvd, write_pvtu, write_vtu};
+use crate::assembly::FrictionCell;
 use crate::case::RegionKind;
 use crate::dofs::{Field, NONE};
 use crate::model::Model;
@@ -90,13 +91,15 @@ impl Series {
         files
     }
 
-    /// Write the state `x` as step `step` at `time`, and the updated `.pvd`.
+    /// Write the state `x` as step `step` at `time` (with friction, its cells' slip state), and
+    /// the updated `.pvd`.
     pub fn write(
         &mut self,
         model: &Model,
         step: usize,
         x: &[f64],
         time: f64,
+        friction: Option<&[Option<FrictionCell>]>,
     ) -> Result<(), OutputError> {
         let cells = all_cell_fields(model, x).map_err(|e| OutputError::Fields {
             step,
@@ -134,6 +137,7 @@ impl Series {
             region: &self.region,
             kind: &self.kind,
             region_names: &self.region_names,
+            friction,
         };
         let file = self.file_name(step);
         let own = match self.ranks {

@@ -9,6 +9,7 @@
 
 use super::nodal::{NodalFields, principal, von_mises};
 use super::{OutputError, write_atomic};
+use crate::assembly::FrictionCell;
 use crate::kernel::CellFields;
 use crate::mesh::Mesh;
 use base64::Engine;
@@ -40,6 +41,9 @@ pub struct StepFields<'a> {
     pub kind: &'a [i32],
     /// Region names, indexed by `region`: written as field data.
     pub region_names: &'a [String],
+    /// Scenes with friction: each cell's slip state and slip-plane normal (`None` off the
+    /// friction regions, written as zeros).
+    pub friction: Option<&'a [Option<FrictionCell>]>,
 }
 
 /// One data array: name, VTK type, components and its little-endian bytes.
@@ -181,6 +185,20 @@ fn data_arrays(mesh: &Mesh, f: &StepFields, piece: &Piece) -> (Vec<Array>, Vec<A
     if f.theta.is_some() {
         cell.push(f64s("q", 3, c.iter().flat_map(|c| c.q)));
         cell.push(f64s("k", 1, c.iter().map(|c| c.k)));
+    }
+    if let Some(friction) = f.friction {
+        let fc: Vec<FrictionCell> = pc
+            .iter()
+            .map(|&i| friction[i].unwrap_or_default())
+            .collect();
+        cell.push(f64s("slip", 3, fc.iter().flat_map(|c| c.state.slip)));
+        cell.push(f64s(
+            "slip_increment",
+            3,
+            fc.iter().flat_map(|c| c.state.increment),
+        ));
+        cell.push(f64s("slipping", 1, fc.iter().map(|c| c.state.slipping)));
+        cell.push(f64s("slip_normal", 3, fc.iter().flat_map(|c| c.normal)));
     }
 
     (point, cell)
