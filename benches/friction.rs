@@ -1,7 +1,13 @@
-//! `make bench`: what friction costs. Each friction scene of `cases/` solved as shipped, with
-//! the slip planes found by tmc (`normal = "auto"`) where it gives them by hand, and without
-//! friction; the variants interleaved over three rounds (this machine's speed drifts), as a
-//! markdown table of medians with the wall time relative to the frictionless run.
+//! `make bench`: what friction costs, and how far it slides.
+//!
+//! First table: each friction scene of `cases/` solved as shipped, with the slip planes found
+//! by tmc (`normal = "auto"`) where it gives them by hand, and without friction; the variants
+//! interleaved over three rounds (this machine's speed drifts), as a markdown table of medians
+//! with the wall time relative to the frictionless run.
+//!
+//! Second table: a block (`geo/block.geo`) and a pad on a long plate (`geo/pad.geo`), pressed
+//! 0.3 and dragged 1.0 (four times the medium's thickness), at several μ and numbers l of cells
+//! across the medium: how far each drag gets, and the force ratio on the way.
 
 mod common;
 use common::{case_text, root, solve};
@@ -14,6 +20,96 @@ fn median(mut v: Vec<f64>) -> f64 {
 }
 
 fn main() {
+    cost();
+    reach();
+}
+
+/// The drag of the second table: press the top 0.3 down (pseudo-time 0 to 1), then drag it
+/// 1.0 along x (1 to 2), Δt at most 0.025; friction `mu` (none for 0).
+fn drag_text(geo: &str, l: usize, mu: f64) -> String {
+    let friction = if mu > 0.0 {
+        format!("friction = {{ mu = {mu}, normal = [0, 1] }}")
+    } else {
+        String::new()
+    };
+    format!(
+        r#"mesh = "{}"
+[mesh_options]
+params = {{ n = 16, m = 8, l = {l} }}
+[[region]]
+group = "solid"
+kind = "solid"
+K = 20.0
+mu = 10.0
+[[region]]
+group = "medium"
+kind = "medium"
+gamma = 1e-4
+{friction}
+[[bc]]
+group = "bottom"
+ux = 0.0
+uy = 0.0
+[[bc]]
+group = "top"
+uy = -0.3
+path = [0.0, 1.0, 1.0]
+[[bc]]
+group = "top"
+ux = 1.0
+path = [0.0, 0.0, 1.0]
+[steps]
+initial = 0.025
+max = 0.025
+path = [0.0, 1.0, 1.0]
+"#,
+        root().join("geo").join(geo).display()
+    )
+}
+
+/// How far each drag gets: the drag reached (1.0 if it completes), and F_t / F_n of the top,
+/// largest and last, over the drag.
+fn reach() {
+    println!();
+    println!(
+        "| scene | cells across the medium | μ | completes | drag reached | load steps | Newton its | largest F_t/F_n | last F_t/F_n | wall s |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|---|");
+    let runs = [("block.geo", [1, 2, 4, 8].as_slice()), ("pad.geo", &[1, 4])];
+    for (geo, layers) in runs {
+        for &l in layers {
+            for mu in [0.0, 0.1, 0.3, 0.5, 1.0] {
+                let dir = root().join(format!("target/bench-friction/reach-{geo}-{l}-{mu}"));
+                let (ok, s) = solve(&dir, &drag_text(geo, l, mu));
+                let text = std::fs::read_to_string(dir.join("out/history.csv")).unwrap();
+                let mut lines = text.lines();
+                let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+                let col = |name: &str| head.iter().position(|c| *c == name).unwrap();
+                let (t, fx, fy) = (col("time"), col("R_top_x"), col("R_top_y"));
+                let ratios: Vec<(f64, f64)> = lines
+                    .map(|row| {
+                        let v: Vec<f64> = row.split(',').map(|x| x.parse().unwrap()).collect();
+                        (v[t] - 1.0, -v[fx] / v[fy])
+                    })
+                    .filter(|(d, _)| *d > 0.0)
+                    .collect();
+                let largest = ratios.iter().map(|r| r.1).fold(f64::NAN, f64::max);
+                let (reached, last) = ratios.last().copied().unwrap_or((0.0, f64::NAN));
+                println!(
+                    "| {} | {l} | {mu} | {} | {reached:.3} | {} | {} | {largest:.4} | {last:.4} | {:.1} |",
+                    geo.trim_end_matches(".geo"),
+                    if ok { "yes" } else { "no" },
+                    s["load_steps"],
+                    s["newton_iterations"],
+                    s["wall_seconds"].as_f64().unwrap_or(f64::NAN),
+                );
+            }
+        }
+    }
+}
+
+/// The first table: the shipped friction scenes with and without friction.
+fn cost() {
     let given = "friction = { mu = 0.3, normal = [0, 1] }";
     let auto = "friction = { mu = 0.3, normal = \"auto\" }";
     // (scene, [(label, case text)]); the first is the frictionless reference

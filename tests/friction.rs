@@ -551,7 +551,11 @@ fn a_checkpoint_whose_slip_history_does_not_fit_is_refused() {
     friction.truncate(points * 4);
     std::fs::write(&file, cp.to_string()).unwrap();
     let summary = std::fs::read(out.join("summary.json")).unwrap();
-    let o = common::solve_cli(&out.parent().unwrap().join("case.toml"), &out, &["--restart"]);
+    let o = common::solve_cli(
+        &out.parent().unwrap().join("case.toml"),
+        &out,
+        &["--restart"],
+    );
     let e = common::stderr(&o);
     assert!(!o.status.success(), "{e}");
     assert!(
@@ -559,4 +563,65 @@ fn a_checkpoint_whose_slip_history_does_not_fit_is_refused() {
         "{e}"
     );
     assert_eq!(std::fs::read(out.join("summary.json")).unwrap(), summary);
+}
+
+/// The drag of `drag_case` on the pad of `geo/pad.geo` (its group "top" is the pad's): the
+/// pad is pressed 0.3 into a medium that runs on beyond it on both sides.
+fn pad_case(mu: Option<f64>, drag: f64) -> String {
+    drag_case(2, mu, drag, DRAG, 0.025)
+}
+
+#[test]
+fn a_frictionless_pad_ploughs_the_open_medium_ahead_with_little_force() {
+    // dragged twice the medium's thickness, its leading corner pushes into open medium: what
+    // that costs is the medium's own stiffness (γ = 1e-4 of the pad's), a small fraction of
+    // the normal force
+    let case = pad_case(None, 0.5).replace(
+        "[steps]",
+        "[[probe]]\nname = \"pad_x\"\nfield = \"ux\"\nat = [2.0, 0.25]\n[steps]",
+    );
+    let (s, out) = solve_text("pad-frictionless", "pad.geo", COARSE, &case);
+    assert!(s.converged, "{}", s.message);
+    let ploughing = top_forces(&out, 2)
+        .iter()
+        .filter(|(t, _, _)| *t > 1.0)
+        .map(|(_, ft, fnormal)| (ft / fnormal).abs())
+        .fold(0.0, f64::max);
+    let slid = s.probes["pad_x"];
+    println!("pad, μ = 0: slid {slid:.4}, largest F_t / F_n {ploughing:.2e}");
+    assert!(slid > 0.45, "the pad's bottom moved {slid}");
+    assert!(
+        ploughing < 0.01,
+        "ploughing force {ploughing} of the normal force"
+    );
+}
+
+#[test]
+fn with_one_cell_across_the_medium_the_block_slides_four_times_its_thickness() {
+    // One medium cell between block and base: each point of the layer is the only one in
+    // its column, so how the slip splits between cells in series is not in question (with
+    // 4 cells the same drag stalls at 0.17, THEORY.md). The whole drag of 1.0 completes;
+    // while the block still sits on the base (drag up to 0.3, after which it overhangs the
+    // base's end and tilts over its corner), the force ratio in full slip is μ within 3 %.
+    let mu = 0.3;
+    let (s, out) = solve_text(
+        "friction-one-cell",
+        "block.geo",
+        "n = 16, m = 8, l = 1",
+        &drag_case(2, Some(mu), 1.0, DRAG, 0.025),
+    );
+    assert!(s.converged, "{}", s.message);
+    let forces = top_forces(&out, 2);
+    let slip: Vec<(f64, f64)> = forces
+        .iter()
+        .filter(|(t, _, _)| *t > 1.0)
+        .map(|(t, ft, fnormal)| (t - 1.0, ft / fnormal))
+        .skip_while(|(_, r)| *r < 0.97 * mu)
+        .take_while(|(d, _)| *d <= 0.3)
+        .collect();
+    println!("one cell: full slip over {slip:?}");
+    assert!(slip.len() >= 3 && slip[0].0 < 0.2, "full slip {slip:?}");
+    for (d, r) in slip {
+        assert!((r / mu - 1.0).abs() < 0.03, "drag {d}: ratio {r}");
+    }
 }

@@ -8,6 +8,7 @@ mod common;
 use common::*;
 use tmc::assembly::Assembler;
 use tmc::dofs::NONE;
+use tmc::kernel::friction::HISTORY_PER_POINT;
 use tmc::model::Model;
 use tmc::solver::linear::{LinearKind, LinearSolver};
 use tmc::solver::newton::{Newton, Part};
@@ -343,7 +344,7 @@ fn assembled_tangent_with_friction_and_its_heat_q1_t1_h1() {
         let points = || {
             asm.history.slabs[nc..]
                 .iter()
-                .flat_map(|s| s.trial.chunks(4))
+                .flat_map(|s| s.trial.chunks(HISTORY_PER_POINT))
         };
         let slipped = points()
             .filter(|h| h[0] != 0.0 || h[1] != 0.0 || h[2] != 0.0)
