@@ -611,16 +611,22 @@ fn with_one_cell_across_the_medium_the_block_slides_four_times_its_thickness() {
         &drag_case(2, Some(mu), 1.0, DRAG, 0.025),
     );
     assert!(s.converged, "{}", s.message);
-    let forces = top_forces(&out, 2);
-    let slip: Vec<(f64, f64)> = forces
+    ratio_is_mu_in_full_slip(&out, mu, 1.0, 0.2, 0.3);
+}
+
+/// From the onset of full slip (F_t/F_n first within 3 % of μ, before a drag of `onset`) to a
+/// drag of `until`, the ratio stays within 3 % of μ; `amplitude` is the drag per unit of
+/// pseudo-time.
+fn ratio_is_mu_in_full_slip(out: &Path, mu: f64, amplitude: f64, onset: f64, until: f64) {
+    let slip: Vec<(f64, f64)> = top_forces(out, 2)
         .iter()
         .filter(|(t, _, _)| *t > 1.0)
-        .map(|(t, ft, fnormal)| (t - 1.0, ft / fnormal))
+        .map(|(t, ft, fnormal)| (amplitude * (t - 1.0), ft / fnormal))
         .skip_while(|(_, r)| *r < 0.97 * mu)
-        .take_while(|(d, _)| *d <= 0.3)
+        .take_while(|(d, _)| *d <= until)
         .collect();
-    println!("one cell: full slip over {slip:?}");
-    assert!(slip.len() >= 3 && slip[0].0 < 0.2, "full slip {slip:?}");
+    println!("μ = {mu}: (drag, F_t/F_n) in full slip {slip:?}");
+    assert!(slip.len() >= 3 && slip[0].0 < onset, "full slip {slip:?}");
     for (d, r) in slip {
         assert!((r / mu - 1.0).abs() < 0.03, "drag {d}: ratio {r}");
     }
@@ -638,16 +644,5 @@ fn with_a_stiff_rotation_regularization_the_block_slides_twice_the_medium_thickn
         .replace("uy = -0.3", "uy = -0.35");
     let (s, out) = solve_text("friction-stiff-regularization", "block.geo", COARSE, &case);
     assert!(s.converged, "{}", s.message);
-    let slip: Vec<(f64, f64)> = top_forces(&out, 2)
-        .iter()
-        .filter(|(t, _, _)| *t > 1.0)
-        .map(|(t, ft, fnormal)| (0.5 * (t - 1.0), ft / fnormal))
-        .skip_while(|(_, r)| *r < 0.97 * mu)
-        .take_while(|(d, _)| *d <= 0.4)
-        .collect();
-    println!("β1 = 100: full slip over {slip:?}");
-    assert!(slip.len() >= 3 && slip[0].0 < 0.3, "full slip {slip:?}");
-    for (d, r) in slip {
-        assert!((r / mu - 1.0).abs() < 0.03, "drag {d}: ratio {r}");
-    }
+    ratio_is_mu_in_full_slip(&out, mu, 0.5, 0.3, 0.4);
 }
