@@ -7,7 +7,8 @@
 //! constraints, local layout, sparsity) → [`material`] (pure laws) → [`kernel`] (local residual
 //! and tangent) → [`case`] and [`model`] (the discrete problem) → [`assembly`] → [`solver`]
 //! (linear, Newton, stepping) → [`output`] (VTU, history, probes) → [`driver`] (`tmc solve`) →
-//! [`study`] and [`plot`]. Under them all, [`files`]: writing a file under a temporary name.
+//! [`study`] and [`plot`]. Under them all, [`files`]: writing a file under a temporary name, and
+//! [`console`]: lines on the terminal that a closed pipe silences.
 //! See docs/ARCHITECTURE.md.
 
 #![allow(non_snake_case)]
@@ -17,6 +18,7 @@
 
 pub mod assembly;
 pub mod case;
+pub mod console;
 pub mod dofs;
 pub mod driver;
 pub mod element;

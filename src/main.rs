@@ -6,6 +6,7 @@ use std::process::ExitCode;
 use tmc::driver::{SolveOptions, run};
 use tmc::mesh::gmsh::{MeshOptions, mesh_geo};
 use tmc::solver::idle::IdleThreads;
+use tmc::{note, say};
 
 #[derive(Parser)]
 #[command(
@@ -136,10 +137,10 @@ fn parse_set(s: &str) -> Result<(String, String), String> {
 }
 
 fn print_chain(e: &dyn std::error::Error) {
-    eprintln!("error: {e}");
+    note!("error: {e}");
     let mut src = e.source();
     while let Some(s) = src {
-        eprintln!("  caused by: {s}");
+        note!("  caused by: {s}");
         src = s.source();
     }
 }
@@ -164,11 +165,11 @@ fn check_thread_count() -> Result<(), String> {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     if let Err(e) = check_thread_count() {
-        eprintln!("error: {e}");
+        note!("error: {e}");
         return ExitCode::FAILURE;
     }
     if let Err(e) = start_ranks() {
-        eprintln!("error: {e}");
+        note!("error: {e}");
         return ExitCode::FAILURE;
     }
     let code = command(cli);
@@ -225,7 +226,7 @@ fn command(cli: Cli) -> ExitCode {
         } => match tmc::plot::plot_results(&results, &columns, x.as_deref(), output.as_deref()) {
             Ok(files) => {
                 for f in files {
-                    println!("wrote {}", f.display());
+                    say!("wrote {}", f.display());
                 }
                 ExitCode::SUCCESS
             }
@@ -258,9 +259,9 @@ fn command(cli: Cli) -> ExitCode {
             match mesh_geo(&geo, &out, &opts) {
                 Ok(r) => {
                     for w in r.warnings.iter().chain(&r.mesh.untouched_bodies()) {
-                        eprintln!("warning: {w}");
+                        note!("warning: {w}");
                     }
-                    println!("wrote {} ({}D)", r.output.display(), r.dim);
+                    say!("wrote {} ({}D)", r.output.display(), r.dim);
                     print_mesh(&r.mesh);
                     ExitCode::SUCCESS
                 }
@@ -301,7 +302,7 @@ fn print_mesh(mesh: &tmc::mesh::Mesh) {
         .iter()
         .map(|(k, n)| format!("{n} {}", k.name()))
         .collect();
-    println!(
+    say!(
         "  {} nodes, {} cells ({})",
         mesh.coords.len(),
         mesh.n_cells(),
@@ -315,7 +316,7 @@ fn print_mesh(mesh: &tmc::mesh::Mesh) {
             .filter(|b| b.groups.contains(&g))
             .map(|b| b.n_cells())
             .sum();
-        println!("  group \"{}\" ({}D): {n} elements", group.name, group.dim);
+        say!("  group \"{}\" ({}D): {n} elements", group.name, group.dim);
     }
 }
 
@@ -328,23 +329,23 @@ fn check_command(case: &std::path::Path, sets: Vec<(String, String)>) -> ExitCod
     };
     match tmc::driver::check(case, &opts) {
         Ok(r) => {
-            println!("{}: ready to solve", case.display());
-            println!("mesh {} ({}D)", r.mesh.source.display(), r.mesh.dim);
+            say!("{}: ready to solve", case.display());
+            say!("mesh {} ({}D)", r.mesh.source.display(), r.mesh.dim);
             print_mesh(&r.mesh);
             for w in &r.mesh.warnings {
-                println!("  warning: {w}");
+                say!("  warning: {w}");
             }
-            println!("{}", r.physics);
+            say!("{}", r.physics);
             for w in &r.warnings {
-                println!("{w}");
+                say!("{w}");
             }
             for e in &r.expansion {
-                println!("thermal expansion in {e}");
+                say!("thermal expansion in {e}");
             }
             let unknowns: Vec<String> =
                 r.unknowns.iter().map(|(f, n)| format!("{n} {f}")).collect();
-            println!("unknowns: {} ({} free)", unknowns.join(", "), r.free);
-            println!(
+            say!("unknowns: {} ({} free)", unknowns.join(", "), r.free);
+            say!(
                 "tangent: {} entries; factor: {}; about {:.0} MB for the linear algebra",
                 r.tangent_entries,
                 r.factor_entries.map_or(
@@ -354,7 +355,7 @@ fn check_command(case: &std::path::Path, sets: Vec<(String, String)>) -> ExitCod
                 r.estimated_mb()
             );
             if !r.probes.is_empty() {
-                println!("probes: {}", r.probes.join(", "));
+                say!("probes: {}", r.probes.join(", "));
             }
             ExitCode::SUCCESS
         }
@@ -372,7 +373,7 @@ fn study_command(study: &std::path::Path, output: Option<PathBuf>, quiet: bool) 
     let exe = match std::env::current_exe() {
         Ok(e) => e,
         Err(e) => {
-            eprintln!("error: cannot find the tmc executable: {e}");
+            note!("error: cannot find the tmc executable: {e}");
             return ExitCode::FAILURE;
         }
     };
@@ -384,7 +385,7 @@ fn study_command(study: &std::path::Path, output: Option<PathBuf>, quiet: bool) 
     match tmc::study::run_study(study, &opts) {
         Ok(r) => {
             let failed = r.outcomes.iter().filter(|o| !o.converged).count();
-            println!(
+            say!(
                 "study {}: {} variants ({failed} failed); wrote {}",
                 r.name,
                 r.outcomes.len(),
@@ -421,7 +422,7 @@ fn solve_command(case: &std::path::Path, opts: &SolveOptions) -> ExitCode {
                     .iter()
                     .map(|(k, v)| format!("{k} = {v:.6e}"))
                     .collect();
-                println!(
+                say!(
                     "{}: {} dofs, {} load steps, {} Newton iterations, {:.2} s{}{}",
                     s.case,
                     s.dofs["total"],
@@ -431,7 +432,7 @@ fn solve_command(case: &std::path::Path, opts: &SolveOptions) -> ExitCode {
                     if probes.is_empty() { "" } else { "; " },
                     probes.join(", ")
                 );
-                println!("results in {}", s.output);
+                say!("results in {}", s.output);
             }
             ExitCode::SUCCESS
         }

@@ -263,7 +263,7 @@ pub fn run_study(path: &Path, opts: &StudyOptions) -> Result<StudyReport, StudyE
     let mut outcomes = Vec::new();
     for (i, (v, case)) in study.variant.iter().zip(&cases).enumerate() {
         if !opts.quiet {
-            eprintln!("[{}/{}] {} ...", i + 1, study.variant.len(), v.name);
+            crate::note!("[{}/{}] {} ...", i + 1, study.variant.len(), v.name);
         }
         let o =
             run_variant(&study, v, case, &runs.join(slug(&v.name)), opts).map_err(|m| match m {
@@ -271,9 +271,13 @@ pub fn run_study(path: &Path, opts: &StudyOptions) -> Result<StudyReport, StudyE
                 VariantError::Unknown(msg) => invalid(path, msg),
             })?;
         if !opts.quiet {
-            eprintln!(
+            crate::note!(
                 "      {}: {:.0} dofs, {:.0} steps, {:.0} its, {:.2} s",
-                o.message, o.dofs, o.load_steps, o.newton_iterations, o.total_s
+                o.message,
+                o.dofs,
+                o.load_steps,
+                o.newton_iterations,
+                o.total_s
             );
         }
         outcomes.push(o);

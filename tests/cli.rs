@@ -725,3 +725,44 @@ fn plot_draws_history_columns() {
     let o = tmc(&["plot", out.to_str().unwrap(), "-c", "nope"]);
     assert!(!o.status.success() && stderr(&o).contains("no column \"nope\""));
 }
+
+/// The write end of a pipe whose read end is already closed: writing to it fails (EPIPE), as
+/// writing into `| head` does once head has exited.
+fn closed_pipe() -> std::process::Stdio {
+    use std::os::fd::FromRawFd;
+    let mut fds = [0; 2];
+    // SAFETY: pipe fills two new descriptors; the read end is closed at once and the write
+    // end is handed to the Stdio, which owns and closes it.
+    unsafe {
+        assert_eq!(libc::pipe(fds.as_mut_ptr()), 0);
+        libc::close(fds[0]);
+        std::process::Stdio::from_raw_fd(fds[1])
+    }
+}
+
+#[test]
+fn a_closed_pipe_silences_the_output_and_the_run_goes_on() {
+    // `tmc check CASE | head` and `tmc solve CASE 2>&1 | head`: no panic, the exit code of the
+    // command itself, and a solve writes all its results
+    let case = root().join("cases/block-transient.toml");
+    let out = scratch("closed-pipe").join("out");
+    let o = Command::new(env!("CARGO_BIN_EXE_tmc"))
+        .args(["check", case.to_str().unwrap()])
+        .stdout(closed_pipe())
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "check: {}", stderr(&o));
+    assert!(!stderr(&o).contains("panicked"), "{}", stderr(&o));
+    let status = Command::new(env!("CARGO_BIN_EXE_tmc"))
+        .args(["solve", case.to_str().unwrap(), "-o", out.to_str().unwrap()])
+        .stdout(closed_pipe())
+        .stderr(closed_pipe())
+        .status()
+        .unwrap();
+    assert!(status.success(), "solve: {status}");
+    let s = summary(&out);
+    assert_eq!(s["converged"], true);
+    let steps = s["load_steps"].as_u64().unwrap();
+    assert!(steps > 1, "{steps} steps");
+    assert!(out.join(format!("step_{steps:04}.vtu")).is_file());
+}

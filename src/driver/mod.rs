@@ -161,14 +161,14 @@ pub(crate) fn checked_model(
 fn model_on(case: &Case, mesh: Mesh, quiet: bool) -> Result<(Model, Vec<Probe>), SolveError> {
     if !quiet {
         for w in &mesh.warnings {
-            eprintln!("warning: {}: {w}", mesh.source.display());
+            crate::note!("warning: {}: {w}", mesh.source.display());
         }
     }
     case.validate(&mesh)?;
     let model = build(case, mesh)?;
     if !quiet {
         for w in &model.warnings {
-            eprintln!("{}: {w}", case.path.display());
+            crate::note!("{}: {w}", case.path.display());
         }
     }
     let probes = probes::build(case, &model.mesh)?;

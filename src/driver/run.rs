@@ -269,7 +269,7 @@ impl<'a> Run<'a> {
             solvers,
         } = Plan::new(case, model, opts)?;
         if !opts.quiet {
-            eprintln!("{}", describe(&model.physics, strategy));
+            crate::note!("{}", describe(&model.physics, strategy));
         }
         let ctl = controller(case, model);
         let layout = HistoryLayout::new(model, probes, case.file.time.is_some());
@@ -875,7 +875,7 @@ impl<'a> Run<'a> {
     /// A line above the progress bar, or on stderr when the bar is hidden (not a terminal).
     fn say(&self, line: &str) {
         if self.pb.is_hidden() {
-            eprintln!("{line}");
+            crate::note!("{line}");
         } else {
             self.pb.println(line);
         }
