@@ -766,3 +766,62 @@ fn a_closed_pipe_silences_the_output_and_the_run_goes_on() {
     assert!(steps > 1, "{steps} steps");
     assert!(out.join(format!("step_{steps:04}.vtu")).is_file());
 }
+
+/// `tmc check` of cases/block.toml with the replacements `edits` made in its text and one more
+/// `[[bc]]` on "medium_left" (which shares the node at the origin with "bottom") holding
+/// `left`.
+fn check_shared_node(tag: &str, edits: &[(&str, &str)], left: &str) -> Output {
+    let cases = root().join("cases");
+    let mut text = std::fs::read_to_string(cases.join("block.toml"))
+        .unwrap()
+        .replace("\"../geo/", &format!("\"{}/../geo/", cases.display()));
+    for (from, to) in edits {
+        assert!(text.contains(from), "{from}");
+        text = text.replacen(from, to, 1);
+    }
+    let p = write_case(
+        tag,
+        &format!("{text}\n[[bc]]\ngroup = \"medium_left\"\n{left}\n"),
+    );
+    tmc(&["check", p.to_str().unwrap()])
+}
+
+#[test]
+fn shared_nodes_conflict_only_where_their_values_differ_on_the_load_path() {
+    let held = [("uy = 0.0\n", "uy = 0.0\nramp = false\n")];
+    // "bottom" holds ux = 0 from the start, "medium_left" ramps ux = 0: the same value all
+    // along, accepted
+    let o = check_shared_node("conflict-held-ramped", &held, "ux = 0.0");
+    assert!(o.status.success(), "{}", stderr(&o));
+    // held 0 and ramped 0.1 agree at λ = 0 and part at λ = 1, by 0.1: refused, saying where
+    let o = check_shared_node("conflict-differ", &held, "ux = 0.1");
+    let e = stderr(&o);
+    assert!(!o.status.success());
+    assert!(
+        e.contains("\"bottom\" and \"medium_left\" share a node at [0.0, 0.0, 0.0]")
+            && e.contains("ux: 0 and 0.1 at t = 1 (λ = 1), 0.1 apart"),
+        "{e}"
+    );
+    // θ on paths of their own (from the initial 0): 10 × [0, 2] on "bottom" and 40 × [0, 0.5]
+    // on "medium_left" are 0 and then 20 alike, accepted; 40 × [0, 1] parts at t = 1
+    let paths = [(
+        "theta = 20.0\nramp = false",
+        "theta = 10.0\npath = [0.0, 2.0]",
+    )];
+    let o = check_shared_node(
+        "conflict-paths-agree",
+        &paths,
+        "theta = 40.0\npath = [0.0, 0.5]",
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = check_shared_node(
+        "conflict-paths-part",
+        &paths,
+        "theta = 40.0\npath = [0.0, 1.0]",
+    );
+    let e = stderr(&o);
+    assert!(
+        !o.status.success() && e.contains("theta: 20 and 40 at t = 1 (λ = 1), 20 apart"),
+        "{e}"
+    );
+}

@@ -326,16 +326,19 @@ fn dirichlet(
                     bc: index,
                 };
                 if let Some(old) = prescribed[dof] {
-                    if old.value != new.value || old.amp != new.amp {
+                    // two prescriptions conflict where their values differ somewhere on the
+                    // load path (amplitudes are linear between its vertices); flags alone
+                    // (held, ramped, a path of its own) do not
+                    if let Some((t, a, b)) = first_difference(path, &old, &new) {
                         let other = &bc_groups[old.bc].name;
                         return case.error(
                             bc.group.span(),
                             format!(
-                                "groups \"{other}\" and \"{}\" share a node at {:?} but prescribe different {name} ({} and {})",
+                                "groups \"{other}\" and \"{}\" share a node at {:?} but prescribe different {name}: {a} and {b} at t = {t} (λ = {}), {} apart",
                                 bc.group.get_ref(),
                                 mesh.coords[n],
-                                old.value,
-                                new.value
+                                path.lambda(t),
+                                (a - b).abs()
                             ),
                         );
                     }
@@ -346,6 +349,16 @@ fn dirichlet(
         }
     }
     Ok((Constraints::new(prescribed), bc_groups))
+}
+
+/// The first vertex time of the load path at which two prescriptions of one dof differ, with
+/// their values there (the same to 1e-12 of the larger counts as equal).
+fn first_difference(path: &LoadPath, a: &Prescribed, b: &Prescribed) -> Option<(f64, f64, f64)> {
+    path.times.iter().find_map(|&t| {
+        let amps = path.amplitudes(t);
+        let (va, vb) = (a.at(&amps), b.at(&amps));
+        ((va - vb).abs() > 1e-12 * va.abs().max(vb.abs())).then_some((t, va, vb))
+    })
 }
 
 /// Whether a `[[bc]]` has a flux condition (and so a `FluxGroup`, in case order).
