@@ -536,33 +536,65 @@ fn the_first_heat_of_a_cold_scene_converges() {
 }
 
 #[test]
-fn a_checkpoint_whose_slip_history_does_not_fit_is_refused() {
-    // a restart.json of another version (friction's history per point grew from 4 to 7
-    // values): the restart names the file and keeps the run's results
+fn a_damaged_checkpoint_is_refused_with_what_is_wrong_in_it() {
+    // restart.json of a friction run, damaged one section at a time: a restart names the file
+    // and what is wrong, exits non-zero, and keeps the run's results
     let case = drag_case(2, Some(0.5), 0.01, DRAG, 0.25);
-    let (s, out) = solve_text("friction-old-checkpoint", "block.geo", COARSE, &case);
+    let (s, out) = solve_text("friction-damaged-checkpoint", "block.geo", COARSE, &case);
     assert!(s.converged);
     let file = out.join("restart.json");
-    let mut cp: serde_json::Value =
+    let good: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&file).unwrap()).unwrap();
-    let history = cp["point_history"].as_array_mut().unwrap();
-    let friction = history.last_mut().unwrap().as_array_mut().unwrap();
-    let points = friction.len() / 7;
-    friction.truncate(points * 4);
-    std::fs::write(&file, cp.to_string()).unwrap();
     let summary = std::fs::read(out.join("summary.json")).unwrap();
-    let o = common::solve_cli(
-        &out.parent().unwrap().join("case.toml"),
-        &out,
-        &["--restart"],
-    );
-    let e = common::stderr(&o);
-    assert!(!o.status.success(), "{e}");
-    assert!(
-        e.contains("cannot restart") && e.contains("restart.json") && e.contains("history"),
-        "{e}"
-    );
-    assert_eq!(std::fs::read(out.join("summary.json")).unwrap(), summary);
+    type Damage = fn(&mut serde_json::Value);
+    let damages: [(&str, Damage, &str); 4] = [
+        (
+            "history",
+            |cp| {
+                // as friction's points kept 4 values before they kept 7
+                let h = cp["point_history"].as_array_mut().unwrap();
+                let f = h.last_mut().unwrap().as_array_mut().unwrap();
+                let points = f.len() / 7;
+                f.truncate(points * 4);
+            },
+            "history values per block of points",
+        ),
+        (
+            "state",
+            |cp| {
+                cp["x"].as_array_mut().unwrap().pop();
+            },
+            "unknowns",
+        ),
+        (
+            "negative time",
+            |cp| cp["wall"] = (-5.0).into(),
+            "-5 s, is no duration",
+        ),
+        (
+            "huge time",
+            |cp| cp["wall"] = 1e308.into(),
+            "is no duration",
+        ),
+    ];
+    for (what, damage, says) in damages {
+        let mut cp = good.clone();
+        damage(&mut cp);
+        std::fs::write(&file, cp.to_string()).unwrap();
+        let o = common::solve_cli(
+            &out.parent().unwrap().join("case.toml"),
+            &out,
+            &["--restart"],
+        );
+        let e = common::stderr(&o);
+        assert!(!o.status.success(), "{what}: {e}");
+        assert!(
+            e.contains("cannot restart from") && e.contains("restart.json") && e.contains(says),
+            "{what}: {e}"
+        );
+        assert!(!e.contains("panicked"), "{what}: {e}");
+        assert_eq!(std::fs::read(out.join("summary.json")).unwrap(), summary);
+    }
 }
 
 /// The drag of `drag_case` on the pad of `geo/pad.geo` (its group "top" is the pad's): the

@@ -13,8 +13,9 @@ use std::path::{Path, PathBuf};
 
 pub const FILE: &str = "restart.json";
 
-/// This format's version: a checkpoint of another version is refused.
-pub const VERSION: u32 = 1;
+/// This format's version: a checkpoint of another version is refused. 2: friction keeps the
+/// step's slip per point (7 history values, 4 before).
+pub const VERSION: u32 = 2;
 
 /// Everything a run carries from one step to the next.
 #[derive(Clone, Debug, Serialize, Deserialize)]

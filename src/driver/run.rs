@@ -587,15 +587,29 @@ impl<'a> Run<'a> {
     /// Continue from a checkpoint instead of recording the initial state: the run goes on as
     /// if it had never stopped.
     pub(super) fn resume(&mut self, cp: Checkpoint) -> Result<(), SolveError> {
-        // the history a point keeps is the build's (friction's grew from 4 to 7 values)
+        // what the file holds must fit this run's unknowns and points, whatever it says
         let slabs = &self.asm.history.slabs;
         let kept: Vec<usize> = slabs.iter().map(|s| s.committed.len()).collect();
         let read: Vec<usize> = cp.point_history.iter().map(Vec::len).collect();
-        if kept != read {
+        let wrong = if cp.x.len() != self.x.len() {
+            Some(format!(
+                "its state has {} values where this run has {} unknowns",
+                cp.x.len(),
+                self.x.len()
+            ))
+        } else if kept != read {
+            Some(format!(
+                "it holds {read:?} history values per block of points where this run keeps \
+                 {kept:?}"
+            ))
+        } else if std::time::Duration::try_from_secs_f64(cp.wall).is_err() {
+            Some(format!("its run time, {} s, is no duration", cp.wall))
+        } else {
+            None
+        };
+        if let Some(what) = wrong {
             return Err(SolveError::Setup(format!(
-                "cannot restart: {} holds {read:?} history values per block of points where \
-                 this tmc keeps {kept:?} (a checkpoint of another version of tmc); run without \
-                 --restart to start over",
+                "cannot restart from {}: {what}; run without --restart to start over",
                 Checkpoint::path(&self.out_dir).display()
             )));
         }
