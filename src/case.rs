@@ -133,6 +133,9 @@ impl FrictionKey {
 #[serde(deny_unknown_fields)]
 pub struct Bc {
     pub group: Spanned<String>,
+    /// A name to address this entry by (`--set bc.NAME.KEY`, a study's `set`) where its group
+    /// has several `[[bc]]`.
+    pub name: Option<String>,
     pub ux: Option<f64>,
     pub uy: Option<f64>,
     pub uz: Option<f64>,
@@ -468,8 +471,17 @@ pub struct Case {
     pub file: CaseFile,
 }
 
-/// Set `path` (dotted) in the case `doc` to `value`.
-pub fn set_path(doc: &mut toml::Table, path: &str, value: toml::Value) -> Result<(), String> {
+/// Set `path` (dotted) in the case `doc` to `value`. In an array of tables (`[[bc]]`,
+/// `[[region]]`, `[[probe]]`) the segment after its name picks an entry by its `group` or
+/// `name`: `bc.top.uy`; where several match, `bc.bottom#2.theta` picks the second of them in
+/// file order, and without `#N` the error lists them, with their lines when `text` (the case
+/// file's source) is given.
+pub fn set_path(
+    doc: &mut toml::Table,
+    path: &str,
+    value: toml::Value,
+    text: Option<&str>,
+) -> Result<(), String> {
     let segs: Vec<&str> = path.split('.').collect();
     let mut cur: &mut toml::Table = doc;
     for (i, seg) in segs.iter().enumerate() {
@@ -483,32 +495,84 @@ pub fn set_path(doc: &mut toml::Table, path: &str, value: toml::Value) -> Result
         cur = match entry {
             toml::Value::Table(t) => t,
             toml::Value::Array(items) => {
+                // the entry segment: GROUP or NAME, then #N (from 1) among those that match
                 let next = segs[i + 1];
-                let found = items.iter_mut().find_map(|it| match it {
-                    toml::Value::Table(t)
-                        if t.get("group").and_then(|g| g.as_str()) == Some(next)
-                            || t.get("name").and_then(|g| g.as_str()) == Some(next) =>
-                    {
-                        Some(t)
+                let (key, nth) = match next.split_once('#') {
+                    Some((k, n)) => match n.parse::<usize>() {
+                        Ok(n) if n >= 1 => (k, Some(n)),
+                        _ => {
+                            return Err(format!(
+                                "\"{path}\": \"#{n}\" is no entry number (they count from 1 in \
+                                 file order)"
+                            ));
+                        }
+                    },
+                    None => (next, None),
+                };
+                let matches = |t: &toml::Table| {
+                    ["group", "name"]
+                        .iter()
+                        .any(|k| t.get(*k).and_then(|g| g.as_str()) == Some(key))
+                };
+                let found: Vec<usize> = (0..items.len())
+                    .filter(|&k| items[k].as_table().is_some_and(matches))
+                    .collect();
+                let pick = match (nth, found.len()) {
+                    (_, 0) => {
+                        return Err(format!(
+                            "\"{path}\": no [[{seg}]] with group or name \"{key}\""
+                        ));
                     }
-                    _ => None,
-                });
-                let Some(t) = found else {
-                    return Err(format!(
-                        "\"{path}\": no [[{seg}]] with group or name \"{next}\""
-                    ));
+                    (None, 1) => found[0],
+                    (Some(n), m) if n <= m => found[n - 1],
+                    (nth, m) => {
+                        let lines = entry_lines(text, seg);
+                        let list: Vec<String> = found
+                            .iter()
+                            .enumerate()
+                            .map(|(r, &k)| match lines.get(k) {
+                                Some(l) => format!("{seg}.{key}#{} (line {l})", r + 1),
+                                None => format!("{seg}.{key}#{}", r + 1),
+                            })
+                            .collect();
+                        let why = match nth {
+                            Some(n) => format!("there is no #{n}"),
+                            None => "say which".to_string(),
+                        };
+                        return Err(format!(
+                            "\"{path}\": {m} [[{seg}]] have group or name \"{key}\", {why}: {} \
+                             (or give the entry a name = \"...\" and use that)",
+                            list.join(", ")
+                        ));
+                    }
+                };
+                let Some(t) = items[pick].as_table_mut() else {
+                    unreachable!("picked among tables")
                 };
                 // the array segment consumed the next one too
                 let rest = &segs[i + 2..];
                 if rest.is_empty() {
                     return Err(format!("\"{path}\": names an entry, not a key in it"));
                 }
-                return set_path(t, &rest.join("."), value);
+                return set_path(t, &rest.join("."), value, None);
             }
             _ => return Err(format!("\"{path}\": \"{seg}\" is not a table")),
         };
     }
     Err(format!("\"{path}\": empty key"))
+}
+
+/// The lines (from 1) of the `[[seg]]` headers of a case's source, in file order: entry k of
+/// the array is at the k-th (none where the source is unknown).
+fn entry_lines(text: Option<&str>, seg: &str) -> Vec<usize> {
+    let header = format!("[[{seg}]]");
+    text.map_or(Vec::new(), |t| {
+        t.lines()
+            .enumerate()
+            .filter(|(_, l)| l.trim_start().starts_with(&header))
+            .map(|(n, _)| n + 1)
+            .collect()
+    })
 }
 
 /// Most load or time steps a case may ask for (a `path` value or a `dt` is at least one).
@@ -595,7 +659,7 @@ impl Case {
                 .ok()
                 .and_then(|mut t| t.remove("v"))
                 .unwrap_or_else(|| toml::Value::String(raw.clone()));
-            set_path(&mut doc, key, value).map_err(&err)?;
+            set_path(&mut doc, key, value, Some(&self.text)).map_err(&err)?;
         }
         let text = toml::to_string(&doc).map_err(|e| err(e.to_string()))?;
         Case::parse(&self.path, text).map_err(|e| err(e.detail()))

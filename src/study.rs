@@ -177,7 +177,7 @@ pub fn variant_case(base: &toml::Table, case_dir: &Path, v: &Variant) -> Result<
     let mut sets = Vec::new();
     flatten("", &v.set, &mut sets);
     for (k, val) in sets {
-        set_path(&mut doc, &k, val)?;
+        set_path(&mut doc, &k, val, None)?;
     }
     toml::to_string(&doc).map_err(|e| e.to_string())
 }
@@ -850,18 +850,63 @@ mod tests {
             "mesh = \"a.geo\"\n[[region]]\ngroup = \"solid\"\nK = 1.0\n[[region]]\ngroup = \"medium\"\ngamma = 1e-4\n",
         )
         .unwrap();
-        set_path(&mut doc, "region.medium.gamma", toml::Value::Float(1e-5)).unwrap();
-        set_path(&mut doc, "steps.max", toml::Value::Float(0.5)).unwrap();
-        set_path(&mut doc, "mesh_options.params.n", toml::Value::Integer(8)).unwrap();
+        set_path(
+            &mut doc,
+            "region.medium.gamma",
+            toml::Value::Float(1e-5),
+            None,
+        )
+        .unwrap();
+        set_path(&mut doc, "steps.max", toml::Value::Float(0.5), None).unwrap();
+        set_path(
+            &mut doc,
+            "mesh_options.params.n",
+            toml::Value::Integer(8),
+            None,
+        )
+        .unwrap();
         assert_eq!(doc["region"][1]["gamma"].as_float(), Some(1e-5));
         assert_eq!(doc["region"][0]["K"].as_float(), Some(1.0));
         assert_eq!(doc["steps"]["max"].as_float(), Some(0.5));
         assert_eq!(doc["mesh_options"]["params"]["n"].as_integer(), Some(8));
-        let e = set_path(&mut doc, "region.gas.gamma", toml::Value::Float(1.0)).unwrap_err();
+        let e = set_path(&mut doc, "region.gas.gamma", toml::Value::Float(1.0), None).unwrap_err();
         assert!(
             e.contains("no [[region]] with group or name \"gas\""),
             "{e}"
         );
+    }
+
+    #[test]
+    fn a_variant_reaches_the_second_of_two_entries_on_one_group() {
+        // as cases/block.toml's "bottom": ux/uy, then θ; by number (from 1), or by name
+        let base: toml::Table = toml::from_str(
+            "mesh = \"a.geo\"\n[[bc]]\ngroup = \"bottom\"\nux = 0.0\n[[bc]]\ngroup = \"bottom\"\ntheta = 20.0\nname = \"cold\"\n",
+        )
+        .unwrap();
+        let variant = |set: &str| Variant {
+            name: "v".into(),
+            group: None,
+            set: toml::from_str(set).unwrap(),
+            paper: BTreeMap::new(),
+        };
+        for set in [
+            "bc = { \"bottom#2\" = { theta = 30.0 } }",
+            "\"bc.bottom#2.theta\" = 30.0",
+            "bc = { cold = { theta = 30.0 } }",
+        ] {
+            let text = variant_case(&base, Path::new("/c"), &variant(set)).unwrap();
+            let doc: toml::Table = toml::from_str(&text).unwrap();
+            assert_eq!(doc["bc"][1]["theta"].as_float(), Some(30.0), "{set}");
+            assert!(doc["bc"][0].get("theta").is_none(), "{set}");
+        }
+        // the group alone names two entries: refused, listing both
+        let e = variant_case(
+            &base,
+            Path::new("/c"),
+            &variant("bc = { bottom = { theta = 30.0 } }"),
+        )
+        .unwrap_err();
+        assert!(e.contains("bc.bottom#1, bc.bottom#2"), "{e}");
     }
 
     #[test]

@@ -825,3 +825,54 @@ fn shared_nodes_conflict_only_where_their_values_differ_on_the_load_path() {
         "{e}"
     );
 }
+
+#[test]
+fn set_reaches_every_entry_of_a_group_with_two() {
+    // cases/slab-conduction.toml with two heat-flux [[bc]] on "top" (the second named): --set
+    // by number (from 1, file order) or by name reaches either; the group alone is refused with
+    // both entries and their lines; a flux on either entry heats the slab alike
+    let cases = root().join("cases");
+    let text = std::fs::read_to_string(cases.join("slab-conduction.toml"))
+        .unwrap()
+        .replace("\"../geo/", &format!("\"{}/../geo/", cases.display()))
+        + "\n[[bc]]\ngroup = \"top\"\nheat_flux = 0.0\n\n[[bc]]\ngroup = \"top\"\nname = \"lid\"\nheat_flux = 0.0\n";
+    let case = write_case("set-two-entries", &text);
+    let lines: Vec<usize> = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| *l == "[[bc]]")
+        .map(|(n, _)| n + 1)
+        .collect();
+    let theta_mid = |set: &str| -> Result<f64, String> {
+        let out = case
+            .parent()
+            .unwrap()
+            .join(format!("out-{}", set.replace(['#', '='], "_")));
+        let o = solve_cli(&case, &out, &["--set", set]);
+        if o.status.success() {
+            Ok(summary(&out)["probes"]["theta_mid"].as_f64().unwrap())
+        } else {
+            Err(stderr(&o))
+        }
+    };
+    let none = theta_mid("bc.top#1.heat_flux=0.0").unwrap();
+    let by_number = theta_mid("bc.top#2.heat_flux=50.0").unwrap();
+    let by_name = theta_mid("bc.lid.heat_flux=50.0").unwrap();
+    let on_first = theta_mid("bc.top#1.heat_flux=50.0").unwrap();
+    println!("θ_mid: {none} without flux, {by_number} #2, {by_name} by name, {on_first} #1");
+    assert!(by_number > none + 1.0, "the flux heats the slab");
+    assert_eq!(by_number, by_name);
+    assert!((on_first - by_number).abs() < 1e-9 * by_number);
+    let e = theta_mid("bc.top.heat_flux=50.0").unwrap_err();
+    let listed = format!(
+        "bc.top#1 (line {}), bc.top#2 (line {})",
+        lines[lines.len() - 2],
+        lines[lines.len() - 1]
+    );
+    assert!(
+        e.contains("2 [[bc]] have group or name \"top\"") && e.contains(&listed),
+        "{e}"
+    );
+    let e = theta_mid("bc.top#3.heat_flux=50.0").unwrap_err();
+    assert!(e.contains("there is no #3"), "{e}");
+}
