@@ -165,7 +165,13 @@ fn flatten(prefix: &str, t: &toml::Table, out: &mut Vec<(String, toml::Value)>) 
 
 /// The case text of one variant: the base case with the variant's keys set, and `mesh` made
 /// absolute (the variant's case file lives elsewhere).
-pub fn variant_case(base: &toml::Table, case_dir: &Path, v: &Variant) -> Result<String, String> {
+/// `source`, the base case's text, lets an error name the lines of the entries a key could mean.
+pub fn variant_case(
+    base: &toml::Table,
+    source: Option<&str>,
+    case_dir: &Path,
+    v: &Variant,
+) -> Result<String, String> {
     let mut doc = base.clone();
     if let Some(toml::Value::String(m)) = doc.get("mesh").cloned() {
         let abs = case_dir.join(&m);
@@ -177,7 +183,7 @@ pub fn variant_case(base: &toml::Table, case_dir: &Path, v: &Variant) -> Result<
     let mut sets = Vec::new();
     flatten("", &v.set, &mut sets);
     for (k, val) in sets {
-        set_path(&mut doc, &k, val, None)?;
+        set_path(&mut doc, &k, val, source)?;
     }
     toml::to_string(&doc).map_err(|e| e.to_string())
 }
@@ -382,7 +388,7 @@ fn variant_cases(path: &Path, study: &StudyFile) -> Result<Vec<String>, StudyErr
         .variant
         .iter()
         .map(|v| {
-            let text = variant_case(&base, &case_dir, v)
+            let text = variant_case(&base, Some(&case_text), &case_dir, v)
                 .map_err(|m| invalid(path, format!("variant \"{}\": {m}", v.name)))?;
             // the whole case check (unknown keys, values) now, naming the variant and what it
             // sets, not a line of a generated file later
@@ -879,10 +885,8 @@ mod tests {
     #[test]
     fn a_variant_reaches_the_second_of_two_entries_on_one_group() {
         // as cases/block.toml's "bottom": ux/uy, then θ; by number (from 1), or by name
-        let base: toml::Table = toml::from_str(
-            "mesh = \"a.geo\"\n[[bc]]\ngroup = \"bottom\"\nux = 0.0\n[[bc]]\ngroup = \"bottom\"\ntheta = 20.0\nname = \"cold\"\n",
-        )
-        .unwrap();
+        let source = "mesh = \"a.geo\"\n[[bc]]\ngroup = \"bottom\"\nux = 0.0\n[[bc]]\ngroup = \"bottom\"\ntheta = 20.0\nname = \"cold\"\n";
+        let base: toml::Table = toml::from_str(source).unwrap();
         let variant = |set: &str| Variant {
             name: "v".into(),
             group: None,
@@ -894,7 +898,7 @@ mod tests {
             "\"bc.bottom#2.theta\" = 30.0",
             "bc = { cold = { theta = 30.0 } }",
         ] {
-            let text = variant_case(&base, Path::new("/c"), &variant(set)).unwrap();
+            let text = variant_case(&base, None, Path::new("/c"), &variant(set)).unwrap();
             let doc: toml::Table = toml::from_str(&text).unwrap();
             assert_eq!(doc["bc"][1]["theta"].as_float(), Some(30.0), "{set}");
             assert!(doc["bc"][0].get("theta").is_none(), "{set}");
@@ -902,11 +906,24 @@ mod tests {
         // the group alone names two entries: refused, listing both
         let e = variant_case(
             &base,
+            None,
             Path::new("/c"),
             &variant("bc = { bottom = { theta = 30.0 } }"),
         )
         .unwrap_err();
         assert!(e.contains("bc.bottom#1, bc.bottom#2"), "{e}");
+        // with the case's source at hand, with their lines
+        let e = variant_case(
+            &base,
+            Some(source),
+            Path::new("/c"),
+            &variant("bc = { bottom = { theta = 30.0 } }"),
+        )
+        .unwrap_err();
+        assert!(
+            e.contains("bc.bottom#1 (line 2), bc.bottom#2 (line 5)"),
+            "{e}"
+        );
     }
 
     #[test]
@@ -918,7 +935,7 @@ mod tests {
             "name = \"a\"\nset = { mesh_options = { params = { n = 8 } }, \"steps.max\" = 0.5 }\n",
         )
         .unwrap();
-        let text = variant_case(&base, Path::new("/x/cases"), &v).unwrap();
+        let text = variant_case(&base, None, Path::new("/x/cases"), &v).unwrap();
         let doc: toml::Table = toml::from_str(&text).unwrap();
         assert_eq!(doc["mesh"].as_str(), Some("/x/cases/g.geo"));
         assert_eq!(doc["mesh_options"]["params"]["n"].as_integer(), Some(8));
