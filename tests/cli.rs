@@ -771,10 +771,7 @@ fn a_closed_pipe_silences_the_output_and_the_run_goes_on() {
 /// `[[bc]]` on "medium_left" (which shares the node at the origin with "bottom") holding
 /// `left`.
 fn check_shared_node(tag: &str, edits: &[(&str, &str)], left: &str) -> Output {
-    let cases = root().join("cases");
-    let mut text = std::fs::read_to_string(cases.join("block.toml"))
-        .unwrap()
-        .replace("\"../geo/", &format!("\"{}/../geo/", cases.display()));
+    let mut text = shipped_case("block");
     for (from, to) in edits {
         assert!(text.contains(from), "{from}");
         text = text.replacen(from, to, 1);
@@ -831,10 +828,7 @@ fn set_reaches_every_entry_of_a_group_with_two() {
     // cases/slab-conduction.toml with two heat-flux [[bc]] on "top" (the second named): --set
     // by number (from 1, file order) or by name reaches either; the group alone is refused with
     // both entries and their lines; a flux on either entry heats the slab alike
-    let cases = root().join("cases");
-    let text = std::fs::read_to_string(cases.join("slab-conduction.toml"))
-        .unwrap()
-        .replace("\"../geo/", &format!("\"{}/../geo/", cases.display()))
+    let text = shipped_case("slab-conduction")
         + "\n[[bc]]\ngroup = \"top\"\nheat_flux = 0.0\n\n[[bc]]\ngroup = \"top\"\nname = \"lid\"\nheat_flux = 0.0\n";
     let case = write_case("set-two-entries", &text);
     let lines: Vec<usize> = text

@@ -3,7 +3,10 @@
 
 mod common;
 
-use common::{case_body, point_array, root, scratch, solve_cli, solve_text, stderr, summary, tmc};
+use common::{
+    case_body, point_array, root, scratch, shipped_case, solve_cli, solve_text, stderr, summary,
+    tmc,
+};
 use std::path::{Path, PathBuf};
 
 /// The block scene with its four `[[bc]]` blocks replaced by `bcs`.
@@ -286,9 +289,7 @@ fn a_body_no_boundary_group_touches_is_reported() {
 #[test]
 fn a_solid_only_the_medium_holds_is_reported() {
     let dir = scratch("medium-alone");
-    let text = std::fs::read_to_string(root().join("cases/cylinder-plate.toml"))
-        .unwrap()
-        .replace("\"../geo/", &format!("\"{}/geo/", root().display()));
+    let text = shipped_case("cylinder-plate");
     let check = |name: &str, text: &str| {
         let case = dir.join(name);
         std::fs::write(&case, text).unwrap();

@@ -138,6 +138,13 @@ pub fn solve_text_opts(tag: &str, geo: &str, options: &str, case_text: &str) -> 
     (s, out)
 }
 
+/// `cases/NAME.toml` with its mesh path made absolute, so that it can be written anywhere.
+pub fn shipped_case(name: &str) -> String {
+    std::fs::read_to_string(root().join(format!("cases/{name}.toml")))
+        .unwrap()
+        .replace("\"../geo/", &format!("\"{}/geo/", root().display()))
+}
+
 /// The body of a case file without its `mesh` key and header comments.
 pub fn case_body(name: &str) -> String {
     hard::body_of(name)
