@@ -138,12 +138,7 @@ impl Checkpoint {
                 path.display()
             ))
         })?;
-        let refuse = |what: &str| {
-            Err(SolveError::Setup(format!(
-                "cannot restart from {}: {what}; run without --restart to start over",
-                path.display()
-            )))
-        };
+        let refuse = |what: &str| Err(refusal(&path, what));
         if cp.version != VERSION {
             return refuse(&format!(
                 "it was written by another version of tmc (format {})",
@@ -165,4 +160,35 @@ impl Checkpoint {
         }
         Ok(cp)
     }
+
+    /// Whether the checkpoint in `dir` fits a run of `unknowns` unknowns whose point history
+    /// blocks hold `history` values each, and its run time is a duration: the file may say the
+    /// right version, case and mesh and still be damaged.
+    pub fn fits(&self, dir: &Path, unknowns: usize, history: &[usize]) -> Result<(), SolveError> {
+        let read: Vec<usize> = self.point_history.iter().map(Vec::len).collect();
+        let what = if self.x.len() != unknowns {
+            format!(
+                "its state has {} values where this run has {unknowns} unknowns",
+                self.x.len()
+            )
+        } else if read != history {
+            format!(
+                "it holds {read:?} history values per block of points where this run keeps \
+                 {history:?}"
+            )
+        } else if std::time::Duration::try_from_secs_f64(self.wall).is_err() {
+            format!("its run time, {} s, is no duration", self.wall)
+        } else {
+            return Ok(());
+        };
+        Err(refusal(&Checkpoint::path(dir), &what))
+    }
+}
+
+/// A checkpoint at `path` that cannot be continued from, and why.
+fn refusal(path: &Path, what: &str) -> SolveError {
+    SolveError::Setup(format!(
+        "cannot restart from {}: {what}; run without --restart to start over",
+        path.display()
+    ))
 }

@@ -587,32 +587,10 @@ impl<'a> Run<'a> {
     /// Continue from a checkpoint instead of recording the initial state: the run goes on as
     /// if it had never stopped.
     pub(super) fn resume(&mut self, cp: Checkpoint) -> Result<(), SolveError> {
-        // what the file holds must fit this run's unknowns and points, whatever it says
-        let slabs = &self.asm.history.slabs;
-        let kept: Vec<usize> = slabs.iter().map(|s| s.committed.len()).collect();
-        let read: Vec<usize> = cp.point_history.iter().map(Vec::len).collect();
-        let wrong = if cp.x.len() != self.x.len() {
-            Some(format!(
-                "its state has {} values where this run has {} unknowns",
-                cp.x.len(),
-                self.x.len()
-            ))
-        } else if kept != read {
-            Some(format!(
-                "it holds {read:?} history values per block of points where this run keeps \
-                 {kept:?}"
-            ))
-        } else if std::time::Duration::try_from_secs_f64(cp.wall).is_err() {
-            Some(format!("its run time, {} s, is no duration", cp.wall))
-        } else {
-            None
-        };
-        if let Some(what) = wrong {
-            return Err(SolveError::Setup(format!(
-                "cannot restart from {}: {what}; run without --restart to start over",
-                Checkpoint::path(&self.out_dir).display()
-            )));
-        }
+        let history: Vec<usize> = (self.asm.history.slabs.iter())
+            .map(|s| s.committed.len())
+            .collect();
+        cp.fits(&self.out_dir, self.x.len(), &history)?;
         self.x = cp.x;
         self.asm.resume(&cp.point_history, cp.t);
         self.ctl.t = cp.t;
