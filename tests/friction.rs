@@ -8,6 +8,8 @@ mod common;
 
 use common::{cell_array, history, point_array, solve_text};
 use std::path::Path;
+use tmc::driver::Strategy;
+use tmc::solver::linear::LinearKind;
 
 /// The block scene without heat: press the top 0.3 down, then (from pseudo-time 1 to 2) drag
 /// it `drag` along x (or along `path` of the drag's own amplitude), friction `mu` in the
@@ -431,6 +433,37 @@ fn friction_heats_the_interface_more_the_faster_it_slides_and_the_heat_balances(
         flash.push(theta);
     }
     assert!(flash[0] < flash[1] && flash[1] < flash[2], "{flash:?}");
+}
+
+#[test]
+fn frictional_heating_solved_one_way_is_the_monolithic_solution() {
+    // friction's heat does not act back on the mechanics: the mechanics (LU) and then the heat
+    // (LDLᵀ) per step reach the monolithic Newton's state; the same steps forced on both
+    // (no growth, no cut before 60 iterations), 0.3 of drag
+    let case = heating_case(0.75).replace("[time]", "[steps]\ngrow = 1.0\nmax_iter = 60\n[time]");
+    let (one, d1) = solve_text("friction-one-way", "block.geo", COARSE, &case);
+    let (mono, d2) = solve_text(
+        "friction-monolithic",
+        "block.geo",
+        COARSE,
+        &format!("{case}[solver]\ncoupling = \"monolithic\"\n"),
+    );
+    assert_eq!(one.strategy, Strategy::OneWay);
+    assert_eq!(one.linear_solver, LinearKind::Lu);
+    assert_eq!(mono.strategy, Strategy::Monolithic);
+    assert_eq!(one.load_steps, mono.load_steps);
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-10 * b.abs();
+    let (w1, w2) = (one.friction_work.unwrap(), mono.friction_work.unwrap());
+    assert!(close(w1, w2), "friction work {w1} vs {w2}");
+    for (k, v) in &mono.probes {
+        assert!(close(one.probes[k], *v), "{k}: {} vs {v}", one.probes[k]);
+    }
+    let (_, r1) = history(&d1);
+    let (cols, r2) = history(&d2);
+    let fx = cols.iter().position(|c| c == "R_top_x").unwrap();
+    for (a, b) in r1.iter().zip(&r2) {
+        assert!((a[fx] - b[fx]).abs() <= 1e-9 * b[fx].abs().max(1e-3));
+    }
 }
 
 #[test]

@@ -290,8 +290,11 @@ fn friction_heats_the_sliding_block_and_the_heat_balances() {
         s.load_steps
     );
     // the shipped scene's flash temperature (the suite runs it as shipped: its mesh, its
-    // steps), hotter than the block above
-    assert!((theta - 0.12459).abs() < 1e-3 * 0.12459, "{theta}");
+    // steps), hotter than the block above. Backward Euler in time leaves it first-order in
+    // the steps: Δt = 0.025, 0.0125, 0.00625, 0.003125 held fixed give 0.12303, 0.12401,
+    // 0.12450, 0.12474 (limit ≈ 0.1250); the shipped adaptive steps (79, from Δt = 0.025)
+    // give 0.12395
+    assert!((theta - 0.12395).abs() < 1e-3 * 0.12395, "{theta}");
     assert!(s.probes["theta_block"] < theta);
     let (made, stored, heat_in) = (
         s.friction_heat.unwrap(),

@@ -191,7 +191,10 @@ impl Plan {
             Ok((p, s))
         };
         let solvers = match strategy {
-            Strategy::OneWay => vec![system(Part::Mechanics, true)?, system(Part::Heat, true)?],
+            Strategy::OneWay => vec![
+                system(Part::Mechanics, !model.physics.friction)?,
+                system(Part::Heat, true)?,
+            ],
             _ => vec![system(Part::All, symmetric_tangent(&model.physics))?],
         };
         Ok(Plan {
@@ -239,10 +242,21 @@ impl Plan {
             Strategy::OneWay => {
                 let part = |p: Part| -> Result<(Part, LinearSolver), SolveError> {
                     let eqs = newton.equations(p);
-                    Ok((p, LinearSolver::block_ldlt(&asm.pattern, &structure, &eqs)?))
+                    Ok((
+                        p,
+                        if p == Part::Mechanics && model.physics.friction {
+                            LinearSolver::block_lu(&asm.pattern, &eqs)?
+                        } else {
+                            LinearSolver::block_ldlt(&asm.pattern, &structure, &eqs)?
+                        },
+                    ))
                 };
                 vec![part(Part::Mechanics)?, part(Part::Heat)?]
             }
+            _ if kind == LinearKind::BlockGmres => vec![(
+                Part::All,
+                LinearSolver::block_gmres(&asm.pattern, &structure, model.physics.friction)?,
+            )],
             _ => vec![(
                 Part::All,
                 LinearSolver::new(kind, &asm.pattern, &structure)?,

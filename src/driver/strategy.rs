@@ -20,13 +20,12 @@ pub enum Strategy {
 }
 
 /// The strategy the physics allows, unless the case forces the monolithic one (or a
-/// whole-system linear solver). Friction makes the mechanics unsymmetric, which the one-way
-/// split's symmetric factorisations cannot take: with both fields it is solved whole.
+/// whole-system linear solver). Friction's heat is a one-way coupling like the medium's
+/// deformation heat: its mechanics (unsymmetric) is solved first, by LU, then the heat.
 pub fn choose_strategy(solver: &crate::case::Solver, physics: &Physics) -> Strategy {
     if !(physics.mechanics && physics.conduction) {
         Strategy::SingleField
     } else if physics.heat_to_mechanics
-        || physics.friction
         || solver.coupling == CouplingChoice::Monolithic
         || matches!(solver.linear, LinearChoice::Lu | LinearChoice::Gmres)
     {
@@ -70,6 +69,7 @@ pub fn describe(physics: &Physics, strategy: Strategy) -> String {
     let how = match strategy {
         Strategy::SingleField if physics.friction => "one unsymmetric system",
         Strategy::SingleField => "one symmetric system",
+        Strategy::OneWay if physics.friction => "mechanics (LU), then heat (LDLᵀ) per step",
         Strategy::OneWay => "mechanics, then heat per step, symmetric factorisations",
         Strategy::Monolithic => "monolithic Newton",
     };
@@ -82,10 +82,10 @@ pub fn symmetric_tangent(physics: &Physics) -> bool {
     !(physics.friction || physics.mechanics && physics.conduction)
 }
 
-/// Choose the whole-system linear solver: LDLᵀ where the tangent is symmetric, LU with
-/// friction (whose mechanical block is unsymmetric, which the block preconditioner's
-/// symmetric factorisations cannot take), GMRES with the block-triangular preconditioner
-/// otherwise (LU or LDLᵀ when the case asks).
+/// Choose the whole-system linear solver: LDLᵀ where the tangent is symmetric, LU for
+/// friction's mechanics alone (unsymmetric), GMRES with the block-triangular preconditioner
+/// for coupled fields (its mechanics block factorised by LU with friction, by LDLᵀ without);
+/// LU or LDLᵀ when the case asks.
 pub fn choose_linear(choice: LinearChoice, physics: &Physics) -> LinearKind {
     match choice {
         LinearChoice::Lu => LinearKind::Lu,
@@ -94,7 +94,7 @@ pub fn choose_linear(choice: LinearChoice, physics: &Physics) -> LinearKind {
         LinearChoice::Auto => {
             if symmetric_tangent(physics) {
                 LinearKind::Ldlt
-            } else if physics.friction {
+            } else if physics.friction && !physics.conduction {
                 LinearKind::Lu
             } else {
                 LinearKind::BlockGmres
