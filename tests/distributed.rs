@@ -331,3 +331,44 @@ fn a_direct_solver_under_the_multigrid_method_keeps_no_old_factor() {
     let gap = |s: &serde_json::Value| s["probes"]["gap"].as_f64().unwrap();
     assert!((gap(&preonly) - gap(&direct)).abs() < 1e-9 * gap(&direct));
 }
+
+#[test]
+fn a_bad_input_under_mpirun_ends_every_rank_with_the_error_printed_once() {
+    // before, rank 0 told the others of its failure with an empty broadcast, which Open MPI
+    // refused (MPI_ERR_ARG): the job aborted with exit 13 and the message was lost
+    let good = std::fs::read_to_string(root().join("cases/friction-heating.toml"))
+        .unwrap()
+        .replace("../geo/", &format!("{}/geo/", root().display()));
+    let dir = scratch("distributed-bad-inputs");
+    std::fs::create_dir_all(&dir).unwrap();
+    let a_file = dir.join("a-file");
+    std::fs::write(&a_file, "the user's").unwrap();
+    let cases = [
+        (
+            "normal.toml",
+            good.replace("normal = [0, 1]", "normal = [0, 1, 0]"),
+            "`friction.normal` has 3 components",
+        ),
+        (
+            "group.toml",
+            good.replacen("group = \"bottom\"", "group = \"nothere\"", 1),
+            "\"nothere\" is not in the mesh",
+        ),
+    ];
+    for (name, text, says) in cases {
+        let case = dir.join(name);
+        std::fs::write(&case, text).unwrap();
+        let o = mpirun(2, &case, &dir.join(format!("out-{name}")), &[]);
+        let e = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{name}: {e}");
+        assert_eq!(e.matches(says).count(), 1, "{name}: {e}");
+        assert!(!e.contains("MPI_ERR"), "{name}: {e}");
+    }
+    // -o naming a file: refused, the file kept
+    let case = dir.join("good.toml");
+    std::fs::write(&case, &good).unwrap();
+    let o = mpirun(2, &case, &a_file, &[]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("MPI_ERR"), "{}", stderr(&o));
+    assert_eq!(std::fs::read_to_string(&a_file).unwrap(), "the user's");
+}

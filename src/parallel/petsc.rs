@@ -117,7 +117,10 @@ pub(super) fn broadcast(root: usize, bytes: &mut Vec<u8>) {
     let mut len = [bytes.len() as u64];
     p.broadcast_into(&mut len[..]);
     bytes.resize(len[0] as usize, 0);
-    p.broadcast_into(&mut bytes[..]);
+    // nothing to send: Open MPI refuses the empty buffer's dangling pointer (MPI_ERR_ARG)
+    if !bytes.is_empty() {
+        p.broadcast_into(&mut bytes[..]);
+    }
 }
 
 fn comm() -> mpi::ffi::MPI_Comm {
