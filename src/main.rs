@@ -168,6 +168,17 @@ fn main() -> ExitCode {
         note!("error: {e}");
         return ExitCode::FAILURE;
     }
+    if let Some(what) = serial_only(&cli.command) {
+        // no MPI to start: every rank ends here, rank 0 says why
+        if tmc::parallel::launched_rank().unwrap_or(0) == 0 {
+            note!(
+                "error: mpirun -n {}: tmc {what} runs on one process (only `tmc solve` and \
+                 `tmc check` run on several ranks); run it without mpirun",
+                tmc::parallel::launched_size().unwrap_or(0)
+            );
+        }
+        return ExitCode::FAILURE;
+    }
     if let Err(e) = start_ranks() {
         note!("error: {e}");
         return ExitCode::FAILURE;
@@ -176,6 +187,21 @@ fn main() -> ExitCode {
     #[cfg(feature = "petsc")]
     tmc::parallel::petsc::finish();
     code
+}
+
+/// Under `mpirun -n N` (N > 1), the command if it cannot run on several ranks: a study starts
+/// each variant as a process of its own (which would start MPI inside the job and fail), and
+/// meshing or plotting on every rank would write the same files at once.
+fn serial_only(command: &Command) -> Option<&'static str> {
+    if tmc::parallel::launched_size().is_none_or(|n| n <= 1) {
+        return None;
+    }
+    match command {
+        Command::Study { .. } => Some("study"),
+        Command::Plot { .. } => Some("plot"),
+        Command::Mesh { .. } => Some("mesh"),
+        _ => None,
+    }
 }
 
 /// Under `mpirun -n N` (N > 1): MPI started, the cores shared among the ranks (unless

@@ -33,31 +33,43 @@ pub struct Chart<'a> {
     pub log_y: bool,
 }
 
-/// The range of `v` with a margin; positive values only on a log axis.
-fn range(v: impl Iterator<Item = f64>, log: bool) -> std::ops::Range<f64> {
+/// The range of `v` with a margin; positive values only on a log axis. `None` when the values
+/// span more than about 1e307 on a linear axis: no axis plotters draws holds them.
+fn range(v: impl Iterator<Item = f64>, log: bool) -> Option<std::ops::Range<f64>> {
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
     for x in v.filter(|x| x.is_finite() && (!log || *x > 0.0)) {
         lo = lo.min(x);
         hi = hi.max(x);
     }
     if !lo.is_finite() {
-        return if log { 0.1..10.0 } else { 0.0..1.0 };
+        return Some(if log { 0.1..10.0 } else { 0.0..1.0 });
     }
     if log {
-        // whole decades, at least two (plotters puts its log ticks on the decades)
-        let (mut a, mut b) = ((lo / 1.01).log10().floor(), (hi * 1.01).log10().ceil());
+        // whole decades, at least two (plotters puts its log ticks on the decades), within
+        // what a double holds
+        let (mut a, mut b) = ((lo.log10() - 0.005).floor(), (hi.log10() + 0.005).ceil());
         if b - a < 2.0 {
             a -= 1.0;
             b += 1.0;
         }
-        10f64.powf(a)..10f64.powf(b)
+        Some(10f64.powf(a.max(-307.0))..10f64.powf(b.min(308.0)))
     } else {
+        // plotters' ticks overflow (and loop) on spans near the largest double
+        let span = hi - lo;
+        if !(16.0 * span).is_finite() {
+            return None;
+        }
         let pad = if hi > lo {
-            0.05 * (hi - lo)
+            0.05 * span
         } else {
             0.5 * lo.abs().max(1.0)
         };
-        (lo - pad)..(hi + pad)
+        let padded = (lo - pad)..(hi + pad);
+        Some(if padded.start.is_finite() && padded.end.is_finite() {
+            padded
+        } else {
+            lo..hi
+        })
     }
 }
 
@@ -104,20 +116,28 @@ fn register_font(path: &Path) -> Result<(), PlotError> {
 /// Draw `chart` into a PNG at `path`.
 pub fn line_chart(path: &Path, chart: &Chart) -> Result<(), PlotError> {
     register_font(path)?;
-    let xs = range(
-        chart
+    let axis = |label: &str, v: &mut dyn Iterator<Item = f64>, log: bool| {
+        range(v, log).ok_or_else(|| PlotError::Draw {
+            path: path.to_owned(),
+            msg: format!("the values of {label} span more than 1e307: no axis can show them"),
+        })
+    };
+    let xs = axis(
+        chart.x_label,
+        &mut chart
             .series
             .iter()
             .flat_map(|s| s.points.iter().map(|p| p.0)),
         chart.log_x,
-    );
-    let ys = range(
-        chart
+    )?;
+    let ys = axis(
+        chart.y_label,
+        &mut chart
             .series
             .iter()
             .flat_map(|s| s.points.iter().map(|p| p.1)),
         chart.log_y,
-    );
+    )?;
     let spans = (xs.end - xs.start, ys.end - ys.start);
     let r = draw_then_rename(path, |p| match (chart.log_x, chart.log_y) {
         (false, false) => draw(p, chart, spans, xs, ys),

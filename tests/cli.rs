@@ -726,6 +726,39 @@ fn plot_draws_history_columns() {
     assert!(!o.status.success() && stderr(&o).contains("no column \"nope\""));
 }
 
+#[test]
+fn plot_refuses_a_column_no_axis_holds_and_draws_huge_ones_that_fit() {
+    // ±1e308 (or 1e-300 to 1.7e308) looped for ever in plotters' ticks; ±1e300 draws
+    let dir = scratch("plot-huge");
+    std::fs::create_dir_all(&dir).unwrap();
+    for (values, drawn) in [
+        (["1e308", "-1e308"], false),
+        (["1e-300", "1.7e308"], false),
+        (["1e300", "-1e300"], true),
+    ] {
+        std::fs::write(
+            dir.join("history.csv"),
+            format!(
+                "step,lambda,energy\n0,0,0\n1,0.5,{}\n2,1,{}\n",
+                values[0], values[1]
+            ),
+        )
+        .unwrap();
+        let png = dir.join("energy.png");
+        let _ = std::fs::remove_file(&png);
+        let o = tmc(&["plot", dir.to_str().unwrap(), "-c", "energy"]);
+        assert_eq!(o.status.success(), drawn, "{values:?}: {}", stderr(&o));
+        assert_eq!(png.exists(), drawn, "{values:?}");
+        if !drawn {
+            assert!(
+                stderr(&o).contains("span more than 1e307"),
+                "{}",
+                stderr(&o)
+            );
+        }
+    }
+}
+
 /// The write end of a pipe whose read end is already closed: writing to it fails (EPIPE), as
 /// writing into `| head` does once head has exited.
 fn closed_pipe() -> std::process::Stdio {

@@ -371,4 +371,29 @@ fn a_bad_input_under_mpirun_ends_every_rank_with_the_error_printed_once() {
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(!stderr(&o).contains("MPI_ERR"), "{}", stderr(&o));
     assert_eq!(std::fs::read_to_string(&a_file).unwrap(), "the user's");
+    // a study starts its variants as processes of their own, which cannot start MPI inside
+    // the job: refused at once (before, the variants failed in MPI_Init or the ranks hung)
+    let study = dir.join("study.toml");
+    std::fs::write(
+        &study,
+        format!(
+            "case = \"{}\"\n[[variant]]\nname = \"a\"\nset = {{ \"time.dt\" = 0.05 }}\n",
+            case.display()
+        ),
+    )
+    .unwrap();
+    let o = std::process::Command::new("mpirun")
+        .args(["-n", "2", env!("CARGO_BIN_EXE_tmc"), "study"])
+        .arg(&study)
+        .arg("-o")
+        .arg(dir.join("study-out"))
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
+        .output()
+        .unwrap();
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    assert_eq!(e.matches("tmc study runs on one process").count(), 1, "{e}");
+    assert!(!dir.join("study-out").exists());
 }

@@ -32,6 +32,13 @@ pub fn launched_size() -> Option<usize> {
         .find_map(|k| std::env::var(k).ok()?.trim().parse().ok())
 }
 
+/// This process's rank as `mpirun` set it in the environment (before MPI is started).
+pub fn launched_rank() -> Option<usize> {
+    ["OMPI_COMM_WORLD_RANK", "PMI_RANK", "PMIX_RANK"]
+        .iter()
+        .find_map(|k| std::env::var(k).ok()?.trim().parse().ok())
+}
+
 impl Ranks {
     /// One process.
     pub const SERIAL: Ranks = Ranks { rank: 0, size: 1 };
