@@ -24,9 +24,11 @@ demo: deps-demo
 	@echo "results in results/block/: open block.pvd in ParaView"
 
 # Every test: unit, analytical, patch, tangent, end-to-end, bad input, and the PETSc engine
-# on one and two ranks.
+# on one and two ranks; then what a build without the PETSc engine says when asked for it
+# (built in its own folder, so as not to replace the engine's build).
 test: deps
 	$(CARGO) test --release --features petsc
+	CARGO_TARGET_DIR=target/serial $(CARGO) test --release --test cli without_petsc
 
 # Benchmarks print tables (tests never assert wall time).
 bench: deps

@@ -903,3 +903,45 @@ fn set_reaches_every_entry_of_a_group_with_two() {
     let e = theta_mid("bc.top#3.heat_flux=50.0").unwrap_err();
     assert!(e.contains("there is no #3"), "{e}");
 }
+
+/// Run by `make test` on a build without the `petsc` feature (its own target folder).
+#[cfg(not(feature = "petsc"))]
+#[test]
+fn without_petsc_the_engine_and_mpirun_say_how_to_build_it() {
+    let case = root().join("cases/block.toml");
+    let out = scratch("without-petsc");
+    let o = tmc(&[
+        "solve",
+        case.to_str().unwrap(),
+        "-q",
+        "-o",
+        out.to_str().unwrap(),
+        "--set",
+        "solver.engine=\"petsc\"",
+    ]);
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    assert!(
+        e.contains("engine = \"petsc\"") && e.contains("cargo build --release --features petsc"),
+        "{e}"
+    );
+    assert!(!out.join("summary.json").exists(), "nothing solved");
+    // under mpirun: every rank ends with the same words, no MPI abort
+    let o = Command::new("mpirun")
+        .args(["-n", "2", env!("CARGO_BIN_EXE_tmc"), "solve"])
+        .arg(&case)
+        .args(["-q", "-o"])
+        .arg(&out)
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
+        .output()
+        .unwrap();
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    assert!(
+        e.contains("mpirun -n 2") && e.contains("--features petsc"),
+        "{e}"
+    );
+    assert!(!e.contains("MPI_ERR"), "{e}");
+}

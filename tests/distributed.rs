@@ -275,6 +275,44 @@ fn a_misspelt_petsc_option_is_an_error() {
 }
 
 #[test]
+fn petsc_failures_are_told_in_petsc_s_words() {
+    // (options, what stderr must say): a solver stopped by its iteration limit names its
+    // KSPConvergedReason; a failed call names the call, PETSc's text and where it was raised
+    let cases = [
+        (
+            "-ksp_type gmres -pc_type jacobi -ksp_max_it 1",
+            vec!["gmres/jacobi did not converge (DIVERGED_ITS, KSPConvergedReason -3)"],
+        ),
+        (
+            "-ksp_type gmres -pc_type jacobi -ksp_max_it 1 -ksp_error_if_not_converged",
+            vec!["KSPSolve failed", "reason DIVERGED_ITS", "(error 91)"],
+        ),
+        (
+            "-ksp_type nonsense",
+            vec![
+                "KSPSetFromOptions failed",
+                "Unable to find requested KSP type nonsense",
+                "(in KSPSetType)",
+            ],
+        ),
+    ];
+    for (i, (options, says)) in cases.iter().enumerate() {
+        let (o, _) = block_on_petsc(
+            &format!("distributed-petsc-words-{i}"),
+            &format!("solver.petsc.options=\"{options}\""),
+        );
+        assert!(!o.status.success(), "{options}");
+        let e = stderr(&o);
+        for s in says {
+            assert!(e.contains(s), "{options}: {s} not in {e}");
+        }
+        // one statement of it, no advice about ramps, no "unknown error"
+        assert_eq!(e.matches("error:").count(), 1, "{options}: {e}");
+        assert!(!e.contains("caused by") && !e.contains("ramp") && !e.contains("unknown"));
+    }
+}
+
+#[test]
 fn faer_s_linear_choice_on_petsc_is_an_error() {
     let (o, _) = block_on_petsc("distributed-bad-linear", "solver.linear=\"lu\"");
     assert!(!o.status.success());

@@ -35,8 +35,9 @@ pub enum SolveError {
     Gmsh(#[from] GmshError),
     #[error(transparent)]
     Output(#[from] OutputError),
+    /// (Its text is the linear solver's, not repeated as a cause.)
     #[error("linear solver: {0}")]
-    Linear(#[from] LinearError),
+    Linear(LinearError),
     #[error("{0}")]
     Setup(String),
     #[error(
@@ -59,6 +60,12 @@ pub enum SolveError {
         steps: usize,
         dir: PathBuf,
     },
+}
+
+impl From<LinearError> for SolveError {
+    fn from(e: LinearError) -> SolveError {
+        SolveError::Linear(e)
+    }
 }
 
 /// Set by SIGINT/SIGTERM (see [`stop_on_signals`]): runs stop after their current step.

@@ -409,6 +409,8 @@ impl<'a> Run<'a> {
                 Ok(rep.iterations)
             }
             Err(failure) if !failure.recoverable() => Err(self.fail(failure)?),
+            // the linear solver's failure, not the values held in full: no advice on ramps
+            Err(failure @ StepFailure::Linear(_)) => Err(self.fail(failure)?),
             Err(failure) => {
                 self.pb.finish_and_clear();
                 let err = SolveError::Setup(format!(

@@ -66,18 +66,12 @@ unsafe extern "C" {
         specific: *mut *mut c_char,
     ) -> PetscErrorCode;
     pub fn PetscPushErrorHandler(handler: ErrorHandler, ctx: *mut c_void) -> PetscErrorCode;
-    pub fn PetscReturnErrorHandler(
-        comm: MPI_Comm,
-        line: c_int,
-        fun: *const c_char,
-        file: *const c_char,
-        n: PetscErrorCode,
-        p: c_int,
-        mess: *const c_char,
-        ctx: *mut c_void,
-    ) -> PetscErrorCode;
 
     pub fn PetscOptionsInsertString(options: PetscOptions, s: *const c_char) -> PetscErrorCode;
+    /// The names of KSPConvergedReason, indexed by the reason itself (PETSc shifts the
+    /// pointer so that negative reasons index it too): `KSPConvergedReasons[-3]` is
+    /// "DIVERGED_ITS".
+    pub static KSPConvergedReasons: *const *const c_char;
     pub fn PetscOptionsLeftGet(
         options: PetscOptions,
         n: *mut PetscInt,

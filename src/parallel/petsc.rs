@@ -1,7 +1,7 @@
 //! The engine: MPI, then PETSc, started once per process ([`start`]) and ended before it exits
 //! ([`finish`]); PETSc's objects as owned values that destroy themselves; PETSc's errors as
 //! [`PetscError`] values (PETSc's own handler, which prints a traceback, is replaced by one
-//! that only returns the code).
+//! that keeps PETSc's words for the error where it was raised, for the error tmc reports).
 
 use super::Ranks;
 use super::ffi::{self, PetscInt};
@@ -23,24 +23,84 @@ pub struct PetscError {
     pub message: String,
 }
 
-/// `Ok` for PETSc's 0, else the error with PETSc's text for `code`.
+/// The message and function of the error PETSc raised last on this thread (where it was
+/// first raised, not the calls it went back through), taken by [`check`].
+static RAISED: Mutex<Option<(String, String)>> = Mutex::new(None);
+
+/// PETSc's error handler while tmc runs: keeps where the error was raised and PETSc's words
+/// for it, prints nothing, and returns the code (as PETSc's `PetscReturnErrorHandler`).
+unsafe extern "C" fn keep_error(
+    _comm: mpi::ffi::MPI_Comm,
+    _line: std::os::raw::c_int,
+    fun: *const std::os::raw::c_char,
+    _file: *const std::os::raw::c_char,
+    n: ffi::PetscErrorCode,
+    p: std::os::raw::c_int,
+    mess: *const std::os::raw::c_char,
+    _ctx: *mut std::os::raw::c_void,
+) -> ffi::PetscErrorCode {
+    // p = PETSC_ERROR_INITIAL (0) where the error is raised, PETSC_ERROR_REPEAT on the way back
+    if p == 0 {
+        let text = |s: *const std::os::raw::c_char| {
+            if s.is_null() {
+                String::new()
+            } else {
+                // SAFETY: PETSc passes NUL-terminated strings that live through the call
+                unsafe { CStr::from_ptr(s) }
+                    .to_string_lossy()
+                    .trim()
+                    .to_owned()
+            }
+        };
+        if let Ok(mut raised) = RAISED.lock() {
+            *raised = Some((text(mess), text(fun)));
+        }
+    }
+    n
+}
+
+/// `Ok` for PETSc's 0, else the error: PETSc's text for `code` and, where PETSc said more
+/// where it raised it, those words and the function that raised it.
 pub fn check(call: &'static str, code: ffi::PetscErrorCode) -> Result<(), PetscError> {
+    let raised = RAISED.lock().ok().and_then(|mut r| r.take());
     if code == 0 {
         return Ok(());
     }
     let mut text: *const std::os::raw::c_char = std::ptr::null();
-    let message = unsafe {
+    let generic = unsafe {
         if ffi::PetscErrorMessage(code, &mut text, std::ptr::null_mut()) == 0 && !text.is_null() {
-            CStr::from_ptr(text).to_string_lossy().into_owned()
+            Some(CStr::from_ptr(text).to_string_lossy().into_owned())
         } else {
-            "unknown error".into()
+            None
         }
+    };
+    let message = match (generic, raised) {
+        (Some(g), Some((m, f))) if !m.is_empty() => format!("{g}: {m} (in {f})"),
+        (None, Some((m, f))) if !m.is_empty() => format!("{m} (in {f})"),
+        (Some(g), _) => g,
+        (None, _) => "PETSc gave no text for this code".into(),
     };
     Err(PetscError {
         call,
         code,
         message,
     })
+}
+
+/// PETSc's name of a KSPConvergedReason ("DIVERGED_ITS" for −3), or the number where PETSc
+/// has no name for it.
+pub fn reason_name(reason: i32) -> String {
+    // KSP_DIVERGED_PC_FAILED (−11) … KSP_CONVERGED_ATOL_NORMAL (9) in PETSc 3.18
+    if (-11..=9).contains(&reason) && reason != -1 {
+        // SAFETY: PETSc's table holds a name (or NULL) for every reason in that range
+        let name = unsafe { *ffi::KSPConvergedReasons.offset(reason as isize) };
+        if !name.is_null() {
+            return unsafe { CStr::from_ptr(name) }
+                .to_string_lossy()
+                .into_owned();
+        }
+    }
+    format!("reason {reason}")
 }
 
 /// Start MPI if it is not running yet (idempotent): the ranks of the world.
@@ -65,7 +125,7 @@ pub fn start() -> Result<Ranks, PetscError> {
             check("PetscInitialize", ffi::PetscInitializeNoArguments())?;
             check(
                 "PetscPushErrorHandler",
-                ffi::PetscPushErrorHandler(ffi::PetscReturnErrorHandler, std::ptr::null_mut()),
+                ffi::PetscPushErrorHandler(keep_error, std::ptr::null_mut()),
             )?;
         }
         *petsc = true;

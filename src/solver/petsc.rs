@@ -281,8 +281,9 @@ impl PetscSystem {
         }
         if report.reason < 0 {
             return Err(EngineError::Diverged(format!(
-                "PETSc's {} did not converge (reason {}) after {} iterations",
+                "PETSc's {} did not converge ({}, KSPConvergedReason {}) after {} iterations",
                 self.ksp.describe(),
+                crate::parallel::petsc::reason_name(report.reason),
                 report.reason,
                 report.iterations
             )));
