@@ -281,7 +281,9 @@ pub struct Time {
     pub times: Option<Spanned<Vec<f64>>>,
     /// The load factor over time as [[t, λ], …], piecewise linear, t increasing from 0
     /// (default `[[0, 0], [end, 1]]`).
-    pub lambda: Option<Spanned<Vec<[f64; 2]>>>,
+    /// (Rows are read as lists and checked to hold two values each: a fixed-size array would
+    /// drop a third silently.)
+    pub lambda: Option<Spanned<Vec<Vec<f64>>>>,
 }
 
 impl Time {
@@ -294,7 +296,7 @@ impl Time {
             .as_ref()
             .map_or(Vec::new(), |t| t.get_ref().clone());
         if let Some(l) = &self.lambda {
-            v.extend(l.get_ref().iter().map(|r| r[0]));
+            v.extend(l.get_ref().iter().filter_map(|r| r.first().copied()));
         }
         v.push(end);
         v.retain(|&t| t > 0.0 && t <= end);
@@ -1108,6 +1110,27 @@ impl Case {
         }
         if let Some(l) = &t.lambda {
             let v = l.get_ref();
+            if let Some((i, r)) = v.iter().enumerate().find(|(_, r)| r.len() != 2) {
+                return self.error(
+                    l.span(),
+                    format!(
+                        "[time]: `lambda` row {} has {} value{}; each row is [t, λ]",
+                        i + 1,
+                        r.len(),
+                        if r.len() == 1 { "" } else { "s" }
+                    ),
+                );
+            }
+            if let Some((i, r)) = v.iter().enumerate().find(|(_, r)| r[0] > end) {
+                return self.error(
+                    l.span(),
+                    format!(
+                        "[time]: `lambda` row {} is at t = {}, past `end` = {end}",
+                        i + 1,
+                        r[0]
+                    ),
+                );
+            }
             let ok = v.len() >= 2
                 && v[0][0] == 0.0
                 && v.windows(2).all(|w| w[0][0] < w[1][0])

@@ -592,3 +592,116 @@ fn bad_friction_is_named_by_file_line_and_key() {
     );
     assert!(!out.join("step_0000.vtu").exists(), "nothing written: {e}");
 }
+
+#[test]
+fn bad_time_keys_are_named_by_file_line_and_key() {
+    // every [time] key of cases/block-transient.toml made bad in turn, through `tmc check`
+    let dir = scratch("bad-time");
+    let shipped = std::fs::read_to_string(root().join("cases/block-transient.toml"))
+        .unwrap()
+        .replace("\"../geo/", &format!("\"{}/geo/", root().display()));
+    let table = "lambda = [[0.0, 0.0], [1.0, 1.0], [3.0, 1.0]]";
+    let cases: &[(&str, &str, &str, &[&str])] = &[
+        (
+            "end-zero",
+            "end = 3.0",
+            "end = 0.0",
+            &["`end` must be positive and finite, got 0"],
+        ),
+        (
+            "end-negative",
+            "end = 3.0",
+            "end = -1.0",
+            &["`end` must be positive"],
+        ),
+        (
+            "dt-zero",
+            "dt = 0.1",
+            "dt = 0.0",
+            &["`dt` must be positive and at most `end` (3), got 0"],
+        ),
+        (
+            "dt-past-end",
+            "dt = 0.1",
+            "dt = 5.0",
+            &["`dt` must be positive and at most `end`"],
+        ),
+        ("dt-nan", "dt = 0.1", "dt = nan", &["got NaN"]),
+        (
+            "dt-word",
+            "dt = 0.1",
+            "dt = \"fast\"",
+            &["dt", "expected f64"],
+        ),
+        (
+            "times-unsorted",
+            "dt = 0.1",
+            "dt = 0.1\ntimes = [2.0, 1.0]",
+            &["`times` must increase within (0, end = 3]"],
+        ),
+        (
+            "times-past-end",
+            "dt = 0.1",
+            "dt = 0.1\ntimes = [1.0, 4.0]",
+            &["`times` must increase within (0, end = 3]"],
+        ),
+        (
+            "lambda-unsorted",
+            table,
+            "lambda = [[0.0, 0.0], [3.0, 1.0], [1.0, 1.0]]",
+            &["t increasing from 0"],
+        ),
+        (
+            "lambda-late-start",
+            table,
+            "lambda = [[0.5, 0.0], [3.0, 1.0]]",
+            &["t increasing from 0"],
+        ),
+        (
+            "lambda-wide",
+            table,
+            "lambda = [[0.0, 0.0], [1.0, 1.0, 7.0], [3.0, 1.0]]",
+            &["`lambda` row 2 has 3 values; each row is [t, λ]"],
+        ),
+        (
+            "lambda-narrow",
+            table,
+            "lambda = [[0.0, 0.0], [1.0], [3.0, 1.0]]",
+            &["`lambda` row 2 has 1 value;"],
+        ),
+        (
+            "lambda-past-end",
+            table,
+            "lambda = [[0.0, 0.0], [1.0, 1.0], [4.0, 1.0]]",
+            &["`lambda` row 3 is at t = 4, past `end` = 3"],
+        ),
+        (
+            "lambda-nan",
+            table,
+            "lambda = [[0.0, 0.0], [1.0, nan], [3.0, 1.0]]",
+            &["finite [t, λ] rows"],
+        ),
+        (
+            "capacity-negative",
+            "rho_c = 400.0",
+            "rho_c = -400.0",
+            &["region[0] (\"solid\"): `rho_c` must be positive and finite, got -400"],
+        ),
+        ("time-typo", "dt = 0.1", "dt = 0.1\ndtt = 0.2", &["dtt"]),
+    ];
+    for (name, old, new, words) in cases {
+        assert!(shipped.contains(old), "{name}");
+        let text = shipped.replacen(old, new, 1);
+        let case = dir.join(format!("{name}.toml"));
+        std::fs::write(&case, &text).unwrap();
+        let first = new.lines().last().unwrap();
+        let line = 1 + text.lines().position(|l| l == first).unwrap();
+        let mut expect = vec![format!("{name}.toml:{line}")];
+        if name.starts_with("dt-word") || name.starts_with("time-typo") {
+            expect = vec![format!("{name}.toml")]; // TOML's own line and column
+        }
+        let mut all: Vec<&str> = expect.iter().map(|s| s.as_str()).collect();
+        all.extend_from_slice(words);
+        fails_with(&tmc(&["check", case.to_str().unwrap()]), &all);
+    }
+}

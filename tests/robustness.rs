@@ -293,6 +293,12 @@ fn mutated_case_files_never_panic() {
             &[("n", 4.0), ("m", 2.0), ("l", 1.0)],
         ),
         ("slab-convection", "slab.geo", &[("n", 4.0), ("m", 2.0)]),
+        // friction with its heat under [time]
+        (
+            "friction-heating",
+            "block.geo",
+            &[("n", 4.0), ("m", 2.0), ("l", 1.0)],
+        ),
         ("plate-hole", "plate-hole.geo", &[("h", 0.3)]),
         (
             "block-plate-3d",

@@ -89,7 +89,7 @@ fn load_path(case: &Case) -> LoadPath {
             let table = time
                 .lambda
                 .as_ref()
-                .map(|l| l.get_ref().clone())
+                .map(|l| l.get_ref().iter().map(|r| [r[0], r[1]]).collect())
                 .unwrap_or_else(|| vec![[0.0, 0.0], [end, 1.0]]);
             LoadPath {
                 times: table.iter().map(|v| v[0]).collect(),
