@@ -743,7 +743,34 @@ impl Case {
         self.check_regions()?;
         let n_path = self.check_steps()?;
         self.check_bc_values(n_path)?;
+        self.check_petsc_options()?;
         self.check_probes()
+    }
+
+    /// `[solver.petsc] options` in PETSc's command-line syntax: every word an option (`-name`)
+    /// or the value right after one. PETSc skips a word that is neither without a word.
+    fn check_petsc_options(&self) -> Result<(), CaseError> {
+        let Some(o) = &self.file.solver.petsc.options else {
+            return Ok(());
+        };
+        let is_option = |w: &str| w.starts_with('-') && w.parse::<f64>().is_err();
+        let mut after_option = false;
+        for w in o.get_ref().split_whitespace() {
+            if is_option(w) {
+                after_option = true;
+            } else if after_option {
+                after_option = false;
+            } else {
+                return self.error(
+                    o.span(),
+                    format!(
+                        "[solver.petsc] options: \"{w}\" is neither an option nor an option's \
+                         value (options start with a dash: \"-{w}\"?)"
+                    ),
+                );
+            }
+        }
+        Ok(())
     }
 
     /// Every region: its kind's required moduli positive, no key of the other kind, a
@@ -990,6 +1017,25 @@ impl Case {
         }
         for bc in &f.bc {
             self.check_convection(bc)?;
+        }
+        // a group that convects in one [[bc]] and holds θ in another: the held θ wins, and
+        // the convected heat would be in no balance
+        for bc in f.bc.iter().filter(|b| b.theta.is_some()) {
+            let g = bc.group.get_ref();
+            let convecting =
+                f.bc.iter()
+                    .find(|b| b.group.get_ref() == g && b.h.is_some());
+            if let Some(h) = convecting.and_then(|b| b.h.as_ref()) {
+                let theta_line = self.line_of(bc.group.span());
+                return self.error(
+                    h.span(),
+                    format!(
+                        "bc on \"{g}\": the group convects (`h`) here and has a prescribed \
+                         `theta` in the [[bc]] at line {theta_line}; a boundary is either held \
+                         at a temperature or convects"
+                    ),
+                );
+            }
         }
         Ok(())
     }

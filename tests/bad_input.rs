@@ -705,3 +705,59 @@ fn bad_time_keys_are_named_by_file_line_and_key() {
         fails_with(&tmc(&["check", case.to_str().unwrap()]), &all);
     }
 }
+
+#[test]
+fn what_was_accepted_without_a_word_is_refused() {
+    let dir = scratch("bad-silent");
+    let convection = std::fs::read_to_string(root().join("cases/slab-convection.toml"))
+        .unwrap()
+        .replace("\"../geo/", &format!("\"{}/geo/", root().display()));
+    let write = |name: &str, text: &str| {
+        let p = dir.join(format!("{name}.toml"));
+        std::fs::write(&p, text).unwrap();
+        p
+    };
+    let line_of = |text: &str, l: &str| 1 + text.lines().position(|x| x == l).unwrap();
+    // convection on a group whose θ another [[bc]] holds: the held θ won, and the convected
+    // heat was in no balance
+    let text = format!("{convection}\n[[bc]]\ngroup = \"right\"\ntheta = 50.0\n");
+    let case = write("h-and-theta", &text);
+    let h = line_of(&text, "h = 2.5");
+    let theta = text.lines().count() - 1; // the last [[bc]]'s group line
+    fails_with(
+        &tmc(&["check", case.to_str().unwrap()]),
+        &[
+            &format!("h-and-theta.toml:{h}"),
+            "bc on \"right\": the group convects (`h`)",
+            &format!("`theta` in the [[bc]] at line {theta}"),
+        ],
+    );
+    // h = 0 insulates: it fixes no temperature (the heat source then has nowhere to go)
+    let text = convection
+        .replace("[[bc]]\ngroup = \"left\"\ntheta = 100.0\n", "")
+        .replace("h = 2.5", "h = 0.0")
+        .replacen("k = 5.0", "k = 5.0\nheat_source = 1.0", 1);
+    let case = write("h-zero", &text);
+    fails_with(
+        &tmc(&["check", case.to_str().unwrap()]),
+        &["h-zero.toml", "is not fixed", "convects (`h` > 0)"],
+    );
+    // a PETSc option without its dash (PETSc skipped it)
+    let block = root().join("cases/block.toml");
+    for (options, word) in [("ksp_type cg", "ksp_type"), ("-ksp_type cg gmres", "gmres")] {
+        let o = tmc(&[
+            "check",
+            block.to_str().unwrap(),
+            "--set",
+            "solver.engine=\"petsc\"",
+            "--set",
+            &format!("solver.petsc.options=\"{options}\""),
+        ]);
+        fails_with(
+            &o,
+            &[&format!(
+                "\"{word}\" is neither an option nor an option's value"
+            )],
+        );
+    }
+}

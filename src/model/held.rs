@@ -43,10 +43,10 @@ pub fn unheld_body(model: &Model) -> Option<String> {
         }
         if model.physics.conduction && dofs.has(Field::Theta) {
             let fixed = nodes.iter().any(|&n| held_dof(dofs.theta[n]));
-            let convects = model
-                .facet_blocks
-                .iter()
-                .any(|fb| mesh.facets[fb.block].conn.iter().any(|&n| comp[n] == c));
+            // h = 0 is an insulated boundary: it holds no temperature
+            let convects = model.facet_blocks.iter().any(|fb| {
+                fb.law.h > 0.0 && mesh.facets[fb.block].conn.iter().any(|&n| comp[n] == c)
+            });
             let stores = model.capacity_blocks.iter().any(|cb| {
                 mesh.cells[cb.block]
                     .conn
@@ -56,7 +56,7 @@ pub fn unheld_body(model: &Model) -> Option<String> {
             if !(fixed || convects || stores) {
                 return Some(format!(
                     "the temperature of {} is not fixed: no `theta` is prescribed on it and no \
-                     boundary of it convects (`h`), so a stationary solution is not unique",
+                     boundary of it convects (`h` > 0), so a stationary solution is not unique",
                     name()
                 ));
             }
