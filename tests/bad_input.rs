@@ -761,3 +761,37 @@ fn what_was_accepted_without_a_word_is_refused() {
         );
     }
 }
+
+#[test]
+fn under_time_a_failed_run_speaks_of_t_and_dt() {
+    // a drag that cannot converge in 3 iterations: the steps shrink below the minimum; the
+    // controller's steps are physical time steps, which the message called Δλ
+    let dir = scratch("bad-time-words");
+    let case = root().join("cases/friction-heating.toml");
+    let sets = [
+        "steps.max_iter=3",
+        "mesh_options.params.n=4",
+        "mesh_options.params.m=2",
+        "mesh_options.params.l=1",
+        "steps.min=1e-3",
+    ];
+    let mut args = vec!["solve", case.to_str().unwrap(), "-q", "-o"];
+    let out = dir.join("out");
+    args.push(out.to_str().unwrap());
+    for s in &sets {
+        args.extend(["--set", s]);
+    }
+    let e = fails_with(
+        &tmc(&args),
+        &[
+            "load step from t = ",
+            "(λ = 1.000000) failed with Δt = ",
+            "below the minimum step",
+        ],
+    );
+    assert!(!e.contains("Δλ"), "{e}");
+    assert!(
+        out.join("summary.json").exists(),
+        "the steps that converged are kept"
+    );
+}

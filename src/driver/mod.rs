@@ -40,23 +40,25 @@ pub enum SolveError {
     Linear(LinearError),
     #[error("{0}")]
     Setup(String),
+    /// `at`: where the run stands ("λ = 0.5", or "t = 1.2 (λ = 1)" with `[time]`); `step`:
+    /// the step that failed ("Δλ = 2e-5", or "Δt = 2e-5").
     #[error(
-        "load step from λ = {lambda:.6} failed with Δλ = {dlambda:.3e}, below the minimum step ({reason}); \
-         the {steps} converged steps up to λ = {lambda:.6} are in {dir}"
+        "load step from {at} failed with {step}, below the minimum step ({reason}); \
+         the {steps} converged steps up to {at} are in {dir}"
     )]
     StepTooSmall {
-        lambda: f64,
-        dlambda: f64,
+        at: String,
+        step: String,
         reason: String,
         steps: usize,
         dir: PathBuf,
     },
     #[error(
-        "interrupted at λ = {lambda:.6} after {steps} converged steps; they are in {dir} \
+        "interrupted at {at} after {steps} converged steps; they are in {dir} \
          (summary.json says \"interrupted\")"
     )]
     Interrupted {
-        lambda: f64,
+        at: String,
         steps: usize,
         dir: PathBuf,
     },

@@ -774,8 +774,13 @@ impl<'a> Run<'a> {
         self.totals.last_failure = failure.to_string();
         if self.opts.verbose {
             let lambda = self.model.path.lambda(target);
+            let to = if self.transient_clock {
+                format!("t {target:.4e} (λ {lambda:.4})")
+            } else {
+                format!("λ {lambda:.4}")
+            };
             self.say(&format!(
-                "  step to λ {lambda:.4} failed: {}; cutting the step",
+                "  step to {to} failed: {}; cutting the step",
                 self.totals.last_failure
             ));
         }
@@ -784,9 +789,14 @@ impl<'a> Run<'a> {
         if let Err(dl) = self.ctl.reject() {
             self.pb.finish_and_clear();
             let reason = self.totals.last_failure.clone();
+            let step = if self.transient_clock {
+                format!("Δt = {dl:.3e}")
+            } else {
+                format!("Δλ = {dl:.3e}")
+            };
             let err = SolveError::StepTooSmall {
-                lambda: self.model.path.lambda(self.ctl.t),
-                dlambda: dl,
+                at: self.position(),
+                step,
                 reason,
                 steps: self.ctl.accepted,
                 dir: self.out_dir.clone(),
@@ -795,6 +805,16 @@ impl<'a> Run<'a> {
             return Err(err);
         }
         Ok(())
+    }
+
+    /// Where the run stands: "λ = 0.500000", or with `[time]` "t = 1.2000e0 (λ = 1.000000)".
+    fn position(&self) -> String {
+        let lambda = self.model.path.lambda(self.ctl.t);
+        if self.transient_clock {
+            format!("t = {:.4e} (λ = {lambda:.6})", self.ctl.t)
+        } else {
+            format!("λ = {lambda:.6}")
+        }
     }
 
     /// A failure no smaller step can mend (the engine's): the run ends at once, its summary
@@ -814,7 +834,7 @@ impl<'a> Run<'a> {
     pub(super) fn interrupt(mut self) -> Result<Summary, SolveError> {
         self.pb.finish_and_clear();
         let err = SolveError::Interrupted {
-            lambda: self.model.path.lambda(self.ctl.t),
+            at: self.position(),
             steps: self.ctl.accepted,
             dir: self.out_dir.clone(),
         };
