@@ -628,6 +628,21 @@ fn a_damaged_checkpoint_is_refused_with_what_is_wrong_in_it() {
         assert!(!e.contains("panicked"), "{what}: {e}");
         assert_eq!(std::fs::read(out.join("summary.json")).unwrap(), summary);
     }
+    // the undamaged checkpoint of this finished run: nothing to continue (before, the
+    // restart rewrote summary.json without its friction work)
+    std::fs::write(&file, good.to_string()).unwrap();
+    let o = common::solve_cli(
+        &out.parent().unwrap().join("case.toml"),
+        &out,
+        &["--restart"],
+    );
+    let e = common::stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    assert!(
+        e.contains("has finished") && e.contains("nothing to continue"),
+        "{e}"
+    );
+    assert_eq!(std::fs::read(out.join("summary.json")).unwrap(), summary);
 }
 
 /// The drag of `drag_case` on the pad of `geo/pad.geo` (its group "top" is the pad's): the

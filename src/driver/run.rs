@@ -607,6 +607,15 @@ impl<'a> Run<'a> {
             .map(|s| s.committed.len())
             .collect();
         cp.fits(&self.out_dir, self.x.len(), &history)?;
+        if cp.t >= self.ctl.end - 1e-9 * self.ctl.end.max(1e-300) {
+            return Err(SolveError::Setup(format!(
+                "cannot restart: the run in {} has finished (it reached the end of its path, \
+                 {}); there is nothing to continue, and its results stay as they are. To go \
+                 further, lengthen the path and solve again without --restart",
+                self.out_dir.display(),
+                self.position_at(cp.t)
+            )));
+        }
         self.x = cp.x;
         self.asm.resume(&cp.point_history, cp.t);
         self.ctl.t = cp.t;
@@ -636,6 +645,10 @@ impl<'a> Run<'a> {
             s.heat_in = Some(cp.heat_in);
         }
         self.series.resume(cp.series);
+        if self.model.physics.friction {
+            // the dissipation so far is in the points' history, restored above
+            self.account_friction();
+        }
         self.written = cp.written;
         self.history.resume(cp.history);
         // wall seconds go on from where the run stopped
@@ -809,9 +822,13 @@ impl<'a> Run<'a> {
 
     /// Where the run stands: "λ = 0.500000", or with `[time]` "t = 1.2000e0 (λ = 1.000000)".
     fn position(&self) -> String {
-        let lambda = self.model.path.lambda(self.ctl.t);
+        self.position_at(self.ctl.t)
+    }
+
+    fn position_at(&self, t: f64) -> String {
+        let lambda = self.model.path.lambda(t);
         if self.transient_clock {
-            format!("t = {:.4e} (λ = {lambda:.6})", self.ctl.t)
+            format!("t = {t:.4e} (λ = {lambda:.6})")
         } else {
             format!("λ = {lambda:.6}")
         }
