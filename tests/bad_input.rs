@@ -742,6 +742,26 @@ fn what_was_accepted_without_a_word_is_refused() {
         &tmc(&["check", case.to_str().unwrap()]),
         &["h-zero.toml", "is not fixed", "convects (`h` > 0)"],
     );
+    // a capacity without [time]: solved (stationary heat), with a note naming its line
+    let transient = std::fs::read_to_string(root().join("cases/block-transient.toml"))
+        .unwrap()
+        .replace("\"../geo/", &format!("\"{}/geo/", root().display()));
+    let (a, b) = (
+        transient.find("[time]").unwrap(),
+        transient.find("[[probe]]").unwrap(),
+    );
+    let text = format!("{}{}", &transient[..a], &transient[b..]);
+    let case = write("capacity-without-time", &text);
+    let o = tmc(&["check", case.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", err(&o));
+    let report = String::from_utf8_lossy(&o.stdout).to_string() + &err(&o);
+    let rho = line_of(&text, "rho_c = 400.0");
+    assert!(
+        report.contains(&format!(
+            "note: line {rho}: region[0] (\"solid\"): `rho_c` has no effect: without [time]"
+        )),
+        "{report}"
+    );
     // a PETSc option without its dash (PETSc skipped it)
     let block = root().join("cases/block.toml");
     for (options, word) in [("ksp_type cg", "ksp_type"), ("-ksp_type cg gmres", "gmres")] {

@@ -77,7 +77,43 @@ pub fn build(case: &Case, mesh: Mesh) -> Result<Model, CaseError> {
         return case.error(case.file.mesh.span(), msg);
     }
     model.warnings = super::held::held_by_medium_alone(&model);
+    model.warnings.extend(unused_keys(case, &model));
     Ok(model)
+}
+
+/// Keys the case gives that this scene does not use, each as a note with its line: the
+/// capacity without `[time]` or without conduction, the heat fraction of friction whose heat
+/// goes nowhere.
+fn unused_keys(case: &Case, model: &Model) -> Vec<String> {
+    let mut notes = Vec::new();
+    let line = |span| case.line_of(span);
+    for (i, r) in case.file.region.iter().enumerate() {
+        let g = r.group.get_ref();
+        if let Some(rho_c) = &r.rho_c
+            && !model.physics.transient
+        {
+            let why = if case.file.time.is_none() {
+                "without [time] the heat is stationary"
+            } else {
+                "the scene conducts no heat"
+            };
+            notes.push(format!(
+                "note: line {}: region[{i}] (\"{g}\"): `rho_c` has no effect: {why}",
+                line(rho_c.span())
+            ));
+        }
+        if let Some(fr) = &r.friction
+            && let Some(eta) = &fr.get_ref().heat_fraction
+            && !model.physics.frictional_heating
+        {
+            notes.push(format!(
+                "note: line {}: region[{i}] (\"{g}\"): `friction.heat_fraction` has no effect: \
+                 frictional heat needs [time] and a scene that conducts",
+                line(eta.span())
+            ));
+        }
+    }
+    notes
 }
 
 /// The load factor over time: `[time] lambda` (default: from 0 at t = 0 to 1 at the end), or
