@@ -1167,16 +1167,6 @@ impl Case {
                     ),
                 );
             }
-            if let Some((i, r)) = v.iter().enumerate().find(|(_, r)| r[0] > end) {
-                return self.error(
-                    l.span(),
-                    format!(
-                        "[time]: `lambda` row {} is at t = {}, past `end` = {end}",
-                        i + 1,
-                        r[0]
-                    ),
-                );
-            }
             let ok = v.len() >= 2
                 && v[0][0] == 0.0
                 && v.windows(2).all(|w| w[0][0] < w[1][0])

@@ -670,12 +670,6 @@ fn bad_time_keys_are_named_by_file_line_and_key() {
             &["`lambda` row 2 has 1 value;"],
         ),
         (
-            "lambda-past-end",
-            table,
-            "lambda = [[0.0, 0.0], [1.0, 1.0], [4.0, 1.0]]",
-            &["`lambda` row 3 is at t = 4, past `end` = 3"],
-        ),
-        (
             "lambda-nan",
             table,
             "lambda = [[0.0, 0.0], [1.0, nan], [3.0, 1.0]]",
