@@ -61,7 +61,7 @@ pub enum RegionKind {
 
 /// `[[region]]`: the material of one physical group of cells.
 #[derive(Clone, Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, expecting = "a [[region]] table")]
 #[allow(non_snake_case)]
 pub struct Region {
     pub group: Spanned<String>,
@@ -99,7 +99,10 @@ pub struct Region {
 
 /// `friction = { mu = 0.3, normal = [0, 1] }` (or `normal = "auto"`) of a medium region.
 #[derive(Clone, Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(
+    deny_unknown_fields,
+    expecting = "a table such as { mu = 0.3, normal = [0, 1] }"
+)]
 pub struct FrictionKey {
     /// Coulomb coefficient μ_f ≥ 0.
     pub mu: Spanned<f64>,
@@ -115,7 +118,10 @@ pub struct FrictionKey {
 
 /// `normal` of a `friction`: given, or `"auto"` (any other word is an error at validation).
 #[derive(Clone, Debug, Deserialize)]
-#[serde(untagged)]
+#[serde(
+    untagged,
+    expecting = "`normal` must be \"auto\" or the slip plane's normal as numbers, such as [0, 1]"
+)]
 pub enum SlipNormal {
     Given(Vec<f64>),
     Word(String),
@@ -130,7 +136,7 @@ impl FrictionKey {
 
 /// `[[bc]]`: conditions on one physical group of the boundary (or of points).
 #[derive(Clone, Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, expecting = "a [[bc]] table")]
 pub struct Bc {
     pub group: Spanned<String>,
     /// A name to address this entry by (`--set bc.NAME.KEY`, a study's `set`) where its group
@@ -160,7 +166,10 @@ pub struct Bc {
 
 /// `ramp` of a `[[bc]]`: one choice for the block, or one per value.
 #[derive(Clone, Debug, Deserialize)]
-#[serde(untagged)]
+#[serde(
+    untagged,
+    expecting = "`ramp` must be true, false, or a table such as { theta = false }"
+)]
 pub enum Ramp {
     All(bool),
     Per(std::collections::BTreeMap<String, bool>),
@@ -228,7 +237,7 @@ impl Bc {
 
 /// `[steps]`: load stepping and Newton controls.
 #[derive(Clone, Debug, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[serde(deny_unknown_fields, default, expecting = "the [steps] table")]
 pub struct Steps {
     /// First load increment Δλ.
     pub initial: f64,
@@ -271,7 +280,10 @@ impl Default for Steps {
 /// `[time]`: physical time t ∈ [0, end] replaces the load parameter as what the steps
 /// advance; loads follow λ(t).
 #[derive(Clone, Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(
+    deny_unknown_fields,
+    expecting = "the [time] table (end, dt, times, lambda)"
+)]
 pub struct Time {
     /// End time, > 0.
     pub end: Spanned<f64>,
@@ -387,7 +399,7 @@ pub enum LinearChoice {
 
 /// `[[probe]]`: a named scalar output evaluated after every converged step.
 #[derive(Clone, Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, expecting = "a [[probe]] table")]
 pub struct Probe {
     pub name: Spanned<String>,
     /// "ux", "uy", "uz", "theta" (value at `at`) or "distance" (between `from` and `to`).
@@ -450,7 +462,7 @@ pub struct Units {
 
 /// `[output]`: which steps get a `.vtu` (history.csv has every step).
 #[derive(Clone, Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, expecting = "the [output] table")]
 pub struct Output {
     /// A `.vtu` every this many accepted steps (default 1: every step); step 0 and the last
     /// step reached are always written.

@@ -44,7 +44,10 @@ pub enum StudyError {
 
 /// The reference the errors are measured against.
 #[derive(Clone, Debug, Deserialize)]
-#[serde(untagged)]
+#[serde(
+    untagged,
+    expecting = "`reference` must be \"last\", a variant's name, or known values such as { gap = 3.0e-4 }"
+)]
 pub enum Reference {
     /// "last" (the last variant, by convention the finest) or a variant's name.
     Variant(String),
@@ -53,7 +56,7 @@ pub enum Reference {
 }
 
 #[derive(Clone, Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, expecting = "a [[variant]] table")]
 pub struct Variant {
     pub name: String,
     /// The curve this variant belongs to in the error-vs-time plot (default "all").
