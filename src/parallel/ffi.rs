@@ -68,6 +68,7 @@ unsafe extern "C" {
     pub fn PetscPushErrorHandler(handler: ErrorHandler, ctx: *mut c_void) -> PetscErrorCode;
 
     pub fn PetscOptionsInsertString(options: PetscOptions, s: *const c_char) -> PetscErrorCode;
+    pub fn PetscLogDefaultBegin() -> PetscErrorCode;
     /// The names of KSPConvergedReason, indexed by the reason itself (PETSc shifts the
     /// pointer so that negative reasons index it too): `KSPConvergedReasons[-3]` is
     /// "DIVERGED_ITS".

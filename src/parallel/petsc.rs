@@ -191,12 +191,32 @@ fn cstring(s: &str) -> CString {
     CString::new(s).expect("no NUL in PETSc names")
 }
 
-/// Add `options` (PETSc's command-line syntax) to PETSc's options.
+/// Add `options` (PETSc's command-line syntax) to PETSc's options. `-log_view`, which PETSc
+/// reads when it starts (before the case's options are known), starts its logging here, and
+/// PETSc prints the log when it ends.
 pub fn insert_options(options: &str) -> Result<(), PetscError> {
     let s = cstring(options);
     check("PetscOptionsInsertString", unsafe {
         ffi::PetscOptionsInsertString(std::ptr::null_mut(), s.as_ptr())
-    })
+    })?;
+    let mut set: ffi::PetscBool = ffi::PETSC_FALSE;
+    let name = cstring("-log_view");
+    unsafe {
+        // (asking marks the option used)
+        check(
+            "PetscOptionsHasName",
+            ffi::PetscOptionsHasName(
+                std::ptr::null_mut(),
+                std::ptr::null(),
+                name.as_ptr(),
+                &mut set,
+            ),
+        )?;
+        if set != ffi::PETSC_FALSE {
+            check("PetscLogDefaultBegin", ffi::PetscLogDefaultBegin())?;
+        }
+    }
+    Ok(())
 }
 
 /// Options tmc set as defaults ([`default_option`]): not the user's, so never reported unused.
