@@ -482,7 +482,8 @@ fn restart_continues_an_interrupted_run_exactly() {
         &["--restart", "--set", "region.solid.k=11.0"],
     );
     assert!(
-        !o.status.success() && stderr(&o).contains("has changed since"),
+        !o.status.success()
+            && stderr(&o).contains("has changed since: region[0].k: 100.0 then, 11.0 now"),
         "{}",
         stderr(&o)
     );

@@ -459,3 +459,33 @@ fn a_huge_count_in_a_mesh_file_is_an_error_not_an_allocation() {
         );
     }
 }
+
+#[test]
+fn a_checkpoint_knows_its_mesh_s_boundary_groups() {
+    // the same nodes and cells with a boundary group on other facets: a restart would go on
+    // under other boundary conditions, so the mesh's fingerprint differs
+    let dir = scratch("fingerprint-groups");
+    std::fs::create_dir_all(&dir).unwrap();
+    let opts = MeshOptions {
+        set_numbers: vec![("n".into(), 4.0), ("m".into(), 2.0), ("l".into(), 1.0)],
+        order: 1,
+        ..Default::default()
+    };
+    let mesh = mesh_geo(&root().join("geo/block.geo"), &dir.join("m.msh"), &opts)
+        .unwrap()
+        .mesh;
+    let fingerprint = tmc::driver::checkpoint::mesh_fingerprint;
+    let mut moved = mesh.clone();
+    let (top, bottom) = (moved.group("top").unwrap(), moved.group("bottom").unwrap());
+    for b in &mut moved.facets {
+        for g in &mut b.groups {
+            if *g == top {
+                *g = bottom;
+            } else if *g == bottom {
+                *g = top;
+            }
+        }
+    }
+    assert_eq!(fingerprint(&mesh), fingerprint(&mesh.clone()));
+    assert_ne!(fingerprint(&mesh), fingerprint(&moved));
+}

@@ -14,8 +14,9 @@ use std::path::{Path, PathBuf};
 pub const FILE: &str = "restart.json";
 
 /// This format's version: a checkpoint of another version is refused. 2: friction keeps the
-/// step's slip per point (7 history values, 4 before).
-pub const VERSION: u32 = 2;
+/// step's slip per point (7 history values, 4 before). 3: the mesh's fingerprint covers its
+/// physical groups (a boundary group moved to other nodes changes the run).
+pub const VERSION: u32 = 3;
 
 /// Everything a run carries from one step to the next.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -74,6 +75,68 @@ pub fn case_fingerprint(case: &Case) -> String {
     toml::to_string(&doc).unwrap_or_default()
 }
 
+/// What differs between two case fingerprints, key by key ("region[0].k: 10 then, 11 now"),
+/// at most a few.
+fn case_changes(then: &str, now: &str) -> String {
+    let parse = |t: &str| {
+        toml::from_str::<toml::Table>(t)
+            .map(toml::Value::Table)
+            .ok()
+    };
+    let (Some(a), Some(b)) = (parse(then), parse(now)) else {
+        return "its keys differ".into();
+    };
+    let mut out = Vec::new();
+    differences(&a, &b, String::new(), &mut out);
+    let shown: Vec<String> = out.iter().take(4).cloned().collect();
+    let more = out.len().saturating_sub(shown.len());
+    let mut text = shown.join("; ");
+    if more > 0 {
+        text.push_str(&format!("; and {more} more"));
+    }
+    if text.is_empty() {
+        "its keys differ".into()
+    } else {
+        text
+    }
+}
+
+/// Dotted paths where `a` (then) and `b` (now) differ, with both values.
+fn differences(a: &toml::Value, b: &toml::Value, at: String, out: &mut Vec<String>) {
+    use toml::Value;
+    let join = |k: &str| {
+        if at.is_empty() {
+            k.to_string()
+        } else {
+            format!("{at}.{k}")
+        }
+    };
+    match (a, b) {
+        (Value::Table(x), Value::Table(y)) => {
+            for (k, v) in x {
+                match y.get(k) {
+                    Some(w) => differences(v, w, join(k), out),
+                    None => out.push(format!("{} removed (was {v})", join(k))),
+                }
+            }
+            for (k, w) in y {
+                if !x.contains_key(k) {
+                    out.push(format!("{} added ({w})", join(k)));
+                }
+            }
+        }
+        (Value::Array(x), Value::Array(y))
+            if x.len() == y.len() && x.iter().all(Value::is_table) =>
+        {
+            for (i, (v, w)) in x.iter().zip(y).enumerate() {
+                differences(v, w, format!("{at}[{i}]"), out);
+            }
+        }
+        _ if a != b => out.push(format!("{at}: {a} then, {b} now")),
+        _ => {}
+    }
+}
+
 /// The mesh's size and a hash (FNV-1a) of its coordinates' bits and its cells.
 pub fn mesh_fingerprint(mesh: &Mesh) -> String {
     let mut h: u64 = 0xcbf29ce484222325;
@@ -91,6 +154,16 @@ pub fn mesh_fingerprint(mesh: &Mesh) -> String {
             for &n in b.cell(c) {
                 eat(n as u64);
             }
+        }
+    }
+    // the physical groups: their names, dimensions and nodes (the boundary conditions act there)
+    for (g, group) in mesh.groups.iter().enumerate() {
+        for b in group.name.bytes() {
+            eat(b as u64);
+        }
+        eat(group.dim as u64);
+        for n in mesh.group_nodes(g) {
+            eat(n as u64);
         }
     }
     format!(
@@ -145,10 +218,12 @@ impl Checkpoint {
                 cp.version
             ));
         }
-        if cp.case != case_fingerprint(case) {
+        let now = case_fingerprint(case);
+        if cp.case != now {
             return refuse(&format!(
-                "{} has changed since (only [steps] controls and [output] may change)",
-                case.path.display()
+                "{} has changed since: {} (only [steps] controls and [output] may change)",
+                case.path.display(),
+                case_changes(&cp.case, &now)
             ));
         }
         if cp.mesh != mesh_fingerprint(mesh) {
