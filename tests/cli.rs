@@ -927,16 +927,16 @@ fn without_petsc_the_engine_and_mpirun_say_how_to_build_it() {
     );
     assert!(!out.join("summary.json").exists(), "nothing solved");
     // under mpirun: every rank ends with the same words, no MPI abort
-    let o = Command::new("mpirun")
-        .args(["-n", "2", env!("CARGO_BIN_EXE_tmc"), "solve"])
-        .arg(&case)
-        .args(["-q", "-o"])
-        .arg(&out)
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-        .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
-        .output()
-        .unwrap();
+    let o = mpirun_tmc(
+        2,
+        &[
+            "solve".as_ref(),
+            case.as_os_str(),
+            "-q".as_ref(),
+            "-o".as_ref(),
+            out.as_os_str(),
+        ],
+    );
     let e = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{e}");
     assert!(

@@ -11,18 +11,15 @@ use std::path::{Path, PathBuf};
 
 /// `mpirun -n ranks tmc solve CASE -q -o OUT extra…` (as root too: CI runs as root).
 fn mpirun(ranks: usize, case: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
-    std::process::Command::new("mpirun")
-        .args(["-n", &ranks.to_string(), env!("CARGO_BIN_EXE_tmc"), "solve"])
-        .arg(case)
-        .args(["-q", "-o"])
-        .arg(out)
-        .args(extra)
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-        .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
-        .current_dir(root())
-        .output()
-        .unwrap()
+    let mut args = vec![
+        "solve".as_ref(),
+        case.as_os_str(),
+        "-q".as_ref(),
+        "-o".as_ref(),
+    ];
+    args.push(out.as_os_str());
+    args.extend(extra.iter().map(|e| std::ffi::OsStr::new(*e)));
+    common::mpirun_tmc(ranks, &args)
 }
 
 /// The last step file of a run: its `.vtu`, or on several ranks the `.pvtu` of its parts.
@@ -430,16 +427,16 @@ fn a_bad_input_under_mpirun_ends_every_rank_with_the_error_printed_once() {
         ),
     )
     .unwrap();
-    let o = std::process::Command::new("mpirun")
-        .args(["-n", "2", env!("CARGO_BIN_EXE_tmc"), "study"])
-        .arg(&study)
-        .arg("-o")
-        .arg(dir.join("study-out"))
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-        .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
-        .output()
-        .unwrap();
+    let study_out = dir.join("study-out");
+    let o = common::mpirun_tmc(
+        2,
+        &[
+            "study".as_ref(),
+            study.as_os_str(),
+            "-o".as_ref(),
+            study_out.as_os_str(),
+        ],
+    );
     let e = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{e}");
     assert_eq!(e.matches("tmc study runs on one process").count(), 1, "{e}");

@@ -199,24 +199,28 @@ pub fn insert_options(options: &str) -> Result<(), PetscError> {
     check("PetscOptionsInsertString", unsafe {
         ffi::PetscOptionsInsertString(std::ptr::null_mut(), s.as_ptr())
     })?;
-    let mut set: ffi::PetscBool = ffi::PETSC_FALSE;
-    let name = cstring("-log_view");
-    unsafe {
-        // (asking marks the option used)
-        check(
-            "PetscOptionsHasName",
-            ffi::PetscOptionsHasName(
-                std::ptr::null_mut(),
-                std::ptr::null(),
-                name.as_ptr(),
-                &mut set,
-            ),
-        )?;
-        if set != ffi::PETSC_FALSE {
-            check("PetscLogDefaultBegin", ffi::PetscLogDefaultBegin())?;
-        }
+    // (asking marks the option used)
+    if has_option("-log_view")? {
+        check("PetscLogDefaultBegin", unsafe {
+            ffi::PetscLogDefaultBegin()
+        })?;
     }
     Ok(())
+}
+
+/// Whether PETSc's options hold `name` (with its dash); asking marks it used.
+fn has_option(name: &str) -> Result<bool, PetscError> {
+    let key = cstring(name);
+    let mut set: ffi::PetscBool = ffi::PETSC_FALSE;
+    check("PetscOptionsHasName", unsafe {
+        ffi::PetscOptionsHasName(
+            std::ptr::null_mut(),
+            std::ptr::null(),
+            key.as_ptr(),
+            &mut set,
+        )
+    })?;
+    Ok(set != ffi::PETSC_FALSE)
 }
 
 /// Options tmc set as defaults ([`default_option`]): not the user's, so never reported unused.
@@ -224,29 +228,16 @@ static DEFAULTS: Mutex<Vec<String>> = Mutex::new(Vec::new());
 
 /// Set option `-name value` unless the user's options (or an earlier default) set it.
 pub fn default_option(name: &str, value: &str) -> Result<(), PetscError> {
-    let key = cstring(&format!("-{name}"));
-    let mut set: ffi::PetscBool = ffi::PETSC_FALSE;
-    unsafe {
-        check(
-            "PetscOptionsHasName",
-            ffi::PetscOptionsHasName(
-                std::ptr::null_mut(),
-                std::ptr::null(),
-                key.as_ptr(),
-                &mut set,
-            ),
-        )?;
-        if set == ffi::PETSC_FALSE {
-            let v = cstring(value);
-            check(
-                "PetscOptionsSetValue",
-                ffi::PetscOptionsSetValue(std::ptr::null_mut(), key.as_ptr(), v.as_ptr()),
-            )?;
-            DEFAULTS
-                .lock()
-                .expect("defaults lock")
-                .push(name.to_string());
-        }
+    let key = format!("-{name}");
+    if !has_option(&key)? {
+        let (key, v) = (cstring(&key), cstring(value));
+        check("PetscOptionsSetValue", unsafe {
+            ffi::PetscOptionsSetValue(std::ptr::null_mut(), key.as_ptr(), v.as_ptr())
+        })?;
+        DEFAULTS
+            .lock()
+            .expect("defaults lock")
+            .push(name.to_string());
     }
     Ok(())
 }
