@@ -607,18 +607,18 @@ impl<'a> Run<'a> {
             .map(|s| s.committed.len())
             .collect();
         cp.fits(&self.out_dir, self.x.len(), &history)?;
-        if cp.t >= self.ctl.end - 1e-9 * self.ctl.end.max(1e-300) {
+        self.ctl.t = cp.t;
+        if self.ctl.done() {
             return Err(SolveError::Setup(format!(
                 "cannot restart: the run in {} has finished (it reached the end of its path, \
                  {}); there is nothing to continue, and its results stay as they are. To go \
                  further, lengthen the path and solve again without --restart",
                 self.out_dir.display(),
-                self.position_at(cp.t)
+                self.position()
             )));
         }
         self.x = cp.x;
         self.asm.resume(&cp.point_history, cp.t);
-        self.ctl.t = cp.t;
         self.ctl.dt = cp.dt;
         self.ctl.accepted = cp.accepted;
         self.ctl.rejected = cp.rejected;
@@ -822,10 +822,7 @@ impl<'a> Run<'a> {
 
     /// Where the run stands: "λ = 0.500000", or with `[time]` "t = 1.2000e0 (λ = 1.000000)".
     fn position(&self) -> String {
-        self.position_at(self.ctl.t)
-    }
-
-    fn position_at(&self, t: f64) -> String {
+        let t = self.ctl.t;
         let lambda = self.model.path.lambda(t);
         if self.transient_clock {
             format!("t = {t:.4e} (λ = {lambda:.6})")

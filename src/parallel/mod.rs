@@ -27,15 +27,17 @@ pub struct Ranks {
 /// The number of processes `mpirun` (Open MPI, or a PMI launcher) started this one among,
 /// read from the environment it sets; `None` when not started by a launcher.
 pub fn launched_size() -> Option<usize> {
-    ["OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE"]
-        .iter()
-        .find_map(|k| std::env::var(k).ok()?.trim().parse().ok())
+    launcher_number(["OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE"])
 }
 
 /// This process's rank as `mpirun` set it in the environment (before MPI is started).
 pub fn launched_rank() -> Option<usize> {
-    ["OMPI_COMM_WORLD_RANK", "PMI_RANK", "PMIX_RANK"]
-        .iter()
+    launcher_number(["OMPI_COMM_WORLD_RANK", "PMI_RANK", "PMIX_RANK"])
+}
+
+/// The first of the launchers' variables `keys` that is set, as a number.
+fn launcher_number(keys: [&str; 3]) -> Option<usize> {
+    keys.iter()
         .find_map(|k| std::env::var(k).ok()?.trim().parse().ok())
 }
 

@@ -23,8 +23,9 @@ pub struct PetscError {
     pub message: String,
 }
 
-/// The message and function of the error PETSc raised last on this thread (where it was
-/// first raised, not the calls it went back through), taken by [`check`].
+/// The message and function of the error PETSc raised last (where it was first raised, not
+/// the calls it went back through), taken by the next [`check`]; tmc calls PETSc from one
+/// thread.
 static RAISED: Mutex<Option<(String, String)>> = Mutex::new(None);
 
 /// PETSc's error handler while tmc runs: keeps where the error was raised and PETSc's words

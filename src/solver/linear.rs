@@ -291,10 +291,7 @@ impl LinearSolver {
     pub fn factor(&mut self, values: &[f64]) -> Result<(), LinearError> {
         match &mut self.backend {
             Backend::Lu(lu) => lu.factor(values)?,
-            Backend::Ldlt(f) => {
-                f.sub.update(values);
-                f.factor()?;
-            }
+            Backend::Ldlt(f) => f.factor(values)?,
             Backend::BlockGmres(b) => b.factor(values)?,
             #[cfg(feature = "petsc")]
             Backend::Petsc(p) => p.factor(values)?,
@@ -331,11 +328,6 @@ impl LinearSolver {
     pub fn take_krylov(&mut self) -> usize {
         std::mem::take(&mut self.krylov_count)
     }
-}
-
-/// The whole system's pattern in faer's form.
-fn full_pattern(p: &Pattern) -> SymbolicSparseColMat<usize> {
-    SymbolicSparseColMat::new_checked(p.n, p.n, p.col_ptr.clone(), None, p.row_idx.clone())
 }
 
 /// A square sub-block of the system matrix, `rows × cols` of the free equations, with the slot
@@ -485,8 +477,10 @@ impl SymFactor {
         })
     }
 
-    fn factor(&mut self) -> Result<(), LinearError> {
+    /// Numeric factorisation of the block of the whole system's `values`.
+    fn factor(&mut self, values: &[f64]) -> Result<(), LinearError> {
         self.factored = false;
+        self.sub.update(values);
         let pattern = &self.sub.pattern;
         let stack = MemStack::new(&mut self.factor_mem);
         match self.precision {
@@ -665,10 +659,7 @@ enum MechanicsFactor {
 impl MechanicsFactor {
     fn factor(&mut self, values: &[f64]) -> Result<(), LinearError> {
         match self {
-            MechanicsFactor::Ldlt(f) => {
-                f.sub.update(values);
-                f.factor()
-            }
+            MechanicsFactor::Ldlt(f) => f.factor(values),
             MechanicsFactor::Lu(f) => {
                 f.sub.update(values);
                 f.refactor()
@@ -700,9 +691,8 @@ struct BlockTriangular {
     ft: Option<SymFactor>,
     /// K_θm: temperature rows, mechanics columns.
     coupling: SubMatrix,
-    /// Copy of the whole matrix (pattern and values) for the products.
-    pattern: SymbolicSparseColMat<usize>,
-    values: Vec<f64>,
+    /// Copy of the whole matrix for the products.
+    whole: SubMatrix,
 }
 
 impl BlockTriangular {
@@ -710,6 +700,7 @@ impl BlockTriangular {
     fn new(p: &Pattern, s: &Structure, unsymmetric: bool) -> Result<BlockTriangular, LinearError> {
         let mech: Vec<usize> = (0..p.n).filter(|&e| !s.thermal[e]).collect();
         let heat: Vec<usize> = (0..p.n).filter(|&e| s.thermal[e]).collect();
+        let all: Vec<usize> = (0..p.n).collect();
         let block = |eqs: &[usize]| -> Result<Option<SymFactor>, LinearError> {
             if eqs.is_empty() {
                 return Ok(None);
@@ -727,25 +718,18 @@ impl BlockTriangular {
             fm,
             ft: block(&heat)?,
             coupling: SubMatrix::new(p, &heat, &mech),
-            pattern: full_pattern(p),
-            values: vec![0.0; p.nnz()],
+            whole: SubMatrix::new(p, &all, &all),
             mech,
             heat,
         })
     }
 
     fn factor(&mut self, values: &[f64]) -> Result<(), LinearError> {
-        self.values.copy_from_slice(values);
+        self.whole.update(values);
         // the temperature block factors on the other core while the mechanics block does
         let mech =
             |f: &mut Option<MechanicsFactor>| f.as_mut().map_or(Ok(()), |f| f.factor(values));
-        let heat = |f: &mut Option<SymFactor>| -> Result<(), LinearError> {
-            if let Some(f) = f {
-                f.sub.update(values);
-                f.factor()?;
-            }
-            Ok(())
-        };
+        let heat = |f: &mut Option<SymFactor>| f.as_mut().map_or(Ok(()), |f| f.factor(values));
         let (m, t) = rayon::join(|| mech(&mut self.fm), || heat(&mut self.ft));
         m.and(t)?;
         self.coupling.update(values);
@@ -772,18 +756,7 @@ impl BlockTriangular {
     }
 
     fn solve(&self, b: &mut [f64]) -> Result<usize, LinearError> {
-        let a = SparseColMatRef::new(self.pattern.as_ref(), &self.values);
-        let matvec = |x: &[f64], y: &mut [f64]| {
-            y.fill(0.0);
-            let (cp, ri, v) = (a.col_ptr(), a.row_idx(), a.val());
-            for (j, &xj) in x.iter().enumerate() {
-                if xj != 0.0 {
-                    for k in cp[j]..cp[j + 1] {
-                        y[ri[k]] += v[k] * xj;
-                    }
-                }
-            }
-        };
+        let matvec = |x: &[f64], y: &mut [f64]| self.whole.mul(x, y);
         let rhs = b.to_vec();
         let out = gmres(
             &matvec,
