@@ -7,6 +7,7 @@
 mod common;
 
 use common::{point_array, root, scratch, solve_cli, stderr, summary};
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// `mpirun -n ranks tmc solve CASE -q -o OUT extra…` (as root too: CI runs as root).
@@ -248,7 +249,8 @@ fn scene_on_petsc(scene: &str, tag: &str, key_value: &str) -> (std::process::Out
 fn a_misspelt_petsc_option_is_an_error() {
     // the block holds a temperature in full from λ = 0 (its first solve settles step 0); the
     // slab ramps everything (its first solve is step 1's): an engine's failure is no reason
-    // to cut a step, and ends the run either way
+    // to cut a step, and ends the run either way, before its first step: a set-up failure,
+    // which leaves no results
     for scene in ["block", "slab-conduction"] {
         let (o, out) = scene_on_petsc(
             scene,
@@ -261,12 +263,52 @@ fn a_misspelt_petsc_option_is_an_error() {
             e.contains("-ksp_typo cg") && e.contains("did not use") && !e.contains("ramp"),
             "{scene}: {e}"
         );
-        let s = summary(&out);
-        assert_eq!(s["converged"], false, "{scene}");
-        assert_eq!(s["rejected_steps"], 0, "{scene}: {s}");
+        assert!(!e.contains("below the minimum"), "{scene}: {e}");
+        assert_eq!(folder_files(&out), BTreeMap::new(), "{scene}");
+    }
+}
+
+/// Every file in `dir` (and its hidden ones) with its bytes.
+fn folder_files(dir: &Path) -> BTreeMap<String, Vec<u8>> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| {
+            let e = e.unwrap();
+            let bytes = std::fs::read(e.path()).unwrap_or_default();
+            (e.file_name().to_string_lossy().into_owned(), bytes)
+        })
+        .collect()
+}
+
+#[test]
+fn a_rerun_failing_on_its_engine_leaves_the_previous_results_as_they_were() {
+    // before, the previous run's files were removed once the case and model were checked, and
+    // the engine failed after: on an option PETSc refused (set-up), or one it did not use
+    // (known at the first solve), on one process and on two ranks
+    let case = root().join("cases/block.toml");
+    let out = scratch("distributed-rerun-kept");
+    let o = solve_cli(&case, &out, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let before = folder_files(&out);
+    assert!(before.contains_key("history.csv") && before.contains_key("summary.json"));
+    for (ranks, options, says) in [
+        (1, "-ksp_type nonsense", "Unable to find requested KSP type nonsense"),
+        (1, "-ksp_typo cg", "did not use the option(s) -ksp_typo cg"),
+        (2, "-ksp_type nonsense", "Unable to find requested KSP type nonsense"),
+        (2, "-ksp_typo cg", "did not use the option(s) -ksp_typo cg"),
+    ] {
+        let set = format!("solver.petsc.options=\"{options}\"");
+        let args = ["--set", "solver.engine=\"petsc\"", "--set", &set];
+        let o = match ranks {
+            1 => solve_cli(&case, &out, &args),
+            _ => mpirun(ranks, &case, &out, &args),
+        };
+        let e = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{ranks} {options}: {e}");
+        assert_eq!(e.matches(says).count(), 1, "{ranks} {options}: {e}");
         assert!(
-            s["message"].as_str().unwrap().contains("-ksp_typo cg"),
-            "{scene}: {s}"
+            folder_files(&out) == before,
+            "{ranks} ranks, {options}: the folder changed"
         );
     }
 }

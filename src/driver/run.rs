@@ -547,6 +547,10 @@ impl<'a> Run<'a> {
             self.history.row(&values)?;
         }
         self.save_checkpoint()?;
+        if let Some(folder) = &mut self.folder {
+            // a step taken: the previous run's files go for good
+            folder.settle()?;
+        }
         self.report_step(&row, &rep);
         Ok(())
     }
@@ -840,6 +844,11 @@ impl<'a> Run<'a> {
             StepFailure::Linear(e) => SolveError::Linear(e),
             other => SolveError::Setup(other.to_string()),
         };
+        if self.ctl.accepted == 0 && matches!(err, SolveError::Linear(_)) {
+            // the engine refused before the first step (an option it did not use, a factor
+            // it cannot make): a set-up failure, after which the folder is put back as it was
+            return Ok(err);
+        }
         self.finish(false, err.to_string())?;
         Ok(err)
     }
@@ -907,9 +916,11 @@ impl<'a> Run<'a> {
         s.min_J_solid = finite(tot.min_J.0);
         s.min_J_medium = finite(tot.min_J.1);
         s.min_J = finite(tot.min_J.0.min(tot.min_J.1)).unwrap_or(1.0);
-        if self.folder.is_some() {
+        if let Some(folder) = &mut self.folder {
             let json = serde_json::to_string_pretty(&*s).expect("serialisable");
             write_atomic(&self.out_dir.join("summary.json"), json.as_bytes())?;
+            // results of this run's own, even if it failed: they replace the previous run's
+            folder.settle()?;
         }
         Ok(())
     }

@@ -1,6 +1,11 @@
 //! A run's output folder: held by one run at a time (a lock file naming its process), with a
 //! manifest of the files the run writes there, so that the next run replaces exactly those
 //! and nothing else a user keeps in the folder.
+//!
+//! Replacing is a transaction: the previous run's files are moved aside (into [`HELD`]), not
+//! deleted, until the new run has taken its first step ([`RunFolder::settle`]). A run that
+//! fails before (its engine refuses an option, a write fails, it is killed) puts them back:
+//! when it drops the folder, or, if it was killed, when the next run opens it.
 
 use super::{OutputError, werr, write_atomic};
 use std::path::{Path, PathBuf};
@@ -9,6 +14,11 @@ use std::path::{Path, PathBuf};
 pub const LOCK: &str = ".tmc.lock";
 /// The manifest: one file name per line, every file the last run in this folder wrote.
 pub const MANIFEST: &str = ".tmc-manifest";
+/// Where the previous run's files wait (with its manifest) until the new run settles.
+pub const HELD: &str = ".tmc-previous";
+/// A settled run's [`HELD`] folder on its way out (renamed first, so a kill while it is being
+/// removed never leaves a half-removed previous run that looks like one to put back).
+const DISCARDED: &str = ".tmc-discarded";
 
 /// An output folder held by this run; the lock goes when it is dropped.
 #[derive(Debug)]
@@ -19,6 +29,9 @@ pub struct RunFolder {
     /// Files of this run (after `replace_previous`).
     written: Vec<String>,
     replaced: bool,
+    /// The previous run's files are in [`HELD`], to go when this run settles or to come back
+    /// if it fails first.
+    held: bool,
     /// The folder did not exist before this run.
     created: bool,
 }
@@ -61,19 +74,17 @@ impl RunFolder {
                 Err(e) => return Err(werr(&lock, e)),
             }
         }
-        let previous = std::fs::read_to_string(dir.join(MANIFEST))
-            .map(|t| {
-                t.lines()
-                    .filter(|l| own_name(l))
-                    .map(String::from)
-                    .collect()
-            })
-            .unwrap_or_default();
+        // a run killed before it settled: its previous run comes back
+        if dir.join(HELD).is_dir() {
+            put_back(dir, &read_manifest(dir))?;
+        }
+        remove_discarded(dir)?;
         Ok(RunFolder {
             dir: dir.to_owned(),
-            previous,
+            previous: read_manifest(dir),
             written: Vec::new(),
             replaced: false,
+            held: false,
             created,
         })
     }
@@ -82,19 +93,39 @@ impl RunFolder {
         &self.dir
     }
 
-    /// Remove the previous run's files (those its manifest lists), once this run is known to
-    /// start: everything before (case, mesh, model) has been checked.
+    /// Move the previous run's files (those its manifest lists) aside, once this run is known
+    /// to start: everything before (case, mesh, model) has been checked. They go for good when
+    /// this run settles, and come back if it fails before.
     pub fn replace_previous(&mut self) -> Result<(), OutputError> {
-        for name in std::mem::take(&mut self.previous) {
-            let p = self.dir.join(&name);
-            match std::fs::remove_file(&p) {
+        let held = self.dir.join(HELD);
+        std::fs::create_dir(&held).map_err(|e| werr(&held, e))?;
+        self.held = true;
+        self.replaced = true;
+        for name in std::mem::take(&mut self.previous)
+            .iter()
+            .map(String::as_str)
+            .chain([MANIFEST])
+        {
+            let p = self.dir.join(name);
+            match std::fs::rename(&p, held.join(name)) {
                 Ok(()) => {}
                 Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
                 Err(e) => return Err(werr(&p, e)),
             }
         }
-        self.replaced = true;
         self.save()
+    }
+
+    /// This run has taken its first step (or ended with results of its own): the previous
+    /// run's files go for good.
+    pub fn settle(&mut self) -> Result<(), OutputError> {
+        if !self.held {
+            return Ok(());
+        }
+        let (held, gone) = (self.dir.join(HELD), self.dir.join(DISCARDED));
+        std::fs::rename(&held, &gone).map_err(|e| werr(&held, e))?;
+        self.held = false;
+        remove_discarded(&self.dir)
     }
 
     /// Keep the previous run's files: this run continues it (a restart), and its manifest
@@ -124,12 +155,56 @@ impl RunFolder {
 
 impl Drop for RunFolder {
     fn drop(&mut self) {
+        let put_back = self.held && put_back(&self.dir, &self.written).is_ok();
         let _ = std::fs::remove_file(self.dir.join(LOCK));
-        if self.created && !self.replaced {
+        if self.created && (!self.replaced || put_back) {
             // a run that failed on its input leaves no empty folder behind (only removed if
             // empty)
             let _ = std::fs::remove_dir(&self.dir);
         }
+    }
+}
+
+/// The file names the manifest in `dir` lists.
+fn read_manifest(dir: &Path) -> Vec<String> {
+    std::fs::read_to_string(dir.join(MANIFEST))
+        .map(|t| {
+            t.lines()
+                .filter(|l| own_name(l))
+                .map(String::from)
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+/// Undo an unsettled replacement in `dir`: remove `written` (the failed run's files), move the
+/// held files and manifest back, remove the empty [`HELD`] folder.
+fn put_back(dir: &Path, written: &[String]) -> Result<(), OutputError> {
+    let held = dir.join(HELD);
+    for name in written {
+        let p = dir.join(name);
+        match std::fs::remove_file(&p) {
+            Ok(()) => {}
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+            Err(e) => return Err(werr(&p, e)),
+        }
+    }
+    let _ = std::fs::remove_file(dir.join(MANIFEST));
+    for entry in std::fs::read_dir(&held).map_err(|e| werr(&held, e))? {
+        let entry = entry.map_err(|e| werr(&held, e))?;
+        let to = dir.join(entry.file_name());
+        std::fs::rename(entry.path(), &to).map_err(|e| werr(&to, e))?;
+    }
+    std::fs::remove_dir(&held).map_err(|e| werr(&held, e))
+}
+
+/// Remove a settled run's discarded files, if any are left.
+fn remove_discarded(dir: &Path) -> Result<(), OutputError> {
+    let gone = dir.join(DISCARDED);
+    match std::fs::remove_dir_all(&gone) {
+        Ok(()) => Ok(()),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
+        Err(e) => Err(werr(&gone, e)),
     }
 }
 
@@ -142,6 +217,8 @@ fn own_name(name: &str) -> bool {
         && name != ".."
         && name != LOCK
         && name != MANIFEST
+        && name != HELD
+        && name != DISCARDED
 }
 
 /// Whether process `pid` exists (a signal-0 probe: EPERM means it exists under another user).
@@ -151,4 +228,84 @@ fn alive(pid: i32) -> bool {
     }
     let r = unsafe { libc::kill(pid, 0) };
     r == 0 || std::io::Error::last_os_error().raw_os_error() == Some(libc::EPERM)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::collections::BTreeMap;
+
+    /// A folder left by a run that wrote `a.vtu` and `history.csv`, beside a user's note.
+    fn previous_run(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("tmc-folder-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        for (f, text) in [
+            ("a.vtu", "old a"),
+            ("history.csv", "old history"),
+            ("notes.txt", "the user's"),
+            (MANIFEST, "a.vtu\nhistory.csv\n"),
+        ] {
+            std::fs::write(dir.join(f), text).unwrap();
+        }
+        dir
+    }
+
+    fn files(dir: &Path) -> BTreeMap<String, String> {
+        std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| {
+                let e = e.unwrap();
+                let text = std::fs::read_to_string(e.path()).unwrap_or("(folder)".into());
+                (e.file_name().to_string_lossy().into_owned(), text)
+            })
+            .collect()
+    }
+
+    /// Open `dir`, replace the previous run, write `b.vtu` and a new `history.csv`.
+    fn new_run(dir: &Path) -> RunFolder {
+        let mut f = RunFolder::open(dir).unwrap();
+        f.replace_previous().unwrap();
+        for (name, text) in [("b.vtu", "new b"), ("history.csv", "new history")] {
+            f.record(name).unwrap();
+            std::fs::write(dir.join(name), text).unwrap();
+        }
+        f
+    }
+
+    #[test]
+    fn a_run_that_fails_before_settling_puts_the_previous_run_back() {
+        let dir = previous_run("dropped");
+        let before = files(&dir);
+        drop(new_run(&dir));
+        assert_eq!(files(&dir), before);
+    }
+
+    #[test]
+    fn a_run_killed_before_settling_is_undone_by_the_next_open() {
+        let dir = previous_run("killed");
+        let before = files(&dir);
+        // killed: no drop, its lock and the held files stay
+        std::mem::forget(new_run(&dir));
+        assert!(dir.join(HELD).is_dir());
+        // (its lock names a process that is gone)
+        std::fs::write(dir.join(LOCK), "0\n").unwrap();
+        let f = RunFolder::open(&dir).unwrap();
+        assert_eq!(f.previous, vec!["a.vtu", "history.csv"]);
+        drop(f);
+        assert_eq!(files(&dir), before);
+    }
+
+    #[test]
+    fn a_settled_run_replaces_the_previous_one_and_keeps_the_user_s_files() {
+        let dir = previous_run("settled");
+        let mut f = new_run(&dir);
+        f.settle().unwrap();
+        drop(f);
+        let now = files(&dir);
+        let names: Vec<&str> = now.keys().map(String::as_str).collect();
+        assert_eq!(names, [MANIFEST, "b.vtu", "history.csv", "notes.txt"]);
+        assert_eq!(now["history.csv"], "new history");
+        assert_eq!(now[MANIFEST], "b.vtu\nhistory.csv\n");
+    }
 }
