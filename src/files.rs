@@ -37,3 +37,28 @@ impl Drop for TempFile {
         }
     }
 }
+
+/// FNV-1a, 64 bits: a fingerprint of bytes fed in pieces (a mesh, a file as it grows), to tell
+/// whether two are the same; not a defence against a forger.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Fnv(pub u64);
+
+impl Default for Fnv {
+    fn default() -> Fnv {
+        Fnv(0xcbf29ce484222325)
+    }
+}
+
+impl Fnv {
+    pub fn eat(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 ^= b as u64;
+            self.0 = self.0.wrapping_mul(0x100000001b3);
+        }
+    }
+
+    /// Feed a number by its little-endian bytes.
+    pub fn eat_u64(&mut self, v: u64) {
+        self.eat(&v.to_le_bytes());
+    }
+}

@@ -292,9 +292,17 @@ fn a_rerun_failing_on_its_engine_leaves_the_previous_results_as_they_were() {
     let before = folder_files(&out);
     assert!(before.contains_key("history.csv") && before.contains_key("summary.json"));
     for (ranks, options, says) in [
-        (1, "-ksp_type nonsense", "Unable to find requested KSP type nonsense"),
+        (
+            1,
+            "-ksp_type nonsense",
+            "Unable to find requested KSP type nonsense",
+        ),
         (1, "-ksp_typo cg", "did not use the option(s) -ksp_typo cg"),
-        (2, "-ksp_type nonsense", "Unable to find requested KSP type nonsense"),
+        (
+            2,
+            "-ksp_type nonsense",
+            "Unable to find requested KSP type nonsense",
+        ),
         (2, "-ksp_typo cg", "did not use the option(s) -ksp_typo cg"),
     ] {
         let set = format!("solver.petsc.options=\"{options}\"");

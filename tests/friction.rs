@@ -628,6 +628,55 @@ fn a_damaged_checkpoint_is_refused_with_what_is_wrong_in_it() {
         assert!(!e.contains("panicked"), "{what}: {e}");
         assert_eq!(std::fs::read(out.join("summary.json")).unwrap(), summary);
     }
+    // the files the checkpoint counts, damaged (with the checkpoint made to look unfinished,
+    // as a restart of a finished run stops before it reads them): refused, naming the file
+    let mut unfinished = good.clone();
+    unfinished["t"] = (good["t"].as_f64().unwrap() * 0.5).into();
+    std::fs::write(&file, unfinished.to_string()).unwrap();
+    let pvd = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .find(|p| p.extension().is_some_and(|e| e == "pvd"))
+        .unwrap();
+    let history = out.join("history.csv");
+    for (damaged, says) in [
+        (&history, "history.csv does not go with it: its rows differ"),
+        (
+            &history,
+            "history.csv does not go with it: it holds 40 bytes",
+        ),
+        (&pvd, "does not go with it: it ends before its last line"),
+    ] {
+        let kept = std::fs::read(damaged).unwrap();
+        let mut bad = kept.clone();
+        if says.contains("holds") {
+            bad.truncate(40);
+        } else if damaged == &history {
+            let at = bad.len() / 2;
+            bad[at] = if bad[at] == b'1' { b'2' } else { b'1' };
+        } else {
+            bad.truncate(bad.len() - 12);
+        }
+        std::fs::write(damaged, &bad).unwrap();
+        let o = common::solve_cli(
+            &out.parent().unwrap().join("case.toml"),
+            &out,
+            &["--restart"],
+        );
+        let e = common::stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{says}: {e}");
+        assert!(
+            e.contains("cannot restart from") && e.contains(says),
+            "{says}: {e}"
+        );
+        assert_eq!(
+            std::fs::read(damaged).unwrap(),
+            bad,
+            "{says}: left as it was"
+        );
+        assert_eq!(std::fs::read(out.join("summary.json")).unwrap(), summary);
+        std::fs::write(damaged, kept).unwrap();
+    }
     // the undamaged checkpoint of this finished run: nothing to continue (before, the
     // restart rewrote summary.json without its friction work)
     std::fs::write(&file, good.to_string()).unwrap();

@@ -5,6 +5,7 @@
 
 use super::SolveError;
 use crate::case::Case;
+use crate::files::Fnv;
 use crate::mesh::Mesh;
 use crate::solver::newton::Spent;
 use serde::{Deserialize, Serialize};
@@ -15,8 +16,9 @@ pub const FILE: &str = "restart.json";
 
 /// This format's version: a checkpoint of another version is refused. 2: friction keeps the
 /// step's slip per point (7 history values, 4 before). 3: the mesh's fingerprint covers its
-/// physical groups (a boundary group moved to other nodes changes the run).
-pub const VERSION: u32 = 3;
+/// physical groups (a boundary group moved to other nodes changes the run). 4: `history.csv`
+/// and the `.pvd` are counted, not copied (their cost per step no longer grows with the run).
+pub const VERSION: u32 = 4;
 
 /// Everything a run carries from one step to the next.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -51,11 +53,12 @@ pub struct Checkpoint {
     pub energy: f64,
     pub tangents_skipped: usize,
     pub heat_stored: Option<f64>,
-    /// The files written so far: (time, name) of the series, the last step written, and
-    /// `history.csv` as it stands.
-    pub series: Vec<(f64, String)>,
+    /// The files written so far: how many steps the `.pvd` lists, the last step written, and
+    /// how far `history.csv` had got (its length and fingerprint).
+    pub series: usize,
     pub written: Option<usize>,
-    pub history: String,
+    pub history_bytes: u64,
+    pub history_hash: u64,
     /// Wall seconds of the run when the checkpoint was written.
     pub wall: f64,
 }
@@ -139,33 +142,28 @@ fn differences(a: &toml::Value, b: &toml::Value, at: String, out: &mut Vec<Strin
 
 /// The mesh's size and a hash (FNV-1a) of its coordinates' bits and its cells.
 pub fn mesh_fingerprint(mesh: &Mesh) -> String {
-    let mut h: u64 = 0xcbf29ce484222325;
-    let mut eat = |v: u64| {
-        for b in v.to_le_bytes() {
-            h ^= b as u64;
-            h = h.wrapping_mul(0x100000001b3);
-        }
-    };
+    let mut h = Fnv::default();
     for x in mesh.coords.iter().flatten() {
-        eat(x.to_bits());
+        h.eat_u64(x.to_bits());
     }
     for b in &mesh.cells {
         for c in 0..b.n_cells() {
             for &n in b.cell(c) {
-                eat(n as u64);
+                h.eat_u64(n as u64);
             }
         }
     }
     // the physical groups: their names, dimensions and nodes (the boundary conditions act there)
     for (g, group) in mesh.groups.iter().enumerate() {
         for b in group.name.bytes() {
-            eat(b as u64);
+            h.eat_u64(b as u64);
         }
-        eat(group.dim as u64);
+        h.eat_u64(group.dim as u64);
         for n in mesh.group_nodes(g) {
-            eat(n as u64);
+            h.eat_u64(n as u64);
         }
     }
+    let h = h.0;
     format!(
         "{} nodes, {} cells, {h:016x}",
         mesh.coords.len(),

@@ -592,9 +592,10 @@ impl<'a> Run<'a> {
             energy: self.summary.energy,
             tangents_skipped: self.summary.tangents_skipped,
             heat_stored: self.summary.heat_stored,
-            series: self.series.written().to_vec(),
+            series: self.series.written().len(),
             written: self.written,
-            history: self.history.text().to_string(),
+            history_bytes: self.history.mark().bytes,
+            history_hash: self.history.mark().hash,
             wall: self.start.elapsed().as_secs_f64(),
         };
         if let Some(folder) = &mut self.folder {
@@ -648,13 +649,31 @@ impl<'a> Run<'a> {
         if self.model.physics.transient {
             s.heat_in = Some(cp.heat_in);
         }
-        self.series.resume(cp.series);
+        let checkpoint = Checkpoint::path(&self.out_dir);
+        let damaged = |file: &std::path::Path, what: String| {
+            SolveError::Setup(format!(
+                "cannot restart from {}: {} does not go with it: {what}; run without --restart \
+                 to start over",
+                checkpoint.display(),
+                file.display()
+            ))
+        };
+        self.series
+            .resume(cp.series)
+            .map_err(|e| damaged(self.series.pvd(), e))?;
         if self.model.physics.friction {
             // the dissipation so far is in the points' history, restored above
             self.account_friction();
         }
         self.written = cp.written;
-        self.history.resume(cp.history);
+        let mark = crate::output::history::Mark {
+            bytes: cp.history_bytes,
+            hash: cp.history_hash,
+        };
+        if self.folder.is_some() {
+            let file = self.out_dir.join("history.csv");
+            self.history.resume(mark).map_err(|e| damaged(&file, e))?;
+        }
         // wall seconds go on from where the run stopped
         self.start = Instant::now()
             .checked_sub(std::time::Duration::from_secs_f64(cp.wall))

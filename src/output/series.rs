@@ -7,7 +7,7 @@
 use super::OutputError;
 use super::fields::all_cell_fields;
 use super::nodal::nodal_fields;
-use super::vtu::{Piece, StepFields, ZLIB_LEVEL, write_pvd, write_pvtu, write_vtu};
+use super::vtu::{Piece, StepFields, ZLIB_LEVEL, read_pvd, write_pvd, write_pvtu, write_vtu};
 use crate::assembly::FrictionCell;
 use crate::case::RegionKind;
 use crate::dofs::{Field, NONE};
@@ -69,9 +69,28 @@ impl Series {
         &self.written
     }
 
-    /// Continue a run's series: the states it has written.
-    pub fn resume(&mut self, written: Vec<(f64, String)>) {
-        self.written = written;
+    /// Continue a run's series: the first `count` states its `.pvd` lists (the rank that
+    /// writes the `.pvd` reads it). The error says what is wrong with the `.pvd`.
+    pub fn resume(&mut self, count: usize) -> Result<(), String> {
+        if matches!(self.ranks, Some((r, _)) if r > 0) {
+            return Ok(());
+        }
+        let mut listed = read_pvd(&self.pvd)?;
+        if listed.len() < count {
+            return Err(format!(
+                "it lists {} steps where the checkpoint counts {count}",
+                listed.len()
+            ));
+        }
+        // (a step written after the checkpoint is taken again, and the `.pvd` rewritten then)
+        listed.truncate(count);
+        self.written = listed;
+        Ok(())
+    }
+
+    /// The `.pvd` file.
+    pub fn pvd(&self) -> &Path {
+        &self.pvd
     }
 
     /// The file of step `step` the `.pvd` lists.

@@ -391,6 +391,31 @@ pub fn write_pvtu(
     write_atomic(path, s.as_bytes())
 }
 
+/// The (time, file name) pairs a `.pvd` of [`write_pvd`] lists; the error says what is wrong.
+pub fn read_pvd(path: &Path) -> Result<Vec<(f64, String)>, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read it ({e})"))?;
+    let quoted = |line: &str, key: &str| -> Option<String> {
+        let start = line.find(&format!("{key}=\""))? + key.len() + 2;
+        let len = line[start..].find('"')?;
+        Some(line[start..start + len].to_string())
+    };
+    let mut steps = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        if !line.trim_start().starts_with("<DataSet") {
+            continue;
+        }
+        let time = quoted(line, "timestep").and_then(|t| t.parse::<f64>().ok());
+        match (time, quoted(line, "file")) {
+            (Some(t), Some(f)) => steps.push((t, f)),
+            _ => return Err(format!("line {} is not a data set of tmc's", i + 1)),
+        }
+    }
+    if !text.trim_end().ends_with("</VTKFile>") {
+        return Err("it ends before its last line".into());
+    }
+    Ok(steps)
+}
+
 /// Write the `.pvd` collection of (λ, file name) pairs.
 pub fn write_pvd(path: &Path, steps: &[(f64, String)]) -> Result<(), OutputError> {
     let mut s = String::from(
