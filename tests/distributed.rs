@@ -492,3 +492,130 @@ fn a_bad_input_under_mpirun_ends_every_rank_with_the_error_printed_once() {
     assert_eq!(e.matches("tmc study runs on one process").count(), 1, "{e}");
     assert!(!dir.join("study-out").exists());
 }
+
+/// `mpirun -n ranks tmc solve CASE -q -o OUT extra…`, stopped by Ctrl-C (SIGINT to the job's
+/// process group: mpirun and its ranks) once its third step is written.
+fn mpirun_interrupted(
+    ranks: usize,
+    case: &Path,
+    out: &Path,
+    extra: &[&str],
+) -> std::process::Output {
+    use std::os::unix::process::CommandExt;
+    let child = std::process::Command::new("mpirun")
+        .args(["-n", &ranks.to_string(), env!("CARGO_BIN_EXE_tmc"), "solve"])
+        .arg(case)
+        .args(["-q", "-o"])
+        .arg(out)
+        .args(extra)
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
+        .current_dir(root())
+        .process_group(0)
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let t0 = std::time::Instant::now();
+    while !out.join("step_0002.pvtu").exists() {
+        assert!(t0.elapsed().as_secs() < 300, "no step written");
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+    unsafe { libc::kill(-(child.id() as i32), libc::SIGINT) };
+    child.wait_with_output().unwrap()
+}
+
+#[test]
+fn a_distributed_run_restarts_on_as_many_ranks_or_on_others() {
+    // friction with its heat: history per point in two kinds of blocks (the stored θ and the
+    // slip), each rank holding its own cells'. Stopped by Ctrl-C on two ranks, then continued
+    // on two, one and three: the history of the uninterrupted two-rank run, the same steps and
+    // iterations, every physical column to 1e-10 of its largest value (the residuals and
+    // Krylov counts are the engines' own)
+    let dir = scratch("distributed-restart");
+    let case = root().join("cases/friction-heating.toml");
+    let finer = ["--set", "time.dt=0.01"];
+    let full = dir.join("full");
+    let o = mpirun(2, &case, &full, &finer);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let stopped = dir.join("stopped");
+    let o = mpirun_interrupted(2, &case, &stopped, &finer);
+    assert!(!o.status.success(), "the run was interrupted");
+    let (cols, all_rows) = common::history(&full);
+    let done = common::history(&stopped).1.len();
+    assert!(
+        done >= 3 && done < all_rows.len(),
+        "stopped after {done} of {} rows",
+        all_rows.len()
+    );
+    let copy = |to: &str| {
+        let to = dir.join(to);
+        std::fs::create_dir_all(&to).unwrap();
+        for e in std::fs::read_dir(&stopped).unwrap() {
+            let e = e.unwrap();
+            std::fs::copy(e.path(), to.join(e.file_name())).unwrap();
+        }
+        to
+    };
+    let (on_one, on_three) = (copy("on-one"), copy("on-three"));
+    let solver_own = [
+        "res_u",
+        "res_theta",
+        "res_p",
+        "krylov_iterations",
+        "wall_seconds",
+    ];
+    // each column's largest value over the run: a column at round-off (a sideways reaction)
+    // is judged against it
+    let scale: Vec<f64> = (0..cols.len())
+        .map(|j| all_rows.iter().map(|r| r[j].abs()).fold(0.0, f64::max))
+        .collect();
+    for (ranks, out) in [(2, &stopped), (1, &on_one), (3, &on_three)] {
+        let mut args = vec!["--restart"];
+        args.extend(finer);
+        let o = if ranks == 1 {
+            solve_cli(&case, out, &args)
+        } else {
+            mpirun(ranks, &case, out, &args)
+        };
+        assert!(o.status.success(), "{ranks} ranks: {}", stderr(&o));
+        let (cols2, rows) = common::history(out);
+        assert_eq!(cols, cols2);
+        assert_eq!(rows.len(), all_rows.len(), "{ranks} ranks");
+        for (i, (a, b)) in all_rows.iter().zip(&rows).enumerate() {
+            for (j, (x, y)) in a.iter().zip(b).enumerate() {
+                if solver_own.contains(&cols[j].as_str()) {
+                    continue;
+                }
+                assert!(
+                    (x - y).abs() <= 1e-10 * scale[j],
+                    "{ranks} ranks, row {i}, {}: {x} vs {y}",
+                    cols[j]
+                );
+            }
+        }
+        let (a, b) = (summary(&full), summary(out));
+        for key in ["load_steps", "rejected_steps", "newton_iterations"] {
+            assert_eq!(a[key], b[key], "{ranks} ranks: {key}");
+        }
+        for key in ["friction_work", "friction_heat", "heat_stored", "energy"] {
+            let (x, y) = (a[key].as_f64().unwrap(), b[key].as_f64().unwrap());
+            assert!(
+                (x - y).abs() <= 1e-10 * x.abs(),
+                "{ranks} ranks: {key} {x} vs {y}"
+            );
+        }
+    }
+    // and what cannot be continued is said once, every rank ending with it
+    std::fs::write(on_one.join("restart.json"), "{").unwrap();
+    for (out, says) in [
+        (dir.join("nothing"), "has no restart.json"),
+        (on_one.clone(), "is not a tmc checkpoint"),
+    ] {
+        let o = mpirun(2, &case, &out, &["--restart"]);
+        let e = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{e}");
+        assert_eq!(e.matches(says).count(), 1, "{e}");
+        assert!(!e.contains("MPI_ERR"), "{e}");
+    }
+}

@@ -366,6 +366,28 @@ impl Assembler {
         self.t_committed = t;
     }
 
+    /// The committed history of every block with one, whole: on several ranks each cell's
+    /// values from the rank that assembles it (every rank takes part). A checkpoint of this
+    /// does not depend on how the cells were shared out, so a run can go on on other ranks.
+    pub fn whole_history(&self, model: &Model) -> Vec<Vec<f64>> {
+        let blocks = (model.capacity_blocks.iter().map(|cb| cb.block))
+            .chain(model.friction_blocks.iter().map(|fb| fb.block));
+        (self.history.slabs.iter().zip(blocks))
+            .map(|(slab, block)| {
+                let mut whole = slab.committed.clone();
+                if !self.ranks.is_serial() {
+                    for (c, cell) in whole.chunks_mut(slab.width).enumerate() {
+                        if !self.owns_cell(block, c) {
+                            cell.fill(0.0);
+                        }
+                    }
+                    self.ranks.sum_into(&mut whole);
+                }
+                whole
+            })
+            .collect()
+    }
+
     /// A step was rejected: whatever its attempts wrote into the history is discarded.
     pub fn restore(&mut self) {
         self.history.restore();

@@ -180,6 +180,12 @@ impl Checkpoint {
         serde_json::to_string(self).expect("a checkpoint is serialisable")
     }
 
+    /// A checkpoint from the text of [`Checkpoint::to_json`] (as another rank sends it).
+    pub fn from_json(text: &[u8]) -> Result<Checkpoint, SolveError> {
+        serde_json::from_slice(text)
+            .map_err(|e| SolveError::Setup(format!("the checkpoint rank 0 sent is not one: {e}")))
+    }
+
     /// Whether `dir` holds a checkpoint; the error says what to do when it does not.
     pub fn exists(dir: &Path) -> Result<(), SolveError> {
         let path = Checkpoint::path(dir);

@@ -242,19 +242,16 @@ fn run_ranks(
         .clone()
         .unwrap_or_else(|| PathBuf::from("results").join(case.name()));
     let root = if ranks.is_root() {
-        let setup = (|| {
-            if opts.restart {
-                return Err(SolveError::Setup(
-                    "--restart continues a run on one process (runs on several ranks write no \
-                     checkpoint)"
-                        .into(),
-                ));
-            }
+        let setup = (|| -> Result<_, SolveError> {
             let mut folder = RunFolder::open(&out_dir)?;
+            if opts.restart {
+                let (model, probes, cp) = restart_setup(case, &mut folder, opts)?;
+                return Ok((model, probes, folder, Some(cp)));
+            }
             let (mut model, probes, staged) = checked_model(case, &out_dir, opts.quiet)?;
             folder.replace_previous()?;
             commit_mesh(&mut folder, &mut model, staged)?;
-            Ok((model, probes, folder))
+            Ok((model, probes, folder, None))
         })();
         Some(setup)
     } else {
@@ -271,10 +268,18 @@ fn run_ranks(
         _ => Vec::new(),
     };
     ranks.broadcast(0, &mut mesh_file);
-    let (model, probes, folder) = match root {
+    // and the checkpoint a restart continues from, as rank 0 read and checked it
+    let mut resumed = match &root {
+        Some(Ok((.., Some(cp)))) => cp.to_json().into_bytes(),
+        _ => Vec::new(),
+    };
+    if opts.restart {
+        ranks.broadcast(0, &mut resumed);
+    }
+    let (model, probes, folder, from) = match root {
         Some(setup) => {
-            let (model, probes, folder) = setup?;
-            (model, probes, Some(folder))
+            let (model, probes, folder, from) = setup?;
+            (model, probes, Some(folder), from)
         }
         None if mesh_file.is_empty() => {
             return Err(SolveError::Setup("rank 0 failed to set the run up".into()));
@@ -283,11 +288,18 @@ fn run_ranks(
             // read_msh names the mesh by the path it read
             let mesh = read_msh(Path::new(&*String::from_utf8_lossy(&mesh_file)))?;
             let (model, probes) = model_on(case, mesh, true)?;
-            (model, probes, None)
+            let from = match opts.restart {
+                true => Some(checkpoint::Checkpoint::from_json(&resumed)?),
+                false => None,
+            };
+            (model, probes, None, from)
         }
     };
     let mut run = Run::new(case, &model, &probes, folder, out_dir, opts, start)?;
-    run.record_initial()?;
+    match from {
+        Some(cp) => run.resume(cp)?,
+        None => run.record_initial()?,
+    }
     step_to_end(run)
 }
 
@@ -299,6 +311,17 @@ fn restart(
     opts: &SolveOptions,
     start: Instant,
 ) -> Result<Summary, SolveError> {
+    let (model, probes, cp) = restart_setup(case, &mut folder, opts)?;
+    solve_model(case, model, &probes, folder, opts, start, Some(cp))
+}
+
+/// The model a restart continues on (on the mesh the run ran on) and its checkpoint, checked
+/// against the case and the mesh; the folder's files are kept.
+fn restart_setup(
+    case: &Case,
+    folder: &mut RunFolder,
+    opts: &SolveOptions,
+) -> Result<(Model, Vec<Probe>, checkpoint::Checkpoint), SolveError> {
     let dir = folder.dir().to_owned();
     checkpoint::Checkpoint::exists(&dir)?;
     let mesh = if case.mesh_path().extension().is_some_and(|e| e == "geo") {
@@ -309,7 +332,7 @@ fn restart(
     let (model, probes) = model_on(case, mesh, opts.quiet)?;
     let cp = checkpoint::Checkpoint::read(&dir, case, &model.mesh)?;
     folder.keep_previous()?;
-    solve_model(case, model, &probes, folder, opts, start, Some(cp))
+    Ok((model, probes, cp))
 }
 
 /// Step the model from its initial state to the end of its load path.

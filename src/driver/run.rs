@@ -557,8 +557,14 @@ impl<'a> Run<'a> {
 
     /// `restart.json` of the last accepted state (after its `.vtu` and history row).
     fn save_checkpoint(&mut self) -> Result<(), SolveError> {
-        // on several ranks each holds its own cells' history per point: no one file has it all
-        if self.folder.is_none() || !self.asm.ranks.is_serial() {
+        // on several ranks each holds its own cells' history per point: gathered (by every
+        // rank) before the first rank writes it
+        let point_history = if self.folder.is_some() || !self.asm.ranks.is_serial() {
+            self.asm.whole_history(self.model)
+        } else {
+            Vec::new()
+        };
+        if self.folder.is_none() {
             return Ok(());
         }
         let tot = &self.totals;
@@ -568,13 +574,7 @@ impl<'a> Run<'a> {
             case: self.fingerprint.0.clone(),
             mesh: self.fingerprint.1.clone(),
             x: self.x.clone(),
-            point_history: self
-                .asm
-                .history
-                .slabs
-                .iter()
-                .map(|s| s.committed.clone())
-                .collect(),
+            point_history,
             t: self.ctl.t,
             dt: self.ctl.dt,
             accepted: self.ctl.accepted,
@@ -649,6 +649,8 @@ impl<'a> Run<'a> {
         if self.model.physics.transient {
             s.heat_in = Some(cp.heat_in);
         }
+        // the files written so far, which the first rank reads: checked before anything that
+        // takes every rank, and one verdict for all
         let checkpoint = Checkpoint::path(&self.out_dir);
         let damaged = |file: &std::path::Path, what: String| {
             SolveError::Setup(format!(
@@ -658,22 +660,27 @@ impl<'a> Run<'a> {
                 file.display()
             ))
         };
-        self.series
+        let mark = crate::output::history::Mark {
+            bytes: cp.history_bytes,
+            hash: cp.history_hash,
+        };
+        let files = self
+            .series
             .resume(cp.series)
-            .map_err(|e| damaged(self.series.pvd(), e))?;
+            .map_err(|e| damaged(self.series.pvd(), e))
+            .and_then(|_| match self.folder.is_some() {
+                true => (self.history.resume(mark))
+                    .map_err(|e| damaged(&self.out_dir.join("history.csv"), e)),
+                false => Ok(()),
+            });
+        (self.asm.ranks).agree(files, SolveError::to_string, |text| {
+            SolveError::Setup(text.into())
+        })?;
         if self.model.physics.friction {
             // the dissipation so far is in the points' history, restored above
             self.account_friction();
         }
         self.written = cp.written;
-        let mark = crate::output::history::Mark {
-            bytes: cp.history_bytes,
-            hash: cp.history_hash,
-        };
-        if self.folder.is_some() {
-            let file = self.out_dir.join("history.csv");
-            self.history.resume(mark).map_err(|e| damaged(&file, e))?;
-        }
         // wall seconds go on from where the run stopped
         self.start = Instant::now()
             .checked_sub(std::time::Duration::from_secs_f64(cp.wall))
