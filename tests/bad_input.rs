@@ -145,7 +145,17 @@ fn gmsh_exiting_or_a_full_disk_never_ends_in_success() {
     let body = std::fs::read_to_string(root().join("cases/block.toml")).unwrap();
     let case = dir.join("block.toml");
     std::fs::write(&case, body.replace("../geo/block.geo", "block.msh")).unwrap();
+    // over a first run's results: the rerun fails on its first file, before its first step,
+    // and puts them back as they were
     let out = dir.join("full");
+    let o = solve(&case, &out);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let files = |dir: &Path| -> Vec<(String, Vec<u8>)> {
+        (listing(dir).into_iter())
+            .map(|f| (f.clone(), std::fs::read(dir.join(&f)).unwrap()))
+            .collect()
+    };
+    let before = files(&out);
     let o = limited(&format!("solve {} -o {} -q", case.display(), out.display()));
     let e = fails_with(&o, &["cannot write"]);
     assert!(e.contains("File too large") || e.contains("space"), "{e}");
@@ -155,6 +165,12 @@ fn gmsh_exiting_or_a_full_disk_never_ends_in_success() {
             vtkio::Vtk::import(out.join(&f)).unwrap_or_else(|e| panic!("{f}: {e}"));
         }
     }
+    assert!(before == files(&out), "the first run's results as they were");
+    // into a new folder: it fails the same way and leaves no folder behind
+    let fresh = dir.join("fresh");
+    let o = limited(&format!("solve {} -o {} -q", case.display(), fresh.display()));
+    fails_with(&o, &["cannot write"]);
+    assert!(!fresh.exists(), "{:?}", listing(&fresh));
 }
 
 #[test]
