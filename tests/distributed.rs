@@ -606,16 +606,54 @@ fn a_distributed_run_restarts_on_as_many_ranks_or_on_others() {
             );
         }
     }
-    // and what cannot be continued is said once, every rank ending with it
+    // and what cannot be continued is said once, every rank ending with it, the folder as it
+    // was: no run there, a finished run, a changed case, another case, a damaged checkpoint,
+    // a damaged history
+    let other = root().join("cases/block-transient.toml");
     std::fs::write(on_one.join("restart.json"), "{").unwrap();
-    for (out, says) in [
-        (dir.join("nothing"), "has no restart.json"),
-        (on_one.clone(), "is not a tmc checkpoint"),
+    let history = on_three.join("history.csv");
+    let mut cut = std::fs::read(&history).unwrap();
+    cut.truncate(cut.len() / 2);
+    std::fs::write(&history, &cut).unwrap();
+    std::fs::write(
+        on_three.join("restart.json"),
+        std::fs::read_to_string(on_three.join("restart.json"))
+            .unwrap()
+            .replacen("\"t\":1.5", "\"t\":1.25", 1),
+    )
+    .unwrap();
+    let k = ["--set", "time.dt=0.01", "--set", "region.solid.k=2.0"];
+    let nothing = dir.join("nothing");
+    std::fs::create_dir_all(&nothing).unwrap();
+    for (case, out, extra, says) in [
+        (&case, nothing.clone(), &[][..], "has no restart.json"),
+        (&case, full.clone(), &finer[..], "has finished"),
+        (
+            &case,
+            full.clone(),
+            &k[..],
+            "has changed since: region[0].k: 1.0 then, 2.0 now",
+        ),
+        (&other, full.clone(), &[][..], "has changed since"),
+        (&case, on_one.clone(), &finer[..], "is not a tmc checkpoint"),
+        (
+            &case,
+            on_three.clone(),
+            &finer[..],
+            "history.csv does not go with it",
+        ),
     ] {
-        let o = mpirun(2, &case, &out, &["--restart"]);
+        let before = folder_files(&out);
+        let mut args = vec!["--restart"];
+        args.extend(extra);
+        let o = mpirun(2, case, &out, &args);
         let e = stderr(&o);
-        assert_eq!(o.status.code(), Some(1), "{e}");
-        assert_eq!(e.matches(says).count(), 1, "{e}");
-        assert!(!e.contains("MPI_ERR"), "{e}");
+        assert_eq!(o.status.code(), Some(1), "{says}: {e}");
+        assert_eq!(e.matches(says).count(), 1, "{says}: {e}");
+        assert!(
+            !e.contains("MPI_ERR") && !e.contains("panicked"),
+            "{says}: {e}"
+        );
+        assert_eq!(folder_files(&out), before, "{says}: the folder as it was");
     }
 }
