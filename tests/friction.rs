@@ -568,6 +568,13 @@ fn the_first_heat_of_a_cold_scene_converges() {
     );
 }
 
+/// A checkpoint's JSON, changed by a test, sealed again as tmc seals it: what it holds is
+/// then judged, not its seal.
+fn resealed(mut cp: serde_json::Value) -> String {
+    cp.as_object_mut().unwrap().remove("seal");
+    tmc::driver::checkpoint::seal(&cp.to_string())
+}
+
 #[test]
 fn a_damaged_checkpoint_is_refused_with_what_is_wrong_in_it() {
     // restart.json of a friction run, damaged one section at a time: a restart names the file
@@ -613,7 +620,7 @@ fn a_damaged_checkpoint_is_refused_with_what_is_wrong_in_it() {
     for (what, damage, says) in damages {
         let mut cp = good.clone();
         damage(&mut cp);
-        std::fs::write(&file, cp.to_string()).unwrap();
+        std::fs::write(&file, resealed(cp)).unwrap();
         let o = common::solve_cli(
             &out.parent().unwrap().join("case.toml"),
             &out,
@@ -632,7 +639,7 @@ fn a_damaged_checkpoint_is_refused_with_what_is_wrong_in_it() {
     // as a restart of a finished run stops before it reads them): refused, naming the file
     let mut unfinished = good.clone();
     unfinished["t"] = (good["t"].as_f64().unwrap() * 0.5).into();
-    std::fs::write(&file, unfinished.to_string()).unwrap();
+    std::fs::write(&file, resealed(unfinished)).unwrap();
     let pvd = std::fs::read_dir(&out)
         .unwrap()
         .map(|e| e.unwrap().path())
@@ -677,9 +684,52 @@ fn a_damaged_checkpoint_is_refused_with_what_is_wrong_in_it() {
         assert_eq!(std::fs::read(out.join("summary.json")).unwrap(), summary);
         std::fs::write(damaged, kept).unwrap();
     }
+    // changed or cut after it was written, without a new seal: a value's digit, the seal
+    // itself, the text cut at every eighth of its length
+    let text = resealed(good.clone());
+    let at = text.find("\"t\":").unwrap() + 4;
+    let digit = if text.as_bytes()[at] == b'1' {
+        "2"
+    } else {
+        "1"
+    };
+    let mut damaged = vec![
+        (
+            format!("{}{digit}{}", &text[..at], &text[at + 1..]),
+            "does not match its seal",
+        ),
+        (
+            text.replacen("\"seal\"", "\"seel\"", 1),
+            "does not begin with its seal",
+        ),
+    ];
+    for eighth in 1..8 {
+        let cut = text.len() * eighth / 8;
+        damaged.push((text[..cut].to_string(), "does not match its seal"));
+    }
+    for (bad, says) in damaged {
+        std::fs::write(&file, &bad).unwrap();
+        let o = common::solve_cli(
+            &out.parent().unwrap().join("case.toml"),
+            &out,
+            &["--restart"],
+        );
+        let e = common::stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{says}: {e}");
+        assert!(
+            e.contains("cannot restart from") && e.contains("restart.json") && e.contains(says),
+            "{says}: {e}"
+        );
+        assert_eq!(
+            std::fs::read_to_string(&file).unwrap(),
+            bad,
+            "left as it was"
+        );
+        assert_eq!(std::fs::read(out.join("summary.json")).unwrap(), summary);
+    }
     // the undamaged checkpoint of this finished run: nothing to continue (before, the
     // restart rewrote summary.json without its friction work)
-    std::fs::write(&file, good.to_string()).unwrap();
+    std::fs::write(&file, text).unwrap();
     let o = common::solve_cli(
         &out.parent().unwrap().join("case.toml"),
         &out,

@@ -1,7 +1,8 @@
 //! `restart.json`: what a run needs to continue from its last converged step exactly as if
 //! it had never stopped (`tmc solve CASE --restart`). Written after every accepted step, with
 //! the step's `.vtu` and `history.csv` row already on disk. Numbers are written so that they
-//! read back to the same bits.
+//! read back to the same bits. Its first key, `seal`, is a fingerprint of the rest of the
+//! text: a file cut short or changed after it was written is refused, whatever it changed.
 
 use super::SolveError;
 use crate::case::Case;
@@ -17,8 +18,47 @@ pub const FILE: &str = "restart.json";
 /// This format's version: a checkpoint of another version is refused. 2: friction keeps the
 /// step's slip per point (7 history values, 4 before). 3: the mesh's fingerprint covers its
 /// physical groups (a boundary group moved to other nodes changes the run). 4: `history.csv`
-/// and the `.pvd` are counted, not copied (their cost per step no longer grows with the run).
+/// and the `.pvd` are counted, not copied (their cost per step no longer grows with the run);
+/// sealed; the point history whole on several ranks too.
 pub const VERSION: u32 = 4;
+
+/// How a sealed checkpoint begins: `{"seal":"` and 16 hex digits, then `",` and the rest.
+const SEAL: &str = "{\"seal\":\"";
+
+/// The JSON object `body` (`{…}`, without a seal) sealed: `seal` first, the FNV-1a of the
+/// object's text without it, then the object's keys as they were.
+pub fn seal(body: &str) -> String {
+    let mut h = Fnv::default();
+    h.eat(body.as_bytes());
+    let rest = body.strip_prefix('{').unwrap_or(body);
+    let sep = if rest.starts_with('}') { "" } else { "," };
+    format!("{SEAL}{:016x}\"{sep}{rest}", h.0)
+}
+
+/// The object a sealed text holds, without its seal; the error says what is wrong.
+fn unseal(text: &str) -> Result<String, String> {
+    let sealed = text
+        .strip_prefix(SEAL)
+        .and_then(|t| Some((t.get(..16)?, t.get(16..)?.strip_prefix('"')?)))
+        .and_then(|(hex, rest)| Some((u64::from_str_radix(hex, 16).ok()?, rest)));
+    let Some((seal, rest)) = sealed else {
+        return Err("it does not begin with its seal (it is no tmc checkpoint, or was cut)".into());
+    };
+    let body = match rest.strip_prefix(',') {
+        Some(keys) => format!("{{{keys}"),
+        None => format!("{{{rest}"),
+    };
+    let mut h = Fnv::default();
+    h.eat(body.as_bytes());
+    if h.0 != seal {
+        return Err(
+            "its text does not match its seal: it was cut short or changed after it \
+                    was written"
+                .into(),
+        );
+    }
+    Ok(body)
+}
 
 /// Everything a run carries from one step to the next.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -176,14 +216,17 @@ impl Checkpoint {
         dir.join(FILE)
     }
 
+    /// The sealed text of the checkpoint.
     pub fn to_json(&self) -> String {
-        serde_json::to_string(self).expect("a checkpoint is serialisable")
+        seal(&serde_json::to_string(self).expect("a checkpoint is serialisable"))
     }
 
     /// A checkpoint from the text of [`Checkpoint::to_json`] (as another rank sends it).
     pub fn from_json(text: &[u8]) -> Result<Checkpoint, SolveError> {
-        serde_json::from_slice(text)
-            .map_err(|e| SolveError::Setup(format!("the checkpoint rank 0 sent is not one: {e}")))
+        let not_one =
+            |e: String| SolveError::Setup(format!("the checkpoint rank 0 sent is not one: {e}"));
+        let body = unseal(&String::from_utf8_lossy(text)).map_err(not_one)?;
+        serde_json::from_str(&body).map_err(|e| not_one(e.to_string()))
     }
 
     /// Whether `dir` holds a checkpoint; the error says what to do when it does not.
@@ -209,7 +252,8 @@ impl Checkpoint {
                 path.display()
             ))
         })?;
-        let cp: Checkpoint = serde_json::from_str(&text).map_err(|e| {
+        let body = unseal(&text).map_err(|e| refusal(&path, &e))?;
+        let cp: Checkpoint = serde_json::from_str(&body).map_err(|e| {
             SolveError::Setup(format!(
                 "cannot restart: {} is not a tmc checkpoint: {e}",
                 path.display()
@@ -270,4 +314,27 @@ fn refusal(path: &Path, what: &str) -> SolveError {
         "cannot restart from {}: {what}; run without --restart to start over",
         path.display()
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_sealed_text_reads_back_and_any_change_breaks_its_seal() {
+        for body in [r#"{"a":1,"b":[2.5,null]}"#, "{}"] {
+            let sealed = seal(body);
+            assert!(sealed.starts_with(SEAL));
+            serde_json::from_str::<serde_json::Value>(&sealed).expect("still JSON");
+            assert_eq!(unseal(&sealed).unwrap(), body);
+            // every byte changed, and every length cut short, is found
+            for i in 0..sealed.len() {
+                let mut bytes = sealed.clone().into_bytes();
+                bytes[i] = if bytes[i] == b'7' { b'8' } else { b'7' };
+                let changed = String::from_utf8(bytes).unwrap();
+                assert!(unseal(&changed).is_err(), "byte {i}: {changed}");
+                assert!(unseal(&sealed[..i]).is_err(), "cut at {i}");
+            }
+        }
+    }
 }
