@@ -436,6 +436,56 @@ fn friction_heats_the_interface_more_the_faster_it_slides_and_the_heat_balances(
 }
 
 #[test]
+fn frictional_heat_is_shared_between_two_bodies_as_their_conductances() {
+    // cases/friction-partition.toml: the heat leaving the upper block (k = 3) over that leaving
+    // the lower (k = 1), both of current height h held at 0 ° on their outer faces, is
+    // (k_upper/h_upper)/(k_lower/h_lower) for rectangles with insulated sides, whatever the
+    // interface's temperature profile: a closed form independent of the friction law
+    let out = common::scratch("friction-partition").join("out");
+    let s = tmc::driver::run(
+        &common::root().join("cases/friction-partition.toml"),
+        &tmc::driver::SolveOptions {
+            out_dir: Some(out.clone()),
+            quiet: true,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert!(s.converged && s.physics.frictional_heating);
+    let (cols, rows) = history(&out);
+    let c = |name: &str| column(&cols, &rows, name);
+    let (t, q_bottom) = (c("time"), c("Q_bottom"));
+    let (q_left, q_right) = (c("Q_top_left"), c("Q_top_right"));
+    let (top, bottom, lower) = (c("upper_top"), c("upper_bottom"), c("lower_top"));
+    let mut seen = 0;
+    for i in (0..t.len()).filter(|&i| t[i] >= 1.5) {
+        let (upper, lower_heat) = (q_left[i] + q_right[i], q_bottom[i]);
+        assert!(
+            upper < 0.0 && lower_heat < 0.0,
+            "t = {}: heat leaves both",
+            t[i]
+        );
+        let (h_upper, h_lower) = (1.0 + top[i] - bottom[i], 1.0 + lower[i]);
+        let closed_form = (3.0 / h_upper) / (1.0 / h_lower);
+        let ratio = upper / lower_heat;
+        assert!(
+            (ratio / closed_form - 1.0).abs() < 0.015,
+            "t = {}: heat out of the upper block over the lower {ratio}, closed form {closed_form}",
+            t[i]
+        );
+        seen += 1;
+    }
+    assert!(seen >= 10, "{seen} steps in the second half of the drag");
+    // and the heat made is the heat stored and let out
+    let (made, stored, heat_in) = (
+        s.friction_heat.unwrap(),
+        s.heat_stored.unwrap(),
+        s.heat_in.unwrap(),
+    );
+    assert!(made > 0.0 && ((stored - heat_in - made) / made).abs() < 1e-8);
+}
+
+#[test]
 fn frictional_heating_solved_one_way_is_the_monolithic_solution() {
     // friction's heat does not act back on the mechanics: the mechanics (LU) and then the heat
     // (LDLᵀ) per step reach the monolithic Newton's state; the same steps forced on both
