@@ -421,7 +421,14 @@ fn study_command(study: &std::path::Path, output: Option<PathBuf>, quiet: bool) 
                     .collect::<Vec<_>>()
                     .join(", ")
             );
-            // the report names the failures; the exit status tells scripts
+            // the report names the failures, and so does the end of the run (quiet or not):
+            // each failed variant with its error; the exit status tells scripts
+            if !silent() {
+                for o in r.outcomes.iter().filter(|o| !o.converged) {
+                    let message = o.message.trim_start_matches("error: ");
+                    eprintln!("error: variant \"{}\" failed: {message}", o.variant.name);
+                }
+            }
             if failed == 0 {
                 ExitCode::SUCCESS
             } else {

@@ -165,10 +165,17 @@ fn gmsh_exiting_or_a_full_disk_never_ends_in_success() {
             vtkio::Vtk::import(out.join(&f)).unwrap_or_else(|e| panic!("{f}: {e}"));
         }
     }
-    assert!(before == files(&out), "the first run's results as they were");
+    assert!(
+        before == files(&out),
+        "the first run's results as they were"
+    );
     // into a new folder: it fails the same way and leaves no folder behind
     let fresh = dir.join("fresh");
-    let o = limited(&format!("solve {} -o {} -q", case.display(), fresh.display()));
+    let o = limited(&format!(
+        "solve {} -o {} -q",
+        case.display(),
+        fresh.display()
+    ));
     fails_with(&o, &["cannot write"]);
     assert!(!fresh.exists(), "{:?}", listing(&fresh));
 }
@@ -851,5 +858,98 @@ fn under_time_a_failed_run_speaks_of_t_and_dt() {
     assert!(
         out.join("summary.json").exists(),
         "the steps that converged are kept"
+    );
+}
+
+#[test]
+fn a_study_setting_the_new_features_badly_ends_naming_the_variant_and_the_key() {
+    // friction, [time] and convection keys set badly by a study's variant: the study file,
+    // the variant and what is wrong named, no variant run, no folder made; what only the mesh
+    // can tell (a normal of three components on a 2D mesh) fails that variant when it runs,
+    // named at the end with its error, and the study exits 1
+    let dir = scratch("bad-study-new-keys");
+    let heating = root().join("cases/friction-heating.toml");
+    let transient = root().join("cases/block-transient.toml");
+    let tries = [
+        (
+            &heating,
+            "\"region.medium.friction.mu\" = -1",
+            "`friction.mu` must be finite and ≥ 0",
+        ),
+        (
+            &heating,
+            "\"region.medium.friction.heat_fraction\" = 2",
+            "must be in [0, 1], got 2",
+        ),
+        (
+            &heating,
+            "\"region.medium.friction.c_f\" = 0",
+            "`friction.c_f` must be positive",
+        ),
+        (&heating, "\"time.dt\" = -1", "`dt` must be positive"),
+        (&heating, "\"time.end\" = 0", "`end`"),
+        (
+            &transient,
+            "\"bc.solid_left.h\" = -5",
+            "`h` must be finite and ≥ 0, got -5",
+        ),
+        (&transient, "\"region.solid.rho_c\" = -1", "rho_c"),
+    ];
+    for (i, (case, set, says)) in tries.iter().enumerate() {
+        let study = dir.join(format!("study{i}.toml"));
+        std::fs::write(
+            &study,
+            format!(
+                "case = \"{}\"\n[[variant]]\nname = \"fine\"\nset = {{ \"steps.tol\" = 1e-8 }}\n\
+                 [[variant]]\nname = \"bad\"\nset = {{ {set} }}\n",
+                case.display()
+            ),
+        )
+        .unwrap();
+        let out = dir.join(format!("out{i}"));
+        let o = tmc(&[
+            "study",
+            study.to_str().unwrap(),
+            "-q",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        let e = fails_with(&o, &[&format!("study{i}.toml"), "variant \"bad\"", says]);
+        assert!(!e.contains("panicked"), "{set}: {e}");
+        assert!(!out.exists(), "{set}: nothing ran");
+    }
+    // known only with the mesh: the variant fails when it runs, the others run, the end of the
+    // study names it (it said only "1 failed" with -q before)
+    let study = dir.join("mesh.toml");
+    std::fs::write(
+        &study,
+        format!(
+            "case = \"{}\"\n[[variant]]\nname = \"fine\"\nset = {{ \"steps.tol\" = 1e-8 }}\n\
+             [[variant]]\nname = \"bad\"\nset = {{ \"region.medium.friction.normal\" = [0, 1, 0] }}\n",
+            heating.display()
+        ),
+    )
+    .unwrap();
+    let out = dir.join("out-mesh");
+    let o = tmc(&[
+        "study",
+        study.to_str().unwrap(),
+        "-q",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    let e = fails_with(
+        &o,
+        &[
+            "variant \"bad\" failed",
+            "runs/bad/case.toml:",
+            "`friction.normal` has 3 components; the mesh is 2D",
+        ],
+    );
+    assert!(!e.contains("variant \"fine\""), "{e}");
+    let table = std::fs::read_to_string(out.join("study.md")).unwrap();
+    assert!(
+        table.contains("| fine |") && table.contains("failed: "),
+        "{table}"
     );
 }
