@@ -663,3 +663,108 @@ fn a_distributed_run_restarts_on_as_many_ranks_or_on_others() {
         assert_eq!(folder_files(&out), before, "{says}: the folder as it was");
     }
 }
+
+/// The processes whose parent is `parent` (from /proc).
+fn children(parent: u32) -> Vec<u32> {
+    std::fs::read_dir("/proc")
+        .unwrap()
+        .filter_map(|e| e.ok()?.file_name().to_str()?.parse::<u32>().ok())
+        .filter(|pid| {
+            let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).unwrap_or_default();
+            // pid (comm) state ppid …: the comm may hold spaces, so count from its ')'
+            let after = stat.rsplit_once(')').map_or("", |(_, a)| a);
+            after.split_whitespace().nth(1) == Some(&parent.to_string())
+        })
+        .collect()
+}
+
+#[test]
+fn a_rank_killed_mid_run_leaves_every_file_whole_and_the_run_restarts() {
+    // kill -9 of one rank after step 20 (mpirun then ends the job): no file of the results
+    // cut short under its own name, and --restart on two ranks gives the uninterrupted history
+    let dir = scratch("distributed-kill");
+    let case = root().join("cases/friction-heating.toml");
+    let full = dir.join("full");
+    assert!(mpirun(2, &case, &full, &[]).status.success());
+    for victim in ["0", "1"] {
+        use std::os::unix::process::CommandExt;
+        let out = dir.join(format!("killed-{victim}"));
+        let mut job = std::process::Command::new("mpirun")
+            .args(["-n", "2", env!("CARGO_BIN_EXE_tmc"), "solve"])
+            .arg(&case)
+            .args(["-q", "-o"])
+            .arg(&out)
+            .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+            .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+            .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
+            .current_dir(root())
+            .process_group(0)
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .unwrap();
+        let t0 = std::time::Instant::now();
+        while !out.join("step_0020.pvtu").exists() {
+            assert!(t0.elapsed().as_secs() < 300, "no step 20");
+            std::thread::sleep(std::time::Duration::from_millis(1));
+        }
+        let ranks = children(job.id());
+        let rank = ranks.iter().copied().find(|pid| {
+            let env = std::fs::read(format!("/proc/{pid}/environ")).unwrap_or_default();
+            env.split(|&b| b == 0)
+                .any(|v| v == format!("OMPI_COMM_WORLD_RANK={victim}").as_bytes())
+        });
+        let rank = rank.expect("the rank's process");
+        unsafe { libc::kill(rank as i32, libc::SIGKILL) };
+        assert!(
+            !job.wait().unwrap().success(),
+            "the job ended with its rank"
+        );
+        // until the job's other rank is gone too (it holds the folder until then)
+        let alive = |pid: &u32| {
+            let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).unwrap_or_default();
+            let state = stat
+                .rsplit_once(')')
+                .map_or("", |(_, a)| a)
+                .split_whitespace()
+                .next();
+            !matches!(state, None | Some("Z") | Some("X"))
+        };
+        while ranks.iter().any(alive) {
+            assert!(t0.elapsed().as_secs() < 300, "the job's ranks stay");
+            std::thread::sleep(std::time::Duration::from_millis(10));
+        }
+        // every file under its own name whole (a file being written when the rank died is
+        // under its .part name): every step file reads back
+        for e in std::fs::read_dir(&out).unwrap() {
+            let name = e.unwrap().file_name().to_string_lossy().into_owned();
+            if name.ends_with(".pvtu") {
+                step_points(&out.join(&name), "u");
+            }
+        }
+        let o = mpirun(2, &case, &out, &["--restart"]);
+        assert!(o.status.success(), "rank {victim} killed: {}", stderr(&o));
+        // the restart wrote again what was being written: no .part left
+        for e in std::fs::read_dir(&out).unwrap() {
+            let name = e.unwrap().file_name().to_string_lossy().into_owned();
+            assert!(
+                !name.ends_with(".part"),
+                "rank {victim} killed: {name} left"
+            );
+        }
+        let ((cols, a), (_, b)) = (common::history(&full), common::history(&out));
+        assert_eq!(a.len(), b.len(), "rank {victim} killed: steps");
+        let wall = cols.iter().position(|c| c == "wall_seconds").unwrap();
+        for (i, (x, y)) in a.iter().zip(&b).enumerate() {
+            for j in (0..cols.len()).filter(|&j| j != wall) {
+                let scale = a.iter().map(|r| r[j].abs()).fold(0.0, f64::max);
+                assert!(
+                    (x[j] - y[j]).abs() <= 1e-10 * scale,
+                    "rank {victim} killed, row {i}, {}: {} vs {}",
+                    cols[j],
+                    x[j],
+                    y[j]
+                );
+            }
+        }
+    }
+}

@@ -221,13 +221,27 @@ fn own_name(name: &str) -> bool {
         && name != DISCARDED
 }
 
-/// Whether process `pid` exists (a signal-0 probe: EPERM means it exists under another user).
+/// Whether process `pid` is running (a signal-0 probe: EPERM means it exists under another
+/// user). A zombie is not: a rank of a job that mpirun left behind when another rank was
+/// killed ends as one where nothing reaps it, and would hold the folder for ever.
 fn alive(pid: i32) -> bool {
     if pid <= 0 {
         return false;
     }
     let r = unsafe { libc::kill(pid, 0) };
-    r == 0 || std::io::Error::last_os_error().raw_os_error() == Some(libc::EPERM)
+    let exists = r == 0 || std::io::Error::last_os_error().raw_os_error() == Some(libc::EPERM);
+    exists && !zombie(pid)
+}
+
+/// Whether process `pid` has exited and waits to be reaped (its state in /proc/PID/stat is Z
+/// or X; false where /proc cannot tell).
+fn zombie(pid: i32) -> bool {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).unwrap_or_default();
+    // pid (comm) state …: the comm may hold spaces and parentheses, so read after the last ')'
+    let state = stat
+        .rsplit_once(')')
+        .and_then(|(_, rest)| rest.split_whitespace().next());
+    matches!(state, Some("Z") | Some("X"))
 }
 
 #[cfg(test)]
@@ -271,6 +285,24 @@ mod tests {
             std::fs::write(dir.join(name), text).unwrap();
         }
         f
+    }
+
+    #[test]
+    fn an_exited_process_waiting_to_be_reaped_holds_no_folder() {
+        let me = std::process::id() as i32;
+        assert!(alive(me) && !zombie(me));
+        let mut child = std::process::Command::new("true").spawn().unwrap();
+        let pid = child.id() as i32;
+        let t0 = std::time::Instant::now();
+        while !zombie(pid) {
+            assert!(t0.elapsed().as_secs() < 30, "`true` did not exit");
+            std::thread::sleep(std::time::Duration::from_millis(1));
+        }
+        // it exists for a signal-0 probe, but it is not running
+        assert_eq!(unsafe { libc::kill(pid, 0) }, 0);
+        assert!(!alive(pid));
+        child.wait().unwrap();
+        assert!(!alive(pid));
     }
 
     #[test]
