@@ -895,8 +895,9 @@ fn a_study_setting_the_new_features_badly_ends_naming_the_variant_and_the_key() 
         ),
         (&transient, "\"region.solid.rho_c\" = -1", "rho_c"),
     ];
-    for (i, (case, set, says)) in tries.iter().enumerate() {
-        let study = dir.join(format!("study{i}.toml"));
+    // a study of `case` in `name`.toml: a fine variant, then one that sets `set`; run with -q
+    let study = |name: &str, case: &Path, set: &str| {
+        let study = dir.join(format!("{name}.toml"));
         std::fs::write(
             &study,
             format!(
@@ -906,38 +907,26 @@ fn a_study_setting_the_new_features_badly_ends_naming_the_variant_and_the_key() 
             ),
         )
         .unwrap();
-        let out = dir.join(format!("out{i}"));
-        let o = tmc(&[
+        let out = dir.join(format!("out-{name}"));
+        let args = [
             "study",
             study.to_str().unwrap(),
             "-q",
             "-o",
             out.to_str().unwrap(),
-        ]);
+        ];
+        (tmc(&args), out)
+    };
+    for (i, (case, set, says)) in tries.iter().enumerate() {
+        let (o, out) = study(&format!("study{i}"), case, set);
         let e = fails_with(&o, &[&format!("study{i}.toml"), "variant \"bad\"", says]);
         assert!(!e.contains("panicked"), "{set}: {e}");
         assert!(!out.exists(), "{set}: nothing ran");
     }
     // known only with the mesh: the variant fails when it runs, the others run, the end of the
     // study names it (it said only "1 failed" with -q before)
-    let study = dir.join("mesh.toml");
-    std::fs::write(
-        &study,
-        format!(
-            "case = \"{}\"\n[[variant]]\nname = \"fine\"\nset = {{ \"steps.tol\" = 1e-8 }}\n\
-             [[variant]]\nname = \"bad\"\nset = {{ \"region.medium.friction.normal\" = [0, 1, 0] }}\n",
-            heating.display()
-        ),
-    )
-    .unwrap();
-    let out = dir.join("out-mesh");
-    let o = tmc(&[
-        "study",
-        study.to_str().unwrap(),
-        "-q",
-        "-o",
-        out.to_str().unwrap(),
-    ]);
+    let normal = "\"region.medium.friction.normal\" = [0, 1, 0]";
+    let (o, out) = study("mesh", &heating, normal);
     let e = fails_with(
         &o,
         &[

@@ -493,36 +493,86 @@ fn a_bad_input_under_mpirun_ends_every_rank_with_the_error_printed_once() {
     assert!(!dir.join("study-out").exists());
 }
 
-/// `mpirun -n ranks tmc solve CASE -q -o OUT extra…`, stopped by Ctrl-C (SIGINT to the job's
-/// process group: mpirun and its ranks) once its third step is written.
+/// `mpirun -n ranks tmc solve CASE -q -o OUT extra…` started in a process group of its own
+/// (mpirun and its ranks), returned once the run has written step `step`.
+fn mpirun_job(
+    ranks: usize,
+    case: &Path,
+    out: &Path,
+    extra: &[&str],
+    step: usize,
+) -> std::process::Child {
+    use std::os::unix::process::CommandExt;
+    let job = common::mpirun_command(ranks)
+        .arg("solve")
+        .arg(case)
+        .args(["-q", "-o"])
+        .arg(out)
+        .args(extra)
+        .process_group(0)
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let file = out.join(format!("step_{step:04}.pvtu"));
+    let t0 = std::time::Instant::now();
+    while !file.exists() {
+        assert!(t0.elapsed().as_secs() < 300, "no {}", file.display());
+        std::thread::sleep(std::time::Duration::from_millis(1));
+    }
+    job
+}
+
+/// As [`mpirun_job`], stopped by Ctrl-C (SIGINT to the job's process group) once its third
+/// step is written.
 fn mpirun_interrupted(
     ranks: usize,
     case: &Path,
     out: &Path,
     extra: &[&str],
 ) -> std::process::Output {
-    use std::os::unix::process::CommandExt;
-    let child = std::process::Command::new("mpirun")
-        .args(["-n", &ranks.to_string(), env!("CARGO_BIN_EXE_tmc"), "solve"])
-        .arg(case)
-        .args(["-q", "-o"])
-        .arg(out)
-        .args(extra)
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-        .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
-        .current_dir(root())
-        .process_group(0)
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    let t0 = std::time::Instant::now();
-    while !out.join("step_0002.pvtu").exists() {
-        assert!(t0.elapsed().as_secs() < 300, "no step written");
-        std::thread::sleep(std::time::Duration::from_millis(2));
+    let job = mpirun_job(ranks, case, out, extra, 2);
+    unsafe { libc::kill(-(job.id() as i32), libc::SIGINT) };
+    job.wait_with_output().unwrap()
+}
+
+/// The history of the run in `out` is that of the uninterrupted run in `full`: as many rows,
+/// every physical column within 1e-10 of its largest value over the run (a column at
+/// round-off, a sideways reaction, is judged against it), the same steps and iterations, the
+/// same totals to 1e-10. The residuals and Krylov counts are the engines' own, and not judged.
+fn same_history(full: &Path, out: &Path, label: &str) {
+    let ((cols, expected), (cols2, rows)) = (common::history(full), common::history(out));
+    assert_eq!(cols, cols2, "{label}");
+    assert_eq!(rows.len(), expected.len(), "{label}: rows");
+    let solver_own = [
+        "res_u",
+        "res_theta",
+        "res_p",
+        "krylov_iterations",
+        "wall_seconds",
+    ];
+    for j in (0..cols.len()).filter(|&j| !solver_own.contains(&cols[j].as_str())) {
+        let scale = expected.iter().map(|r| r[j].abs()).fold(0.0, f64::max);
+        for (i, (a, b)) in expected.iter().zip(&rows).enumerate() {
+            assert!(
+                (a[j] - b[j]).abs() <= 1e-10 * scale,
+                "{label}, row {i}, {}: {} vs {}",
+                cols[j],
+                a[j],
+                b[j]
+            );
+        }
     }
-    unsafe { libc::kill(-(child.id() as i32), libc::SIGINT) };
-    child.wait_with_output().unwrap()
+    let (a, b) = (summary(full), summary(out));
+    for key in ["load_steps", "rejected_steps", "newton_iterations"] {
+        assert_eq!(a[key], b[key], "{label}: {key}");
+    }
+    for key in ["friction_work", "friction_heat", "heat_stored", "energy"] {
+        let (x, y) = (a[key].as_f64().unwrap(), b[key].as_f64().unwrap());
+        assert!(
+            (x - y).abs() <= 1e-10 * x.abs(),
+            "{label}: {key} {x} vs {y}"
+        );
+    }
 }
 
 #[test]
@@ -541,7 +591,7 @@ fn a_distributed_run_restarts_on_as_many_ranks_or_on_others() {
     let stopped = dir.join("stopped");
     let o = mpirun_interrupted(2, &case, &stopped, &finer);
     assert!(!o.status.success(), "the run was interrupted");
-    let (cols, all_rows) = common::history(&full);
+    let all_rows = common::history(&full).1;
     let done = common::history(&stopped).1.len();
     assert!(
         done >= 3 && done < all_rows.len(),
@@ -558,18 +608,6 @@ fn a_distributed_run_restarts_on_as_many_ranks_or_on_others() {
         to
     };
     let (on_one, on_three) = (copy("on-one"), copy("on-three"));
-    let solver_own = [
-        "res_u",
-        "res_theta",
-        "res_p",
-        "krylov_iterations",
-        "wall_seconds",
-    ];
-    // each column's largest value over the run: a column at round-off (a sideways reaction)
-    // is judged against it
-    let scale: Vec<f64> = (0..cols.len())
-        .map(|j| all_rows.iter().map(|r| r[j].abs()).fold(0.0, f64::max))
-        .collect();
     for (ranks, out) in [(2, &stopped), (1, &on_one), (3, &on_three)] {
         let mut args = vec!["--restart"];
         args.extend(finer);
@@ -579,32 +617,7 @@ fn a_distributed_run_restarts_on_as_many_ranks_or_on_others() {
             mpirun(ranks, &case, out, &args)
         };
         assert!(o.status.success(), "{ranks} ranks: {}", stderr(&o));
-        let (cols2, rows) = common::history(out);
-        assert_eq!(cols, cols2);
-        assert_eq!(rows.len(), all_rows.len(), "{ranks} ranks");
-        for (i, (a, b)) in all_rows.iter().zip(&rows).enumerate() {
-            for (j, (x, y)) in a.iter().zip(b).enumerate() {
-                if solver_own.contains(&cols[j].as_str()) {
-                    continue;
-                }
-                assert!(
-                    (x - y).abs() <= 1e-10 * scale[j],
-                    "{ranks} ranks, row {i}, {}: {x} vs {y}",
-                    cols[j]
-                );
-            }
-        }
-        let (a, b) = (summary(&full), summary(out));
-        for key in ["load_steps", "rejected_steps", "newton_iterations"] {
-            assert_eq!(a[key], b[key], "{ranks} ranks: {key}");
-        }
-        for key in ["friction_work", "friction_heat", "heat_stored", "energy"] {
-            let (x, y) = (a[key].as_f64().unwrap(), b[key].as_f64().unwrap());
-            assert!(
-                (x - y).abs() <= 1e-10 * x.abs(),
-                "{ranks} ranks: {key} {x} vs {y}"
-            );
-        }
+        same_history(&full, out, &format!("restarted on {ranks} ranks"));
     }
     // and what cannot be continued is said once, every rank ending with it, the folder as it
     // was: no run there, a finished run, a changed case, another case, a damaged checkpoint,
@@ -687,26 +700,9 @@ fn a_rank_killed_mid_run_leaves_every_file_whole_and_the_run_restarts() {
     let full = dir.join("full");
     assert!(mpirun(2, &case, &full, &[]).status.success());
     for victim in ["0", "1"] {
-        use std::os::unix::process::CommandExt;
         let out = dir.join(format!("killed-{victim}"));
-        let mut job = std::process::Command::new("mpirun")
-            .args(["-n", "2", env!("CARGO_BIN_EXE_tmc"), "solve"])
-            .arg(&case)
-            .args(["-q", "-o"])
-            .arg(&out)
-            .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-            .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-            .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
-            .current_dir(root())
-            .process_group(0)
-            .stderr(std::process::Stdio::null())
-            .spawn()
-            .unwrap();
+        let mut job = mpirun_job(2, &case, &out, &[], 20);
         let t0 = std::time::Instant::now();
-        while !out.join("step_0020.pvtu").exists() {
-            assert!(t0.elapsed().as_secs() < 300, "no step 20");
-            std::thread::sleep(std::time::Duration::from_millis(1));
-        }
         let ranks = children(job.id());
         let rank = ranks.iter().copied().find(|pid| {
             let env = std::fs::read(format!("/proc/{pid}/environ")).unwrap_or_default();
@@ -751,20 +747,6 @@ fn a_rank_killed_mid_run_leaves_every_file_whole_and_the_run_restarts() {
                 "rank {victim} killed: {name} left"
             );
         }
-        let ((cols, a), (_, b)) = (common::history(&full), common::history(&out));
-        assert_eq!(a.len(), b.len(), "rank {victim} killed: steps");
-        let wall = cols.iter().position(|c| c == "wall_seconds").unwrap();
-        for (i, (x, y)) in a.iter().zip(&b).enumerate() {
-            for j in (0..cols.len()).filter(|&j| j != wall) {
-                let scale = a.iter().map(|r| r[j].abs()).fold(0.0, f64::max);
-                assert!(
-                    (x[j] - y[j]).abs() <= 1e-10 * scale,
-                    "rank {victim} killed, row {i}, {}: {} vs {}",
-                    cols[j],
-                    x[j],
-                    y[j]
-                );
-            }
-        }
+        same_history(&full, &out, &format!("rank {victim} killed"));
     }
 }

@@ -636,6 +636,19 @@ fn a_damaged_checkpoint_is_refused_with_what_is_wrong_in_it() {
     let good: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&file).unwrap()).unwrap();
     let summary = std::fs::read(out.join("summary.json")).unwrap();
+    // a restart of the damaged folder: refused, exit 1, naming what `says`, summary kept
+    let refused = |says: &str| {
+        let case = out.parent().unwrap().join("case.toml");
+        let o = common::solve_cli(&case, &out, &["--restart"]);
+        let e = common::stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{says}: {e}");
+        let named = e.contains("cannot restart from") && e.contains("restart.json");
+        assert!(
+            named && e.contains(says) && !e.contains("panicked"),
+            "{says}: {e}"
+        );
+        assert_eq!(std::fs::read(out.join("summary.json")).unwrap(), summary);
+    };
     type Damage = fn(&mut serde_json::Value);
     let damages: [(&str, Damage, &str); 4] = [
         (
@@ -667,23 +680,11 @@ fn a_damaged_checkpoint_is_refused_with_what_is_wrong_in_it() {
             "is no duration",
         ),
     ];
-    for (what, damage, says) in damages {
+    for (_section, damage, says) in damages {
         let mut cp = good.clone();
         damage(&mut cp);
         std::fs::write(&file, resealed(cp)).unwrap();
-        let o = common::solve_cli(
-            &out.parent().unwrap().join("case.toml"),
-            &out,
-            &["--restart"],
-        );
-        let e = common::stderr(&o);
-        assert!(!o.status.success(), "{what}: {e}");
-        assert!(
-            e.contains("cannot restart from") && e.contains("restart.json") && e.contains(says),
-            "{what}: {e}"
-        );
-        assert!(!e.contains("panicked"), "{what}: {e}");
-        assert_eq!(std::fs::read(out.join("summary.json")).unwrap(), summary);
+        refused(says);
     }
     // the files the checkpoint counts, damaged (with the checkpoint made to look unfinished,
     // as a restart of a finished run stops before it reads them): refused, naming the file
@@ -715,17 +716,7 @@ fn a_damaged_checkpoint_is_refused_with_what_is_wrong_in_it() {
             bad.truncate(bad.len() - 12);
         }
         std::fs::write(damaged, &bad).unwrap();
-        let o = common::solve_cli(
-            &out.parent().unwrap().join("case.toml"),
-            &out,
-            &["--restart"],
-        );
-        let e = common::stderr(&o);
-        assert_eq!(o.status.code(), Some(1), "{says}: {e}");
-        assert!(
-            e.contains("cannot restart from") && e.contains(says),
-            "{says}: {e}"
-        );
+        refused(says);
         assert_eq!(
             std::fs::read(damaged).unwrap(),
             bad,
@@ -759,23 +750,12 @@ fn a_damaged_checkpoint_is_refused_with_what_is_wrong_in_it() {
     }
     for (bad, says) in damaged {
         std::fs::write(&file, &bad).unwrap();
-        let o = common::solve_cli(
-            &out.parent().unwrap().join("case.toml"),
-            &out,
-            &["--restart"],
-        );
-        let e = common::stderr(&o);
-        assert_eq!(o.status.code(), Some(1), "{says}: {e}");
-        assert!(
-            e.contains("cannot restart from") && e.contains("restart.json") && e.contains(says),
-            "{says}: {e}"
-        );
+        refused(says);
         assert_eq!(
             std::fs::read_to_string(&file).unwrap(),
             bad,
             "left as it was"
         );
-        assert_eq!(std::fs::read(out.join("summary.json")).unwrap(), summary);
     }
     // the undamaged checkpoint of this finished run: nothing to continue (before, the
     // restart rewrote summary.json without its friction work)

@@ -218,16 +218,20 @@ fn vtu_array(vtu: &Path, name: &str, point: bool) -> Vec<f64> {
     panic!("no array {name} in {}", vtu.display())
 }
 
-/// `mpirun -n RANKS` of tmc with `args`, as root and on more ranks than cores if need be.
+/// `mpirun -n RANKS tmc`, as root and on more ranks than cores if need be, to add arguments to.
 #[allow(dead_code)]
-pub fn mpirun_tmc(ranks: usize, args: &[&std::ffi::OsStr]) -> std::process::Output {
-    std::process::Command::new("mpirun")
-        .args(["-n", &ranks.to_string(), env!("CARGO_BIN_EXE_tmc")])
-        .args(args)
+pub fn mpirun_command(ranks: usize) -> std::process::Command {
+    let mut c = std::process::Command::new("mpirun");
+    c.args(["-n", &ranks.to_string(), env!("CARGO_BIN_EXE_tmc")])
         .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
         .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
         .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
-        .current_dir(root())
-        .output()
-        .unwrap()
+        .current_dir(root());
+    c
+}
+
+/// `mpirun -n RANKS` of tmc with `args`.
+#[allow(dead_code)]
+pub fn mpirun_tmc(ranks: usize, args: &[&std::ffi::OsStr]) -> std::process::Output {
+    mpirun_command(ranks).args(args).output().unwrap()
 }
