@@ -844,6 +844,49 @@ fn a_frictionless_pad_ploughs_the_open_medium_ahead_with_little_force() {
 }
 
 #[test]
+fn a_pad_on_a_long_plate_slides_its_own_width() {
+    // issue 36's pad (geo/pad.geo, 2 wide, on a plate running 1 beyond it each side) with one
+    // cell across the medium, pressed 0.3 and dragged 2.0, its own width. Without friction
+    // the open medium ploughed ahead costs under 5 % of what μ = 0.3 would (measured ≤ 0.8 %
+    // of the normal force); with μ = 0.3 the whole drag completes, the force ratio within
+    // 10 % of μ in full slip (measured 0.281–0.310: it settles 6 % low as the pad leaves the
+    // plate's middle). With four cells across, μ = 0.3 stalls after 0.12 (CASE.md).
+    for mu in [None, Some(0.3)] {
+        let (s, out) = solve_text(
+            &format!("pad-own-width-{mu:?}"),
+            "pad.geo",
+            "n = 16, m = 8, l = 1",
+            &drag_case(2, mu, 2.0, DRAG, 0.025),
+        );
+        assert!(s.converged, "μ = {mu:?}: {}", s.message);
+        let ratios: Vec<(f64, f64)> = top_forces(&out, 2)
+            .iter()
+            .filter(|(t, _, _)| *t > 1.0)
+            .map(|(t, ft, fnormal)| (2.0 * (t - 1.0), ft / fnormal))
+            .collect();
+        assert!(
+            (ratios.last().unwrap().0 - 2.0).abs() < 1e-9,
+            "the whole drag"
+        );
+        match mu {
+            None => {
+                let ploughing = ratios.iter().map(|r| r.1.abs()).fold(0.0, f64::max);
+                println!("pad, μ = 0, dragged 2.0: largest F_t / F_n {ploughing:.2e}");
+                assert!(ploughing < 0.05 * 0.3, "ploughing {ploughing}");
+            }
+            Some(mu) => {
+                let slip: Vec<_> = ratios.iter().skip_while(|r| r.1 < 0.97 * mu).collect();
+                println!("pad, μ = {mu}, dragged 2.0: (drag, F_t/F_n) in full slip {slip:?}");
+                assert!(slip.len() >= 10 && slip[0].0 < 0.3, "full slip {slip:?}");
+                for (d, r) in slip {
+                    assert!((r / mu - 1.0).abs() < 0.1, "drag {d}: ratio {r}");
+                }
+            }
+        }
+    }
+}
+
+#[test]
 fn with_one_cell_across_the_medium_the_block_slides_four_times_its_thickness() {
     // One medium cell between block and base: nothing can fold inside the layer where the
     // block's leading corner pitches down (with 4 or 8 cells, drags at μ ≥ 0.3 stall there:
