@@ -677,17 +677,20 @@ fn a_distributed_run_restarts_on_as_many_ranks_or_on_others() {
     }
 }
 
+/// A process's state letter and its parent's pid, from /proc/PID/stat (`None` once it is gone).
+fn proc_stat(pid: u32) -> Option<(String, u32)> {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+    // pid (comm) state ppid …: the comm may hold spaces, so count from its last ')'
+    let mut after = stat.rsplit_once(')')?.1.split_whitespace();
+    Some((after.next()?.to_string(), after.next()?.parse().ok()?))
+}
+
 /// The processes whose parent is `parent` (from /proc).
 fn children(parent: u32) -> Vec<u32> {
     std::fs::read_dir("/proc")
         .unwrap()
         .filter_map(|e| e.ok()?.file_name().to_str()?.parse::<u32>().ok())
-        .filter(|pid| {
-            let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).unwrap_or_default();
-            // pid (comm) state ppid …: the comm may hold spaces, so count from its ')'
-            let after = stat.rsplit_once(')').map_or("", |(_, a)| a);
-            after.split_whitespace().nth(1) == Some(&parent.to_string())
-        })
+        .filter(|&pid| proc_stat(pid).is_some_and(|(_, ppid)| ppid == parent))
         .collect()
 }
 
@@ -716,15 +719,8 @@ fn a_rank_killed_mid_run_leaves_every_file_whole_and_the_run_restarts() {
             "the job ended with its rank"
         );
         // until the job's other rank is gone too (it holds the folder until then)
-        let alive = |pid: &u32| {
-            let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).unwrap_or_default();
-            let state = stat
-                .rsplit_once(')')
-                .map_or("", |(_, a)| a)
-                .split_whitespace()
-                .next();
-            !matches!(state, None | Some("Z") | Some("X"))
-        };
+        let alive =
+            |pid: &u32| proc_stat(*pid).is_some_and(|(state, _)| state != "Z" && state != "X");
         while ranks.iter().any(alive) {
             assert!(t0.elapsed().as_secs() < 300, "the job's ranks stay");
             std::thread::sleep(std::time::Duration::from_millis(10));

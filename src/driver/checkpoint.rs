@@ -8,6 +8,7 @@ use super::SolveError;
 use crate::case::Case;
 use crate::files::Fnv;
 use crate::mesh::Mesh;
+use crate::output::history::Mark;
 use crate::solver::newton::Spent;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -97,8 +98,7 @@ pub struct Checkpoint {
     /// how far `history.csv` had got (its length and fingerprint).
     pub series: usize,
     pub written: Option<usize>,
-    pub history_bytes: u64,
-    pub history_hash: u64,
+    pub history: Mark,
     /// Wall seconds of the run when the checkpoint was written.
     pub wall: f64,
 }

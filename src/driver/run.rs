@@ -594,8 +594,7 @@ impl<'a> Run<'a> {
             heat_stored: self.summary.heat_stored,
             series: self.series.written().len(),
             written: self.written,
-            history_bytes: self.history.mark().bytes,
-            history_hash: self.history.mark().hash,
+            history: self.history.mark(),
             wall: self.start.elapsed().as_secs_f64(),
         };
         if let Some(folder) = &mut self.folder {
@@ -660,16 +659,12 @@ impl<'a> Run<'a> {
                 file.display()
             ))
         };
-        let mark = crate::output::history::Mark {
-            bytes: cp.history_bytes,
-            hash: cp.history_hash,
-        };
         let files = self
             .series
             .resume(cp.series)
             .map_err(|e| damaged(self.series.pvd(), e))
             .and_then(|_| match self.folder.is_some() {
-                true => (self.history.resume(mark))
+                true => (self.history.resume(cp.history))
                     .map_err(|e| damaged(&self.out_dir.join("history.csv"), e)),
                 false => Ok(()),
             });

@@ -20,8 +20,9 @@ pub struct History {
     hash: Fnv,
 }
 
-/// How far a history file had got: its length and the fingerprint of those bytes.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// How far a history file had got: its length and the fingerprint of those bytes (what a
+/// checkpoint keeps of it).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct Mark {
     pub bytes: u64,
     pub hash: u64,
