@@ -245,7 +245,7 @@ impl Plan {
                     Ok((
                         p,
                         if p == Part::Mechanics && model.physics.friction {
-                            LinearSolver::block_lu(&asm.pattern, &eqs)?
+                            LinearSolver::block_lu(&asm.pattern, &structure, &eqs)?
                         } else {
                             LinearSolver::block_ldlt(&asm.pattern, &structure, &eqs)?
                         },

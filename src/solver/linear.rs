@@ -10,13 +10,16 @@
 //!   twice the SIMD width; GMRES keeps the residual in double and reaches the same 1e-10).
 //!   Without thermal expansion (K_mθ = 0) the preconditioner is the exact inverse up to that
 //!   rounding, and GMRES stops after two or three iterations.
-//! - [`LinearKind::Lu`]: faer's sparse LU with partial pivoting (friction's unsymmetric
-//!   mechanics, alone or as the first part of a one-way split). Its fill is that of AᵀA, far
-//!   more than LDLᵀ's (see SOLVERS.md), so a factor is kept across Newton iterations while it
-//!   preconditions the newer tangents: GMRES with it reaches 1e-10 in a few products, or the
-//!   tangent is refactorised. In the block preconditioner above, friction's mechanics block
-//!   is factorised by LU in double precision, at every factorisation.
+//! - [`LinearKind::Lu`]: friction's unsymmetric mechanics, alone or as the first part of a
+//!   one-way split. The friction tangent has the symmetric pattern of the frictionless one, so
+//!   it is factorised without pivoting in the same nested-dissection order ([`StaticLu`]:
+//!   twice LDLᵀ's entries), by faer's partially pivoted LU (fill bounded by AᵀA's pattern)
+//!   only where a pivot vanishes in that order. A factor is kept across Newton iterations
+//!   while it preconditions the newer tangents: GMRES with it reaches 1e-10 in a few
+//!   products, or the tangent is refactorised. In the block preconditioner above, friction's
+//!   mechanics block is factorised the same way in single precision, at every factorisation.
 
+use super::static_lu::{Real, StaticLu};
 use crate::dofs::{Pattern, Structure};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::solvers::Solve;
@@ -93,27 +96,40 @@ pub struct LinearSolver {
 /// refactored (each iteration: a product with the matrix and a solve with the factor).
 const LAG_MAX_ITS: usize = 12;
 
-/// LU with partial pivoting of the whole system, refactored only when its last factor no
-/// longer preconditions the current tangent well: between Newton iterations a tangent moves
-/// little, so GMRES with the last factor as its preconditioner reaches [`GMRES_TOL`] in a few
-/// products, each far cheaper than a factorisation, whose fill is that of AᵀA. A factor that
-/// needs more than [`LAG_MAX_ITS`] is refactored with the current values and solves directly.
-struct LaggedLu {
-    /// The block's pattern and the current tangent's values; whether `numeric` is their factor.
+/// LU of an unsymmetric block, refactored only when its last factor no longer preconditions
+/// the current tangent well: between Newton iterations a tangent moves little, so GMRES with
+/// the last factor as its preconditioner reaches [`GMRES_TOL`] in a few products, each far
+/// cheaper than a factorisation. A factor that needs more than [`LAG_MAX_ITS`] is refactored
+/// with the current values.
+///
+/// The factor is [`StaticLu`]: no pivoting, in the nested-dissection order of the symmetric
+/// pattern, so its entries are twice LDLᵀ's. Where a pivot vanishes in that order, faer's LU
+/// with partial pivoting (fill bounded by the pattern of AᵀA) takes over for that factor.
+/// Every solve runs GMRES with the factor (one or two products with a fresh one), so a factor
+/// whose static pivots lost digits still gives the solution to [`GMRES_TOL`].
+struct LaggedLu<T: Real> {
+    /// The block's pattern and the current tangent's values; whether the factor is theirs.
     sub: SubMatrix,
+    staticlu: StaticLu<T>,
     symbolic: SymbolicLu<usize>,
-    numeric: Option<Lu<usize, f64>>,
+    pivoted: Option<Lu<usize, f64>>,
+    factored: bool,
     current: bool,
 }
 
-impl LaggedLu {
-    fn new(sub: SubMatrix) -> Result<LaggedLu, LinearError> {
+impl<T: Real> LaggedLu<T> {
+    /// `node[i]`: mesh node of the block's equation i (the elimination order keeps a node's
+    /// unknowns together).
+    fn new(sub: SubMatrix, node: &[u32]) -> Result<LaggedLu<T>, LinearError> {
         let symbolic = SymbolicLu::try_new(sub.pattern.as_ref())
             .map_err(|e| LinearError::Symbolic(format!("{e:?}")))?;
+        let (fwd, _) = nested_dissection(&sub.pattern, node);
         Ok(LaggedLu {
+            staticlu: StaticLu::new(&sub.pattern, &fwd),
             sub,
             symbolic,
-            numeric: None,
+            pivoted: None,
+            factored: false,
             current: false,
         })
     }
@@ -123,62 +139,74 @@ impl LaggedLu {
     fn factor(&mut self, values: &[f64]) -> Result<(), LinearError> {
         self.sub.update(values);
         self.current = false;
-        if self.numeric.is_none() {
+        if !self.factored {
             self.refactor()?;
         }
         Ok(())
     }
 
     fn refactor(&mut self) -> Result<(), LinearError> {
-        self.numeric = None;
-        let a = SparseColMatRef::new(self.sub.pattern.as_ref(), &self.sub.values);
-        let lu = Lu::try_new_with_symbolic(self.symbolic.clone(), a)
-            .map_err(|e| LinearError::Factor(format!("{e:?}")))?;
-        self.numeric = Some(lu);
+        self.factored = false;
+        self.pivoted = None;
+        if self.staticlu.factor(&self.sub.values).is_err() {
+            let a = SparseColMatRef::new(self.sub.pattern.as_ref(), &self.sub.values);
+            let lu = Lu::try_new_with_symbolic(self.symbolic.clone(), a)
+                .map_err(|e| LinearError::Factor(format!("{e:?}")))?;
+            self.pivoted = Some(lu);
+        }
+        self.factored = true;
         self.current = true;
         Ok(())
     }
 
-    /// b → A⁻¹ b; the Krylov iterations it took (0 for a direct solve).
+    /// b → A⁻¹ b; the Krylov iterations it took.
     fn solve(&mut self, b: &mut [f64]) -> Result<usize, LinearError> {
-        let n = b.len();
-        if !self.current {
-            let lu = self.numeric.as_ref().expect("factored before solve");
+        let rhs = b.to_vec();
+        let mut spent = 0;
+        loop {
+            let budget = if self.current { GMRES_MAX } else { LAG_MAX_ITS };
             let sub = &self.sub;
-            let matvec = |x: &[f64], y: &mut [f64]| sub.mul(x, y);
-            let precond = |r: &[f64], z: &mut [f64]| {
-                z.copy_from_slice(r);
-                lu.solve_in_place(MatMut::from_column_major_slice_mut(z, n, 1));
-            };
-            let mut x = vec![0.0; n];
-            if let Ok(its) = gmres(
-                &matvec,
-                &precond,
+            let this = &*self;
+            let out = gmres(
+                &|x: &[f64], y: &mut [f64]| sub.mul(x, y),
+                &|r: &[f64], z: &mut [f64]| {
+                    z.copy_from_slice(r);
+                    this.apply(z)
+                },
+                &rhs,
                 b,
-                &mut x,
                 GMRES_TOL,
-                LAG_MAX_ITS,
-                LAG_MAX_ITS,
-            ) {
-                b.copy_from_slice(&x);
-                return Ok(its);
+                GMRES_RESTART.min(budget),
+                budget,
+            );
+            match out {
+                Ok(its) => return Ok(spent + its),
+                Err((iterations, residual)) if self.current => {
+                    return Err(LinearError::Krylov {
+                        iterations: spent + iterations,
+                        residual,
+                    });
+                }
+                Err((its, _)) => {
+                    spent += its;
+                    self.refactor()?;
+                }
             }
-            self.refactor()?;
         }
-        self.apply(b);
-        Ok(0)
     }
 
     /// b → A⁻¹ b with the factor held, of the current values or of earlier ones.
     fn apply(&self, b: &mut [f64]) {
         let n = b.len();
-        let lu = self.numeric.as_ref().expect("factored before solve");
-        lu.solve_in_place(MatMut::from_column_major_slice_mut(b, n, 1));
+        match &self.pivoted {
+            Some(lu) => lu.solve_in_place(MatMut::from_column_major_slice_mut(b, n, 1)),
+            None => self.staticlu.solve(b),
+        }
     }
 }
 
 enum Backend {
-    Lu(Box<LaggedLu>),
+    Lu(Box<LaggedLu<f64>>),
     Ldlt(Box<SymFactor>),
     BlockGmres(Box<BlockTriangular>),
     #[cfg(feature = "petsc")]
@@ -191,7 +219,7 @@ impl LinearSolver {
     /// depends on pivoting.
     pub fn factor_entries(&self) -> Option<usize> {
         match &self.backend {
-            Backend::Lu(_) => None,
+            Backend::Lu(f) => Some(f.staticlu.entries()),
             #[cfg(feature = "petsc")]
             Backend::Petsc(_) => None,
             Backend::Ldlt(f) => Some(f.symbolic.len_val()),
@@ -206,7 +234,7 @@ impl LinearSolver {
     pub fn new(kind: LinearKind, p: &Pattern, s: &Structure) -> Result<LinearSolver, LinearError> {
         let all: Vec<usize> = (0..p.n).collect();
         match kind {
-            LinearKind::Lu => Self::block_lu(p, &all),
+            LinearKind::Lu => Self::block_lu(p, s, &all),
             LinearKind::Ldlt => Self::block_ldlt(p, s, &all),
             LinearKind::BlockGmres => Self::block_gmres(p, s, false),
             LinearKind::Petsc => Err(LinearError::Engine(
@@ -241,11 +269,16 @@ impl LinearSolver {
 
     /// LU of the (unsymmetric) sub-block of equations `eqs` (increasing): `factor` takes the
     /// whole system's values, `solve` vectors of `eqs.len()`.
-    pub fn block_lu(p: &Pattern, eqs: &[usize]) -> Result<LinearSolver, LinearError> {
+    pub fn block_lu(
+        p: &Pattern,
+        s: &Structure,
+        eqs: &[usize],
+    ) -> Result<LinearSolver, LinearError> {
+        let nodes: Vec<u32> = eqs.iter().map(|&e| s.node[e]).collect();
         let sub = SubMatrix::new(p, eqs, eqs);
         Ok(Self::with(
             LinearKind::Lu,
-            Backend::Lu(Box::new(LaggedLu::new(sub)?)),
+            Backend::Lu(Box::new(LaggedLu::new(sub, &nodes)?)),
         ))
     }
 
@@ -653,7 +686,7 @@ fn nested_dissection(p: &SymbolicSparseColMat<usize>, node: &[u32]) -> (Vec<usiz
 /// friction.
 enum MechanicsFactor {
     Ldlt(Box<SymFactor>),
-    Lu(Box<LaggedLu>),
+    Lu(Box<LaggedLu<f32>>),
 }
 
 impl MechanicsFactor {
@@ -677,7 +710,7 @@ impl MechanicsFactor {
     fn entries(&self) -> Option<usize> {
         match self {
             MechanicsFactor::Ldlt(f) => Some(f.symbolic.len_val()),
-            MechanicsFactor::Lu(_) => None,
+            MechanicsFactor::Lu(f) => Some(f.staticlu.entries()),
         }
     }
 }
@@ -709,8 +742,9 @@ impl BlockTriangular {
             SymFactor::new(SubMatrix::new(p, eqs, eqs), &nodes, Precision::Single).map(Some)
         };
         let fm = if unsymmetric && !mech.is_empty() {
+            let nodes: Vec<u32> = mech.iter().map(|&e| s.node[e]).collect();
             let sub = SubMatrix::new(p, &mech, &mech);
-            Some(MechanicsFactor::Lu(Box::new(LaggedLu::new(sub)?)))
+            Some(MechanicsFactor::Lu(Box::new(LaggedLu::new(sub, &nodes)?)))
         } else {
             block(&mech)?.map(|f| MechanicsFactor::Ldlt(Box::new(f)))
         };
@@ -975,11 +1009,8 @@ mod tests {
             );
             solver.krylov_last
         };
-        assert_eq!(
-            solve(&mut solver, &v),
-            0,
-            "the first factor solves directly"
-        );
+        // the first factor is the tangent's: GMRES ends after one product
+        assert_eq!(solve(&mut solver, &v), 1, "the first factor solves at once");
         // a tangent that moved a little: the last factor preconditions it
         let near: Vec<f64> = v
             .iter()
@@ -988,13 +1019,14 @@ mod tests {
             .collect();
         let its = solve(&mut solver, &near);
         assert!(its > 0 && its <= LAG_MAX_ITS, "{its}");
-        // one that moved far: refactorised, solved directly
+        // one that moved far: the lagged factor gives up after its budget, the refactorised
+        // one solves at once
         let far: Vec<f64> = v
             .iter()
             .enumerate()
             .map(|(k, a)| a * (1.0 + 0.9 * (k % 5) as f64))
             .collect();
-        assert_eq!(solve(&mut solver, &far), 0);
+        assert_eq!(solve(&mut solver, &far), LAG_MAX_ITS + 1);
         // and the block preconditioner with an unsymmetric mechanics block
         let (p, v, node, thermal) = system(40, 0.1, 0.3);
         let mut w = v.clone();
@@ -1014,6 +1046,35 @@ mod tests {
         assert!(residual(&p, &w, &x, &b) < 1e-9);
         // (11 measured; 78 with its mechanics block taken as symmetric by LDLᵀ)
         assert!(solver.krylov_last <= 15, "{}", solver.krylov_last);
+    }
+
+    #[test]
+    fn a_vanishing_static_pivot_falls_back_to_partial_pivoting() {
+        // the pattern is full, the diagonal zero: every elimination order meets a zero pivot
+        // first, and only row exchanges factorise it
+        let n = 4;
+        let p = Pattern {
+            n,
+            col_ptr: (0..=n).map(|j| j * n).collect(),
+            row_idx: (0..n * n).map(|k| k % n).collect(),
+        };
+        let v: Vec<f64> = (0..n * n)
+            .map(|k| match (k % n, k / n) {
+                (i, j) if i == j => 0.0,
+                (i, j) => 1.0 + (i * n + 2 * j) as f64 * 0.1,
+            })
+            .collect();
+        let s = Structure {
+            node: (0..n as u32).collect(),
+            thermal: vec![false; n],
+        };
+        let mut solver = LinearSolver::new(LinearKind::Lu, &p, &s).unwrap();
+        solver.factor(&v).unwrap();
+        let b = vec![1.0, -2.0, 0.5, 3.0];
+        let mut x = b.clone();
+        solver.solve(&mut x).unwrap();
+        assert!(residual(&p, &v, &x, &b) < 1e-12);
+        assert_eq!(solver.krylov_last, 1);
     }
 
     #[test]

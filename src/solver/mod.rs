@@ -7,4 +7,5 @@ pub mod linear;
 pub mod newton;
 #[cfg(feature = "petsc")]
 pub mod petsc;
+pub mod static_lu;
 pub mod stepping;
