@@ -15,6 +15,7 @@ use crate::model::Model;
 use crate::output::probes::Probe;
 use crate::output::{History, OutputError, RunFolder, Series, write_atomic};
 use crate::parallel::Ranks;
+use crate::solver::engine::{Engine, Faer, System};
 use crate::solver::linear::{LinearKind, LinearSolver};
 use crate::solver::newton::{Newton, Part, StepFailure, StepReport};
 use crate::solver::stepping::Controller;
@@ -113,7 +114,9 @@ impl Plan {
         }
         let asm = Assembler::new(model);
         newton.idle = opts.idle_threads;
-        let solvers = Self::solvers(model, &asm, &newton, strategy, kind)?;
+        let structure = equation_structure(&model.dofs, &model.cons);
+        let systems = Self::systems(model, &newton, strategy);
+        let solvers = Faer { whole: kind }.solvers(&systems, &asm.pattern, &structure)?;
         Ok(Plan {
             strategy,
             asm,
@@ -147,8 +150,7 @@ impl Plan {
                 .unwrap_err()
                 .into());
         }
-        let engine = |e: petsc::PetscError| SolveError::Setup(e.to_string());
-        let ranks = petsc::start().map_err(engine)?;
+        let ranks = petsc::start().map_err(|e| SolveError::Setup(e.to_string()))?;
         if let Some(o) = &solver.petsc.options {
             petsc::insert_options(o.get_ref()).map_err(|e| {
                 let msg = format!("[solver.petsc] options: {e}");
@@ -177,26 +179,13 @@ impl Plan {
             rigid: &rigid,
             medium: &medium,
         };
-        let system = |p: Part, symmetric: bool| -> Result<(Part, LinearSolver), SolveError> {
-            let eqs = newton.equations(p);
-            let s = LinearSolver::petsc(
-                &asm.pattern,
-                &structure,
-                &eqs,
-                &own,
-                symmetric,
-                &hints,
-                solver.petsc.method,
-            )?;
-            Ok((p, s))
+        let on_ranks = crate::solver::engine::Petsc {
+            own,
+            hints,
+            method: solver.petsc.method,
         };
-        let solvers = match strategy {
-            Strategy::OneWay => vec![
-                system(Part::Mechanics, !model.physics.friction)?,
-                system(Part::Heat, true)?,
-            ],
-            _ => vec![system(Part::All, symmetric_tangent(&model.physics))?],
-        };
+        let systems = Self::systems(model, &newton, strategy);
+        let solvers = on_ranks.solvers(&systems, &asm.pattern, &structure)?;
         Ok(Plan {
             strategy,
             asm,
@@ -228,40 +217,19 @@ impl Plan {
             .into())
     }
 
-    /// The linear solvers of `strategy`: one for the whole system of `kind`, or symmetric block
-    /// factorisations for mechanics and for heat.
-    fn solvers(
-        model: &Model,
-        asm: &Assembler,
-        newton: &Newton,
-        strategy: Strategy,
-        kind: LinearKind,
-    ) -> Result<Vec<(Part, LinearSolver)>, SolveError> {
-        let structure = equation_structure(&model.dofs, &model.cons);
-        Ok(match strategy {
-            Strategy::OneWay => {
-                let part = |p: Part| -> Result<(Part, LinearSolver), SolveError> {
-                    let eqs = newton.equations(p);
-                    Ok((
-                        p,
-                        if p == Part::Mechanics && model.physics.friction {
-                            LinearSolver::block_lu(&asm.pattern, &structure, &eqs)?
-                        } else {
-                            LinearSolver::block_ldlt(&asm.pattern, &structure, &eqs)?
-                        },
-                    ))
-                };
-                vec![part(Part::Mechanics)?, part(Part::Heat)?]
-            }
-            _ if kind == LinearKind::BlockGmres => vec![(
-                Part::All,
-                LinearSolver::block_gmres(&asm.pattern, &structure, model.physics.friction)?,
-            )],
-            _ => vec![(
-                Part::All,
-                LinearSolver::new(kind, &asm.pattern, &structure)?,
-            )],
-        })
+    /// The systems `strategy` solves: the whole system, or mechanics and then heat.
+    fn systems(model: &Model, newton: &Newton, strategy: Strategy) -> Vec<System> {
+        let friction = model.physics.friction;
+        let system = |part: Part, symmetric: bool| System {
+            part,
+            eqs: newton.equations(part),
+            symmetric,
+            symmetric_mechanics: !friction,
+        };
+        match strategy {
+            Strategy::OneWay => vec![system(Part::Mechanics, !friction), system(Part::Heat, true)],
+            _ => vec![system(Part::All, symmetric_tangent(&model.physics))],
+        }
     }
 }
 
