@@ -374,10 +374,10 @@ fn check_command(case: &std::path::Path, sets: Vec<(String, String)>) -> ExitCod
             say!(
                 "tangent: {} entries; factor: {}; about {:.0} MB for the linear algebra",
                 r.tangent_entries,
-                r.factor_entries.map_or(
-                    "fill known only after the first factorisation (LU)".to_string(),
-                    |n| { format!("{n} entries") }
-                ),
+                r.factor_entries
+                    .map_or("laid out by PETSc when it factorises".to_string(), |n| {
+                        format!("{n} entries")
+                    }),
                 r.estimated_mb()
             );
             if !r.probes.is_empty() {
