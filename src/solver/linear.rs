@@ -111,7 +111,8 @@ struct LaggedLu<T: Real> {
     /// The block's pattern and the current tangent's values; whether the factor is theirs.
     sub: SubMatrix,
     staticlu: StaticLu<T>,
-    symbolic: SymbolicLu<usize>,
+    /// faer's symbolic analysis for the pivoted LU, made when a factorisation first needs it.
+    symbolic: Option<SymbolicLu<usize>>,
     pivoted: Option<Lu<usize, f64>>,
     factored: bool,
     current: bool,
@@ -120,18 +121,16 @@ struct LaggedLu<T: Real> {
 impl<T: Real> LaggedLu<T> {
     /// `node[i]`: mesh node of the block's equation i (the elimination order keeps a node's
     /// unknowns together).
-    fn new(sub: SubMatrix, node: &[u32]) -> Result<LaggedLu<T>, LinearError> {
-        let symbolic = SymbolicLu::try_new(sub.pattern.as_ref())
-            .map_err(|e| LinearError::Symbolic(format!("{e:?}")))?;
+    fn new(sub: SubMatrix, node: &[u32]) -> LaggedLu<T> {
         let (fwd, _) = nested_dissection(&sub.pattern, node);
-        Ok(LaggedLu {
+        LaggedLu {
             staticlu: StaticLu::new(&sub.pattern, &fwd),
             sub,
-            symbolic,
+            symbolic: None,
             pivoted: None,
             factored: false,
             current: false,
-        })
+        }
     }
 
     /// Take the whole system's `values` as the current tangent; factorised at once only the
@@ -149,8 +148,16 @@ impl<T: Real> LaggedLu<T> {
         self.factored = false;
         self.pivoted = None;
         if self.staticlu.factor(&self.sub.values).is_err() {
-            let a = SparseColMatRef::new(self.sub.pattern.as_ref(), &self.sub.values);
-            let lu = Lu::try_new_with_symbolic(self.symbolic.clone(), a)
+            let pattern = self.sub.pattern.as_ref();
+            let symbolic = match &mut self.symbolic {
+                Some(s) => s,
+                none => none.insert(
+                    SymbolicLu::try_new(pattern)
+                        .map_err(|e| LinearError::Symbolic(format!("{e:?}")))?,
+                ),
+            };
+            let a = SparseColMatRef::new(pattern, &self.sub.values);
+            let lu = Lu::try_new_with_symbolic(symbolic.clone(), a)
                 .map_err(|e| LinearError::Factor(format!("{e:?}")))?;
             self.pivoted = Some(lu);
         }
@@ -250,8 +257,8 @@ impl LinearSolver {
         s: &Structure,
         eqs: &[usize],
     ) -> Result<LinearSolver, LinearError> {
-        let nodes: Vec<u32> = eqs.iter().map(|&e| s.node[e]).collect();
         let sub = SubMatrix::new(p, eqs, eqs);
+        let nodes = nodes_of(s, eqs);
         let backend = Backend::Ldlt(Box::new(SymFactor::new(sub, &nodes, Precision::Double)?));
         Ok(Self::with(LinearKind::Ldlt, backend))
     }
@@ -274,11 +281,10 @@ impl LinearSolver {
         s: &Structure,
         eqs: &[usize],
     ) -> Result<LinearSolver, LinearError> {
-        let nodes: Vec<u32> = eqs.iter().map(|&e| s.node[e]).collect();
         let sub = SubMatrix::new(p, eqs, eqs);
         Ok(Self::with(
             LinearKind::Lu,
-            Backend::Lu(Box::new(LaggedLu::new(sub, &nodes)?)),
+            Backend::Lu(Box::new(LaggedLu::new(sub, &nodes_of(s, eqs)))),
         ))
     }
 
@@ -604,6 +610,11 @@ fn ldlt_solve<T: ComplexField>(
     );
 }
 
+/// The mesh node of each of the equations `eqs`, for [`nested_dissection`].
+fn nodes_of(s: &Structure, eqs: &[usize]) -> Vec<u32> {
+    eqs.iter().map(|&e| s.node[e]).collect()
+}
+
 /// Fill-reducing ordering of a symmetric pattern: METIS nested dissection of the graph whose
 /// vertices are mesh nodes (all unknowns of a node stay together), expanded to equations.
 /// Returns (forward, inverse) with `forward[new] = old`.
@@ -738,13 +749,15 @@ impl BlockTriangular {
             if eqs.is_empty() {
                 return Ok(None);
             }
-            let nodes: Vec<u32> = eqs.iter().map(|&e| s.node[e]).collect();
-            SymFactor::new(SubMatrix::new(p, eqs, eqs), &nodes, Precision::Single).map(Some)
+            let sub = SubMatrix::new(p, eqs, eqs);
+            SymFactor::new(sub, &nodes_of(s, eqs), Precision::Single).map(Some)
         };
         let fm = if unsymmetric && !mech.is_empty() {
-            let nodes: Vec<u32> = mech.iter().map(|&e| s.node[e]).collect();
             let sub = SubMatrix::new(p, &mech, &mech);
-            Some(MechanicsFactor::Lu(Box::new(LaggedLu::new(sub, &nodes)?)))
+            Some(MechanicsFactor::Lu(Box::new(LaggedLu::new(
+                sub,
+                &nodes_of(s, &mech),
+            ))))
         } else {
             block(&mech)?.map(|f| MechanicsFactor::Ldlt(Box::new(f)))
         };

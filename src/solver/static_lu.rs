@@ -67,10 +67,12 @@ pub struct StaticLu<T: Real> {
     /// `perm[new] = old`, `inv[old] = new`.
     perm: Vec<usize>,
     inv: Vec<usize>,
-    /// The permuted matrix P A Pᵀ in CSC, with the slot of the original values of each entry.
+    /// The permuted matrix P A Pᵀ in CSC, with the slot of the original values of each entry
+    /// and the slot of its mirror image (the pattern is symmetric).
     a_ptr: Vec<usize>,
     a_row: Vec<usize>,
     a_src: Vec<usize>,
+    a_mirror: Vec<usize>,
     a_val: Vec<T>,
     /// Elimination tree of P A Pᵀ.
     parent: Vec<usize>,
@@ -108,6 +110,14 @@ impl<T: Real> StaticLu<T> {
             a_src.extend(column.iter().map(|c| c.1));
             a_ptr.push(a_row.len());
         }
+        let (ap, ar) = (&a_ptr, &a_row);
+        let a_mirror = (0..n)
+            .flat_map(|k| (ap[k]..ap[k + 1]).map(move |p| (ar[p], k)))
+            .map(|(i, k)| {
+                let (a, b) = (a_ptr[i], a_ptr[i + 1]);
+                a + a_row[a..b].binary_search(&k).expect("symmetric pattern")
+            })
+            .collect();
         let parent = elimination_tree(n, &a_ptr, &a_row);
         // row k of L has its nonzeros at the row subtree of k: count them per column, then
         // fill the columns in increasing k (so each is sorted)
@@ -143,6 +153,7 @@ impl<T: Real> StaticLu<T> {
             a_ptr,
             a_row,
             a_src,
+            a_mirror,
             parent,
             ptr,
             idx,
@@ -188,14 +199,9 @@ impl<T: Real> StaticLu<T> {
                 let i = self.a_row[p];
                 if i < k {
                     x[i] = self.a_val[p];
+                    y[i] = self.a_val[self.a_mirror[p]];
                 } else if i == k {
                     d = self.a_val[p];
-                }
-            }
-            for p in self.a_ptr[k]..self.a_ptr[k + 1] {
-                let i = self.a_row[p];
-                if i < k {
-                    y[i] = self.a_val[self.mirror(i, k)];
                 }
             }
             row_subtree(
@@ -232,14 +238,6 @@ impl<T: Real> StaticLu<T> {
             self.diag[k] = d;
         }
         Ok(())
-    }
-
-    /// Slot of A[k, i] given that A[i, k] is in the pattern (column i, row k).
-    fn mirror(&self, i: usize, k: usize) -> usize {
-        let (a, b) = (self.a_ptr[i], self.a_ptr[i + 1]);
-        a + self.a_row[a..b]
-            .binary_search(&k)
-            .expect("symmetric pattern")
     }
 
     /// b → A⁻¹ b.
@@ -303,21 +301,20 @@ fn row_subtree(
 ) {
     reach.clear();
     mark[k] = k;
-    let mut path = Vec::new();
     for &i0 in &row[ptr[k]..ptr[k + 1]] {
         if i0 >= k {
             continue;
         }
-        // climb from i0 to the first node already visited in this row
-        path.clear();
+        // climb from i0 to the first node already visited in this row, then turn the path
+        // so that, read backwards, the deepest comes first
+        let start = reach.len();
         let mut i = i0;
         while mark[i] != k {
-            path.push(i);
+            reach.push(i);
             mark[i] = k;
             i = parent[i];
         }
-        // the path from its top down, so that reversed, the deepest comes first
-        reach.extend(path.iter().rev());
+        reach[start..].reverse();
     }
 }
 
