@@ -362,6 +362,17 @@ fn bad_values_are_named_by_file_line_and_key() {
         &tmc(&["mesh", dir.join("folder.geo").to_str().unwrap()]),
         &["is a folder"],
     );
+    // a case or a mesh where the .geo belongs: said, not a gmsh syntax error on line 1
+    let msh = dir.join("made.msh");
+    std::fs::write(&msh, "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n").unwrap();
+    for (file, says) in [
+        ("cases/block.toml", "is a case file, not a .geo file"),
+        (msh.to_str().unwrap(), "is a mesh already, not a .geo file"),
+    ] {
+        let o = tmc(&["mesh", file, "-o", dir.join("named.msh").to_str().unwrap()]);
+        fails_with(&o, &[file, says]);
+        assert!(!dir.join("named.msh").exists() && !dir.join("named.part.msh").exists());
+    }
     // -o DIR: the mesh goes into the folder, nothing half-written beside it
     let o = tmc(&["mesh", "geo/slab.geo", "-o", dir.to_str().unwrap()]);
     assert!(o.status.success(), "{}", err(&o));

@@ -14,6 +14,12 @@ pub enum GmshError {
     NotFound { path: PathBuf },
     #[error("{path} is a folder, not a .geo file")]
     NotAFile { path: PathBuf },
+    #[error("{path} is {what}, not a .geo file: {hint}")]
+    NotGeo {
+        path: PathBuf,
+        what: &'static str,
+        hint: &'static str,
+    },
     #[error("gmsh failed on {path}: {msg}")]
     Failed { path: PathBuf, msg: String },
     #[error(
@@ -79,6 +85,28 @@ enum Outcome {
     Failed(String),
 }
 
+/// A case file or a mesh handed where a `.geo` belongs: gmsh would read it as geometry and
+/// fail on its first line with a syntax error that does not say what went wrong.
+fn not_geo(geo: &Path) -> Result<(), GmshError> {
+    let ext = geo.extension().and_then(|e| e.to_str()).unwrap_or("");
+    let (what, hint) = match ext.to_ascii_lowercase().as_str() {
+        "toml" => (
+            "a case file",
+            "`tmc mesh` meshes a .geo; `tmc check` and `tmc solve` mesh a case's geometry themselves",
+        ),
+        "msh" => (
+            "a mesh already",
+            "a case can name it as its `mesh` directly; `tmc mesh` makes one from a .geo",
+        ),
+        _ => return Ok(()),
+    };
+    Err(GmshError::NotGeo {
+        path: geo.to_owned(),
+        what,
+        hint,
+    })
+}
+
 /// Mesh `geo` and write MSH 4.1 to `out`.
 ///
 /// gmsh runs in a child process, so that a `.geo` that calls `Exit` or a crash inside gmsh
@@ -86,6 +114,7 @@ enum Outcome {
 /// (a truncated file, e.g. on a full disk, fails here), synced and renamed: `out` is either the
 /// complete new mesh or untouched.
 pub fn mesh_geo(geo: &Path, out: &Path, opts: &MeshOptions) -> Result<MeshReport, GmshError> {
+    not_geo(geo)?;
     if geo.is_dir() {
         return Err(GmshError::NotAFile {
             path: geo.to_owned(),
