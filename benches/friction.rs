@@ -116,7 +116,7 @@ fn cost() {
     let auto = "friction = { mu = 0.3, normal = \"auto\" }";
     // (scene, [(label, case text)]); the first is the frictionless reference
     let mut scenes: Vec<(&str, Vec<(&str, String)>)> =
-        ["friction-heating", "discs-ellipse-friction"]
+        ["friction-heating", "discs-ellipse-friction", "sphere-drag"]
             .iter()
             .map(|&name| {
                 let shipped = case_text(name);

@@ -936,3 +936,82 @@ fn with_a_stiff_rotation_regularization_the_block_slides_twice_the_medium_thickn
     assert!(s.converged, "{}", s.message);
     ratio_is_mu_in_full_slip(&out, mu, 0.5, 0.3, 0.4);
 }
+
+#[test]
+fn a_sphere_dragged_one_radius_turns_its_friction_work_into_heat() {
+    // cases/sphere-drag.toml: a hemisphere pressed 0.05 into a plate through the medium, then
+    // dragged one radius (0.4) along it, slip planes from normal = "auto", both bodies
+    // conducting the frictional heat out through their held faces (3D, tet4)
+    let (s, out) = common::solve_case("sphere-drag");
+    assert!(s.converged && s.time == 2.0, "{}", s.message);
+    assert!(s.physics.frictional_heating && s.physics.transient);
+    let (work, heat) = (s.friction_work.unwrap(), s.friction_heat.unwrap());
+    let (stored, heat_in) = (s.heat_stored.unwrap(), s.heat_in.unwrap());
+    let kept = s.energy;
+    let done = s.external_work;
+    println!(
+        "sphere dragged 0.4: {} steps, {} iterations; tip moved {:.4}; friction work {work:.6e}, \
+         stored − in − made {:.1e} of made; work − energy − friction work {:.2e} of it; \
+         θ tip {:.3e}, plate {:.3e}",
+        s.load_steps,
+        s.newton_iterations,
+        s.probes["slider_tip_ux"],
+        (stored - heat_in - heat) / heat,
+        (done - kept - work) / work,
+        s.probes["theta_slider_tip"],
+        s.probes["theta_plate"]
+    );
+    // every bit of friction's work is heat, stored or conducted out of the held faces
+    assert_eq!(heat, work);
+    assert!(((stored - heat_in - heat) / heat).abs() < 1e-8);
+    assert!(
+        heat_in < 0.0 && stored > 0.0,
+        "in {heat_in}, stored {stored}"
+    );
+    // the work done on the slider is the energy kept plus friction's: to the first-order
+    // error of integrating the dissipation over the steps (2.6 % measured at these steps)
+    assert!(
+        ((done - kept - work) / work).abs() < 0.04,
+        "{done} − {kept} vs {work}"
+    );
+    // the slider slid: its tip follows the top's 0.4 to within the slider's own shear, and
+    // the plate's surface it left, and the tip, are warmer than the held faces
+    let tip = s.probes["slider_tip_ux"];
+    assert!(tip > 0.3 && tip < 0.4, "tip moved {tip}");
+    assert!(s.probes["theta_slider_tip"] > 0.0 && s.probes["theta_plate"] > 0.0);
+    // full slip: drag force over normal force above μ (the medium ploughed ahead adds to
+    // friction, THEORY.md, "Curved bodies dragged")
+    let (cols, rows) = history(&out);
+    let (fx, fz) = (
+        column(&cols, &rows, "R_slider_top_x"),
+        column(&cols, &rows, "R_slider_top_z"),
+    );
+    let last = fx.len() - 1;
+    assert!(fx[last] / -fz[last] > 0.3, "{} / {}", fx[last], fz[last]);
+}
+
+#[test]
+fn on_a_sphere_the_auto_normals_are_radial() {
+    // the medium cells touching the sphere's lower half: each slip plane's normal is the
+    // sphere's radius through the cell, to the angle a face of h = 0.075 spans on it
+    let text = common::case_body("sphere-drag");
+    let (_, model) = common::model_with(&text, "sphere-plate.geo", &[], "auto-sphere");
+    let fb = &model.friction_blocks[0];
+    let blk = &model.mesh.cells[fb.block];
+    let mut near = 0;
+    for c in 0..blk.n_cells() {
+        let x = tmc::mesh::centroid(&model.mesh.coords, blk.cell(c));
+        let d = [x[0], x[1], x[2] - 1.0];
+        let rho = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        // within half a cell of the sphere, nearer it than the plate
+        if rho > 0.4 && rho < 0.43 && x[2] > 0.6 && x[2] - 0.5 > rho - 0.4 {
+            let n = fb.normals.of(c);
+            let radial = (n[0] * d[0] + n[1] * d[1] + n[2] * d[2]).abs() / rho;
+            assert!(radial > 0.95, "cell at {x:?}: normal {n:?}");
+            assert!((n.norm() - 1.0).abs() < 1e-12);
+            near += 1;
+        }
+    }
+    println!("{near} medium cells next to the sphere checked");
+    assert!(near > 20, "{near} cells checked");
+}
