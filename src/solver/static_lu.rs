@@ -374,40 +374,62 @@ impl<T: Real> StaticLu<T> {
     /// b → A⁻¹ b.
     pub fn solve(&self, b: &mut [f64]) {
         let mut z: Vec<T> = self.perm.iter().map(|&old| T::of(b[old])).collect();
-        // L z = b, supernode by supernode
+        // the rows below a supernode, gathered: L_RJ z_J, or z_R for U_JR z_R
+        let widest = self.nodes.iter().map(|s| s.n_rows.max(s.width())).max();
+        let mut tmp = vec![T::default(); widest.unwrap_or(0)];
+        // L z = b, supernode by supernode: z_J by the unit lower L_JJ, then z_R −= L_RJ z_J
         for sn in &self.nodes {
             let (bg, w, nr) = (sn.begin, sn.width(), sn.n_rows);
             let m = w + nr;
             let l = &self.l[sn.l_at..sn.l_at + m * w];
             for t in 0..w {
                 let zt = z[bg + t];
-                if zt == T::default() {
-                    continue;
+                for (zr, &lrt) in z[bg + t + 1..bg + w]
+                    .iter_mut()
+                    .zip(&l[t * m + t + 1..t * m + w])
+                {
+                    *zr -= lrt * zt;
                 }
-                for r in t + 1..w {
-                    z[bg + r] -= l[t * m + r] * zt;
-                }
-                for (r, &i) in self.rows[sn.rows_at..sn.rows_at + nr].iter().enumerate() {
-                    z[i] -= l[t * m + w + r] * zt;
+            }
+            if nr > 0 {
+                let panel = MatRef::from_column_major_slice_with_stride(&l[w..], nr, w, m);
+                let zj = MatRef::from_column_major_slice(&z[bg..bg + w], w, 1);
+                let out = MatMut::from_column_major_slice_mut(&mut tmp[..nr], nr, 1);
+                faer::linalg::matmul::matmul(out, Accum::Replace, panel, zj, T::of(1.0), Par::Seq);
+                for (&i, &v) in self.rows[sn.rows_at..sn.rows_at + nr].iter().zip(&tmp) {
+                    z[i] -= v;
                 }
             }
         }
-        // U z = z, backwards
+        // U z = z, backwards: z_J −= U_JR z_R, then z_J by the upper U_JJ
         for sn in self.nodes.iter().rev() {
             let (bg, w, nr) = (sn.begin, sn.width(), sn.n_rows);
             let m = w + nr;
             let l = &self.l[sn.l_at..sn.l_at + m * w];
-            let u = &self.u[sn.u_at..sn.u_at + nr * w];
-            let below = &self.rows[sn.rows_at..sn.rows_at + nr];
+            if nr > 0 {
+                let below = &self.rows[sn.rows_at..sn.rows_at + nr];
+                for (t, &i) in tmp.iter_mut().zip(below) {
+                    *t = z[i];
+                }
+                let u = MatRef::from_column_major_slice(&self.u[sn.u_at..sn.u_at + nr * w], nr, w);
+                let zr = MatRef::from_column_major_slice(&tmp[..nr], nr, 1);
+                let zj = MatMut::from_column_major_slice_mut(&mut z[bg..bg + w], w, 1);
+                faer::linalg::matmul::matmul(
+                    zj,
+                    Accum::Add,
+                    u.transpose(),
+                    zr,
+                    T::of(-1.0),
+                    Par::Seq,
+                );
+            }
             for t in (0..w).rev() {
-                let mut s = z[bg + t];
-                for (r, &i) in below.iter().enumerate() {
-                    s -= u[t * nr + r] * z[i];
+                let zt = z[bg + t] / l[t * m + t];
+                z[bg + t] = zt;
+                for r in 0..t {
+                    let v = z[bg + r] - l[t * m + r] * zt;
+                    z[bg + r] = v;
                 }
-                for c in t + 1..w {
-                    s -= l[c * m + t] * z[bg + c];
-                }
-                z[bg + t] = s / l[t * m + t];
             }
         }
         for (old, v) in b.iter_mut().enumerate() {
