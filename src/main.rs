@@ -371,15 +371,19 @@ fn check_command(case: &std::path::Path, sets: Vec<(String, String)>) -> ExitCod
             let unknowns: Vec<String> =
                 r.unknowns.iter().map(|(f, n)| format!("{n} {f}")).collect();
             say!("unknowns: {} ({} free)", unknowns.join(", "), r.free);
-            say!(
-                "tangent: {} entries; factor: {}; about {:.0} MB for the linear algebra",
-                r.tangent_entries,
-                r.factor_entries
-                    .map_or("laid out by PETSc when it factorises".to_string(), |n| {
-                        format!("{n} entries")
-                    }),
-                r.estimated_mb()
-            );
+            match r.factor_entries {
+                Some(n) => say!(
+                    "tangent: {} entries; factor: {n} entries; about {:.0} MB for the linear algebra",
+                    r.tangent_entries,
+                    r.estimated_mb()
+                ),
+                // PETSc lays its factor out when it factorises: the tangent is all that is known
+                None => say!(
+                    "tangent: {} entries, about {:.0} MB; the factor is PETSc's, sized when it factorises",
+                    r.tangent_entries,
+                    r.estimated_mb()
+                ),
+            }
             if !r.probes.is_empty() {
                 say!("probes: {}", r.probes.join(", "));
             }

@@ -746,3 +746,31 @@ fn a_rank_killed_mid_run_leaves_every_file_whole_and_the_run_restarts() {
         same_history(&full, &out, &format!("rank {victim} killed"));
     }
 }
+
+#[test]
+fn check_says_what_it_can_size_on_each_engine() {
+    // faer's factor is laid out before the run; PETSc's only when it factorises, so the
+    // memory `tmc check` gives on PETSc is the tangent's alone, and it says so
+    let run = |extra: &[&str]| {
+        let mut args = vec!["check", "cases/block.toml"];
+        args.extend(extra);
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_tmc"))
+            .args(&args)
+            .current_dir(root())
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", stderr(&o));
+        String::from_utf8_lossy(&o.stdout).into_owned()
+    };
+    let faer = run(&[]);
+    assert!(
+        faer.contains("entries; factor: ") && faer.contains("MB for the linear algebra"),
+        "{faer}"
+    );
+    let petsc = run(&["--set", "solver.engine=\"petsc\""]);
+    assert!(
+        petsc.contains("the factor is PETSc's, sized when it factorises")
+            && !petsc.contains("for the linear algebra"),
+        "{petsc}"
+    );
+}

@@ -33,7 +33,8 @@ pub struct CheckReport {
 
 impl CheckReport {
     /// Memory of the tangent (values and row indices) and of the factors in double precision,
-    /// in MB: what the run adds to the mesh and the state.
+    /// in MB: what the run adds to the mesh and the state (the tangent alone where the factor
+    /// is PETSc's).
     pub fn estimated_mb(&self) -> f64 {
         let tangent = self.tangent_entries as f64 * 16.0;
         let factor = self.factor_entries.unwrap_or(0) as f64 * 16.0;
