@@ -242,7 +242,8 @@ fn block_scene_reaches_full_load_with_a_physical_gap() {
     let (s, _) = solve_case("block");
     assert!(s.converged && s.lambda == 1.0 && s.min_J > 0.0);
     let gap = s.probes["gap"];
-    // SPEC: a one-dimensional force balance with eq. 7 gives about 3e-4 (the paper: 6.3e-4)
+    // THEORY.md, "The block's gap": a one-dimensional force balance with eq. 7 gives about
+    // 3e-4 (the paper: 6.3e-4)
     assert!(gap > 2e-4 && gap < 4e-4, "gap {gap}");
     let pressure = -s.reactions["top"]["y"] / 2.0;
     let law = -medium_stress(1e-4, gap / 0.25);

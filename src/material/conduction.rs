@@ -1,5 +1,6 @@
 //! Heat conduction: the Fourier law pulled back to the reference configuration (eq. 10) with
-//! a conductivity that may depend on the volume ratio J (the medium's, eq. 15 as SPEC reads it).
+//! a conductivity that may depend on the volume ratio J (the medium's, eq. 15 as
+//! docs/THEORY.md reads it).
 #![allow(non_snake_case)]
 
 use super::{Real, Tensor3};
@@ -10,7 +11,7 @@ use nalgebra::{Matrix3, Vector3};
 pub enum Conductivity {
     /// Constant k (solids, eq. 10).
     Constant(f64),
-    /// Third medium: k(J) = min(k_TM (1 + (ln J)²), k_max) — SPEC's reading of eq. (15).
+    /// Third medium: k(J) = min(k_TM (1 + (ln J)²), k_max) — THEORY.md's reading of eq. (15).
     Medium { k_tm: f64, k_max: f64 },
 }
 
