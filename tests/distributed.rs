@@ -754,11 +754,7 @@ fn check_says_what_it_can_size_on_each_engine() {
     let run = |extra: &[&str]| {
         let mut args = vec!["check", "cases/block.toml"];
         args.extend(extra);
-        let o = std::process::Command::new(env!("CARGO_BIN_EXE_tmc"))
-            .args(&args)
-            .current_dir(root())
-            .output()
-            .unwrap();
+        let o = common::tmc(&args);
         assert!(o.status.success(), "{}", stderr(&o));
         String::from_utf8_lossy(&o.stdout).into_owned()
     };

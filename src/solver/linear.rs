@@ -221,9 +221,9 @@ enum Backend {
 }
 
 impl LinearSolver {
-    /// Entries of the factor(s) as the symbolic analysis laid them out: known before any
-    /// numeric work for LDLᵀ (and the blocks of block GMRES); `None` for LU, whose fill
-    /// depends on pivoting.
+    /// Entries of the factor(s) as the symbolic analysis laid them out, before any numeric
+    /// work (an LU that falls back to partial pivoting has other fill); `None` on PETSc, which
+    /// lays its factor out when it factorises.
     pub fn factor_entries(&self) -> Option<usize> {
         match &self.backend {
             Backend::Lu(f) => Some(f.staticlu.entries()),

@@ -243,7 +243,7 @@ impl<T: Real> StaticLu<T> {
         // their rows each has been applied
         let mut waiting: Vec<Vec<usize>> = vec![Vec::new(); self.nodes.len()];
         let mut cursor = vec![0; self.nodes.len()];
-        let mut buf: Vec<T> = Vec::new();
+        let (mut into_l, mut into_u): (Vec<T>, Vec<T>) = (Vec::new(), Vec::new());
         for s in 0..self.nodes.len() {
             let sn = &self.nodes[s];
             let (b, w, nr) = (sn.begin, sn.width(), sn.n_rows);
@@ -280,9 +280,9 @@ impl<T: Real> StaticLu<T> {
                 let drows = &self.rows[dn.rows_at..dn.rows_at + nd];
                 let c0 = cursor[d];
                 let c1 = c0 + drows[c0..].partition_point(|&i| i < sn.end);
-                let (k, k1) = (nd - c0, c1 - c0);
+                let (k, k1, k2) = (nd - c0, c1 - c0, nd - c1);
+                // L_d and U_dᵀ from row c0 down; rows c0..c1 fall in these columns
                 let (l, u) = (&self.l, &self.u);
-                // L_d and U_dᵀ from row c0 down
                 let ld = MatRef::from_column_major_slice_with_stride(
                     &l[dn.l_at + wd + c0..],
                     k,
@@ -290,44 +290,30 @@ impl<T: Real> StaticLu<T> {
                     wd + nd,
                 );
                 let ud = MatRef::from_column_major_slice_with_stride(&u[dn.u_at + c0..], k, wd, nd);
-                // rows c0.. of L times columns c0..c1 of U: into the supernode's L panel
-                buf.clear();
-                buf.resize(k * k1, T::default());
+                // into the L panel: rows c0.. of L times columns c0..c1 of U; into the U
+                // panel: rows c1.. of Uᵀ times columns c0..c1 of Lᵀ
+                into_l.clear();
+                into_l.resize(k * k1, T::default());
                 product(
-                    MatMut::from_column_major_slice_mut(&mut buf, k, k1),
+                    MatMut::from_column_major_slice_mut(&mut into_l, k, k1),
                     ld,
                     ud.subrows(0, k1).transpose(),
+                );
+                into_u.clear();
+                into_u.resize(k2 * k1, T::default());
+                product(
+                    MatMut::from_column_major_slice_mut(&mut into_u, k2, k1),
+                    ud.subrows(k1, k2),
+                    ld.subrows(0, k1).transpose(),
                 );
                 for (c, &j) in drows[c0..c1].iter().enumerate() {
                     let col = l_at + (j - b) * m;
                     for (r, &i) in drows[c0..].iter().enumerate() {
-                        self.l[col + pos[i]] -= buf[c * k + r];
+                        self.l[col + pos[i]] -= into_l[c * k + r];
                     }
-                }
-                // rows c1.. of Uᵀ times columns c0..c1 of Lᵀ: into its U panel
-                let k2 = k - k1;
-                if k2 > 0 {
-                    let (l, u) = (&self.l, &self.u);
-                    let ld = MatRef::from_column_major_slice_with_stride(
-                        &l[dn.l_at + wd + c0..],
-                        k1,
-                        wd,
-                        wd + nd,
-                    );
-                    let ud =
-                        MatRef::from_column_major_slice_with_stride(&u[dn.u_at + c1..], k2, wd, nd);
-                    buf.clear();
-                    buf.resize(k2 * k1, T::default());
-                    product(
-                        MatMut::from_column_major_slice_mut(&mut buf, k2, k1),
-                        ud,
-                        ld.transpose(),
-                    );
-                    for (c, &j) in drows[c0..c1].iter().enumerate() {
-                        let col = u_at + (j - b) * nr;
-                        for (r, &i) in drows[c1..].iter().enumerate() {
-                            self.u[col + pos[i] - w] -= buf[c * k2 + r];
-                        }
+                    let col = u_at + (j - b) * nr;
+                    for (r, &i) in drows[c1..].iter().enumerate() {
+                        self.u[col + pos[i] - w] -= into_u[c * k2 + r];
                     }
                 }
                 cursor[d] = c1;
@@ -345,11 +331,7 @@ impl<T: Real> StaticLu<T> {
                 pivot,
             })?;
             let diag = diag.into_const();
-            let par = if nr * w * w > PARALLEL_FLOPS {
-                Par::rayon(0)
-            } else {
-                Par::Seq
-            };
+            let par = threads_for(nr * w * w);
             faer::linalg::triangular_solve::solve_lower_triangular_in_place(
                 diag.transpose(),
                 lower.transpose_mut(),
@@ -438,14 +420,18 @@ impl<T: Real> StaticLu<T> {
     }
 }
 
-/// dst = lhs · rhs.
-fn product<T: Real>(dst: MatMut<'_, T>, lhs: MatRef<'_, T>, rhs: MatRef<'_, T>) {
-    let flops = lhs.nrows() * lhs.ncols() * rhs.ncols();
-    let par = if flops > PARALLEL_FLOPS {
+/// Both threads for dense work of more than [`PARALLEL_FLOPS`] multiply-adds, one below.
+fn threads_for(flops: usize) -> Par {
+    if flops > PARALLEL_FLOPS {
         Par::rayon(0)
     } else {
         Par::Seq
-    };
+    }
+}
+
+/// dst = lhs · rhs.
+fn product<T: Real>(dst: MatMut<'_, T>, lhs: MatRef<'_, T>, rhs: MatRef<'_, T>) {
+    let par = threads_for(lhs.nrows() * lhs.ncols() * rhs.ncols());
     faer::linalg::matmul::matmul(dst, Accum::Replace, lhs, rhs, T::of(1.0), par);
 }
 
@@ -487,11 +473,7 @@ fn dense_lu<T: Real>(mut a: MatMut<'_, T>, scale: &[f64]) -> Result<(), (usize, 
     let (mut a11, mut a12, mut a21, a22) = a.rb_mut().split_at_mut(h, h);
     dense_lu(a11.rb_mut(), &scale[..h])?;
     let a11 = a11.into_const();
-    let par = if h * h * (w - h) > PARALLEL_FLOPS {
-        Par::rayon(0)
-    } else {
-        Par::Seq
-    };
+    let par = threads_for(h * h * (w - h));
     faer::linalg::triangular_solve::solve_unit_lower_triangular_in_place(a11, a12.rb_mut(), par);
     faer::linalg::triangular_solve::solve_lower_triangular_in_place(
         a11.transpose(),
