@@ -310,7 +310,7 @@ fn command(cli: Cli) -> ExitCode {
             let opts = SolveOptions {
                 out_dir: output,
                 quiet: quiet || silent(),
-                verbose,
+                verbose: verbose && !silent(),
                 idle_threads,
                 sets: set,
                 restart,

@@ -428,6 +428,23 @@ fn a_direct_solver_under_the_multigrid_method_keeps_no_old_factor() {
 }
 
 #[test]
+fn verbose_under_mpirun_prints_each_step_once() {
+    // before, --verbose made every rank print the step lines and the Newton tables
+    let case = root().join("cases/block.toml");
+    let out = scratch("distributed-verbose");
+    let args = ["solve".as_ref(), case.as_os_str(), "--verbose".as_ref()];
+    let o = common::mpirun_tmc(2, &[&args[..], &["-o".as_ref(), out.as_os_str()]].concat());
+    let (said, e) = (String::from_utf8_lossy(&o.stdout), stderr(&o));
+    assert!(o.status.success(), "{e}");
+    let all = format!("{said}{e}");
+    let steps = summary(&out)["load_steps"].as_u64().unwrap();
+    for step in 1..=steps {
+        let line = format!("step {step:3}  ");
+        assert_eq!(all.matches(&line).count(), 1, "{line:?} in {all}");
+    }
+}
+
+#[test]
 fn a_bad_input_under_mpirun_ends_every_rank_with_the_error_printed_once() {
     // before, rank 0 told the others of its failure with an empty broadcast, which Open MPI
     // refused (MPI_ERR_ARG): the job aborted with exit 13 and the message was lost
