@@ -41,7 +41,8 @@ bench: deps
 	$(CARGO) bench --bench output
 	$(CARGO) bench --features petsc --bench distributed
 
-# tmc against FEniCSx on six scenes (T1, T2, Q1, tet4, H1, H2); writes validation/fenicsx/RESULTS.md.
+# tmc against FEniCSx on eight scenes (T1, T2, Q1, tet4, H1, H2; H1 in Mooney-Rivlin, T1 radiating);
+# writes validation/fenicsx/RESULTS.md.
 validate: build
 	/usr/bin/python3 validation/fenicsx/run.py $(CURDIR)/$(TMC) $(CURDIR)/target/validate
 

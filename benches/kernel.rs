@@ -8,15 +8,15 @@ use std::time::Instant;
 use tmc::dofs::{CellState, Layout};
 use tmc::element::{Hex8, Hex27, Quad4, RefElement, Tet4, Tri3};
 use tmc::kernel::{Active, CellMaterial, bulk, lanes};
-use tmc::material::{Conductivity, Regularization, ThermoElastic};
+use tmc::material::{Conductivity, Regularization, SolidLaw, ThermoElastic};
 
 const SOLID: CellMaterial = CellMaterial {
-    law: ThermoElastic {
+    law: SolidLaw::NeoHooke(ThermoElastic {
         K: 20.0,
         mu: 10.0,
         alpha: 1e-5,
         theta0: 0.0,
-    },
+    }),
     cond: Conductivity::Constant(10.0),
     medium: false,
     reg: None,
@@ -24,12 +24,12 @@ const SOLID: CellMaterial = CellMaterial {
 };
 
 const MEDIUM: CellMaterial = CellMaterial {
-    law: ThermoElastic {
+    law: SolidLaw::NeoHooke(ThermoElastic {
         K: 2e-4,
         mu: 1e-4,
         alpha: 1e-5,
         theta0: 0.0,
-    },
+    }),
     cond: Conductivity::Medium {
         k_tm: 0.1,
         k_max: 10.0,

@@ -59,6 +59,16 @@ pub enum RegionKind {
     Medium,
 }
 
+/// `law` of a solid region.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum SolidLawKey {
+    /// Eq. (12), with `K` and `mu` (the default).
+    NeoHooke,
+    /// Abaqus' compressible Mooney-Rivlin, with `C10`, `C01` and `K`.
+    MooneyRivlin,
+}
+
 /// `[[region]]`: the material of one physical group of cells.
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields, expecting = "a [[region]] table")]
@@ -68,8 +78,13 @@ pub struct Region {
     pub kind: RegionKind,
     /// Bulk modulus (solid).
     pub K: Option<Spanned<f64>>,
-    /// Shear modulus (solid).
+    /// Shear modulus (solid, Neo-Hooke).
     pub mu: Option<Spanned<f64>>,
+    /// A solid's stress law (default: Neo-Hooke).
+    pub law: Option<Spanned<SolidLawKey>>,
+    /// Mooney-Rivlin's coefficients of Ī₁ − 3 and Ī₂ − 3.
+    pub C10: Option<Spanned<f64>>,
+    pub C01: Option<Spanned<f64>>,
     /// Conductivity k (solid) or gas conductivity k_TM (medium).
     pub k: Option<Spanned<f64>>,
     /// Thermal expansion coefficient α_t.
@@ -155,6 +170,9 @@ pub struct Bc {
     pub h: Option<Spanned<f64>>,
     /// Ambient temperature θ∞ of the convection.
     pub theta_inf: Option<Spanned<f64>>,
+    /// Radiation to surroundings: heat leaving per unit current area ε σ (θ⁴ − θ∞⁴), in
+    /// full from the start.
+    pub radiation: Option<Spanned<RadiationKey>>,
     /// Scale by the load factor λ (true, the default) or hold at full value from the start
     /// (false): for every value of the block (`ramp = false`), or per value
     /// (`ramp = { theta = false }`: the values not named are ramped).
@@ -162,6 +180,22 @@ pub struct Bc {
     /// This group's own amplitude at pseudo-times 0, 1, …, T (as `[steps] path`), instead of
     /// λ: e.g. press first, then slide. Prescribed values only.
     pub path: Option<Spanned<Vec<f64>>>,
+}
+
+/// `radiation = { emissivity = 0.8, theta_inf = 293.15, sigma = 5.670374419e-8 }` of a
+/// `[[bc]]`: temperatures absolute, σ in the case's units.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(
+    deny_unknown_fields,
+    expecting = "a table such as { emissivity = 0.8, theta_inf = 293.15, sigma = 5.670374419e-8 }"
+)]
+pub struct RadiationKey {
+    /// Emissivity ε in (0, 1].
+    pub emissivity: Spanned<f64>,
+    /// Temperature of the surroundings θ∞ > 0.
+    pub theta_inf: Spanned<f64>,
+    /// The Stefan–Boltzmann constant in the case's units (5.670374419e-8 in SI).
+    pub sigma: Spanned<f64>,
 }
 
 /// `ramp` of a `[[bc]]`: one choice for the block, or one per value.
@@ -187,6 +221,12 @@ impl Bc {
             Some(Ramp::All(r)) => *r,
             Some(Ramp::Per(m)) => m.get(value).copied().unwrap_or(true),
         }
+    }
+
+    /// Whether heat leaves through the group by a law of its temperature (convection,
+    /// radiation): assembled, not prescribed.
+    pub fn exchanges_heat(&self) -> bool {
+        self.h.is_some() || self.radiation.is_some()
     }
 
     /// Whether any value of the block is held at full value.
@@ -840,7 +880,7 @@ impl Case {
             match r.kind {
                 RegionKind::Solid => {
                     need("K", &r.K)?;
-                    need("mu", &r.mu)?;
+                    self.check_solid_law(i, name, r)?;
                     positive_if_given("k", &r.k)?;
                     for (key, v) in [
                         ("gamma", &r.gamma),
@@ -861,12 +901,75 @@ impl Case {
                     positive_if_given("beta1", &r.beta1)?;
                     positive_if_given("beta2", &r.beta2)?;
                     positive_if_given("alpha_r", &r.alpha_r)?;
-                    for (key, v) in [("K", &r.K), ("mu", &r.mu)] {
+                    for (key, v) in [("K", &r.K), ("mu", &r.mu), ("C10", &r.C10), ("C01", &r.C01)] {
                         if let Some(v) = v {
                             return self.error(v.span(), format!("region[{i}] (\"{name}\"): `{key}` is a solid key; the medium's moduli are `gamma`"));
                         }
                     }
+                    if let Some(law) = &r.law {
+                        return self.error(
+                            law.span(),
+                            format!(
+                                "region[{i}] (\"{name}\"): `law` chooses a solid's law; the medium's \
+                                 is eq. (13), Neo-Hooke with K = μ = `gamma`"
+                            ),
+                        );
+                    }
                 }
+            }
+        }
+        Ok(())
+    }
+
+    /// A solid region's law and its moduli: Neo-Hooke's `mu` > 0, or Mooney-Rivlin's `C10` > 0
+    /// and `C01` ≥ 0; no key of the other law.
+    fn check_solid_law(&self, i: usize, name: &str, r: &Region) -> Result<(), CaseError> {
+        let law = r
+            .law
+            .as_ref()
+            .map_or(SolidLawKey::NeoHooke, |l| *l.get_ref());
+        let at = || r.law.as_ref().map_or(r.group.span(), |l| l.span());
+        type Keys<'a, T> = &'a [(&'a str, &'a Option<Spanned<f64>>, T)];
+        let (needed, other): (Keys<bool>, Keys<()>) = match law {
+            SolidLawKey::NeoHooke => (
+                &[("mu", &r.mu, true)],
+                &[("C10", &r.C10, ()), ("C01", &r.C01, ())],
+            ),
+            SolidLawKey::MooneyRivlin => (
+                &[("C10", &r.C10, true), ("C01", &r.C01, false)],
+                &[("mu", &r.mu, ())],
+            ),
+        };
+        let law_name = match law {
+            SolidLawKey::NeoHooke => "neo-hooke",
+            SolidLawKey::MooneyRivlin => "mooney-rivlin",
+        };
+        for &(key, v, ()) in other {
+            if let Some(v) = v {
+                return self.error(
+                    v.span(),
+                    format!(
+                        "region[{i}] (\"{name}\"): `{key}` is not a key of law \"{law_name}\" \
+                         (neo-hooke takes `K` and `mu`; mooney-rivlin `K`, `C10` and `C01`)"
+                    ),
+                );
+            }
+        }
+        for &(key, v, positive) in needed {
+            let Some(v) = v else {
+                return self.error(
+                    at(),
+                    format!("region[{i}] (\"{name}\"): law \"{law_name}\" needs `{key}`"),
+                );
+            };
+            let x = *v.get_ref();
+            let ok = x.is_finite() && if positive { x > 0.0 } else { x >= 0.0 };
+            if !ok {
+                let must = if positive { "positive" } else { "≥ 0" };
+                return self.error(
+                    v.span(),
+                    format!("region[{i}] (\"{name}\"): `{key}` must be {must}, got {x}"),
+                );
             }
         }
         Ok(())
@@ -1020,31 +1123,44 @@ impl Case {
                     format!("bc on \"{g}\": `path` needs {n_path} finite values (one per value of [steps] path, or per row of [time] lambda), the first 0"),
                 );
             }
-            if bc.traction.is_some() || bc.heat_flux.is_some() || bc.h.is_some() || bc.holds_any() {
+            if bc.traction.is_some()
+                || bc.heat_flux.is_some()
+                || bc.exchanges_heat()
+                || bc.holds_any()
+            {
                 return self.error(
                     own.span(),
-                    format!("bc on \"{g}\": `path` applies to prescribed values (ux, uy, uz, theta) only, not to `traction`, `heat_flux`, `h` or `ramp = false`"),
+                    format!("bc on \"{g}\": `path` applies to prescribed values (ux, uy, uz, theta) only, not to `traction`, `heat_flux`, `h`, `radiation` or `ramp = false`"),
                 );
             }
         }
         for bc in &f.bc {
             self.check_convection(bc)?;
+            self.check_radiation(bc)?;
         }
         // a group that convects in one [[bc]] and holds θ in another: the held θ wins, and
         // the convected heat would be in no balance
         for bc in f.bc.iter().filter(|b| b.theta.is_some()) {
             let g = bc.group.get_ref();
-            let convecting =
-                f.bc.iter()
-                    .find(|b| b.group.get_ref() == g && b.h.is_some());
-            if let Some(h) = convecting.and_then(|b| b.h.as_ref()) {
+            let exchanging = f.bc.iter().filter(|b| b.group.get_ref() == g);
+            let law = exchanging
+                .flat_map(|b| {
+                    let h = b.h.as_ref().map(|h| ("convects (`h`)", h.span()));
+                    let r = b
+                        .radiation
+                        .as_ref()
+                        .map(|r| ("radiates (`radiation`)", r.span()));
+                    h.into_iter().chain(r)
+                })
+                .next();
+            if let Some((what, at)) = law {
                 let theta_line = self.line_of(bc.group.span());
                 return self.error(
-                    h.span(),
+                    at,
                     format!(
-                        "bc on \"{g}\": the group convects (`h`) here and has a prescribed \
+                        "bc on \"{g}\": the group {what} here and has a prescribed \
                          `theta` in the [[bc]] at line {theta_line}; a boundary is either held \
-                         at a temperature or convects"
+                         at a temperature or lets heat out by a law"
                     ),
                 );
             }
@@ -1187,6 +1303,39 @@ impl Case {
                 return self.error(
                     l.span(),
                     "[time]: `lambda` needs at least two finite [t, λ] rows, t increasing from 0",
+                );
+            }
+        }
+        Ok(())
+    }
+
+    /// A radiation condition: emissivity in (0, 1], θ∞ and σ positive and finite.
+    fn check_radiation(&self, bc: &Bc) -> Result<(), CaseError> {
+        let Some(rad) = &bc.radiation else {
+            return Ok(());
+        };
+        let g = bc.group.get_ref();
+        let rad = rad.get_ref();
+        let e = *rad.emissivity.get_ref();
+        if !(e > 0.0 && e <= 1.0) {
+            return self.error(
+                rad.emissivity.span(),
+                format!("bc on \"{g}\": `radiation.emissivity` must be in (0, 1], got {e}"),
+            );
+        }
+        for (key, v) in [("theta_inf", &rad.theta_inf), ("sigma", &rad.sigma)] {
+            let x = *v.get_ref();
+            if !(x > 0.0 && x.is_finite()) {
+                let why = if key == "theta_inf" {
+                    " (an absolute temperature, e.g. in kelvin)"
+                } else {
+                    " (5.670374419e-8 in SI units)"
+                };
+                return self.error(
+                    v.span(),
+                    format!(
+                        "bc on \"{g}\": `radiation.{key}` must be positive and finite{why}, got {x}"
+                    ),
                 );
             }
         }
@@ -1405,6 +1554,14 @@ impl Case {
                     format!("bc[{i}] (\"{name}\"): convection `h` needs a {}D boundary group, this one is {gdim}D", mesh.dim - 1),
                 );
             }
+            if let Some(r) = &bc.radiation
+                && gdim + 1 != mesh.dim
+            {
+                return self.error(
+                    r.span(),
+                    format!("bc[{i}] (\"{name}\"): `radiation` needs a {}D boundary group, this one is {gdim}D", mesh.dim - 1),
+                );
+            }
             if let Some(t) = &bc.traction
                 && t.get_ref().len() != mesh.dim
             {
@@ -1417,7 +1574,7 @@ impl Case {
                 || bc.uy.is_some()
                 || bc.uz.is_some()
                 || bc.theta.is_some()
-                || bc.h.is_some()
+                || bc.exchanges_heat()
                 || natural;
             if !any {
                 return self.error(

@@ -34,6 +34,55 @@ fn uniaxial(l: f64, plane: bool) -> (f64, f64) {
     (t, f(t)[(0, 0)])
 }
 
+/// Mooney-Rivlin (C10, C01, K) under F = diag(l, t, t), written in the stretches alone:
+/// J = l t², I₁ = l² + 2 t², I₂ = 2 l² t² + t⁴ and Ψ(l, t) of the law. Returns the lateral
+/// stretch t where ∂Ψ/∂t = 0 (free lateral faces) and P11 = ∂Ψ/∂l there.
+fn mooney_rivlin_uniaxial(l: f64, c10: f64, c01: f64, k: f64) -> (f64, f64) {
+    // ∂Ψ/∂x from ∂J/∂x, ∂I₁/∂x, ∂I₂/∂x
+    let dpsi = |t: f64, dj: f64, di1: f64, di2: f64| {
+        let (j, i1, i2) = (
+            l * t * t,
+            l * l + 2.0 * t * t,
+            2.0 * l * l * t * t + t.powi(4),
+        );
+        c10 * (-2.0 / 3.0 * j.powf(-5.0 / 3.0) * dj * i1 + j.powf(-2.0 / 3.0) * di1)
+            + c01 * (-4.0 / 3.0 * j.powf(-7.0 / 3.0) * dj * i2 + j.powf(-4.0 / 3.0) * di2)
+            + k * (j - 1.0) * dj
+    };
+    let lateral = |t: f64| dpsi(t, 2.0 * l * t, 4.0 * t, 4.0 * l * l * t + 4.0 * t.powi(3));
+    let (mut a, mut b) = (0.3, 1.5);
+    for _ in 0..200 {
+        let m = 0.5 * (a + b);
+        if lateral(m) > 0.0 { b = m } else { a = m }
+    }
+    let t = 0.5 * (a + b);
+    (t, dpsi(t, t * t, 2.0 * l, 4.0 * l * t * t))
+}
+
+#[test]
+fn bar3d_uniaxial_stretch_matches_mooney_rivlin_closed_form() {
+    let body = case_body("bar3d-stretch")
+        .replace("mu = 10.0", "law = \"mooney-rivlin\"\nC10 = 3.0\nC01 = 2.0");
+    let (s, _) = solve_text_opts("bar3d-mooney-rivlin", "bar3d.geo", "", &body);
+    assert!(s.converged);
+    let (t, p11) = mooney_rivlin_uniaxial(1.5, 3.0, 2.0, 20.0);
+    let uy = s.probes["uy_corner"];
+    assert!(
+        (uy - 0.5 * (t - 1.0)).abs() < 1e-9,
+        "uy {uy} vs {}",
+        0.5 * (t - 1.0)
+    );
+    let fx = s.reactions["x1"]["x"];
+    assert!(
+        (fx - p11 * 0.25).abs() < 1e-9 * p11,
+        "force {fx} vs {}",
+        p11 * 0.25
+    );
+    // not Neo-Hooke's answer with the same small-strain moduli (μ = 2 (C10 + C01) = 10)
+    let (t_nh, p11_nh) = uniaxial(1.5, false);
+    assert!((p11 - p11_nh).abs() > 1e-3 * p11 && (t - t_nh).abs() > 1e-4);
+}
+
 #[test]
 fn bar3d_uniaxial_stretch_matches_neo_hooke_closed_form() {
     let (s, dir) = solve_case("bar3d-stretch");
@@ -139,6 +188,32 @@ fn steady_conduction_through_a_slab() {
             "{x:?}"
         );
     }
+}
+
+#[test]
+fn radiation_slab_matches_the_closed_form_end_temperature() {
+    let (s, _) = solve_case("slab-radiation");
+    assert!(!s.physics.mechanics && s.physics.conduction);
+    // k (θ_L − θ_R) / L = ε σ (θ_R⁴ − θ∞⁴), by bisection
+    let (k, l, es, inf) = (5.0, 2.0, 0.8 * 5.670374419e-8, 300.0f64);
+    let out = |t: f64| k * (600.0 - t) / l - es * (t.powi(4) - inf.powi(4));
+    let (mut a, mut b) = (inf, 600.0);
+    for _ in 0..200 {
+        let m = 0.5 * (a + b);
+        if out(m) > 0.0 { a = m } else { b = m }
+    }
+    let right = 0.5 * (a + b);
+    assert!((right - 377.70).abs() < 0.01, "{right}");
+    let theta_r = s.probes["theta_right"];
+    assert!(
+        (theta_r - right).abs() < 1e-9 * right,
+        "θ_R {theta_r} vs {right}"
+    );
+    assert!((s.probes["theta_mid"] - 0.5 * (600.0 + right)).abs() < 1e-9 * right);
+    // the heat conducted, k (θ_L − θ_R) H / L, in through the left and radiated out the right
+    let flow = k * (600.0 - right) / l;
+    assert!((s.reactions["left"]["heat"] - flow).abs() < 1e-9 * flow);
+    assert!((s.reactions["right"]["heat"] + flow).abs() < 1e-9 * flow);
 }
 
 #[test]

@@ -397,6 +397,157 @@ fn bad_values_are_named_by_file_line_and_key() {
 }
 
 #[test]
+fn a_solid_law_s_keys_are_checked_by_file_line_and_key() {
+    let dir = scratch("bad-law");
+    let out = dir.join("out");
+    let mr = "[[region]]\ngroup = \"solid\"\nkind = \"solid\"\nK = 20.0\nlaw = \"mooney-rivlin\"\n";
+    for (tag, body, words) in [
+        (
+            "unknown",
+            SOLID.replace("mu = 10.0", "law = \"ogden\""),
+            vec![
+                "unknown-c.toml",
+                "line 8",
+                "unknown variant `ogden`",
+                "`neo-hooke` or `mooney-rivlin`",
+            ],
+        ),
+        (
+            "no-c10",
+            format!("{mr}C01 = 1.0\n"),
+            vec![
+                "no-c10-c.toml:8",
+                "region[0] (\"solid\")",
+                "law \"mooney-rivlin\" needs `C10`",
+            ],
+        ),
+        (
+            "no-c01",
+            format!("{mr}C10 = 1.0\n"),
+            vec!["no-c01-c.toml:8", "needs `C01`"],
+        ),
+        (
+            "negative",
+            format!("{mr}C10 = 1.0\nC01 = -0.5\n"),
+            vec!["negative-c.toml:10", "`C01` must be ≥ 0, got -0.5"],
+        ),
+        (
+            "zero",
+            format!("{mr}C10 = 0.0\nC01 = 1.0\n"),
+            vec!["zero-c.toml:9", "`C10` must be positive, got 0"],
+        ),
+        (
+            "mu",
+            format!("{mr}C10 = 1.0\nC01 = 1.0\nmu = 3.0\n"),
+            vec![
+                "mu-c.toml:11",
+                "`mu` is not a key of law \"mooney-rivlin\"",
+                "`K`, `C10` and `C01`",
+            ],
+        ),
+        (
+            "c10",
+            format!("{SOLID}C10 = 1.0\n"),
+            vec!["c10-c.toml:9", "`C10` is not a key of law \"neo-hooke\""],
+        ),
+        (
+            "medium",
+            format!(
+                "{SOLID}[[region]]\ngroup = \"solid\"\nkind = \"medium\"\ngamma = 1e-4\nlaw = \"mooney-rivlin\"\n"
+            ),
+            vec![
+                "medium-c.toml:13",
+                "region[1]",
+                "`law` chooses a solid's law",
+            ],
+        ),
+    ] {
+        let case = slab_case(&dir, &format!("{tag}-c"), &format!("{body}{HELD}"));
+        fails_with(&solve(&case, &out), &words);
+        assert!(
+            !out.join("step_0000.vtu").exists(),
+            "{tag}: nothing written"
+        );
+    }
+}
+
+#[test]
+fn radiation_needs_absolute_temperatures_and_says_so() {
+    let dir = scratch("bad-radiation");
+    let out = dir.join("out");
+    let warm = SOLID.replace("mu = 10.0", "mu = 10.0\nk = 5.0\ntheta0 = 300.0");
+    let held = "[[bc]]\ngroup = \"left\"\ntheta = 600.0\n";
+    let radiating = |key: &str| {
+        format!(
+            "[[bc]]\ngroup = \"right\"\nradiation = {{ emissivity = 0.8, theta_inf = 300.0, sigma = 5.67e-8{key} }}\n"
+        )
+    };
+    for (tag, body, words) in [
+        (
+            "emissivity",
+            format!("{warm}{held}{}", radiating("").replace("0.8", "1.5")),
+            vec![
+                "emissivity-c.toml:16",
+                "`radiation.emissivity` must be in (0, 1], got 1.5",
+            ],
+        ),
+        (
+            "inf",
+            format!("{warm}{held}{}", radiating("").replace("300.0,", "-20.0,")),
+            vec![
+                "inf-c.toml:16",
+                "`radiation.theta_inf` must be positive",
+                "kelvin",
+            ],
+        ),
+        (
+            "sigma",
+            format!("{warm}{held}{}", radiating("").replace("5.67e-8", "0.0")),
+            vec![
+                "sigma-c.toml:16",
+                "`radiation.sigma` must be positive",
+                "SI",
+            ],
+        ),
+        (
+            "typo",
+            format!("{warm}{held}{}", radiating(", eps = 1")),
+            vec!["typo-c.toml", "line 16", "unknown field `eps`"],
+        ),
+        (
+            "held",
+            format!(
+                "{warm}{held}{}",
+                radiating("").replace("\"right\"", "\"left\"")
+            ),
+            vec![
+                "held-c.toml:16",
+                "the group radiates (`radiation`) here",
+                "line 12",
+            ],
+        ),
+        (
+            // the slab starts at θ0 = 0: no absolute temperature
+            "cold",
+            format!(
+                "{}{held}{}",
+                SOLID.replace("mu = 10.0", "mu = 10.0\nk = 5.0"),
+                radiating("")
+            ),
+            vec![
+                "θ = 0.0000e0 ≤ 0",
+                "boundary group \"right\", which radiates",
+                "kelvin",
+            ],
+        ),
+    ] {
+        let case = slab_case(&dir, &format!("{tag}-c"), &body);
+        fails_with(&solve(&case, &out), &words);
+        assert!(!out.join("step_0001.vtu").exists(), "{tag}: nothing solved");
+    }
+}
+
+#[test]
 fn singular_systems_are_found_before_solving() {
     let dir = scratch("bad-singular");
     let out = dir.join("out");

@@ -1,6 +1,7 @@
 //! tmc against FEniCSx (Debian's python3-dolfinx 0.5.2) on the same meshes: a 2D and a 3D
-//! scene of `validation/fenicsx/` (and the quadratic tri6 one) must agree node by node to 1e-8
-//! of the solution's max-norm (`make validate` runs all six scenes and writes RESULTS.md).
+//! scene of `validation/fenicsx/` (and the quadratic tri6 one, the 3D one in Mooney-Rivlin and
+//! the 2D one radiating from its hole) must agree node by node to 1e-8 of the solution's
+//! max-norm (`make validate` runs all eight scenes and writes RESULTS.md).
 
 mod common;
 use common::*;
@@ -37,6 +38,16 @@ fn t1_plate_with_hole_matches_fenicsx() {
 #[test]
 fn h1_block_with_hole_matches_fenicsx() {
     compare(&["block-hole-h1"]);
+}
+
+#[test]
+fn a_mooney_rivlin_block_with_hole_matches_fenicsx() {
+    compare(&["block-hole-h1-mr"]);
+}
+
+#[test]
+fn a_plate_radiating_from_its_hole_matches_fenicsx() {
+    compare(&["plate-hole-t1-rad"]);
 }
 
 #[test]

@@ -9,7 +9,7 @@ use crate::dofs::{CellState, Layout, NONE, gather};
 use crate::element::RefElement;
 use crate::kernel::friction::FrictionMaterial;
 use crate::kernel::{self, Active, CellMaterial, KernelError, bulk, capacity, facet, lanes};
-use crate::material::Convection;
+use crate::material::BoundaryFlux;
 use crate::mesh::Block;
 use crate::model::{Model, SlipNormals};
 use rayon::prelude::*;
@@ -243,15 +243,15 @@ impl Cells<'_> {
         Ok(finite)
     }
 
-    /// Add the facets `cells` (global numbers, all of this block) with convection `law`.
+    /// Add the facets `cells` (global numbers, all of this block) with the boundary flux `law`.
     pub(super) fn run_facets<const N: usize, const D: usize, E: RefElement<N, D>>(
         self,
-        law: &Convection,
+        law: &BoundaryFlux,
         cells: &[u32],
     ) -> Result<bool, (KernelError, usize)> {
         let (lay, act) = (self.lay, self.act);
         self.each_cell::<N>(cells, |_, s, r, k| {
-            facet::convection::<N, D, E>(law, &lay, s, act, r, k)
+            facet::boundary_flux::<N, D, E>(law, &lay, s, act, r, k)
         })
     }
 

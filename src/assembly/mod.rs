@@ -61,6 +61,13 @@ pub enum AssemblyError {
     Singular { region: String },
     /// A boundary facet of `group` has collapsed to zero area (or was degenerate).
     BadFacet { group: String, facet: usize },
+    /// θ ≤ 0 at a point of facet `facet` of `group`, which radiates (an absolute temperature
+    /// is positive).
+    ColdRadiator {
+        group: String,
+        facet: usize,
+        theta: f64,
+    },
     /// NaN or infinity in the residual or the tangent.
     NotFinite,
 }
@@ -94,6 +101,16 @@ impl std::fmt::Display for AssemblyError {
             AssemblyError::BadFacet { group, facet } => write!(
                 f,
                 "facet {facet} of boundary group \"{group}\" has no area (degenerate or collapsed)"
+            ),
+            AssemblyError::ColdRadiator {
+                group,
+                facet,
+                theta,
+            } => write!(
+                f,
+                "θ = {theta:.4e} ≤ 0 on facet {facet} of boundary group \"{group}\", which \
+                 radiates: radiation needs absolute temperatures (θ > 0, e.g. in kelvin, for \
+                 every region's theta0, every held θ and theta_inf)"
             ),
             AssemblyError::NotFinite => write!(f, "the residual is not finite"),
         }
@@ -139,6 +156,16 @@ impl AssemblyError {
             AssemblyError::BadFacet { group, facet } => {
                 f(&["bad_facet".into(), group.clone(), facet.to_string()])
             }
+            AssemblyError::ColdRadiator {
+                group,
+                facet,
+                theta,
+            } => f(&[
+                "cold_radiator".into(),
+                group.clone(),
+                facet.to_string(),
+                theta.to_string(),
+            ]),
             AssemblyError::NotFinite => "not_finite".into(),
         }
     }
@@ -169,6 +196,11 @@ impl AssemblyError {
             "bad_facet" => AssemblyError::BadFacet {
                 group: name(),
                 facet: int(2),
+            },
+            "cold_radiator" => AssemblyError::ColdRadiator {
+                group: name(),
+                facet: int(2),
+                theta: num(3),
             },
             _ => AssemblyError::NotFinite,
         }
@@ -718,6 +750,11 @@ fn facet_error(model: &Model, fb: &FacetBlock, e: KernelError, facet: usize) -> 
     let group = model.flux_groups[fb.group].name.clone();
     match e {
         KernelError::BadGeometry => AssemblyError::BadFacet { group, facet },
+        KernelError::NotAbsolute { theta } => AssemblyError::ColdRadiator {
+            group,
+            facet,
+            theta,
+        },
         _ => AssemblyError::NotFinite,
     }
 }
@@ -748,6 +785,8 @@ fn cell_error_in(region: &str, e: KernelError, cell: usize, at: [f64; 3]) -> Ass
             at,
         },
         KernelError::Singular => AssemblyError::Singular { region: region() },
+        // only facet laws have absolute temperatures
+        KernelError::NotAbsolute { .. } => AssemblyError::NotFinite,
     }
 }
 
@@ -841,7 +880,7 @@ pub fn convection_heat(model: &Model, x: &[f64]) -> Result<Vec<f64>, AssemblyErr
             let nodes = blk.cell(c);
             crate::with_element!(blk.kind, |N, D, E| {
                 let s = crate::dofs::gather::<N>(&model.mesh.coords, &model.dofs, nodes, x);
-                crate::kernel::facet::convection::<N, D, E>(
+                crate::kernel::facet::boundary_flux::<N, D, E>(
                     &fb.law,
                     &lay,
                     &s,

@@ -1,7 +1,8 @@
 //! Facet kernels: integrals over boundary facets (lines of a 2D mesh, faces of a 3D one),
-//! residual and tangent in the facet's own local layout. First user: convection,
+//! residual and tangent in the facet's own local layout: the heat a boundary law lets out
+//! (convection h (θ − θ∞), radiation ε σ (θ⁴ − θ∞⁴)),
 //!
-//! r_θ(I) = ∫ N_I h (θ − θ∞) da,   da = |∂x/∂ξ| dξ (line) or |∂x/∂ξ₁ × ∂x/∂ξ₂| dξ (face),
+//! r_θ(I) = ∫ N_I q(θ) da,   da = |∂x/∂ξ| dξ (line) or |∂x/∂ξ₁ × ∂x/∂ξ₂| dξ (face),
 //!
 //! on the current (deformed) facet x = X + u: Nanson's J |F⁻ᵀ N| dA, computed from the facet's
 //! own nodes. The tangent has ∂r_θ/∂θ (symmetric) and, where u is an unknown, ∂(da)/∂u.
@@ -10,7 +11,7 @@
 use super::{Active, KernelError};
 use crate::dofs::{CellState, Layout};
 use crate::element::RefElement;
-use crate::material::Convection;
+use crate::material::BoundaryFlux;
 
 /// The current area element |∂x/∂ξ| (D = 1) or |∂x/∂ξ₁ × ∂x/∂ξ₂| (D = 2) at one point, and
 /// its derivative with respect to the current position of each node, `dm[K][k]`.
@@ -66,11 +67,11 @@ fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     ]
 }
 
-/// Residual and (optionally) tangent of convection on one facet: `r` and `k` (row-major,
-/// `ndof × ndof`) are overwritten. Fills the θ rows when `act.heat` (their u columns also
-/// when `act.mechanics`), nothing else.
-pub fn convection<const N: usize, const D: usize, E: RefElement<N, D>>(
-    law: &Convection,
+/// Residual and (optionally) tangent of a boundary flux on one facet: `r` and `k`
+/// (row-major, `ndof × ndof`) are overwritten. Fills the θ rows when `act.heat` (their u
+/// columns also when `act.mechanics`), nothing else.
+pub fn boundary_flux<const N: usize, const D: usize, E: RefElement<N, D>>(
+    law: &BoundaryFlux,
     lay: &Layout,
     s: &CellState<N>,
     act: Active,
@@ -93,7 +94,7 @@ pub fn convection<const N: usize, const D: usize, E: RefElement<N, D>>(
             return Err(KernelError::BadGeometry);
         }
         let theta: f64 = Nv.iter().zip(&s.theta).map(|(a, b)| a * b).sum();
-        let (q, dq) = law.flux(theta);
+        let (q, dq) = law.flux(theta).ok_or(KernelError::NotAbsolute { theta })?;
         for I in 0..N {
             r[lay.theta(I)] += w * Nv[I] * q * m;
         }
@@ -118,10 +119,19 @@ mod tests {
     use super::*;
     use crate::element::{Line2, Line3, Quad4, Quad9, Tri3, Tri6};
 
-    const LAW: Convection = Convection {
+    use crate::material::{Convection, Radiation};
+
+    const LAW: BoundaryFlux = BoundaryFlux::Convection(Convection {
         h: 3.5,
         theta_inf: 15.0,
-    };
+    });
+
+    /// σ scaled up so that the radiated heat is of the convected heat's size.
+    const RADIATION: BoundaryFlux = BoundaryFlux::Radiation(Radiation {
+        emissivity: 0.8,
+        theta_inf: 15.0,
+        sigma: 1e-4,
+    });
 
     /// A facet of a `dim`-D mesh: distorted, displaced, at varied temperatures.
     fn state<const N: usize, const D: usize, E: RefElement<N, D>>(dim: usize) -> CellState<N> {
@@ -141,7 +151,7 @@ mod tests {
     }
 
     /// Central differences of the residual against the tangent, u and θ columns.
-    fn check<const N: usize, const D: usize, E: RefElement<N, D>>(dim: usize) {
+    fn check<const N: usize, const D: usize, E: RefElement<N, D>>(dim: usize, law: &BoundaryFlux) {
         let lay = Layout {
             n: N,
             dim,
@@ -152,7 +162,7 @@ mod tests {
         let nd = lay.ndof();
         let s = state::<N, D, E>(dim);
         let (mut r, mut k) = (vec![0.0; nd], vec![0.0; nd * nd]);
-        convection::<N, D, E>(&LAW, &lay, &s, Active::ALL, &mut r, Some(&mut k)).unwrap();
+        boundary_flux::<N, D, E>(law, &lay, &s, Active::ALL, &mut r, Some(&mut k)).unwrap();
         let scale = k.iter().fold(0.0f64, |a, v| a.max(v.abs()));
         assert!(scale > 0.0);
         let h = 1e-6;
@@ -168,8 +178,8 @@ mod tests {
                 }
                 t
             };
-            convection::<N, D, E>(&LAW, &lay, &perturb(h), Active::ALL, &mut rp, None).unwrap();
-            convection::<N, D, E>(&LAW, &lay, &perturb(-h), Active::ALL, &mut rm, None).unwrap();
+            boundary_flux::<N, D, E>(law, &lay, &perturb(h), Active::ALL, &mut rp, None).unwrap();
+            boundary_flux::<N, D, E>(law, &lay, &perturb(-h), Active::ALL, &mut rm, None).unwrap();
             for a in 0..nd {
                 let fd = (rp[a] - rm[a]) / (2.0 * h);
                 assert!(
@@ -194,13 +204,35 @@ mod tests {
     }
 
     #[test]
-    fn convection_tangent_matches_finite_differences() {
-        check::<2, 1, Line2>(2);
-        check::<3, 1, Line3>(2);
-        check::<3, 2, Tri3>(3);
-        check::<4, 2, Quad4>(3);
-        check::<6, 2, Tri6>(3);
-        check::<9, 2, Quad9>(3);
+    fn boundary_flux_tangent_matches_finite_differences() {
+        for law in [&LAW, &RADIATION] {
+            check::<2, 1, Line2>(2, law);
+            check::<3, 1, Line3>(2, law);
+            check::<3, 2, Tri3>(3, law);
+            check::<4, 2, Quad4>(3, law);
+            check::<6, 2, Tri6>(3, law);
+            check::<9, 2, Quad9>(3, law);
+        }
+    }
+
+    #[test]
+    fn a_radiating_facet_at_or_below_zero_is_an_error() {
+        let lay = Layout {
+            n: 2,
+            dim: 2,
+            has_u: false,
+            has_theta: true,
+            np: 0,
+        };
+        let mut s = state::<2, 1, Line2>(2);
+        s.theta = [-3.0; 2];
+        let mut r = vec![0.0; lay.ndof()];
+        match boundary_flux::<2, 1, Line2>(&RADIATION, &lay, &s, Active::ALL, &mut r, None) {
+            Err(KernelError::NotAbsolute { theta }) => assert!((theta + 3.0).abs() < 1e-12),
+            other => panic!("{other:?}"),
+        }
+        // convection has no such limit
+        boundary_flux::<2, 1, Line2>(&LAW, &lay, &s, Active::ALL, &mut r, None).unwrap();
     }
 
     #[test]
@@ -219,7 +251,7 @@ mod tests {
             s.theta[I] = 40.0;
         }
         let mut r = vec![0.0; lay.ndof()];
-        convection::<4, 2, Quad4>(&LAW, &lay, &s, Active::ALL, &mut r, None).unwrap();
+        boundary_flux::<4, 2, Quad4>(&LAW, &lay, &s, Active::ALL, &mut r, None).unwrap();
         let total: f64 = r.iter().sum();
         assert!((total - 3.5 * 25.0).abs() < 1e-12, "{total}");
         // only the mechanical rows wanted: nothing
@@ -227,7 +259,7 @@ mod tests {
             mechanics: true,
             heat: false,
         };
-        convection::<4, 2, Quad4>(&LAW, &lay, &s, mech, &mut r, None).unwrap();
+        boundary_flux::<4, 2, Quad4>(&LAW, &lay, &s, mech, &mut r, None).unwrap();
         assert!(r.iter().all(|&v| v == 0.0));
     }
 }

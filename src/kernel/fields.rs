@@ -38,7 +38,7 @@ pub fn cell_fields<const N: usize, const D: usize, E: RefElement<N, D>>(
             grad_theta: gt,
             theta,
             ..
-        } = point::<N, D, E>(xi, *w, lay, s, mat.law.theta0)?;
+        } = point::<N, D, E>(xi, *w, lay, s, mat.law.theta0())?;
         let m = mat
             .law
             .stress(&F, theta)

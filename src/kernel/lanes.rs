@@ -30,8 +30,8 @@
 use super::{Active, CellMaterial, CellSummary, KernelError};
 use crate::dofs::{CellState, Layout};
 use crate::element::RefElement;
-use crate::material::Real;
 use crate::material::regularization::{rotation_denominator, rotation_measure_of};
+use crate::material::{Real, ThermoElastic};
 
 /// Cells per call.
 pub const W: usize = 4;
@@ -127,6 +127,8 @@ pub fn available() -> bool {
 #[derive(Clone, Copy, Debug)]
 pub struct LaneBlock {
     mat: CellMaterial,
+    /// The block's law: the lanes are written for Neo-Hooke's stress.
+    law: ThermoElastic,
     lay: Layout,
 }
 
@@ -138,8 +140,10 @@ impl LaneBlock {
             && mat.reg_direct.is_none()
             && act.mechanics
             && (!lay.has_theta || act.heat);
+        let law = *mat.law.neo_hooke()?;
         ok.then_some(LaneBlock {
             mat: *mat,
+            law,
             lay: *lay,
         })
     }
@@ -156,14 +160,13 @@ pub fn bulk_lanes<const N: usize, const D: usize, E: RefElement<N, D>>(
     r: &mut [f64],
     k: Option<&mut [f64]>,
 ) -> Result<[CellSummary; W], (KernelError, usize)> {
-    let (mat, lay) = (&blk.mat, &blk.lay);
     #[cfg(target_arch = "x86_64")]
     if available() {
         // SAFETY: the CPU has the features the function is compiled for (checked above)
         return unsafe {
             match k {
-                Some(k) => bulk_lanes_avx2::<N, D, E, true>(mat, lay, s, r, k),
-                None => bulk_lanes_avx2::<N, D, E, false>(mat, lay, s, r, &mut []),
+                Some(k) => bulk_lanes_avx2::<N, D, E, true>(blk, s, r, k),
+                None => bulk_lanes_avx2::<N, D, E, false>(blk, s, r, &mut []),
             }
         };
     }
@@ -178,12 +181,11 @@ pub fn bulk_lanes_portable<const N: usize, const D: usize, E: RefElement<N, D>>(
     r: &mut [f64],
     k: Option<&mut [f64]>,
 ) -> Result<[CellSummary; W], (KernelError, usize)> {
-    let (mat, lay) = (&blk.mat, &blk.lay);
     let Some(k) = k else {
-        return body::<N, D, E, false>(mat, lay, s, r, &mut []);
+        return body::<N, D, E, false>(blk, s, r, &mut []);
     };
     let mut kw = vec![0.0; k.len()];
-    let out = body::<N, D, E, true>(mat, lay, s, r, &mut kw)?;
+    let out = body::<N, D, E, true>(blk, s, r, &mut kw)?;
     let n = kw.len() / W;
     for i in 0..n {
         for l in 0..W {
@@ -201,14 +203,13 @@ unsafe fn bulk_lanes_avx2<
     E: RefElement<N, D>,
     const TANGENT: bool,
 >(
-    mat: &CellMaterial,
-    lay: &Layout,
+    blk: &LaneBlock,
     s: &[CellState<N>; W],
     r: &mut [f64],
     k: &mut [f64],
 ) -> Result<[CellSummary; W], (KernelError, usize)> {
     if !TANGENT {
-        return body::<N, D, E, TANGENT>(mat, lay, s, r, k);
+        return body::<N, D, E, TANGENT>(blk, s, r, k);
     }
     // The body writes each tangent entry of the four cells with one store, lane-interleaved;
     // 4 × 4 transposes then give each cell its row-major tangent. Cheaper than four scalar
@@ -218,7 +219,7 @@ unsafe fn bulk_lanes_avx2<
     }
     let mut kw = INTERLEAVED.take();
     kw.resize(k.len(), 0.0);
-    let out = body::<N, D, E, TANGENT>(mat, lay, s, r, &mut kw);
+    let out = body::<N, D, E, TANGENT>(blk, s, r, &mut kw);
     if out.is_ok() {
         // SAFETY: the CPU has AVX2 (this function's features)
         unsafe { deinterleave(&kw, k) };
@@ -302,14 +303,13 @@ fn cofactors(a: &[[V; 3]; 3]) -> [[V; 3]; 3] {
 
 #[inline(always)]
 fn body<const N: usize, const D: usize, E: RefElement<N, D>, const TANGENT: bool>(
-    mat: &CellMaterial,
-    lay: &Layout,
+    blk: &LaneBlock,
     s: &[CellState<N>; W],
     r: &mut [f64],
     k: &mut [f64],
 ) -> Result<[CellSummary; W], (KernelError, usize)> {
+    let (mat, lay, law) = (&blk.mat, &blk.lay, &blk.law);
     let nd = lay.ndof();
-    let law = &mat.law;
     let thermal = lay.has_theta;
     let zero = V::default();
     // the cells' nodal data, lane by lane
@@ -726,16 +726,16 @@ mod tests {
     use super::*;
     use crate::element::{Hex8, Hex20, Hex27, Quad4, Quad9, Tet4, Tet10, Tri3};
     use crate::kernel::bulk;
-    use crate::material::{Conductivity, Regularization, ThermoElastic};
+    use crate::material::{Conductivity, Regularization, SolidLaw, ThermoElastic};
 
     fn material(cond: Conductivity) -> CellMaterial {
         CellMaterial {
-            law: ThermoElastic {
+            law: SolidLaw::NeoHooke(ThermoElastic {
                 K: 20.0,
                 mu: 10.0,
                 alpha: 2e-3,
                 theta0: 10.0,
-            },
+            }),
             cond,
             medium: false,
             reg: None,
@@ -867,6 +867,31 @@ mod tests {
         same_as_one_cell::<10, 3, Tet10>();
         same_as_one_cell::<20, 3, Hex20>();
         same_as_one_cell::<27, 3, Hex27>();
+    }
+
+    /// The lanes are Neo-Hooke's: a block of another law is left to the one-cell kernel.
+    #[test]
+    fn only_neo_hooke_blocks_run_in_lanes() {
+        let nh = material(Conductivity::Constant(1.0));
+        let rubber = CellMaterial {
+            law: SolidLaw::MooneyRivlin(crate::material::MooneyRivlin {
+                C10: 3.0,
+                C01: 2.0,
+                K: 20.0,
+                alpha: 0.0,
+                theta0: 0.0,
+            }),
+            ..nh
+        };
+        let lay = Layout {
+            n: 8,
+            dim: 3,
+            has_u: true,
+            has_theta: true,
+            np: 0,
+        };
+        assert!(LaneBlock::new(&nh, &lay, Active::ALL).is_some());
+        assert!(LaneBlock::new(&rubber, &lay, Active::ALL).is_none());
     }
 
     #[test]

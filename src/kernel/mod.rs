@@ -26,12 +26,12 @@ pub mod regularization;
 pub use bulk::{bulk, inversion};
 pub use fields::{CellFields, cell_fields};
 
-use crate::material::{Conductivity, Regularization, ThermoElastic};
+use crate::material::{Conductivity, Regularization, SolidLaw};
 
 /// Material of a cell block.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CellMaterial {
-    pub law: ThermoElastic,
+    pub law: SolidLaw,
     pub cond: Conductivity,
     pub medium: bool,
     /// Regularization of a linear medium cell (eq. 20); used when the layout carries p.
@@ -48,6 +48,8 @@ pub enum KernelError {
     Inverted { J: f64 },
     /// A rotation measure of the regularization is unbounded (F_aa + F_bb = 0).
     Singular,
+    /// θ ≤ 0 where a law needs an absolute temperature (radiation).
+    NotAbsolute { theta: f64 },
 }
 
 /// What a kernel call reports besides r and K.

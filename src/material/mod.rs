@@ -1,26 +1,36 @@
 //! Pure material laws: functions of a point's kinematics returning stresses, fluxes and their
 //! exact derivatives. They know nothing of meshes or dofs. One file per law family:
-//! [`thermo_elastic`] (the solid's and the medium's stress), [`conduction`] (the pulled-back
+//! [`thermo_elastic`] (the solid's and the medium's stress), [`mooney_rivlin`] (a solid's,
+//! chosen in [`solid`]'s list), [`conduction`] (the pulled-back
 //! Fourier law), [`regularization`] (the medium's rotation measures and their penalty),
-//! [`convection`] (heat lost through a boundary), [`friction`] (Coulomb slip in the medium).
+//! [`convection`] and [`radiation`] (heat lost through a boundary, chosen in [`boundary`]'s
+//! list), [`friction`] (Coulomb slip in the medium).
 //!
 //! Tensors are 3×3 even in 2D (plane strain: F33 = 1, 3D invariants). Fourth-order tangents
 //! are stored as 9×9 matrices with the index pair (i, J) ↦ 3 i + J.
 #![allow(non_snake_case)]
 
+pub mod boundary;
 pub mod conduction;
 pub mod convection;
 pub mod friction;
+pub mod mooney_rivlin;
+pub mod radiation;
 pub mod real;
 pub mod regularization;
+pub mod solid;
 pub mod thermo_elastic;
 
+pub use boundary::BoundaryFlux;
 pub use conduction::{Conductivity, HeatResponse, fourier};
 pub use convection::Convection;
+pub use mooney_rivlin::MooneyRivlin;
+pub use radiation::Radiation;
 pub use real::Real;
 pub use regularization::{
     ROTATION_PLANES, Regularization, RotationMeasure, rotation_measure, rotation_measure_d3,
 };
+pub use solid::SolidLaw;
 pub use thermo_elastic::{Coefficients, Scalars, StressResponse, ThermoElastic};
 
 use nalgebra::SMatrix;

@@ -6,15 +6,19 @@ use super::{
     BcGroup, BlockInfo, CapacityBlock, FacetBlock, FluxGroup, FrictionBlock, LoadPath, Model,
     Physics, SlipNormals, decide_physics, facet_weights,
 };
-use crate::case::{Bc, Case, CaseError, RegionKind, SlipNormal};
+use crate::case::{Bc, Case, CaseError, Region, RegionKind, SlipNormal, SolidLawKey};
 use crate::dofs::{Constraints, DofMap, Field, Layout, NONE, Prescribed};
 use crate::kernel::CellMaterial;
 use crate::kernel::friction::FrictionMaterial;
-use crate::material::{Conductivity, Convection, Regularization, ThermoElastic};
+use crate::material::{
+    BoundaryFlux, Conductivity, Convection, MooneyRivlin, Radiation, Regularization, SolidLaw,
+    ThermoElastic,
+};
 use crate::mesh::Mesh;
 use crate::mesh::centroid;
 use crate::mesh::faces::{Face, NearestFace, shared_faces};
 use nalgebra::Vector3;
+use toml::Spanned;
 
 /// Build the model. The case must already be validated against the mesh.
 pub fn build(case: &Case, mesh: Mesh) -> Result<Model, CaseError> {
@@ -45,7 +49,7 @@ pub fn build(case: &Case, mesh: Mesh) -> Result<Model, CaseError> {
     let mut path = load_path(case);
     let (cons, bc_groups) = dirichlet(case, &mesh, &dofs, &theta_init, &mut path)?;
     let (f_ramp, f_full, mut flux_groups) = external_loads(case, &mesh, &dofs, &blocks, &cons);
-    let facet_blocks = convection_blocks(case, &mesh, &physics, &mut flux_groups);
+    let facet_blocks = boundary_flux_blocks(case, &mesh, &physics, &mut flux_groups);
     let capacity_blocks = capacity_blocks(case, &mesh, &physics, &blocks);
     let friction_blocks = friction_blocks(case, &mesh, &physics, &blocks)?;
     debug_assert!(cons.eq.iter().filter(|&&e| e != NONE).count() == cons.n_eq);
@@ -175,31 +179,20 @@ fn region_materials(case: &Case, d: f64) -> Vec<CellMaterial> {
             let k = r.k.as_ref().map(|k| *k.get_ref()).unwrap_or(1.0);
             match r.kind {
                 RegionKind::Solid => CellMaterial {
-                    law: ThermoElastic {
-                        K: *r.K.as_ref().expect("checked").get_ref(),
-                        mu: *r.mu.as_ref().expect("checked").get_ref(),
-                        alpha: r.alpha,
-                        theta0: r.theta0,
-                    },
+                    law: solid_law(r),
                     cond: Conductivity::Constant(k),
                     medium: false,
                     reg: None,
                     reg_direct: None,
                 },
                 RegionKind::Medium => {
-                    let gamma = *r.gamma.as_ref().expect("checked").get_ref();
                     let k_max = r
                         .k_max
                         .as_ref()
                         .map(|v| *v.get_ref())
                         .unwrap_or(k_max_default.max(k));
                     CellMaterial {
-                        law: ThermoElastic {
-                            K: gamma,
-                            mu: gamma,
-                            alpha: r.alpha,
-                            theta0: r.theta0,
-                        },
+                        law: SolidLaw::NeoHooke(medium_law(r)),
                         cond: Conductivity::Medium { k_tm: k, k_max },
                         medium: true,
                         reg: Some(Regularization {
@@ -291,13 +284,50 @@ fn cell_blocks(
     (blocks, p_nodes)
 }
 
+/// A solid region's law, of the moduli its `law` takes (checked present).
+fn solid_law(r: &Region) -> SolidLaw {
+    let v = |key: &Option<Spanned<f64>>| *key.as_ref().expect("checked").get_ref();
+    let K = v(&r.K);
+    let (alpha, theta0) = (r.alpha, r.theta0);
+    match r
+        .law
+        .as_ref()
+        .map_or(SolidLawKey::NeoHooke, |l| *l.get_ref())
+    {
+        SolidLawKey::NeoHooke => SolidLaw::NeoHooke(ThermoElastic {
+            K,
+            mu: v(&r.mu),
+            alpha,
+            theta0,
+        }),
+        SolidLawKey::MooneyRivlin => SolidLaw::MooneyRivlin(MooneyRivlin {
+            C10: v(&r.C10),
+            C01: v(&r.C01),
+            K,
+            alpha,
+            theta0,
+        }),
+    }
+}
+
+/// A medium region's law: eq. (12) with K = μ = γ (eq. 13).
+fn medium_law(r: &Region) -> ThermoElastic {
+    let gamma = *r.gamma.as_ref().expect("checked").get_ref();
+    ThermoElastic {
+        K: gamma,
+        mu: gamma,
+        alpha: r.alpha,
+        theta0: r.theta0,
+    }
+}
+
 /// Initial temperature of each node: θ0 of its region (the last region listed wins on shared
 /// nodes).
 fn initial_temperatures(mesh: &Mesh, blocks: &[BlockInfo]) -> Vec<f64> {
     let mut theta_init = vec![0.0; mesh.coords.len()];
     for info in blocks {
         for &n in &mesh.cells[info.block].conn {
-            theta_init[n] = info.mat.law.theta0;
+            theta_init[n] = info.mat.law.theta0();
         }
     }
     theta_init
@@ -399,7 +429,7 @@ fn first_difference(path: &LoadPath, a: &Prescribed, b: &Prescribed) -> Option<(
 
 /// Whether a `[[bc]]` has a flux condition (and so a `FluxGroup`, in case order).
 fn has_flux(bc: &Bc) -> bool {
-    bc.traction.is_some() || bc.heat_flux.is_some() || bc.h.is_some()
+    bc.traction.is_some() || bc.heat_flux.is_some() || bc.exchanges_heat()
 }
 
 /// Nodal external loads from tractions, heat fluxes, body forces and heat sources:
@@ -451,7 +481,7 @@ fn external_loads(
         groups.push(FluxGroup {
             name: bc.group.get_ref().clone(),
             loads,
-            convects: bc.h.is_some() && dofs.has(Field::Theta),
+            convects: bc.exchanges_heat() && dofs.has(Field::Theta),
         });
     }
     for (bi, b) in mesh.cells.iter().enumerate() {
@@ -561,7 +591,7 @@ fn friction_blocks(
             region: info.region,
             mat: FrictionMaterial {
                 mu: *fr.mu.get_ref(),
-                medium: info.mat.law,
+                medium: medium_law(region),
                 c_f: fr.c_f.as_ref().map_or(1.0, |v| *v.get_ref()),
             },
             normals,
@@ -608,46 +638,56 @@ fn nearest_normals(mesh: &Mesh, block: usize, faces: &[Face]) -> Vec<Vector3<f64
         .collect()
 }
 
-/// The facet blocks of the convecting groups (`flux_groups` as [`external_loads`] lists them:
-/// one per `[[bc]]` with a flux condition, in case order).
-fn convection_blocks(
+/// The facet blocks of the groups that convect or radiate (`flux_groups` as
+/// [`external_loads`] lists them: one per `[[bc]]` with a flux condition, in case order), one
+/// per law and mesh facet block.
+fn boundary_flux_blocks(
     case: &Case,
     mesh: &Mesh,
     physics: &Physics,
     flux_groups: &mut [FluxGroup],
 ) -> Vec<FacetBlock> {
     let mut out = Vec::new();
+    if !physics.conduction {
+        return out;
+    }
     let with_flux = case.file.bc.iter().filter(|bc| has_flux(bc));
     for (gi, bc) in with_flux.enumerate() {
-        let (Some(h), Some(theta_inf)) = (&bc.h, &bc.theta_inf) else {
-            continue;
-        };
-        if !physics.conduction {
-            continue;
-        }
-        let law = Convection {
-            h: *h.get_ref(),
-            theta_inf: *theta_inf.get_ref(),
-        };
+        let convection = bc.h.as_ref().zip(bc.theta_inf.as_ref()).map(|(h, t)| {
+            BoundaryFlux::Convection(Convection {
+                h: *h.get_ref(),
+                theta_inf: *t.get_ref(),
+            })
+        });
+        let radiation = bc.radiation.as_ref().map(|r| {
+            let r = r.get_ref();
+            BoundaryFlux::Radiation(Radiation {
+                emissivity: *r.emissivity.get_ref(),
+                theta_inf: *r.theta_inf.get_ref(),
+                sigma: *r.sigma.get_ref(),
+            })
+        });
         let g = mesh.group(bc.group.get_ref()).expect("validated");
-        for (fb, b) in mesh.facets.iter().enumerate() {
-            if !b.groups.contains(&g) {
-                continue;
+        for law in convection.into_iter().chain(radiation) {
+            for (fb, b) in mesh.facets.iter().enumerate() {
+                if !b.groups.contains(&g) {
+                    continue;
+                }
+                out.push(FacetBlock {
+                    block: fb,
+                    group: gi,
+                    law,
+                    layout: Layout {
+                        n: b.kind.n_nodes(),
+                        dim: mesh.dim,
+                        has_u: physics.mechanics,
+                        has_theta: true,
+                        np: 0,
+                    },
+                });
             }
-            out.push(FacetBlock {
-                block: fb,
-                group: gi,
-                law,
-                layout: Layout {
-                    n: b.kind.n_nodes(),
-                    dim: mesh.dim,
-                    has_u: physics.mechanics,
-                    has_theta: true,
-                    np: 0,
-                },
-            });
+            debug_assert!(flux_groups[gi].convects);
         }
-        debug_assert!(flux_groups[gi].convects);
     }
     out
 }

@@ -45,7 +45,8 @@ pub fn unheld_body(model: &Model) -> Option<String> {
             let fixed = nodes.iter().any(|&n| held_dof(dofs.theta[n]));
             // h = 0 is an insulated boundary: it holds no temperature
             let convects = model.facet_blocks.iter().any(|fb| {
-                fb.law.h > 0.0 && mesh.facets[fb.block].conn.iter().any(|&n| comp[n] == c)
+                fb.law.anchors_temperature()
+                    && mesh.facets[fb.block].conn.iter().any(|&n| comp[n] == c)
             });
             let stores = model.capacity_blocks.iter().any(|cb| {
                 mesh.cells[cb.block]
@@ -56,7 +57,7 @@ pub fn unheld_body(model: &Model) -> Option<String> {
             if !(fixed || convects || stores) {
                 return Some(format!(
                     "the temperature of {} is not fixed: no `theta` is prescribed on it and no \
-                     boundary of it convects (`h` > 0), so a stationary solution is not unique",
+                     boundary of it convects (`h` > 0) or radiates, so a stationary solution is not unique",
                     name()
                 ));
             }

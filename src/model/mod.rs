@@ -16,7 +16,7 @@ use crate::case::RegionKind;
 use crate::dofs::{Constraints, DofMap, Field, Layout};
 use crate::kernel::CellMaterial;
 use crate::kernel::friction::FrictionMaterial;
-use crate::material::Convection;
+use crate::material::BoundaryFlux;
 use crate::mesh::Mesh;
 use nalgebra::Vector3;
 
@@ -39,14 +39,15 @@ pub struct BcGroup {
     pub fields: Vec<&'static str>,
 }
 
-/// A block of boundary facets that carries a facet law (convection), with its local layout.
+/// A block of boundary facets that carries a facet law (convection or radiation), with its
+/// local layout.
 #[derive(Clone, Debug)]
 pub struct FacetBlock {
     /// Index into `mesh.facets`.
     pub block: usize,
     /// Index into `Model::flux_groups`.
     pub group: usize,
-    pub law: Convection,
+    pub law: BoundaryFlux,
     pub layout: Layout,
 }
 
@@ -107,7 +108,8 @@ pub struct FluxGroup {
     /// Prescribed loads on free dofs: (dof, component "x", "y", "z" or "heat", value at full
     /// load, whether it is scaled by λ).
     pub loads: Vec<(usize, &'static str, f64, bool)>,
-    /// Whether facet blocks of this group convect (their heat is assembled, not prescribed).
+    /// Whether facet blocks of this group convect or radiate (their heat is assembled, not
+    /// prescribed).
     pub convects: bool,
 }
 

@@ -33,7 +33,7 @@ pub fn decide_physics(case: &Case) -> Physics {
     let f = &case.file;
     let conduction =
         f.bc.iter()
-            .any(|b| b.theta.is_some() || b.heat_flux.is_some() || b.h.is_some())
+            .any(|b| b.theta.is_some() || b.heat_flux.is_some() || b.exchanges_heat())
             || f.region
                 .iter()
                 .any(|r| r.heat_source.is_some_and(|q| q != 0.0));
@@ -46,6 +46,9 @@ pub fn decide_physics(case: &Case) -> Physics {
             || b.heat_flux.is_some_and(|q| q != 0.0)
             || (b.h.as_ref().is_some_and(|h| *h.get_ref() > 0.0)
                 && b.theta_inf.as_ref().is_some_and(|t| differs(*t.get_ref())))
+            || b.radiation
+                .as_ref()
+                .is_some_and(|r| differs(*r.get_ref().theta_inf.get_ref()))
     }) || f
         .region
         .iter()

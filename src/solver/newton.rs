@@ -221,7 +221,7 @@ impl Newton {
         let modulus = model
             .blocks
             .iter()
-            .map(|b| b.mat.law.K + b.mat.law.mu)
+            .map(|b| b.mat.law.stiffness_scale())
             .fold(0.0, f64::max);
         let force = 1e-12 * modulus * model.d.powi(model.mesh.dim as i32 - 1);
         let mut floor = [0.0; 3];

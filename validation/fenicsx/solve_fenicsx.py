@@ -6,8 +6,9 @@
 Same discrete problem as tmc: the mesh tmc wrote (TMC_OUT_DIR/mesh.msh, read with
 gmshio.model_to_mesh after gmsh.merge), displacement and temperature of the mesh's order (P1
 or isoparametric P2), the Neo-Hooke +
-thermal-expansion energy of eq. 12 and the pulled-back Fourier law (plane strain with 3D
-invariants in 2D), the case's boundary conditions, tmc's load steps (from its history.csv) and
+thermal-expansion energy of eq. 12 (or Mooney-Rivlin's, with `law = "mooney-rivlin"`) and the pulled-back Fourier law (plane strain with 3D
+invariants in 2D), radiation ε σ (θ⁴ − θ∞⁴) per current area on the groups that radiate (linear
+meshes), the case's boundary conditions, tmc's load steps (from its history.csv) and
 tmc's quadrature rules (1 point on simplices, 2^d Gauss points on quads and hexes).
 """
 import csv
@@ -28,7 +29,7 @@ from mpi4py import MPI
 def main(case_path, tmc_out, out_path):
     case = tomllib.load(open(case_path, "rb"))
     (region,) = case["region"]  # one solid region
-    K, mu = region["K"], region["mu"]
+    K = region["K"]
     alpha, theta0, k = region.get("alpha", 0.0), region.get("theta0", 0.0), region["k"]
     lambdas = [float(r["lambda"]) for r in csv.DictReader(open(f"{tmc_out}/history.csv"))][1:]
 
@@ -71,11 +72,33 @@ def main(case_path, tmc_out, out_path):
     J = ufl.det(F)
     C = F.T * F
     lnJ = ufl.ln(J)
-    psi = (K / 2 * lnJ**2 + mu / 2 * (J ** (-2.0 / 3.0) * ufl.tr(C) - 3)
-           - 3 * alpha * (th - theta0) * K * lnJ)
+    thermal = 3 * alpha * (th - theta0) * K * lnJ
+    if region.get("law", "neo-hooke") == "mooney-rivlin":
+        c10, c01 = region["C10"], region["C01"]
+        I1 = ufl.tr(C)
+        I2 = (I1**2 - ufl.tr(C * C)) / 2
+        psi = (c10 * (J ** (-2.0 / 3.0) * I1 - 3) + c01 * (J ** (-4.0 / 3.0) * I2 - 3)
+               + K / 2 * (J - 1) ** 2 - thermal)
+    else:
+        mu = region["mu"]
+        psi = K / 2 * lnJ**2 + mu / 2 * (J ** (-2.0 / 3.0) * ufl.tr(C) - 3) - thermal
     P = ufl.diff(psi, F)
     R = (ufl.inner(P, pad(ufl.grad(v))) * dx
          + J * k * ufl.inner(ufl.inv(C) * pad_vec(ufl.grad(th)), pad_vec(ufl.grad(q))) * dx)
+    # radiation through the current area da = J |F⁻ᵀ N| dA, on tmc's facet rules (2-point
+    # Gauss on lines and quad faces' 2x2, the centroid on triangle faces)
+    facet_degree = {"triangle": 3, "quadrilateral": 3, "tetrahedron": 1, "hexahedron": 3}[name]
+    ds = ufl.Measure("ds", domain=mesh, subdomain_data=facet_tags,
+                     metadata={"quadrature_degree": facet_degree})
+    N = pad_vec(ufl.FacetNormal(mesh))
+    da = J * ufl.sqrt(ufl.dot(ufl.inv(C) * N, N))
+    for bc in case["bc"]:
+        rad = bc.get("radiation")
+        if rad is None:
+            continue
+        assert order == 1, "radiation is compared on linear meshes"
+        es, inf = rad["emissivity"] * rad["sigma"], rad["theta_inf"]
+        R += es * (th**4 - inf**4) * da * q * ds(names[bc["group"]])
 
     # Dirichlet conditions, each value a Constant set per load step
     fdim = gdim - 1
