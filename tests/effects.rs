@@ -41,6 +41,48 @@ fn unknowns_exist_only_for_active_fields() {
 }
 
 #[test]
+fn a_scene_assembles_only_the_terms_it_calls_for() {
+    use tmc::model::Term;
+    let kinds = |m: &tmc::model::Model| -> Vec<&'static str> {
+        let mut k: Vec<&str> = (m.terms().iter())
+            .map(|t| match t {
+                Term::Bulk(_) => "bulk",
+                Term::Flux(_) => "flux",
+                Term::Capacity(_) => "capacity",
+                Term::Friction(_) => "friction",
+            })
+            .collect();
+        k.dedup();
+        k
+    };
+    let small = [("n", 4.0), ("m", 4.0), ("l", 2.0)];
+    // pressed and heated, stationary: the regions' cells alone
+    let (_, m) = model_with(&case_body("block"), "block.geo", &small, "terms-block");
+    assert_eq!(kinds(&m), ["bulk"]);
+    // in time, convecting sides: heat storage (with θₙ per point) and the convecting faces
+    let (_, m) = model_with(
+        &case_body("block-transient"),
+        "block.geo",
+        &small,
+        "terms-time",
+    );
+    assert_eq!(kinds(&m), ["bulk", "flux", "capacity"]);
+    // dragged with friction in time: the slip per point too
+    let (_, m) = model_with(
+        &case_body("friction-heating"),
+        "block.geo",
+        &small,
+        "terms-fric",
+    );
+    assert_eq!(kinds(&m), ["bulk", "capacity", "friction"]);
+    // every term with history has its slab, in term order, and no other term has one
+    let asm = tmc::assembly::Assembler::new(&m);
+    let with_history = m.terms().iter().filter(|t| t.has_history()).count();
+    assert_eq!(asm.history.slabs.len(), with_history);
+    assert!(with_history >= 2);
+}
+
+#[test]
 fn strategies_follow_the_coupling() {
     for (case, strategy) in [
         ("slab-stretch", Strategy::SingleField),

@@ -22,13 +22,13 @@ mod schedule;
 
 pub use cells::check_inversion;
 
-use crate::dofs::{Layout, Pattern, build_pattern, build_pattern_of};
+use crate::dofs::{Pattern, build_pattern, build_pattern_of};
 use crate::element::RefElement;
 use crate::kernel::friction::{HISTORY_PER_POINT, SlipFields};
 use crate::kernel::{Active, KernelError};
 use crate::mesh::partition::Partition;
 use crate::mesh::{Block, centroid};
-use crate::model::{FacetBlock, Model};
+use crate::model::{FacetBlock, Model, Term};
 use crate::parallel::Ranks;
 use cells::{Arrays, Cells, SlabView};
 use history::{PointHistory, Slab};
@@ -233,11 +233,14 @@ impl AssemblyStats {
 /// Assembler state reused across calls: pattern, value and vector storage.
 pub struct Assembler {
     pub pattern: Pattern,
-    /// Per model block, where its cells' tangent entries go (built once per mesh, so the
-    /// scatter is a load and an add per entry, not a search).
+    /// The terms it runs ([`Model::terms`]), and the history slab of each that has one.
+    terms: Vec<Term>,
+    slab_of: Vec<Option<usize>>,
+    /// Per term, where its cells' tangent entries go (built once per mesh, so the scatter is
+    /// a load and an add per entry, not a search).
     slots: Vec<Slots>,
-    /// The order the cells run in, by global number (a model block's cells follow those of
-    /// the blocks before it, from `first_cell[block]`).
+    /// The order the cells run in, by global number (a term's cells follow those of the
+    /// terms before it, from `first_cell[term]`).
     schedule: Schedule,
     first_cell: Vec<u32>,
     /// Entries of `values` zeroed before each tangent assembly: those whose first writer
@@ -252,7 +255,7 @@ pub struct Assembler {
     /// Ask for the cache lines each cell's tangent goes to before its kernel runs (on by
     /// default; off only to measure what it saves).
     pub prefetch: bool,
-    /// History per quadrature point, one slab per capacity block (θₙ at its points).
+    /// History per quadrature point, one slab per term that keeps one, in term order.
     pub history: PointHistory,
     /// Time of the last accepted (committed) state: a step to t is Δt = t − this long.
     t_committed: f64,
@@ -283,16 +286,17 @@ impl Assembler {
     }
 
     fn with_ranks(model: &Model, ranks: Ranks, partition: Option<Partition>) -> Assembler {
+        let terms = model.terms();
         let mine = |bi: usize, c: usize| {
             partition
                 .as_ref()
-                .is_none_or(|p| block_rank(model, p, bi, c) == ranks.rank)
+                .is_none_or(|p| term_rank(model, p, terms[bi], c) == ranks.rank)
         };
         // on several ranks, the entries of this rank's cells only
         let pattern = match partition {
             None => build_pattern(&model.mesh, &model.dofs, &model.cons),
             Some(_) => {
-                let (nn, cells) = (model.mesh.coords.len(), cells_of(model, mine));
+                let (nn, cells) = (model.mesh.coords.len(), cells_of(model, &terms, mine));
                 build_pattern_of(nn, cells, |_| true, &model.dofs, &model.cons)
             }
         };
@@ -300,9 +304,9 @@ impl Assembler {
             pattern.nnz() < FIRST as usize,
             "more than 2³¹ tangent entries"
         );
-        let mut slots: Vec<Slots> = (0..n_blocks(model))
-            .map(|bi| {
-                let (blk, lay) = block(model, bi);
+        let mut slots: Vec<Slots> = (terms.iter().enumerate())
+            .map(|(bi, t)| {
+                let (blk, lay) = t.block(model);
                 Slots::new(model, blk, lay, &pattern, |c| mine(bi, c))
             })
             .collect();
@@ -312,18 +316,18 @@ impl Assembler {
             .trailing_zeros() as usize;
         let mesh = &model.mesh;
         let mut first_cell = vec![0u32];
-        for bi in 0..n_blocks(model) {
-            let n = block(model, bi).0.n_cells() as u32;
+        for t in &terms {
+            let n = t.block(model).0.n_cells() as u32;
             first_cell.push(first_cell.last().unwrap() + n);
         }
         let nodes = |g: u32| -> &[usize] {
             let bi = first_cell.partition_point(|&f| f <= g) - 1;
-            block(model, bi).0.cell((g - first_cell[bi]) as usize)
+            terms[bi].block(model).0.cell((g - first_cell[bi]) as usize)
         };
-        let cells = (0..n_blocks(model))
-            .flat_map(|bi| {
+        let cells = (terms.iter().enumerate())
+            .flat_map(|(bi, t)| {
                 let first = first_cell[bi];
-                (0..block(model, bi).0.n_cells())
+                (0..t.block(model).0.n_cells())
                     .filter(move |&c| mine(bi, c))
                     .map(move |c| first + c as u32)
             })
@@ -341,8 +345,10 @@ impl Assembler {
             .collect();
         let mut zero_first = Vec::new();
         Slots::flag_first(&mut slots, &order, pattern.nnz(), &mut zero_first);
-        let history = initial_history(model);
+        let (history, slab_of) = initial_history(model, &terms);
         Assembler {
+            terms,
+            slab_of,
             history,
             t_committed: 0.0,
             zero_first,
@@ -372,7 +378,11 @@ impl Assembler {
     pub fn rows_owned(&self, model: &Model) -> Option<Pattern> {
         let p = self.partition.as_ref()?;
         let me = self.ranks.rank as u32;
-        let (nn, cells) = (model.mesh.coords.len(), cells_of(model, |_, _| true));
+        let terms = model.terms();
+        let (nn, cells) = (
+            model.mesh.coords.len(),
+            cells_of(model, &terms, |_, _| true),
+        );
         let owned = |a: usize| p.node_rank[a] == me;
         Some(build_pattern_of(nn, cells, owned, &model.dofs, &model.cons))
     }
@@ -402,8 +412,7 @@ impl Assembler {
     /// values from the rank that assembles it (every rank takes part). A checkpoint of this
     /// does not depend on how the cells were shared out, so a run can go on on other ranks.
     pub fn whole_history(&self, model: &Model) -> Vec<Vec<f64>> {
-        let blocks = (model.capacity_blocks.iter().map(|cb| cb.block))
-            .chain(model.friction_blocks.iter().map(|fb| fb.block));
+        let blocks = (self.terms.iter().filter(|t| t.has_history())).map(|t| t.mesh_block(model));
         (self.history.slabs.iter().zip(blocks))
             .map(|(slab, block)| {
                 let mut whole = slab.committed.clone();
@@ -476,7 +485,7 @@ impl Assembler {
             })
             .collect();
         let history = &history;
-        let slots = &self.slots;
+        let (slots, terms, slab_of) = (&self.slots, &self.terms, &self.slab_of);
         let arrays = Arrays {
             values: Shared(self.values.as_mut_ptr()),
             r_full: Shared(self.r_full.as_mut_ptr()),
@@ -491,7 +500,7 @@ impl Assembler {
                 let len = rest.partition_point(|&h| h < first_cell[bi + 1]);
                 let (these, next) = rest.split_at(len);
                 rest = next;
-                let (blk, lay) = block(model, bi);
+                let (blk, lay) = terms[bi].block(model);
                 let job = Cells {
                     model,
                     blk,
@@ -505,7 +514,8 @@ impl Assembler {
                     arrays,
                     prefetch,
                 };
-                let part = run_block(job, bi, these, history, inv_dt)?;
+                let slab = slab_of[bi].map(|i| &history[i]);
+                let part = run_block(job, terms[bi], slab, these, inv_dt)?;
                 stats = combine(stats, part);
             }
             Ok(stats)
@@ -545,14 +555,14 @@ fn combine(a: AssemblyStats, b: AssemblyStats) -> AssemblyStats {
     }
 }
 
-/// Run the cells `these` of assembler block `bi` through its kernel: the bulk for a cell
-/// block, convection for a facet block, the capacity term (ρc/Δt = `rho_c` × `inv_dt`) for a
-/// capacity block.
+/// Run the cells `these` of `term` through its kernel: the bulk for a region's cells, the
+/// boundary flux for a facet block, the capacity term (ρc/Δt = `rho_c` × `inv_dt`) or friction
+/// with the term's history `slab`.
 fn run_block(
     job: Cells,
-    bi: usize,
+    term: Term,
+    slab: Option<&SlabView>,
     these: &[u32],
-    history: &[SlabView],
     inv_dt: f64,
 ) -> Result<AssemblyStats, AssemblyError> {
     let (model, blk) = (job.model, job.blk);
@@ -563,129 +573,88 @@ fn run_block(
             Err(AssemblyError::NotFinite)
         }
     };
-    if let Some(fi) = friction_index(model, bi) {
-        let fb = &model.friction_blocks[fi];
-        let slab = &history[model.capacity_blocks.len() + fi];
-        let heat_rate = fb.heat_fraction * inv_dt;
-        let res = crate::with_cell!(blk.kind, |N, D, E| job.run_friction::<N, D, E>(
-            &fb.mat,
-            &fb.normals,
-            heat_rate,
-            slab,
-            these
-        ));
-        let ok = res.map_err(|(e, cell)| {
-            let at = centroid(&model.mesh.coords, blk.cell(cell));
-            cell_error_in(&model.regions[fb.region].0, e, cell, at)
-        })?;
-        finite(ok)?;
-        return Ok(AssemblyStats::EMPTY);
+    match (term, slab) {
+        (Term::Friction(fi), Some(slab)) => {
+            let fb = &model.friction_blocks[fi];
+            let heat_rate = fb.heat_fraction * inv_dt;
+            let res = crate::with_cell!(blk.kind, |N, D, E| job.run_friction::<N, D, E>(
+                &fb.mat,
+                &fb.normals,
+                heat_rate,
+                slab,
+                these
+            ));
+            let ok = res.map_err(|(e, cell)| {
+                let at = centroid(&model.mesh.coords, blk.cell(cell));
+                cell_error_in(&model.regions[fb.region].0, e, cell, at)
+            })?;
+            finite(ok)?;
+            Ok(AssemblyStats::EMPTY)
+        }
+        (Term::Capacity(ci), Some(slab)) => {
+            let cb = &model.capacity_blocks[ci];
+            let res = crate::with_cell!(blk.kind, |N, D, E| job.run_capacity::<N, D, E>(
+                cb.rho_c * inv_dt,
+                slab,
+                these
+            ));
+            let ok = res.map_err(|(_, cell)| AssemblyError::BadMesh {
+                region: model.regions[cb.region].0.clone(),
+                cell,
+                at: centroid(&model.mesh.coords, blk.cell(cell)),
+            })?;
+            finite(ok)?;
+            Ok(AssemblyStats::EMPTY)
+        }
+        (Term::Flux(f), _) => {
+            let fb = &model.facet_blocks[f];
+            let res = crate::with_element!(blk.kind, |N, D, E| job
+                .run_facets::<N, D, E>(&fb.law, these));
+            finite(res.map_err(|(e, facet)| facet_error(model, fb, e, facet))?)?;
+            Ok(AssemblyStats::EMPTY)
+        }
+        (Term::Bulk(b), _) => {
+            let info = &model.blocks[b];
+            let res = crate::with_cell!(blk.kind, |N, D, E| job.run::<N, D, E>(&info.mat, these));
+            let (min_j, energy, ok) = res.map_err(|(e, cell)| cell_error(model, b, e, cell))?;
+            finite(ok)?;
+            let mut stats = AssemblyStats::EMPTY;
+            if info.mat.medium {
+                stats.min_J_medium = min_j;
+            } else {
+                stats.min_J_solid = min_j;
+            }
+            stats.energy = energy;
+            Ok(stats)
+        }
+        (Term::Capacity(_) | Term::Friction(_), None) => {
+            unreachable!("initial_history gives every term with history its slab")
+        }
     }
-    if let Some(ci) = capacity_index(model, bi) {
-        let cb = &model.capacity_blocks[ci];
-        let res = crate::with_cell!(blk.kind, |N, D, E| job.run_capacity::<N, D, E>(
-            cb.rho_c * inv_dt,
-            &history[ci],
-            these
-        ));
-        let ok = res.map_err(|(_, cell)| AssemblyError::BadMesh {
-            region: model.regions[cb.region].0.clone(),
-            cell,
-            at: centroid(&model.mesh.coords, blk.cell(cell)),
-        })?;
-        finite(ok)?;
-        return Ok(AssemblyStats::EMPTY);
-    }
-    let Some(info) = model.blocks.get(bi) else {
-        let fb = &model.facet_blocks[bi - model.blocks.len()];
-        let res = crate::with_element!(blk.kind, |N, D, E| job
-            .run_facets::<N, D, E>(&fb.law, these));
-        finite(res.map_err(|(e, facet)| facet_error(model, fb, e, facet))?)?;
-        return Ok(AssemblyStats::EMPTY);
-    };
-    let res = crate::with_cell!(blk.kind, |N, D, E| job.run::<N, D, E>(&info.mat, these));
-    let (min_j, energy, ok) = res.map_err(|(e, cell)| cell_error(model, bi, e, cell))?;
-    finite(ok)?;
-    let mut stats = AssemblyStats::EMPTY;
-    if info.mat.medium {
-        stats.min_J_medium = min_j;
-    } else {
-        stats.min_J_solid = min_j;
-    }
-    stats.energy = energy;
-    Ok(stats)
 }
 
-/// Blocks the assembler runs: the model's cell blocks, its facet blocks, its capacity blocks
-/// (the cells that store heat, once more for that term), then its friction blocks (the medium
-/// cells with friction, once more for the slip term).
-fn n_blocks(model: &Model) -> usize {
-    friction_start(model) + model.friction_blocks.len()
-}
-
-/// The first friction block's assembler number.
-fn friction_start(model: &Model) -> usize {
-    model.blocks.len() + model.facet_blocks.len() + model.capacity_blocks.len()
-}
-
-/// The capacity block of assembler block `bi`, if it is one.
-fn capacity_index(model: &Model, bi: usize) -> Option<usize> {
-    bi.checked_sub(model.blocks.len() + model.facet_blocks.len())
-        .filter(|&ci| ci < model.capacity_blocks.len())
-}
-
-/// The friction block of assembler block `bi`, if it is one.
-fn friction_index(model: &Model, bi: usize) -> Option<usize> {
-    bi.checked_sub(friction_start(model))
-}
-
-/// The node lists of the cells (and facets) of every assembler block that `keep` keeps, by
-/// (assembler block, cell).
+/// The node lists of the cells (and facets) of every term that `keep` keeps, by (term,
+/// cell).
 fn cells_of<'m>(
     model: &'m Model,
+    terms: &'m [Term],
     keep: impl Fn(usize, usize) -> bool + Copy + 'm,
 ) -> impl Iterator<Item = &'m [usize]> + 'm {
-    (0..n_blocks(model)).flat_map(move |bi| {
-        let blk = block(model, bi).0;
+    terms.iter().enumerate().flat_map(move |(bi, t)| {
+        let blk = t.block(model).0;
         (0..blk.n_cells())
             .filter(move |&c| keep(bi, c))
             .map(move |c| blk.cell(c))
     })
 }
 
-/// Connectivity and local layout of assembler block `bi` (see [`n_blocks`]).
-fn block(model: &Model, bi: usize) -> (&Block, Layout) {
-    if let Some(fi) = friction_index(model, bi) {
-        let fb = &model.friction_blocks[fi];
-        return (&model.mesh.cells[fb.block], fb.layout);
+/// The rank that assembles cell (or facet) `c` of `term`.
+fn term_rank(model: &Model, p: &Partition, term: Term, c: usize) -> usize {
+    let b = term.mesh_block(model);
+    match term {
+        Term::Flux(_) => p.facet_rank[b][c] as usize,
+        _ => p.cell_rank[b][c] as usize,
     }
-    if let Some(ci) = capacity_index(model, bi) {
-        let cb = &model.capacity_blocks[ci];
-        return (&model.mesh.cells[cb.block], cb.layout);
-    }
-    match model.blocks.get(bi) {
-        Some(info) => (&model.mesh.cells[info.block], info.layout),
-        None => {
-            let fb = &model.facet_blocks[bi - model.blocks.len()];
-            (&model.mesh.facets[fb.block], fb.layout)
-        }
-    }
-}
-
-/// The rank of cell `c` of assembler block `bi`: a facet's from the facets' ranks, any other's
-/// from the cells' (capacity and friction blocks run cells of the mesh's cell blocks again).
-fn block_rank(model: &Model, p: &Partition, bi: usize, c: usize) -> usize {
-    let mesh_block = if let Some(fi) = friction_index(model, bi) {
-        model.friction_blocks[fi].block
-    } else if let Some(ci) = capacity_index(model, bi) {
-        model.capacity_blocks[ci].block
-    } else if let Some(info) = model.blocks.get(bi) {
-        info.block
-    } else {
-        let fb = &model.facet_blocks[bi - model.blocks.len()];
-        return p.facet_rank[fb.block][c] as usize;
-    };
-    p.cell_rank[mesh_block][c] as usize
 }
 
 /// Quadrature points per cell of a block.
@@ -694,34 +663,45 @@ fn points_per_cell(blk: &Block) -> usize {
         .len())
 }
 
-/// The history at the initial state: of the capacity blocks, θ0 at every point; of the
-/// friction blocks, no slip and no work dissipated.
-fn initial_history(model: &Model) -> PointHistory {
+/// The history at the initial state, one slab per term that keeps one (in term order), and
+/// each term's slab: of the capacity terms, θ0 at every point; of the friction terms, no slip
+/// and no work dissipated.
+fn initial_history(model: &Model, terms: &[Term]) -> (PointHistory, Vec<Option<usize>>) {
     let x0 = model.initial_state();
-    let mut slabs: Vec<Slab> = model
-        .capacity_blocks
-        .iter()
-        .map(|cb| {
-            let blk = &model.mesh.cells[cb.block];
-            let width = points_per_cell(blk);
-            let mut slab = Slab::new(blk.n_cells(), width, 0.0);
-            for c in 0..blk.n_cells() {
-                let nodes = blk.cell(c);
-                let out = &mut slab.committed[c * width..(c + 1) * width];
-                crate::with_cell!(blk.kind, |N, D, E| {
-                    let s = crate::dofs::gather::<N>(&model.mesh.coords, &model.dofs, nodes, &x0);
-                    crate::kernel::capacity::theta_at_points::<N, D, E>(&s, out);
-                });
-            }
-            slab.trial.copy_from_slice(&slab.committed);
-            slab
+    let mut slabs: Vec<Slab> = Vec::new();
+    let slab_of = (terms.iter())
+        .map(|&t| {
+            let (blk, _) = t.block(model);
+            let slab = match t {
+                Term::Capacity(_) => {
+                    let width = points_per_cell(blk);
+                    let mut slab = Slab::new(blk.n_cells(), width, 0.0);
+                    for c in 0..blk.n_cells() {
+                        let nodes = blk.cell(c);
+                        let out = &mut slab.committed[c * width..(c + 1) * width];
+                        crate::with_cell!(blk.kind, |N, D, E| {
+                            let s = crate::dofs::gather::<N>(
+                                &model.mesh.coords,
+                                &model.dofs,
+                                nodes,
+                                &x0,
+                            );
+                            crate::kernel::capacity::theta_at_points::<N, D, E>(&s, out);
+                        });
+                    }
+                    slab.trial.copy_from_slice(&slab.committed);
+                    slab
+                }
+                Term::Friction(_) => {
+                    Slab::new(blk.n_cells(), HISTORY_PER_POINT * points_per_cell(blk), 0.0)
+                }
+                Term::Bulk(_) | Term::Flux(_) => return None,
+            };
+            slabs.push(slab);
+            Some(slabs.len() - 1)
         })
         .collect();
-    slabs.extend(model.friction_blocks.iter().map(|fb| {
-        let blk = &model.mesh.cells[fb.block];
-        Slab::new(blk.n_cells(), HISTORY_PER_POINT * points_per_cell(blk), 0.0)
-    }));
-    PointHistory { slabs }
+    (PointHistory { slabs }, slab_of)
 }
 
 /// Heat stored in the capacity blocks at the state `x`: Σ ∫ ρc (θ − θ0) dV.
@@ -796,13 +776,13 @@ fn committed_friction<'a>(
     model: &'a Model,
     asm: &'a Assembler,
 ) -> impl Iterator<Item = (usize, usize, &'a [usize], &'a [f64])> + 'a {
-    let nc = model.capacity_blocks.len();
-    model
-        .friction_blocks
-        .iter()
-        .zip(&asm.history.slabs[nc..])
-        .enumerate()
-        .flat_map(move |(f, (fb, slab))| {
+    (asm.terms.iter().zip(&asm.slab_of))
+        .filter_map(|(t, s)| match (t, s) {
+            (Term::Friction(f), Some(s)) => Some((*f, &asm.history.slabs[*s])),
+            _ => None,
+        })
+        .flat_map(move |(f, slab)| {
+            let fb = &model.friction_blocks[f];
             let blk = &model.mesh.cells[fb.block];
             (0..blk.n_cells())
                 .filter(move |&c| asm.owns_cell(fb.block, c))

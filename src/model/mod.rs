@@ -17,7 +17,7 @@ use crate::dofs::{Constraints, DofMap, Field, Layout};
 use crate::kernel::CellMaterial;
 use crate::kernel::friction::FrictionMaterial;
 use crate::material::BoundaryFlux;
-use crate::mesh::Mesh;
+use crate::mesh::{Block, Mesh};
 use nalgebra::Vector3;
 
 /// One cell block of the mesh with its material and local layout.
@@ -113,6 +113,53 @@ pub struct FluxGroup {
     pub convects: bool,
 }
 
+/// One term of the discrete problem: an integrand over the cells (or facets) of one mesh
+/// block, by its index into the model's list of that kind. The assembler runs
+/// [`Model::terms`] in order; the terms with history ([`Term::has_history`]) own one slab of
+/// per-point values each, in that order too.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Term {
+    /// A region's cells: mechanics, conduction, the medium's regularization
+    /// (`blocks`).
+    Bulk(usize),
+    /// A boundary heat flux on a facet block (`facet_blocks`).
+    Flux(usize),
+    /// Heat stored, ρc (θ − θₙ)/Δt, with θₙ per point as history (`capacity_blocks`).
+    Capacity(usize),
+    /// Coulomb friction in a medium's slip planes, with the slip per point as history
+    /// (`friction_blocks`).
+    Friction(usize),
+}
+
+impl Term {
+    /// The mesh block (cells, or facets for [`Term::Flux`]) the term integrates over, and
+    /// the term's local layout of unknowns.
+    pub fn block<'m>(&self, model: &'m Model) -> (&'m Block, Layout) {
+        let (m, i) = (&model.mesh, self.mesh_block(model));
+        match *self {
+            Term::Bulk(b) => (&m.cells[i], model.blocks[b].layout),
+            Term::Flux(f) => (&m.facets[i], model.facet_blocks[f].layout),
+            Term::Capacity(c) => (&m.cells[i], model.capacity_blocks[c].layout),
+            Term::Friction(f) => (&m.cells[i], model.friction_blocks[f].layout),
+        }
+    }
+
+    /// Index of the term's block in `mesh.cells` (`mesh.facets` for [`Term::Flux`]).
+    pub fn mesh_block(&self, model: &Model) -> usize {
+        match *self {
+            Term::Bulk(b) => model.blocks[b].block,
+            Term::Flux(f) => model.facet_blocks[f].block,
+            Term::Capacity(c) => model.capacity_blocks[c].block,
+            Term::Friction(f) => model.friction_blocks[f].block,
+        }
+    }
+
+    /// Whether the term keeps values per quadrature point between steps.
+    pub fn has_history(&self) -> bool {
+        matches!(self, Term::Capacity(_) | Term::Friction(_))
+    }
+}
+
 /// The discrete problem.
 #[derive(Debug)]
 pub struct Model {
@@ -120,14 +167,15 @@ pub struct Model {
     pub physics: Physics,
     pub dofs: DofMap,
     pub cons: Constraints,
+    /// The regions' cell blocks ([`Term::Bulk`]).
     pub blocks: Vec<BlockInfo>,
-    /// Boundary facets with a facet law, after the cell blocks in the assembly.
+    /// Boundary facets with a facet law ([`Term::Flux`]).
     pub facet_blocks: Vec<FacetBlock>,
     /// Groups with flux conditions, for reporting.
     pub flux_groups: Vec<FluxGroup>,
-    /// Cells that store heat (transient scenes only), after the facets in the assembly.
+    /// Cells that store heat (transient scenes only; [`Term::Capacity`]).
     pub capacity_blocks: Vec<CapacityBlock>,
-    /// Medium cells with friction, after the capacity blocks in the assembly.
+    /// Medium cells with friction ([`Term::Friction`]).
     pub friction_blocks: Vec<FrictionBlock>,
     /// Region names and kinds, in case order.
     pub regions: Vec<(String, RegionKind)>,
@@ -148,6 +196,17 @@ pub struct Model {
 }
 
 impl Model {
+    /// Every term, in the order the assembler runs them: the regions' cells, the boundary
+    /// fluxes, heat storage, friction.
+    pub fn terms(&self) -> Vec<Term> {
+        (0..self.blocks.len())
+            .map(Term::Bulk)
+            .chain((0..self.facet_blocks.len()).map(Term::Flux))
+            .chain((0..self.capacity_blocks.len()).map(Term::Capacity))
+            .chain((0..self.friction_blocks.len()).map(Term::Friction))
+            .collect()
+    }
+
     /// The state at λ = 0: zero displacement, θ = θ0, prescribed values that are not ramped.
     pub fn initial_state(&self) -> Vec<f64> {
         let mut x = vec![0.0; self.dofs.n_dofs];
