@@ -10,7 +10,7 @@ use super::{
 };
 use crate::dofs::{CellState, Layout};
 use crate::element::{RefElement, physical_gradients};
-use crate::material::fourier;
+use crate::material::{SolidLaw, Stress, fourier};
 
 /// The inversion check of [`bulk`] alone, without the law: `Inverted` with the J of the
 /// first quadrature point where J ≤ 0 (or is not finite). Cheap enough to look before an
@@ -44,19 +44,17 @@ pub fn bulk<const N: usize, const D: usize, E: RefElement<N, D>>(
     r: &mut [f64],
     k: Option<&mut [f64]>,
 ) -> Result<CellSummary, KernelError> {
-    #[cfg(target_arch = "x86_64")]
-    if avx2_fma() {
-        // SAFETY: the CPU has the features the function is compiled for (checked above)
-        return unsafe { bulk_avx2::<N, D, E>(mat, lay, s, act, r, k) };
+    // the law list's choice made once per cell: the body is compiled for each law
+    match &mat.law {
+        SolidLaw::NeoHooke(l) => bulk_of::<N, D, E, _>(l, mat, lay, s, act, r, k),
+        SolidLaw::MooneyRivlin(l) => bulk_of::<N, D, E, _>(l, mat, lay, s, act, r, k),
     }
-    bulk_body::<N, D, E, Separate>(mat, lay, s, act, r, k)
 }
 
-/// [`bulk`] compiled for AVX2 and FMA: the node-block loops (eight or four unknowns wide)
-/// become 256-bit fused multiply-adds.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn bulk_avx2<const N: usize, const D: usize, E: RefElement<N, D>>(
+/// [`bulk`] with the solid law `law` (`mat`'s).
+#[inline(always)]
+fn bulk_of<const N: usize, const D: usize, E: RefElement<N, D>, L: Stress>(
+    law: &L,
     mat: &CellMaterial,
     lay: &Layout,
     s: &CellState<N>,
@@ -64,7 +62,28 @@ unsafe fn bulk_avx2<const N: usize, const D: usize, E: RefElement<N, D>>(
     r: &mut [f64],
     k: Option<&mut [f64]>,
 ) -> Result<CellSummary, KernelError> {
-    bulk_body::<N, D, E, Fused>(mat, lay, s, act, r, k)
+    #[cfg(target_arch = "x86_64")]
+    if avx2_fma() {
+        // SAFETY: the CPU has the features the function is compiled for (checked above)
+        return unsafe { bulk_avx2::<N, D, E, L>(law, mat, lay, s, act, r, k) };
+    }
+    bulk_body::<N, D, E, Separate, L>(law, mat, lay, s, act, r, k)
+}
+
+/// [`bulk`] compiled for AVX2 and FMA: the node-block loops (eight or four unknowns wide)
+/// become 256-bit fused multiply-adds.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn bulk_avx2<const N: usize, const D: usize, E: RefElement<N, D>, L: Stress>(
+    law: &L,
+    mat: &CellMaterial,
+    lay: &Layout,
+    s: &CellState<N>,
+    act: Active,
+    r: &mut [f64],
+    k: Option<&mut [f64]>,
+) -> Result<CellSummary, KernelError> {
+    bulk_body::<N, D, E, Fused, L>(law, mat, lay, s, act, r, k)
 }
 
 /// The body of [`bulk`]: per quadrature point the law, then the residual and the tangent
@@ -72,7 +91,8 @@ unsafe fn bulk_avx2<const N: usize, const D: usize, E: RefElement<N, D>>(
 /// long function on purpose: the blocks (kilobytes for a hex) stay in registers and cache
 /// across the point loop instead of passing through memory between functions.
 #[inline(always)]
-fn bulk_body<const N: usize, const D: usize, E: RefElement<N, D>, M: MulAdd>(
+fn bulk_body<const N: usize, const D: usize, E: RefElement<N, D>, M: MulAdd, L: Stress>(
+    law: &L,
     mat: &CellMaterial,
     lay: &Layout,
     s: &CellState<N>,
@@ -86,7 +106,7 @@ fn bulk_body<const N: usize, const D: usize, E: RefElement<N, D>, M: MulAdd>(
         min_J: f64::INFINITY,
         energy: 0.0,
     };
-    let theta_ref = mat.law.theta0();
+    let theta_ref = law.theta0();
     let tangent = k.is_some();
     // The cell's tangent blocks, summed over the quadrature points and added to `k` at the
     // end: node-by-node matrices whose inner loops run over the second node (vectorisable).
@@ -122,8 +142,7 @@ fn bulk_body<const N: usize, const D: usize, E: RefElement<N, D>, M: MulAdd>(
             }
         }
         if lay.has_u && act.mechanics {
-            let m = mat
-                .law
+            let m = law
                 .stress(&F, theta)
                 .ok_or(KernelError::Inverted { J: F.determinant() })?;
             summary.min_J = summary.min_J.min(m.J);
@@ -388,7 +407,27 @@ mod tests {
         // the instruction-set variant `bulk` dispatched to agrees with the portable one to
         // round-off (fused multiply-adds round once)
         let (mut r0, mut k0) = (vec![0.0; nd], vec![0.0; nd * nd]);
-        bulk_body::<N, D, E, Separate>(mat, &lay, &s, Active::ALL, &mut r0, Some(&mut k0)).unwrap();
+        let portable = match &mat.law {
+            SolidLaw::NeoHooke(l) => bulk_body::<N, D, E, Separate, _>(
+                l,
+                mat,
+                &lay,
+                &s,
+                Active::ALL,
+                &mut r0,
+                Some(&mut k0),
+            ),
+            SolidLaw::MooneyRivlin(l) => bulk_body::<N, D, E, Separate, _>(
+                l,
+                mat,
+                &lay,
+                &s,
+                Active::ALL,
+                &mut r0,
+                Some(&mut k0),
+            ),
+        };
+        portable.unwrap();
         let scale = k.iter().fold(0.0f64, |a, v| a.max(v.abs()));
         for (a, b) in k.iter().zip(&k0) {
             assert!(

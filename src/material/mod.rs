@@ -30,7 +30,7 @@ pub use real::Real;
 pub use regularization::{
     ROTATION_PLANES, Regularization, RotationMeasure, rotation_measure, rotation_measure_d3,
 };
-pub use solid::SolidLaw;
+pub use solid::{SolidLaw, Stress};
 pub use thermo_elastic::{Coefficients, Scalars, StressResponse, ThermoElastic};
 
 use nalgebra::SMatrix;

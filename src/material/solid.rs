@@ -5,6 +5,37 @@
 use super::{MooneyRivlin, StressResponse, ThermoElastic};
 use nalgebra::Matrix3;
 
+/// A solid law as the kernels call it: each law its own type, so that a kernel is compiled
+/// for each and the list's choice is made once per cell, not per point.
+pub trait Stress {
+    /// The temperature at which the law is free of thermal stress.
+    fn theta0(&self) -> f64;
+    /// Energy, stress and tangents; `None` when J ≤ 0 or not finite.
+    fn stress(&self, F: &Matrix3<f64>, theta: f64) -> Option<StressResponse>;
+}
+
+impl Stress for ThermoElastic {
+    #[inline(always)]
+    fn theta0(&self) -> f64 {
+        self.theta0
+    }
+    #[inline(always)]
+    fn stress(&self, F: &Matrix3<f64>, theta: f64) -> Option<StressResponse> {
+        ThermoElastic::stress(self, F, theta)
+    }
+}
+
+impl Stress for MooneyRivlin {
+    #[inline(always)]
+    fn theta0(&self) -> f64 {
+        self.theta0
+    }
+    #[inline(always)]
+    fn stress(&self, F: &Matrix3<f64>, theta: f64) -> Option<StressResponse> {
+        MooneyRivlin::stress(self, F, theta)
+    }
+}
+
 /// A solid's stress law.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum SolidLaw {
