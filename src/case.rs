@@ -3,6 +3,7 @@
 //! Parsing refuses unknown keys; [`Case::validate`] checks the case against its mesh before any
 //! work starts, and every error names the file, the key and its line.
 
+use crate::material::conduction::TABLE_POINTS;
 use crate::mesh::Mesh;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
@@ -97,6 +98,13 @@ pub struct Region {
     pub gamma: Option<Spanned<f64>>,
     /// Cap of the medium's conductivity (default: largest solid k).
     pub k_max: Option<Spanned<f64>>,
+    /// A medium's conductivity as a table of `[J, k]` rows, linear in J between them (instead
+    /// of `k` and `k_max`).
+    pub k_table: Option<Spanned<Vec<Vec<f64>>>>,
+    /// A medium's conductance across its closed layer h_c (heat per area, time and degree),
+    /// with `thickness`, the layer's undeformed thickness t0: k ≤ h_c t0 J.
+    pub h_closed: Option<Spanned<f64>>,
+    pub thickness: Option<Spanned<f64>>,
     /// Regularization weights β1, β2 (eq. 20) and α_r (eq. 18).
     pub beta1: Option<Spanned<f64>>,
     pub beta2: Option<Spanned<f64>>,
@@ -885,6 +893,8 @@ impl Case {
                     for (key, v) in [
                         ("gamma", &r.gamma),
                         ("k_max", &r.k_max),
+                        ("h_closed", &r.h_closed),
+                        ("thickness", &r.thickness),
                         ("beta1", &r.beta1),
                         ("beta2", &r.beta2),
                         ("alpha_r", &r.alpha_r),
@@ -901,6 +911,7 @@ impl Case {
                     positive_if_given("beta1", &r.beta1)?;
                     positive_if_given("beta2", &r.beta2)?;
                     positive_if_given("alpha_r", &r.alpha_r)?;
+                    self.check_medium_conductivity(i, name, r)?;
                     for (key, v) in [("K", &r.K), ("mu", &r.mu), ("C10", &r.C10), ("C01", &r.C01)] {
                         if let Some(v) = v {
                             return self.error(v.span(), format!("region[{i}] (\"{name}\"): `{key}` is a solid key; the medium's moduli are `gamma`"));
@@ -917,6 +928,75 @@ impl Case {
                     }
                 }
             }
+        }
+        Ok(())
+    }
+
+    /// A medium's conductivity law: the paper's (`k`, `k_max`), capped by a closed layer's
+    /// conductance (`h_closed` with `thickness`), or a table (`k_table`, alone).
+    fn check_medium_conductivity(&self, i: usize, name: &str, r: &Region) -> Result<(), CaseError> {
+        let at = |msg: String, span: std::ops::Range<usize>| {
+            self.error::<()>(span, format!("region[{i}] (\"{name}\"): {msg}"))
+        };
+        for (key, v) in [("h_closed", &r.h_closed), ("thickness", &r.thickness)] {
+            if let Some(v) = v
+                && !(*v.get_ref() > 0.0 && v.get_ref().is_finite())
+            {
+                return at(
+                    format!("`{key}` must be positive, got {}", v.get_ref()),
+                    v.span(),
+                );
+            }
+        }
+        match (&r.h_closed, &r.thickness) {
+            (Some(h), None) => {
+                return at(
+                    "`h_closed` needs `thickness`, the layer's undeformed thickness".into(),
+                    h.span(),
+                );
+            }
+            (None, Some(t)) => {
+                return at(
+                    "`thickness` is that of a closed layer whose conductance is `h_closed`; give `h_closed` too".into(),
+                    t.span(),
+                );
+            }
+            _ => {}
+        }
+        let Some(table) = &r.k_table else {
+            return Ok(());
+        };
+        for (key, v) in [("k", &r.k), ("k_max", &r.k_max), ("h_closed", &r.h_closed)] {
+            if let Some(v) = v {
+                return at(
+                    format!("`{key}` and `k_table` are two conductivity laws; give one"),
+                    v.span(),
+                );
+            }
+        }
+        let rows = table.get_ref();
+        let bad = |why: &str| {
+            at(
+                format!(
+                    "`k_table` {why} (rows [J, k]: 2 to {TABLE_POINTS}, J > 0 all different, k > 0)"
+                ),
+                table.span(),
+            )
+        };
+        if !(2..=TABLE_POINTS).contains(&rows.len()) {
+            return bad(&format!("has {} rows", rows.len()));
+        }
+        if let Some((n, row)) = rows
+            .iter()
+            .enumerate()
+            .find(|(_, row)| row.len() != 2 || !row.iter().all(|v| *v > 0.0 && v.is_finite()))
+        {
+            return bad(&format!("row {n} is {row:?}"));
+        }
+        let mut js: Vec<f64> = rows.iter().map(|row| row[0]).collect();
+        js.sort_by(f64::total_cmp);
+        if let Some(w) = js.windows(2).find(|w| w[0] == w[1]) {
+            return bad(&format!("gives J = {} twice", w[0]));
         }
         Ok(())
     }

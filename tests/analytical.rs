@@ -216,6 +216,55 @@ fn radiation_slab_matches_the_closed_form_end_temperature() {
     assert!((s.reactions["right"]["heat"] + flow).abs() < 1e-9 * flow);
 }
 
+/// A medium slab (L = 2, H = 1) squeezed in uniaxial strain to J (its faces x = 0 and
+/// x = L held apart by (1 − J) L, its top and bottom held in y) with θ = 100 and 0 held on
+/// its ends: the heat flow across it is k(J) Δθ H / (J L), its layer J L thick.
+fn squeezed_medium(tag: &str, j: f64, conductivity: &str) -> f64 {
+    let body = format!(
+        "[[region]]\ngroup = \"solid\"\nkind = \"medium\"\ngamma = 1e-2\n{conductivity}\n\
+         [[bc]]\ngroup = \"left\"\nux = 0.0\ntheta = 100.0\n\
+         [[bc]]\ngroup = \"right\"\nux = {}\ntheta = 0.0\n\
+         [[bc]]\ngroup = \"top\"\nuy = 0.0\n[[bc]]\ngroup = \"bottom\"\nuy = 0.0\n\
+         [[probe]]\nname = \"theta_mid\"\nfield = \"theta\"\nat = [1.0, 0.5]\n\
+         [steps]\ntol = 1e-12\n",
+        -(1.0 - j) * 2.0,
+    );
+    let (s, _) = solve_text(tag, "slab.geo", "n = 4, m = 2", &body);
+    assert!(s.converged, "{tag}");
+    // linear across the layer (probes are at undeformed positions)
+    assert!(
+        (s.probes["theta_mid"] - 50.0).abs() < 1e-8,
+        "{tag}: {:?}",
+        s.probes
+    );
+    let (q_in, q_out) = (s.reactions["left"]["heat"], s.reactions["right"]["heat"]);
+    assert!(
+        (q_in + q_out).abs() < 1e-9 * q_in,
+        "{tag}: heat in {q_in}, out {q_out}"
+    );
+    q_in
+}
+
+#[test]
+fn a_closed_layer_conducts_h_c_and_a_table_gives_its_k() {
+    // k = min(k_TM (1 + ln² J), k_max, h_c t0 J) = h_c t0 J at J = 0.01: h_c Δθ H
+    let closed = "k = 0.1\nk_max = 1000.0\nh_closed = 50.0\nthickness = 2.0";
+    let q = squeezed_medium("medium-closed", 0.01, closed);
+    assert!((q - 50.0 * 100.0).abs() < 1e-8 * q, "closed layer: {q}");
+    // the paper's law alone: k_TM (1 + ln² J) Δθ H / (J L)
+    let paper = squeezed_medium("medium-paper", 0.01, "k = 0.1\nk_max = 1000.0");
+    let k = 0.1 * (1.0 + 0.01f64.ln().powi(2));
+    assert!(
+        (paper - k * 100.0 / 0.02).abs() < 1e-8 * paper,
+        "paper: {paper}"
+    );
+    // a table, between its points (0.1, 0.5) and (0.01, 2) at J = 0.05
+    let table = "k_table = [[1.0, 0.1], [0.01, 2.0], [0.1, 0.5]]";
+    let q = squeezed_medium("medium-table", 0.05, table);
+    let k = 0.5 + 1.5 * 0.05 / 0.09;
+    assert!((q - k * 100.0 / 0.1).abs() < 1e-8 * q, "table: {q}");
+}
+
 #[test]
 fn convection_bar_matches_the_closed_form_end_temperature() {
     let (s, dir) = solve_case("slab-convection");

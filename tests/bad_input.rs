@@ -548,6 +548,69 @@ fn radiation_needs_absolute_temperatures_and_says_so() {
 }
 
 #[test]
+fn a_medium_s_conductivity_keys_are_checked_by_file_line_and_key() {
+    let dir = scratch("bad-conductivity");
+    let out = dir.join("out");
+    let medium = "[[region]]\ngroup = \"solid\"\nkind = \"medium\"\ngamma = 1e-2\n";
+    for (tag, body, words) in [
+        (
+            "one-row",
+            format!("{medium}k_table = [[1.0, 0.1]]\n"),
+            vec![
+                "one-row-c.toml:8",
+                "region[0] (\"solid\"): `k_table` has 1 rows",
+                "2 to 8",
+            ],
+        ),
+        (
+            "twice",
+            format!("{medium}k_table = [[1.0, 0.1], [1.0, 0.2]]\n"),
+            vec!["twice-c.toml:8", "gives J = 1 twice"],
+        ),
+        (
+            "row",
+            format!("{medium}k_table = [[1.0, 0.1], [0.0, 0.2]]\n"),
+            vec!["row-c.toml:8", "row 1 is [0.0, 0.2]"],
+        ),
+        (
+            "both",
+            format!("{medium}k_table = [[1.0, 0.1], [0.1, 0.2]]\nk = 0.1\n"),
+            vec![
+                "both-c.toml:9",
+                "`k` and `k_table` are two conductivity laws",
+            ],
+        ),
+        (
+            "no-thickness",
+            format!("{medium}k = 0.1\nh_closed = 50.0\n"),
+            vec!["no-thickness-c.toml:9", "`h_closed` needs `thickness`"],
+        ),
+        (
+            "no-h",
+            format!("{medium}k = 0.1\nthickness = 0.25\n"),
+            vec!["no-h-c.toml:9", "give `h_closed` too"],
+        ),
+        (
+            "negative",
+            format!("{medium}k = 0.1\nh_closed = -5.0\nthickness = 0.25\n"),
+            vec!["negative-c.toml:9", "`h_closed` must be positive, got -5"],
+        ),
+        (
+            "solid",
+            format!("{SOLID}h_closed = 5.0\n"),
+            vec!["solid-c.toml:9", "`h_closed` is a medium key"],
+        ),
+    ] {
+        let case = slab_case(&dir, &format!("{tag}-c"), &format!("{body}{HELD}"));
+        fails_with(&solve(&case, &out), &words);
+        assert!(
+            !out.join("step_0000.vtu").exists(),
+            "{tag}: nothing written"
+        );
+    }
+}
+
+#[test]
 fn singular_systems_are_found_before_solving() {
     let dir = scratch("bad-singular");
     let out = dir.join("out");

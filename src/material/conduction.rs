@@ -6,6 +6,9 @@
 use super::{Real, Tensor3};
 use nalgebra::{Matrix3, Vector3};
 
+/// Most points of a conductivity table.
+pub const TABLE_POINTS: usize = 8;
+
 /// Conductivity as a function of the volume ratio J: k(J) and dk/dJ.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Conductivity {
@@ -13,6 +16,18 @@ pub enum Conductivity {
     Constant(f64),
     /// Third medium: k(J) = min(k_TM (1 + (ln J)²), k_max) — THEORY.md's reading of eq. (15).
     Medium { k_tm: f64, k_max: f64 },
+    /// A medium's k(J) as a table: linear in J between its `n` points (J increasing), the
+    /// end values beyond them.
+    Table {
+        n: usize,
+        J: [f64; TABLE_POINTS],
+        k: [f64; TABLE_POINTS],
+    },
+    /// The paper's law with the conductance across a closed layer bounded by h_c:
+    /// k(J) = min(k_TM (1 + (ln J)²), k_max, h_c t0 J), t0 the layer's undeformed thickness
+    /// (`hc_t0` = h_c t0). A layer of thickness t0 squeezed to J t0 conducts k / (J t0) per
+    /// area and degree: at most h_c.
+    Closed { k_tm: f64, k_max: f64, hc_t0: f64 },
 }
 
 impl Conductivity {
@@ -30,6 +45,43 @@ impl Conductivity {
                     k.select_ge(cap, S::splat(0.0), S::splat(2.0 * k_tm) * l / J),
                 )
             }
+            Conductivity::Table {
+                n,
+                J: ref js,
+                k: ref ks,
+            } => {
+                // the last point at or below J decides
+                let (mut k, mut dk) = (S::splat(ks[0]), S::splat(0.0));
+                for i in 0..n - 1 {
+                    let slope = (ks[i + 1] - ks[i]) / (js[i + 1] - js[i]);
+                    let at = S::splat(js[i]);
+                    let line = S::splat(ks[i]) + S::splat(slope) * (J - at);
+                    k = J.select_ge(at, line, k);
+                    dk = J.select_ge(at, S::splat(slope), dk);
+                }
+                let last = S::splat(js[n - 1]);
+                (
+                    J.select_ge(last, S::splat(ks[n - 1]), k),
+                    J.select_ge(last, S::splat(0.0), dk),
+                )
+            }
+            Conductivity::Closed { k_tm, k_max, hc_t0 } => {
+                let (k, dk) = Conductivity::Medium { k_tm, k_max }.eval(J);
+                let closed = S::splat(hc_t0) * J;
+                (
+                    k.select_ge(closed, closed, k),
+                    k.select_ge(closed, S::splat(hc_t0), dk),
+                )
+            }
+        }
+    }
+
+    /// The largest k the law gives.
+    pub fn k_max(&self) -> f64 {
+        match *self {
+            Conductivity::Constant(k) => k,
+            Conductivity::Medium { k_max, .. } | Conductivity::Closed { k_max, .. } => k_max,
+            Conductivity::Table { n, k, .. } => k[..n].iter().fold(0.0, |a: f64, &b| a.max(b)),
         }
     }
 
@@ -161,6 +213,57 @@ mod tests {
                 F,
             );
         }
+    }
+
+    /// A table through (0.01, 2), (0.1, 0.5), (1, 0.1).
+    fn table() -> Conductivity {
+        let (mut J, mut k) = ([0.0; TABLE_POINTS], [0.0; TABLE_POINTS]);
+        J[..3].copy_from_slice(&[0.01, 0.1, 1.0]);
+        k[..3].copy_from_slice(&[2.0, 0.5, 0.1]);
+        Conductivity::Table { n: 3, J, k }
+    }
+
+    #[test]
+    fn a_table_is_linear_between_its_points_and_constant_beyond() {
+        let law = table();
+        for (J, k) in [(0.01, 2.0), (0.1, 0.5), (1.0, 0.1), (1e-4, 2.0), (3.0, 0.1)] {
+            assert!((law.eval(J).0 - k).abs() < 1e-15, "k({J})");
+        }
+        // between (0.1, 0.5) and (0.01, 2): 0.5 + 1.5 × 0.05 / 0.09
+        assert!((law.eval(0.05).0 - (0.5 + 1.5 * 0.05 / 0.09)).abs() < 1e-14);
+        for J in [0.003, 0.05, 0.4, 2.0] {
+            let (_, dk) = law.eval(J);
+            let h = 1e-7 * J;
+            let fd = (law.eval(J + h).0 - law.eval(J - h).0) / (2.0 * h);
+            assert!(
+                (fd - dk).abs() < 1e-6 * (1.0 + dk.abs()),
+                "dk/dJ at {J}: {dk} vs {fd}"
+            );
+        }
+        assert_eq!(law.k_max(), 2.0);
+        for plane in [false, true] {
+            check_fourier(law, sample_F(plane));
+        }
+    }
+
+    #[test]
+    fn a_closed_layer_conducts_at_most_h_c() {
+        let (k_tm, k_max, hc, t0) = (0.1, 100.0, 50.0, 0.25);
+        let law = Conductivity::Closed {
+            k_tm,
+            k_max,
+            hc_t0: hc * t0,
+        };
+        // open: the paper's law; squeezed: the conductance k / (J t0) is h_c
+        assert_eq!(law.eval(1.0).0, k_tm);
+        for J in [1e-2, 1e-3, 1e-5] {
+            let (k, dk) = law.eval(J);
+            assert!((k / (J * t0) - hc).abs() < 1e-12 * hc, "J = {J}");
+            assert_eq!(dk, hc * t0);
+        }
+        let F = Matrix3::from_diagonal(&Vector3::new(1.0, 1e-3, 1.0));
+        check_fourier(law, F);
+        check_fourier(law, sample_F(false));
     }
 
     #[test]

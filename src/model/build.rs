@@ -10,6 +10,7 @@ use crate::case::{Bc, Case, CaseError, Region, RegionKind, SlipNormal, SolidLawK
 use crate::dofs::{Constraints, DofMap, Field, Layout, NONE, Prescribed};
 use crate::kernel::CellMaterial;
 use crate::kernel::friction::FrictionMaterial;
+use crate::material::conduction::TABLE_POINTS;
 use crate::material::{
     BoundaryFlux, Conductivity, Convection, MooneyRivlin, Radiation, Regularization, SolidLaw,
     ThermoElastic,
@@ -152,7 +153,7 @@ fn require_conductivities(case: &Case, physics: &Physics) -> Result<(), CaseErro
     if !physics.conduction {
         return Ok(());
     }
-    match case.file.region.iter().find(|r| r.k.is_none()) {
+    match (case.file.region.iter()).find(|r| r.k.is_none() && r.k_table.is_none()) {
         Some(r) => case.error(
             r.group.span(),
             format!(
@@ -193,7 +194,7 @@ fn region_materials(case: &Case, d: f64) -> Vec<CellMaterial> {
                         .unwrap_or(k_max_default.max(k));
                     CellMaterial {
                         law: SolidLaw::NeoHooke(medium_law(r)),
-                        cond: Conductivity::Medium { k_tm: k, k_max },
+                        cond: medium_conductivity(r, k, k_max),
                         medium: true,
                         reg: Some(Regularization {
                             beta1: r.beta1.as_ref().map(|v| *v.get_ref()).unwrap_or(1.0),
@@ -307,6 +308,32 @@ fn solid_law(r: &Region) -> SolidLaw {
             alpha,
             theta0,
         }),
+    }
+}
+
+/// A medium region's conductivity: its table, the paper's law capped by a closed layer's
+/// conductance, or the paper's law (`k` = k_TM and `k_max` given or defaulted).
+fn medium_conductivity(r: &Region, k_tm: f64, k_max: f64) -> Conductivity {
+    if let Some(rows) = &r.k_table {
+        let mut rows = rows.get_ref().clone();
+        rows.sort_by(|a, b| a[0].total_cmp(&b[0]));
+        let (mut J, mut k) = ([0.0; TABLE_POINTS], [0.0; TABLE_POINTS]);
+        for (i, row) in rows.iter().enumerate() {
+            (J[i], k[i]) = (row[0], row[1]);
+        }
+        return Conductivity::Table {
+            n: rows.len(),
+            J,
+            k,
+        };
+    }
+    match (&r.h_closed, &r.thickness) {
+        (Some(h), Some(t)) => Conductivity::Closed {
+            k_tm,
+            k_max,
+            hc_t0: h.get_ref() * t.get_ref(),
+        },
+        _ => Conductivity::Medium { k_tm, k_max },
     }
 }
 

@@ -16,7 +16,6 @@ use super::idle::IdleThreads;
 use super::linear::{LinearError, LinearSolver};
 use crate::assembly::{Assembler, AssemblyError, AssemblyStats};
 use crate::dofs::{Field, NONE};
-use crate::material::Conductivity;
 use crate::model::Model;
 
 /// Norms per field, indexed by `Field as usize`.
@@ -190,10 +189,7 @@ fn heat_floor(model: &Model) -> f64 {
     let k = model
         .blocks
         .iter()
-        .map(|b| match b.mat.cond {
-            Conductivity::Constant(k) => k,
-            Conductivity::Medium { k_max, .. } => k_max,
-        })
+        .map(|b| b.mat.cond.k_max())
         .fold(0.0, f64::max);
     let prescribed = (model.cons.prescribed.iter().zip(&model.dofs.field))
         .filter(|(_, f)| **f == Field::Theta)
