@@ -425,6 +425,73 @@ fn output_every_n_steps_keeps_the_first_and_the_last() {
     );
 }
 
+/// Every file, function and type the recipes of docs/ARCHITECTURE.md name exists: a
+/// renamed registration point fails here instead of leaving a recipe that misleads.
+#[test]
+fn the_architecture_recipes_name_what_exists() {
+    let doc = std::fs::read_to_string(root().join("docs/ARCHITECTURE.md")).unwrap();
+    let recipes = doc
+        .split("## Recipes")
+        .nth(1)
+        .and_then(|r| r.split("\n## ").next())
+        .expect("a Recipes section");
+    let mut sources = String::new();
+    let mut stack = vec![root().join("src")];
+    while let Some(dir) = stack.pop() {
+        for e in std::fs::read_dir(dir).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else if p.extension().is_some_and(|x| x == "rs") {
+                sources += &std::fs::read_to_string(&p).unwrap();
+            }
+        }
+    }
+    let (mut files, mut names) = (0, 0);
+    for token in recipes.split('`').skip(1).step_by(2) {
+        if token.contains('<') || token.contains(' ') {
+            continue; // a template (`material/<name>.rs`) or a phrase
+        }
+        if token.ends_with(".rs") || token.ends_with(".py") || token.ends_with('/') {
+            let found = ["", "src/", "tests/", "validation/fenicsx/"]
+                .iter()
+                .any(|d| root().join(format!("{d}{token}")).exists());
+            assert!(
+                found,
+                "ARCHITECTURE.md's recipes name `{token}`, which is not there"
+            );
+            files += 1;
+        } else if token.chars().next().is_some_and(|c| c.is_ascii_uppercase())
+            || token.contains('_')
+            || token.contains("::")
+        {
+            // a type, function or method: its last segment is defined somewhere in src/
+            let name = token.trim_end_matches("()").trim_end_matches('!');
+            let name = name.rsplit("::").next().unwrap();
+            let defined = [
+                format!("fn {name}"),
+                format!("struct {name}"),
+                format!("enum {name}"),
+                format!("trait {name}"),
+                format!("    {name}("),
+                format!("    {name} {{"),
+                format!("macro_rules! {name}"),
+            ]
+            .iter()
+            .any(|d| sources.contains(d.as_str()));
+            assert!(
+                defined,
+                "ARCHITECTURE.md's recipes name `{token}`, defined nowhere in src/"
+            );
+            names += 1;
+        }
+    }
+    assert!(
+        files > 10 && names > 10,
+        "{files} files, {names} names read"
+    );
+}
+
 #[test]
 fn the_readme_geometry_is_the_shipped_one_and_it_solves() {
     let readme = std::fs::read_to_string(root().join("README.md")).unwrap();
