@@ -10,7 +10,7 @@ use super::{
 };
 use crate::dofs::{CellState, Layout};
 use crate::element::{RefElement, physical_gradients};
-use crate::material::{SolidLaw, Stress, fourier};
+use crate::material::{Stress, fourier};
 
 /// The inversion check of [`bulk`] alone, without the law: `Inverted` with the J of the
 /// first quadrature point where J ≤ 0 (or is not finite). Cheap enough to look before an
@@ -45,10 +45,9 @@ pub fn bulk<const N: usize, const D: usize, E: RefElement<N, D>>(
     k: Option<&mut [f64]>,
 ) -> Result<CellSummary, KernelError> {
     // the law list's choice made once per cell: the body is compiled for each law
-    match &mat.law {
-        SolidLaw::NeoHooke(l) => bulk_of::<N, D, E, _>(l, mat, lay, s, act, r, k),
-        SolidLaw::MooneyRivlin(l) => bulk_of::<N, D, E, _>(l, mat, lay, s, act, r, k),
-    }
+    crate::with_solid_law!(&mat.law, |l| bulk_of::<N, D, E, _>(
+        l, mat, lay, s, act, r, k
+    ))
 }
 
 /// [`bulk`] with the solid law `law` (`mat`'s).
@@ -407,27 +406,16 @@ mod tests {
         // the instruction-set variant `bulk` dispatched to agrees with the portable one to
         // round-off (fused multiply-adds round once)
         let (mut r0, mut k0) = (vec![0.0; nd], vec![0.0; nd * nd]);
-        let portable = match &mat.law {
-            SolidLaw::NeoHooke(l) => bulk_body::<N, D, E, Separate, _>(
-                l,
-                mat,
-                &lay,
-                &s,
-                Active::ALL,
-                &mut r0,
-                Some(&mut k0),
-            ),
-            SolidLaw::MooneyRivlin(l) => bulk_body::<N, D, E, Separate, _>(
-                l,
-                mat,
-                &lay,
-                &s,
-                Active::ALL,
-                &mut r0,
-                Some(&mut k0),
-            ),
-        };
-        portable.unwrap();
+        crate::with_solid_law!(&mat.law, |l| bulk_body::<N, D, E, Separate, _>(
+            l,
+            mat,
+            &lay,
+            &s,
+            Active::ALL,
+            &mut r0,
+            Some(&mut k0)
+        ))
+        .unwrap();
         let scale = k.iter().fold(0.0f64, |a, v| a.max(v.abs()));
         for (a, b) in k.iter().zip(&k0) {
             assert!(

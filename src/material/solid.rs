@@ -12,6 +12,8 @@ pub trait Stress {
     fn theta0(&self) -> f64;
     /// Energy, stress and tangents; `None` when J ≤ 0 or not finite.
     fn stress(&self, F: &Matrix3<f64>, theta: f64) -> Option<StressResponse>;
+    /// K + μ at small strain: the scale of the stresses a strain makes.
+    fn stiffness_scale(&self) -> f64;
 }
 
 impl Stress for ThermoElastic {
@@ -22,6 +24,9 @@ impl Stress for ThermoElastic {
     #[inline(always)]
     fn stress(&self, F: &Matrix3<f64>, theta: f64) -> Option<StressResponse> {
         ThermoElastic::stress(self, F, theta)
+    }
+    fn stiffness_scale(&self) -> f64 {
+        self.K + self.mu
     }
 }
 
@@ -34,6 +39,9 @@ impl Stress for MooneyRivlin {
     fn stress(&self, F: &Matrix3<f64>, theta: f64) -> Option<StressResponse> {
         MooneyRivlin::stress(self, F, theta)
     }
+    fn stiffness_scale(&self) -> f64 {
+        self.K + self.shear_modulus()
+    }
 }
 
 /// A solid's stress law.
@@ -45,30 +53,33 @@ pub enum SolidLaw {
     MooneyRivlin(MooneyRivlin),
 }
 
+/// `$body` with `$l` bound to the law a `&SolidLaw` holds, as its own type (a [`Stress`]):
+/// the one place that lists the solid laws, so that a generic body is compiled per law.
+#[macro_export]
+macro_rules! with_solid_law {
+    ($law:expr, |$l:ident| $body:expr) => {
+        match $law {
+            $crate::material::SolidLaw::NeoHooke($l) => $body,
+            $crate::material::SolidLaw::MooneyRivlin($l) => $body,
+        }
+    };
+}
+
 impl SolidLaw {
     /// Energy, stress and tangents; `None` when J ≤ 0 or not finite.
     #[inline(always)]
     pub fn stress(&self, F: &Matrix3<f64>, theta: f64) -> Option<StressResponse> {
-        match self {
-            SolidLaw::NeoHooke(l) => l.stress(F, theta),
-            SolidLaw::MooneyRivlin(l) => l.stress(F, theta),
-        }
+        crate::with_solid_law!(self, |l| Stress::stress(l, F, theta))
     }
 
     /// The temperature at which the law is free of thermal stress.
     pub fn theta0(&self) -> f64 {
-        match self {
-            SolidLaw::NeoHooke(l) => l.theta0,
-            SolidLaw::MooneyRivlin(l) => l.theta0,
-        }
+        crate::with_solid_law!(self, |l| Stress::theta0(l))
     }
 
     /// K + μ at small strain: the scale of the stresses a strain makes.
     pub fn stiffness_scale(&self) -> f64 {
-        match self {
-            SolidLaw::NeoHooke(l) => l.K + l.mu,
-            SolidLaw::MooneyRivlin(l) => l.K + l.shear_modulus(),
-        }
+        crate::with_solid_law!(self, |l| Stress::stiffness_scale(l))
     }
 
     /// The law as the vectorised kernel's Neo-Hooke, if it is one (others take the one-cell
