@@ -20,6 +20,42 @@ fn fails_with(o: &Output, words: &[&str]) -> String {
     e
 }
 
+/// `case` solved into `out` is refused with `words` in the message, none of serde's own words
+/// for a shape (its type names), and nothing written.
+fn refused(case: &Path, out: &Path, tag: &str, words: &[&str]) {
+    let e = fails_with(&solve(case, out), words);
+    assert!(
+        !e.contains("untagged") && !e.contains("struct"),
+        "{tag}: {e}"
+    );
+    assert!(
+        !out.join("step_0000.vtu").exists(),
+        "{tag}: nothing written: {e}"
+    );
+}
+
+/// Each case `(tag, body, words)` on the slab, in `dir`, [`refused`].
+fn each_refused(dir: &Path, cases: Vec<(&str, String, Vec<&str>)>) {
+    let out = dir.join("out");
+    for (tag, body, words) in cases {
+        refused(
+            &slab_case(dir, &format!("{tag}-c"), &body),
+            &out,
+            tag,
+            &words,
+        );
+    }
+}
+
+/// `cases` with the slab's mechanical conditions [`HELD`] after each body.
+fn with_held<'a>(
+    cases: Vec<(&'a str, String, Vec<&'a str>)>,
+) -> Vec<(&'a str, String, Vec<&'a str>)> {
+    (cases.into_iter())
+        .map(|(tag, body, words)| (tag, body + HELD, words))
+        .collect()
+}
+
 /// The slab (2 × 1, groups solid, left, right, top, bottom, origin) with `body` after its
 /// `mesh` line.
 fn slab_case(dir: &Path, name: &str, body: &str) -> PathBuf {
@@ -261,7 +297,7 @@ fn nothing_a_user_wrote_is_lost() {
 fn bad_values_are_named_by_file_line_and_key() {
     let dir = scratch("bad-values");
     let out = dir.join("out");
-    for (tag, body, words) in [
+    let cases = vec![
         (
             "alpha",
             format!("{}alpha = inf\n{HELD}", SOLID),
@@ -282,19 +318,8 @@ fn bad_values_are_named_by_file_line_and_key() {
             format!("{SOLID}{}", HELD.replace("ux = 0.2", "ux = -inf")),
             vec!["value-c.toml:", "ux = -inf"],
         ),
-    ] {
-        let case = slab_case(&dir, &format!("{tag}-c"), &body);
-        let e = fails_with(&solve(&case, &out), &words);
-        // serde's own words for a shape (its type names) never reach the user
-        assert!(
-            !e.contains("untagged") && !e.contains("struct"),
-            "{tag}: {e}"
-        );
-        assert!(
-            !out.join("step_0000.vtu").exists(),
-            "{tag}: nothing written: {e}"
-        );
-    }
+    ];
+    each_refused(&dir, cases);
     // .geo parameters: a NaN is named against the case, a misspelt name is refused
     let p = slab_case_params(&dir, "nan-param", "n = nan", &format!("{SOLID}{HELD}"));
     fails_with(
@@ -399,9 +424,8 @@ fn bad_values_are_named_by_file_line_and_key() {
 #[test]
 fn a_solid_law_s_keys_are_checked_by_file_line_and_key() {
     let dir = scratch("bad-law");
-    let out = dir.join("out");
     let mr = "[[region]]\ngroup = \"solid\"\nkind = \"solid\"\nK = 20.0\nlaw = \"mooney-rivlin\"\n";
-    for (tag, body, words) in [
+    let cases = vec![
         (
             "unknown",
             SOLID.replace("mu = 10.0", "law = \"ogden\""),
@@ -461,20 +485,13 @@ fn a_solid_law_s_keys_are_checked_by_file_line_and_key() {
                 "`law` chooses a solid's law",
             ],
         ),
-    ] {
-        let case = slab_case(&dir, &format!("{tag}-c"), &format!("{body}{HELD}"));
-        fails_with(&solve(&case, &out), &words);
-        assert!(
-            !out.join("step_0000.vtu").exists(),
-            "{tag}: nothing written"
-        );
-    }
+    ];
+    each_refused(&dir, with_held(cases));
 }
 
 #[test]
 fn radiation_needs_absolute_temperatures_and_says_so() {
     let dir = scratch("bad-radiation");
-    let out = dir.join("out");
     let warm = SOLID.replace("mu = 10.0", "mu = 10.0\nk = 5.0\ntheta0 = 300.0");
     let held = "[[bc]]\ngroup = \"left\"\ntheta = 600.0\n";
     let radiating = |key: &str| {
@@ -482,7 +499,7 @@ fn radiation_needs_absolute_temperatures_and_says_so() {
             "[[bc]]\ngroup = \"right\"\nradiation = {{ emissivity = 0.8, theta_inf = 300.0, sigma = 5.67e-8{key} }}\n"
         )
     };
-    for (tag, body, words) in [
+    let cases = vec![
         (
             "emissivity",
             format!("{warm}{held}{}", radiating("").replace("0.8", "1.5")),
@@ -540,19 +557,15 @@ fn radiation_needs_absolute_temperatures_and_says_so() {
                 "kelvin",
             ],
         ),
-    ] {
-        let case = slab_case(&dir, &format!("{tag}-c"), &body);
-        fails_with(&solve(&case, &out), &words);
-        assert!(!out.join("step_0001.vtu").exists(), "{tag}: nothing solved");
-    }
+    ];
+    each_refused(&dir, cases);
 }
 
 #[test]
 fn a_medium_s_conductivity_keys_are_checked_by_file_line_and_key() {
     let dir = scratch("bad-conductivity");
-    let out = dir.join("out");
     let medium = "[[region]]\ngroup = \"solid\"\nkind = \"medium\"\ngamma = 1e-2\n";
-    for (tag, body, words) in [
+    let cases = vec![
         (
             "one-row",
             format!("{medium}k_table = [[1.0, 0.1]]\n"),
@@ -600,14 +613,8 @@ fn a_medium_s_conductivity_keys_are_checked_by_file_line_and_key() {
             format!("{SOLID}h_closed = 5.0\n"),
             vec!["solid-c.toml:9", "`h_closed` is a medium key"],
         ),
-    ] {
-        let case = slab_case(&dir, &format!("{tag}-c"), &format!("{body}{HELD}"));
-        fails_with(&solve(&case, &out), &words);
-        assert!(
-            !out.join("step_0000.vtu").exists(),
-            "{tag}: nothing written"
-        );
-    }
+    ];
+    each_refused(&dir, with_held(cases));
 }
 
 #[test]
@@ -837,17 +844,7 @@ fn bad_friction_is_named_by_file_line_and_key() {
             ],
         ),
     ] {
-        let case = block(tag, friction, solid);
-        let e = fails_with(&solve(&case, &out), &words);
-        // serde's own words for a shape (its type names) never reach the user
-        assert!(
-            !e.contains("untagged") && !e.contains("struct"),
-            "{tag}: {e}"
-        );
-        assert!(
-            !out.join("step_0000.vtu").exists(),
-            "{tag}: nothing written: {e}"
-        );
+        refused(&block(tag, friction, solid), &out, tag, &words);
     }
     // "auto" needs a solid surface: here the block is medium too
     let case = block("no-solid", "friction = { mu = 0.3, normal = \"auto\" }", "");

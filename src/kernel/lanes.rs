@@ -869,6 +869,15 @@ mod tests {
         same_as_one_cell::<27, 3, Hex27>();
     }
 
+    /// A hex8 solid's layout: u and θ.
+    const HEX8_U_THETA: Layout = Layout {
+        n: 8,
+        dim: 3,
+        has_u: true,
+        has_theta: true,
+        np: 0,
+    };
+
     /// The lanes are Neo-Hooke's: a block of another law is left to the one-cell kernel.
     #[test]
     fn only_neo_hooke_blocks_run_in_lanes() {
@@ -883,13 +892,7 @@ mod tests {
             }),
             ..nh
         };
-        let lay = Layout {
-            n: 8,
-            dim: 3,
-            has_u: true,
-            has_theta: true,
-            np: 0,
-        };
+        let lay = HEX8_U_THETA;
         assert!(LaneBlock::new(&nh, &lay, Active::ALL).is_some());
         assert!(LaneBlock::new(&rubber, &lay, Active::ALL).is_none());
     }
@@ -897,13 +900,7 @@ mod tests {
     #[test]
     fn an_inverted_lane_is_reported() {
         let mat = material(Conductivity::Constant(1.0));
-        let lay = Layout {
-            n: 8,
-            dim: 3,
-            has_u: true,
-            has_theta: true,
-            np: 0,
-        };
+        let lay = HEX8_U_THETA;
         let mut s: [CellState<8>; W] = std::array::from_fn(state::<8, 3, Hex8>);
         // lane 2 squashed through itself along z
         for I in 0..8 {

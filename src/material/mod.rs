@@ -51,3 +51,43 @@ pub(crate) fn sample_F(plane: bool) -> nalgebra::Matrix3<f64> {
         Matrix3::new(1.1, 0.2, -0.1, 0.05, 0.9, 0.15, -0.2, 0.1, 1.3)
     }
 }
+
+/// The finite-difference checks every stress law passes, at both [`sample_F`] and θ = 70:
+/// P = ∂Ψ/∂F, ∂P/∂F against differences of P (with major symmetry, the law being
+/// hyperelastic) and ∂P/∂θ.
+#[cfg(test)]
+pub(crate) fn check_stress_law(
+    stress: impl Fn(&nalgebra::Matrix3<f64>, f64) -> Option<StressResponse>,
+) {
+    let at = |F: &nalgebra::Matrix3<f64>, theta: f64| stress(F, theta).unwrap();
+    for plane in [false, true] {
+        let F = sample_F(plane);
+        let r = at(&F, 70.0);
+        let h = 1e-6;
+        for (k, l) in (0..9).map(|n| (n / 3, n % 3)) {
+            let (mut p, mut m) = (F, F);
+            p[(k, l)] += h;
+            m[(k, l)] -= h;
+            let (rp, rm) = (at(&p, 70.0), at(&m, 70.0));
+            let fd = (rp.psi - rm.psi) / (2.0 * h);
+            assert!(
+                (fd - r.P[(k, l)]).abs() < 1e-7 * (1.0 + fd.abs()),
+                "P{k}{l}: {fd} vs {}",
+                r.P[(k, l)]
+            );
+            let dP = (rp.P - rm.P) / (2.0 * h);
+            for (i, j) in (0..9).map(|n| (n / 3, n % 3)) {
+                let a = r.dP_dF[(3 * i + j, 3 * k + l)];
+                assert!(
+                    (dP[(i, j)] - a).abs() < 1e-6 * (1.0 + a.abs()),
+                    "A{i}{j}{k}{l}: {} vs {a}",
+                    dP[(i, j)]
+                );
+            }
+        }
+        assert!((r.dP_dF - r.dP_dF.transpose()).norm() < 1e-12);
+        let h = 1e-4;
+        let dP = (at(&F, 70.0 + h).P - at(&F, 70.0 - h).P) / (2.0 * h);
+        assert!((dP - r.dP_dtheta).norm() < 1e-9);
+    }
+}
