@@ -28,7 +28,7 @@ demo: deps-demo
 # (built in its own folder, so as not to replace the engine's build).
 test: deps
 	$(CARGO) test --release --features petsc
-	CARGO_TARGET_DIR=target/serial $(CARGO) test --release --test cli without_petsc
+	CARGO_TARGET_DIR=target/serial $(CARGO) test --release --test it cli::without_petsc
 
 # Benchmarks print tables (tests never assert wall time).
 bench: deps

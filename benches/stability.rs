@@ -1,8 +1,8 @@
-//! The stability suite's table: every hard case of `tests/common/hard.rs`, solved once, with
+//! The stability suite's table: every hard case of `tests/it/common/hard.rs`, solved once, with
 //! its load steps, Newton iterations, smallest J and result. `make bench` prints it; the
-//! assertions are in `tests/stability.rs`.
+//! assertions are in `tests/it/stability.rs`.
 
-#[path = "../tests/common/hard.rs"]
+#[path = "../tests/it/common/hard.rs"]
 mod hard;
 
 fn main() {

@@ -3,7 +3,7 @@
 
 #![allow(non_snake_case, clippy::needless_range_loop)]
 
-mod common;
+use crate::common;
 use common::*;
 use nalgebra::Matrix3;
 use tmc::assembly::Assembler;

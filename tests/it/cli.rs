@@ -2,7 +2,7 @@
 
 #![allow(non_snake_case, clippy::needless_range_loop)]
 
-mod common;
+use crate::common;
 use common::*;
 use std::path::Path;
 use std::process::{Command, Output};
@@ -610,10 +610,12 @@ fn is_png(p: &Path) -> bool {
 fn a_tiny_study_writes_its_csv_table_and_plots() {
     let dir = scratch("study-tiny");
     let study = dir.join("tiny.toml");
+    // the case by a path relative to the study's folder
+    let up = "../".repeat(dir.strip_prefix(root()).unwrap().components().count());
     std::fs::write(
         &study,
         r#"description = "two meshes of the block"
-case = "../../../cases/block.toml"
+case = "UP/cases/block.toml"
 measure = ["gap", "Q_top"]
 reference = "last"
 history = ["gap"]
@@ -626,7 +628,8 @@ set = { mesh_options = { params = { n = 4, m = 4, l = 1 } } }
 name = "fine"
 set = { "mesh_options.params" = { n = 16, m = 8, l = 4 }, "region.medium.gamma" = 1e-4 }
 paper = { gap = 6.3e-4 }
-"#,
+"#
+        .replace("UP/", &up),
     )
     .unwrap();
     let out = dir.join("out");

@@ -79,9 +79,17 @@ pub fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-/// A fresh scratch folder under target/.
+/// A fresh scratch folder under target/, the calling test's own: under the test's name (the
+/// name of the thread the test harness runs it on), so that two tests in this one binary
+/// asking for the same `name` (the same shipped case, say) never share, nor delete each
+/// other's, files.
 pub fn scratch(name: &str) -> PathBuf {
-    let d = root().join("target/test-scratch").join(name);
+    let thread = std::thread::current();
+    let test = thread.name().filter(|t| *t != "main").unwrap_or("");
+    let d = root()
+        .join("target/test-scratch")
+        .join(test.replace("::", "/"))
+        .join(name);
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     d

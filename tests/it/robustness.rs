@@ -1,7 +1,7 @@
 //! Hostile inputs: every mutation of a valid mesh or case file must end in an `Err` with a
 //! message or in a valid result, never in a panic.
 
-mod common;
+use crate::common;
 
 use common::{root, scratch};
 use std::panic::{AssertUnwindSafe, catch_unwind};

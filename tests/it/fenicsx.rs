@@ -3,7 +3,7 @@
 //! the 2D one radiating from its hole) must agree node by node to 1e-8 of the solution's
 //! max-norm (`make validate` runs all eight scenes and writes RESULTS.md).
 
-mod common;
+use crate::common;
 use common::*;
 use std::process::Command;
 

@@ -4,7 +4,7 @@
 //! μ_f = 0 is frictionless, the force curve converges in the step, drag and drag back make a
 //! hysteresis loop whose area is the dissipated work.
 
-mod common;
+use crate::common;
 
 use common::{cell_array, history, point_array, solve_text};
 use std::path::Path;

@@ -4,7 +4,7 @@
 //! clear errors on what it cannot run.
 #![cfg(feature = "petsc")]
 
-mod common;
+use crate::common;
 
 use common::{point_array, root, scratch, solve_cli, stderr, summary};
 use std::collections::BTreeMap;
@@ -390,7 +390,7 @@ fn petsc_options_choose_the_solver() {
     let s = summary(&out);
     assert_eq!(s["petsc_solver"], "gmres/gamg");
     assert!(s["krylov_iterations"].as_u64().unwrap() > 0);
-    // the block's gap as the direct solvers give it (tests/medium.rs): 2.942e-4
+    // the block's gap as the direct solvers give it (tests/it/medium.rs): 2.942e-4
     let gap = s["probes"]["gap"].as_f64().unwrap();
     assert!((gap - 2.9420e-4).abs() < 1e-7, "gap {gap}");
 }

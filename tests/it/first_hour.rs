@@ -1,7 +1,7 @@
 //! What a new user meets first: `ramp` per value and the message when an unramped value
 //! breaks the first step, `tmc check`, `tmc solve --set`.
 
-mod common;
+use crate::common;
 
 use common::{
     case_body, point_array, root, scratch, shipped_case, solve_cli, solve_text, stderr, summary,

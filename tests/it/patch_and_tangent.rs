@@ -4,7 +4,7 @@
 
 #![allow(non_snake_case, clippy::needless_range_loop)]
 
-mod common;
+use crate::common;
 use common::*;
 use tmc::assembly::Assembler;
 use tmc::dofs::NONE;

@@ -2,7 +2,7 @@
 //! no exit 0 without output, no lost file, a message that names the file, line, key, group,
 //! element or body, and singular systems found before solving.
 
-mod common;
+use crate::common;
 
 use common::{history, root, scratch, stderr as err, tmc, tmc_with as tmc_env};
 use std::path::{Path, PathBuf};

@@ -4,7 +4,7 @@
 
 #![allow(non_snake_case)]
 
-mod common;
+use crate::common;
 use common::*;
 use nalgebra::Matrix3;
 use tmc::dofs::Field;

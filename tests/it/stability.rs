@@ -1,10 +1,10 @@
-//! The stability suite: hard cases (tests/common/hard.rs) that must finish with a physical,
+//! The stability suite: hard cases (tests/it/common/hard.rs) that must finish with a physical,
 //! reproducible answer. Every case asserts: it reaches the end of its load path, J > 0 at every
 //! quadrature point of every accepted step, no NaN in any output, the energy balance where it
 //! holds, and the same result on a second run. Then each asserts the physics it is known for.
 //! `make bench` prints the table of these cases (benches/stability.rs).
 
-mod common;
+use crate::common;
 
 use common::hard::{self, Hard};
 use common::{history, root};

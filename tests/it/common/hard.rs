@@ -1,4 +1,4 @@
-//! The stability suite's hard cases, shared by `tests/stability.rs` (which asserts on them) and
+//! The stability suite's hard cases, shared by `tests/it/stability.rs` (which asserts on them) and
 //! `benches/stability.rs` (which prints their table). Coarse meshes: the whole list solves in
 //! well under a minute on two cores.
 

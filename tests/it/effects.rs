@@ -1,7 +1,7 @@
 //! Only the effects a scene calls for: which unknowns exist, and how the coupled fields are
 //! solved (one field, one-way staggered, or monolithic) without changing the answer.
 
-mod common;
+use crate::common;
 use common::*;
 use tmc::dofs::Field;
 use tmc::driver::Strategy;

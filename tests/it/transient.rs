@@ -2,7 +2,7 @@
 //! convergence slopes in Δt and h, the stationary limit, the heat balance, and the history
 //! per quadrature point across accepted and rejected steps.
 
-mod common;
+use crate::common;
 use common::*;
 use tmc::assembly::Assembler;
 
