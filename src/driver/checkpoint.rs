@@ -8,10 +8,8 @@ use super::SolveError;
 use crate::case::Case;
 use crate::files::Fnv;
 use crate::mesh::Mesh;
-use crate::output::history::Mark;
-use crate::solver::newton::Spent;
+use super::state::RunState;
 use serde::{Deserialize, Serialize};
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 pub const FILE: &str = "restart.json";
@@ -20,8 +18,9 @@ pub const FILE: &str = "restart.json";
 /// step's slip per point (7 history values, 4 before). 3: the mesh's fingerprint covers its
 /// physical groups (a boundary group moved to other nodes changes the run). 4: `history.csv`
 /// and the `.pvd` are counted, not copied (their cost per step no longer grows with the run);
-/// sealed; the point history whole on several ranks too.
-pub const VERSION: u32 = 4;
+/// sealed; the point history whole on several ranks too. 5: the run state as one value
+/// (Newton's tally, the totals and the files each an object of their own).
+pub const VERSION: u32 = 5;
 
 /// How a sealed checkpoint begins: `{"seal":"` and 16 hex digits, then `",` and the rest.
 const SEAL: &str = "{\"seal\":\"";
@@ -61,7 +60,7 @@ fn unseal(text: &str) -> Result<String, String> {
     Ok(body)
 }
 
-/// Everything a run carries from one step to the next.
+/// A run's state with what it was computed from.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Checkpoint {
     pub version: u32,
@@ -69,38 +68,9 @@ pub struct Checkpoint {
     /// the mesh. A restart under another case or mesh is refused.
     pub case: String,
     pub mesh: String,
-    /// The last accepted state and the assembler's committed history, per block.
-    pub x: Vec<f64>,
-    pub point_history: Vec<Vec<f64>>,
-    /// Step controller: time reached, next increment, accepted and rejected steps.
-    pub t: f64,
-    pub dt: f64,
-    pub accepted: usize,
-    pub rejected: usize,
-    /// Newton's residual references over the run, and the work of every attempt.
-    pub run_ref: [f64; 3],
-    pub spent: Spent,
-    /// Totals: iterations, Krylov iterations, reaction assembly seconds, smallest J of solids
-    /// and medium (`None`: none yet), work, forces of the last state, reactions, heat in.
-    pub iterations: usize,
-    pub krylov: usize,
-    pub t_reactions: f64,
-    pub min_J: (Option<f64>, Option<f64>),
-    pub work: f64,
-    pub f_last: Vec<f64>,
-    pub reactions: BTreeMap<String, BTreeMap<String, f64>>,
-    pub heat_in: f64,
-    /// Summary values carried over: stored energy, tangents skipped, heat stored.
-    pub energy: f64,
-    pub tangents_skipped: usize,
-    pub heat_stored: Option<f64>,
-    /// The files written so far: how many steps the `.pvd` lists, the last step written, and
-    /// how far `history.csv` had got (its length and fingerprint).
-    pub series: usize,
-    pub written: Option<usize>,
-    pub history: Mark,
-    /// Wall seconds of the run when the checkpoint was written.
-    pub wall: f64,
+    /// Everything the run carries from one step to the next.
+    #[serde(flatten)]
+    pub state: RunState,
 }
 
 /// What the results of `case` depend on: its text with the `[steps]` controls (all but
@@ -288,19 +258,20 @@ impl Checkpoint {
     /// blocks hold `history` values each, and its run time is a duration: the file may say the
     /// right version, case and mesh and still be damaged.
     pub fn fits(&self, dir: &Path, unknowns: usize, history: &[usize]) -> Result<(), SolveError> {
-        let read: Vec<usize> = self.point_history.iter().map(Vec::len).collect();
-        let what = if self.x.len() != unknowns {
+        let state = &self.state;
+        let read: Vec<usize> = state.point_history.iter().map(Vec::len).collect();
+        let what = if state.x.len() != unknowns {
             format!(
                 "its state has {} values where this run has {unknowns} unknowns",
-                self.x.len()
+                state.x.len()
             )
         } else if read != history {
             format!(
                 "it holds {read:?} history values per block of points where this run keeps \
                  {history:?}"
             )
-        } else if std::time::Duration::try_from_secs_f64(self.wall).is_err() {
-            format!("its run time, {} s, is no duration", self.wall)
+        } else if std::time::Duration::try_from_secs_f64(state.wall).is_err() {
+            format!("its run time, {} s, is no duration", state.wall)
         } else {
             return Ok(());
         };

@@ -4,6 +4,7 @@ pub mod check;
 pub mod checkpoint;
 pub mod records;
 mod run;
+pub mod state;
 pub mod strategy;
 
 pub use check::{CheckReport, check};

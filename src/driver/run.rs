@@ -3,7 +3,8 @@
 //! [`super::solve_model`] drives it: attempt a step, then accept or reject it, until done.
 
 use super::checkpoint::{self, Checkpoint};
-use super::records::{HistoryLayout, Reactions, StepRow, Summary, group_flows, peak_memory_mb};
+use super::records::{HistoryLayout, StepRow, Summary, group_flows, peak_memory_mb};
+use super::state::{Files, RunState, Totals};
 use super::strategy::{Strategy, choose_linear, choose_strategy, describe, symmetric_tangent};
 use super::{SolveError, SolveOptions};
 use crate::assembly::{
@@ -19,29 +20,8 @@ use crate::solver::engine::{Engine, Faer, System};
 use crate::solver::linear::{LinearKind, LinearSolver};
 use crate::solver::newton::{Newton, Part, StepFailure, StepReport};
 use crate::solver::stepping::Controller;
-use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::time::Instant;
-
-/// What the run has done so far, beyond the controller's counts.
-#[derive(Clone, Debug)]
-struct Totals {
-    /// Newton iterations of the accepted steps.
-    iterations: usize,
-    krylov: usize,
-    /// Assembly seconds of the converged states' reactions (Newton keeps the rest).
-    t_reactions: f64,
-    /// Smallest J over the accepted steps: (solids, medium).
-    min_J: (f64, f64),
-    /// Work of the forces on the displacements, and the forces of the last accepted state.
-    work: f64,
-    f_last: Vec<f64>,
-    reactions: Reactions,
-    /// The last failed attempt's reason.
-    last_failure: String,
-    /// Heat supplied over the run (transient scenes).
-    heat_in: f64,
-}
 
 pub(super) struct Run<'a> {
     model: &'a Model,
@@ -301,17 +281,7 @@ impl<'a> Run<'a> {
             series,
             layout,
             history,
-            totals: Totals {
-                iterations: 0,
-                krylov: 0,
-                t_reactions: 0.0,
-                min_J: (f64::INFINITY, f64::INFINITY),
-                work: 0.0,
-                f_last: Vec::new(),
-                reactions: BTreeMap::new(),
-                last_failure: String::new(),
-                heat_in: 0.0,
-            },
+            totals: Totals::default(),
             summary,
             pb: progress_bar(opts.quiet),
             held_in_full: case
@@ -339,7 +309,7 @@ impl<'a> Run<'a> {
             .asm
             .assemble(self.model, &self.x, 0.0, false, None)
             .map_err(|e| SolveError::Setup(format!("the initial state is invalid: {e}")))?;
-        self.summary.energy = stats0.energy;
+        self.totals.energy = stats0.energy;
         let convected = convection_heat(self.model, &self.x)
             .map_err(|e| SolveError::Setup(format!("the initial state is invalid: {e}")))?;
         let r0 = group_flows(self.model, &self.asm.r_full, &convected, 0.0);
@@ -373,7 +343,7 @@ impl<'a> Run<'a> {
                 self.x = x;
                 self.totals.iterations += rep.iterations;
                 self.totals.krylov += rep.krylov;
-                self.summary.tangents_skipped += rep.tangents_skipped;
+                self.totals.tangents_skipped += rep.tangents_skipped;
                 Ok(rep.iterations)
             }
             Err(failure) if !failure.recoverable() => Err(self.fail(failure)?),
@@ -449,10 +419,9 @@ impl<'a> Run<'a> {
         let tot = &mut self.totals;
         tot.iterations += rep.iterations;
         tot.krylov += rep.krylov;
-        tot.min_J = (
-            tot.min_J.0.min(rep.stats.min_J_solid),
-            tot.min_J.1.min(rep.stats.min_J_medium),
-        );
+        tot.tangents_skipped += rep.tangents_skipped;
+        tot.energy = rep.stats.energy;
+        tot.lower_min_J(rep.stats.min_J_solid, rep.stats.min_J_medium);
         // reactions at the converged state (the residual of the last assembly)
         let t0 = Instant::now();
         self.asm
@@ -479,10 +448,6 @@ impl<'a> Run<'a> {
             .map(|(&d, (a, b))| 0.5 * (a + b) * (self.x[d] - x_last[d]))
             .sum::<f64>();
         tot.f_last = f_now;
-        self.summary.energy = rep.stats.energy;
-        self.summary.external_work = tot.work;
-        self.summary.krylov_iterations = tot.krylov;
-        self.summary.tangents_skipped += rep.tangents_skipped;
         let row = StepRow {
             step: self.ctl.accepted,
             lambda,
@@ -496,7 +461,7 @@ impl<'a> Run<'a> {
             halvings: rep.halvings,
             time: target,
             work: self.totals.work,
-            heat: self.summary.heat_stored.zip(self.summary.heat_in),
+            heat: self.totals.heat_stored.zip(self.totals.heat_in),
             friction: self
                 .summary
                 .friction_work
@@ -535,35 +500,23 @@ impl<'a> Run<'a> {
         if self.folder.is_none() {
             return Ok(());
         }
-        let tot = &self.totals;
-        let finite = |v: f64| v.is_finite().then_some(v);
         let cp = Checkpoint {
             version: checkpoint::VERSION,
             case: self.fingerprint.0.clone(),
             mesh: self.fingerprint.1.clone(),
-            x: self.x.clone(),
-            point_history,
-            t: self.ctl.t,
-            dt: self.ctl.dt,
-            accepted: self.ctl.accepted,
-            rejected: self.ctl.rejected,
-            run_ref: self.newton.run_ref(),
-            spent: self.newton.spent,
-            iterations: tot.iterations,
-            krylov: tot.krylov,
-            t_reactions: tot.t_reactions,
-            min_J: (finite(tot.min_J.0), finite(tot.min_J.1)),
-            work: tot.work,
-            f_last: tot.f_last.clone(),
-            reactions: tot.reactions.clone(),
-            heat_in: tot.heat_in,
-            energy: self.summary.energy,
-            tangents_skipped: self.summary.tangents_skipped,
-            heat_stored: self.summary.heat_stored,
-            series: self.series.written().len(),
-            written: self.written,
-            history: self.history.mark(),
-            wall: self.start.elapsed().as_secs_f64(),
+            state: RunState {
+                x: self.x.clone(),
+                point_history,
+                clock: self.ctl.clock(),
+                newton: self.newton.tally(),
+                totals: self.totals.clone(),
+                files: Files {
+                    series: self.series.written().len(),
+                    written: self.written,
+                    history: self.history.mark(),
+                },
+                wall: self.start.elapsed().as_secs_f64(),
+            },
         };
         if let Some(folder) = &mut self.folder {
             folder.record(checkpoint::FILE)?;
@@ -579,7 +532,8 @@ impl<'a> Run<'a> {
             .map(|s| s.committed.len())
             .collect();
         cp.fits(&self.out_dir, self.x.len(), &history)?;
-        self.ctl.t = cp.t;
+        let state = cp.state;
+        self.ctl.t = state.clock.t;
         if self.ctl.done() {
             return Err(SolveError::Setup(format!(
                 "cannot restart: the run in {} has finished (it reached the end of its path, \
@@ -589,33 +543,11 @@ impl<'a> Run<'a> {
                 self.position()
             )));
         }
-        self.x = cp.x;
-        self.asm.resume(&cp.point_history, cp.t);
-        self.ctl.dt = cp.dt;
-        self.ctl.accepted = cp.accepted;
-        self.ctl.rejected = cp.rejected;
-        self.newton.resume(cp.run_ref, cp.spent);
-        let tot = &mut self.totals;
-        tot.iterations = cp.iterations;
-        tot.krylov = cp.krylov;
-        tot.t_reactions = cp.t_reactions;
-        tot.min_J = (
-            cp.min_J.0.unwrap_or(f64::INFINITY),
-            cp.min_J.1.unwrap_or(f64::INFINITY),
-        );
-        tot.work = cp.work;
-        tot.f_last = cp.f_last;
-        tot.reactions = cp.reactions;
-        tot.heat_in = cp.heat_in;
-        let s = &mut self.summary;
-        s.energy = cp.energy;
-        s.external_work = cp.work;
-        s.krylov_iterations = cp.krylov;
-        s.tangents_skipped = cp.tangents_skipped;
-        s.heat_stored = cp.heat_stored;
-        if self.model.physics.transient {
-            s.heat_in = Some(cp.heat_in);
-        }
+        self.x = state.x;
+        self.asm.resume(&state.point_history, state.clock.t);
+        self.ctl.set_clock(state.clock);
+        self.newton.resume(state.newton);
+        self.totals = state.totals;
         // the files written so far, which the first rank reads: checked before anything that
         // takes every rank, and one verdict for all
         let checkpoint = Checkpoint::path(&self.out_dir);
@@ -629,10 +561,10 @@ impl<'a> Run<'a> {
         };
         let files = self
             .series
-            .resume(cp.series)
+            .resume(state.files.series)
             .map_err(|e| damaged(self.series.pvd(), e))
             .and_then(|_| match self.folder.is_some() {
-                true => (self.history.resume(cp.history))
+                true => (self.history.resume(state.files.history))
                     .map_err(|e| damaged(&self.out_dir.join("history.csv"), e)),
                 false => Ok(()),
             });
@@ -643,10 +575,10 @@ impl<'a> Run<'a> {
             // the dissipation so far is in the points' history, restored above
             self.account_friction();
         }
-        self.written = cp.written;
+        self.written = state.files.written;
         // wall seconds go on from where the run stopped
         self.start = Instant::now()
-            .checked_sub(std::time::Duration::from_secs_f64(cp.wall))
+            .checked_sub(std::time::Duration::from_secs_f64(state.wall))
             .unwrap_or(self.start);
         Ok(())
     }
@@ -671,9 +603,9 @@ impl<'a> Run<'a> {
             }
         }
         rate += convected;
-        self.totals.heat_in += dt * rate;
-        self.summary.heat_in = Some(self.totals.heat_in);
-        self.summary.heat_stored = Some(heat_stored(model, &self.x).map_err(invalid)?);
+        let tot = &mut self.totals;
+        tot.heat_in = Some(tot.heat_in.unwrap_or(0.0) + dt * rate);
+        tot.heat_stored = Some(heat_stored(model, &self.x).map_err(invalid)?);
         Ok(())
     }
 
@@ -901,10 +833,17 @@ impl<'a> Run<'a> {
             .map(|p| (p.name.clone(), p.eval(&model.mesh, &model.dofs, &self.x)))
             .collect();
         s.reactions = tot.reactions.clone();
-        let finite = |v: f64| v.is_finite().then_some(v);
-        s.min_J_solid = finite(tot.min_J.0);
-        s.min_J_medium = finite(tot.min_J.1);
-        s.min_J = finite(tot.min_J.0.min(tot.min_J.1)).unwrap_or(1.0);
+        (s.min_J_solid, s.min_J_medium) = tot.min_J;
+        s.min_J = match tot.min_J {
+            (Some(a), Some(b)) => a.min(b),
+            (a, b) => a.or(b).unwrap_or(1.0),
+        };
+        s.energy = tot.energy;
+        s.external_work = tot.work;
+        s.krylov_iterations = tot.krylov;
+        s.tangents_skipped = tot.tangents_skipped;
+        s.heat_stored = tot.heat_stored;
+        s.heat_in = tot.heat_in;
         if let Some(folder) = &mut self.folder {
             let json = serde_json::to_string_pretty(&*s).expect("serialisable");
             write_atomic(&self.out_dir.join("summary.json"), json.as_bytes())?;

@@ -155,6 +155,14 @@ pub struct Spent {
     pub updates: usize,
 }
 
+/// What Newton carries from one step to the next, and over a restart: the run's residual
+/// references and the work of every attempt so far.
+#[derive(Clone, Copy, Debug, serde::Serialize, serde::Deserialize)]
+pub struct Tally {
+    pub run_ref: FieldNorms,
+    pub spent: Spent,
+}
+
 /// Newton state carried across steps: references for the per-field residual scale.
 pub struct Newton {
     pub tol: f64,
@@ -239,15 +247,18 @@ impl Newton {
         }
     }
 
-    /// The residual references over the run so far (what a restart carries over).
-    pub fn run_ref(&self) -> FieldNorms {
-        self.run_ref
+    /// The residual references and the work so far (what a restart carries over).
+    pub fn tally(&self) -> Tally {
+        Tally {
+            run_ref: self.run_ref,
+            spent: self.spent,
+        }
     }
 
     /// Continue a run: its references and the work of its attempts so far.
-    pub fn resume(&mut self, run_ref: FieldNorms, spent: Spent) {
-        self.run_ref = run_ref;
-        self.spent = spent;
+    pub fn resume(&mut self, tally: Tally) {
+        self.run_ref = tally.run_ref;
+        self.spent = tally.spent;
     }
 
     /// The free equations of `part`, increasing.

@@ -6,6 +6,16 @@
 
 use crate::case::Steps;
 
+/// Where a controller stands: the time reached, the next increment and the steps counted.
+/// What a restart carries over (the rest of the controller comes from the case).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Clock {
+    pub t: f64,
+    pub dt: f64,
+    pub accepted: usize,
+    pub rejected: usize,
+}
+
 #[derive(Clone, Debug)]
 pub struct Controller {
     /// Time of the last accepted step.
@@ -25,6 +35,26 @@ pub struct Controller {
 }
 
 impl Controller {
+    /// Where the controller stands.
+    pub fn clock(&self) -> Clock {
+        Clock {
+            t: self.t,
+            dt: self.dt,
+            accepted: self.accepted,
+            rejected: self.rejected,
+        }
+    }
+
+    /// Continue from `clock` (a restart).
+    pub fn set_clock(&mut self, clock: Clock) {
+        Clock {
+            t: self.t,
+            dt: self.dt,
+            accepted: self.accepted,
+            rejected: self.rejected,
+        } = clock;
+    }
+
     /// A controller over pseudo-time t ∈ [0, end], vertices at every integer, Δt as `cfg` says.
     pub fn new(cfg: &Steps, end: f64) -> Controller {
         let vertices = (1..=end.round() as usize).map(|i| i as f64).collect();

@@ -1,0 +1,120 @@
+//! The run state: everything a run carries from one accepted step to the next, as one value.
+//! A checkpoint is this value written whole, and a restart reads it back whole; what is not
+//! here (the model, the solvers, the controller's limits) comes again from the case.
+
+use super::records::Reactions;
+use crate::output::history::Mark;
+use crate::solver::newton::Tally;
+use crate::solver::stepping::Clock;
+use serde::{Deserialize, Serialize};
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct RunState {
+    /// The last accepted state, and the assembler's committed history per block of points.
+    pub x: Vec<f64>,
+    pub point_history: Vec<Vec<f64>>,
+    /// The step controller: time reached, next increment, accepted and rejected steps.
+    #[serde(flatten)]
+    pub clock: Clock,
+    pub newton: Tally,
+    pub totals: Totals,
+    pub files: Files,
+    /// Wall seconds of the run at the last accepted step.
+    pub wall: f64,
+}
+
+/// What the run has done so far, beyond the controller's counts.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct Totals {
+    /// Newton and Krylov iterations of the accepted steps.
+    pub iterations: usize,
+    pub krylov: usize,
+    /// Assembly seconds of the converged states' reactions (Newton keeps the rest).
+    pub t_reactions: f64,
+    /// Smallest J over the accepted steps: (solids, medium); `None` while there is none.
+    pub min_J: (Option<f64>, Option<f64>),
+    /// Work of the forces on the displacements, and the forces of the last accepted state.
+    pub work: f64,
+    pub f_last: Vec<f64>,
+    pub reactions: Reactions,
+    /// The last failed attempt's reason.
+    pub last_failure: String,
+    /// Stored energy of the last accepted state, and the tangents Newton did not refactor.
+    pub energy: f64,
+    pub tangents_skipped: usize,
+    /// Transient scenes, from their first accepted step: the heat stored, and the heat
+    /// supplied over the run.
+    pub heat_stored: Option<f64>,
+    pub heat_in: Option<f64>,
+}
+
+impl Totals {
+    /// Take the smallest J of an accepted step (∞ where it has no solid, or no medium).
+    pub fn lower_min_J(&mut self, solid: f64, medium: f64) {
+        let lower = |so_far: Option<f64>, now: f64| {
+            let m = so_far.unwrap_or(f64::INFINITY).min(now);
+            m.is_finite().then_some(m)
+        };
+        self.min_J = (lower(self.min_J.0, solid), lower(self.min_J.1, medium));
+    }
+}
+
+/// The files written so far: how many steps the `.pvd` lists, the last step written, and how
+/// far `history.csv` had got (its length and fingerprint).
+#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
+pub struct Files {
+    pub series: usize,
+    pub written: Option<usize>,
+    pub history: Mark,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_smallest_J_ignores_what_a_scene_does_not_have() {
+        let mut t = Totals::default();
+        t.lower_min_J(0.9, f64::INFINITY);
+        t.lower_min_J(0.95, 0.2);
+        t.lower_min_J(0.7, 0.3);
+        assert_eq!(t.min_J, (Some(0.7), Some(0.2)));
+    }
+
+    #[test]
+    fn a_run_state_reads_back_to_the_same_bits() {
+        let state = RunState {
+            x: vec![0.1, -1.0 / 3.0, 1e-300],
+            point_history: vec![vec![], vec![2.0_f64.sqrt()]],
+            clock: Clock {
+                t: 0.3,
+                dt: 0.0125,
+                accepted: 7,
+                rejected: 1,
+            },
+            newton: Tally {
+                run_ref: [1.0 / 7.0, 0.0, 3.0],
+                spent: Default::default(),
+            },
+            totals: Totals {
+                min_J: (Some(0.123456789), None),
+                heat_in: Some(-2.5e-17),
+                ..Default::default()
+            },
+            files: Files {
+                series: 3,
+                written: Some(6),
+                history: Mark { bytes: 10, hash: u64::MAX },
+            },
+            wall: 12.5,
+        };
+        let text = serde_json::to_string(&state).unwrap();
+        let back: RunState = serde_json::from_str(&text).unwrap();
+        assert_eq!(serde_json::to_string(&back).unwrap(), text);
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&back.x), bits(&state.x));
+        assert_eq!(back.newton.run_ref[0].to_bits(), state.newton.run_ref[0].to_bits());
+        assert_eq!(back.clock, state.clock);
+        assert_eq!(back.totals.heat_in, state.totals.heat_in);
+    }
+}
