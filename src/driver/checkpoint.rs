@@ -5,10 +5,10 @@
 //! text: a file cut short or changed after it was written is refused, whatever it changed.
 
 use super::SolveError;
+use super::state::RunState;
 use crate::case::Case;
 use crate::files::Fnv;
 use crate::mesh::Mesh;
-use super::state::RunState;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 

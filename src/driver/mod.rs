@@ -369,3 +369,188 @@ fn step_to_end(mut run: Run) -> Result<Summary, SolveError> {
     }
     run.complete()
 }
+
+#[cfg(test)]
+mod tests {
+    //! The accept/reject logic of a run, against an engine whose failures are scripted: a
+    //! failure a smaller step may mend cuts the step, one it cannot ends the run with its
+    //! summary written, and a run that keeps failing stops below the minimum step. Each run
+    //! keeps what it accepted, and a restart from its checkpoint ends where an unbroken run
+    //! ends.
+
+    use super::*;
+    use crate::solver::linear::{Factorization, LinearSolver};
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicUsize, Ordering};
+
+    /// Which factorisation (counted from 0 over the run) fails, and how.
+    type Script = fn(usize) -> Option<LinearError>;
+
+    /// A real solver whose factorisations fail as the script says.
+    struct Scripted {
+        inner: LinearSolver,
+        script: Script,
+        calls: Arc<AtomicUsize>,
+    }
+
+    impl Factorization for Scripted {
+        fn factor(&mut self, values: &[f64]) -> Result<(), LinearError> {
+            let call = self.calls.fetch_add(1, Ordering::Relaxed);
+            match (self.script)(call) {
+                Some(failure) => Err(failure),
+                None => self.inner.factor(values),
+            }
+        }
+
+        fn solve(&mut self, b: &mut [f64]) -> Result<usize, LinearError> {
+            self.inner.solve(b)?;
+            Ok(self.inner.krylov_last)
+        }
+    }
+
+    /// The block scene on a coarse mesh, solved into `target/unit-scratch/NAME` with the
+    /// engine's failures scripted; the run's result and its folder.
+    fn solve_scripted(name: &str, script: Script) -> (Result<Summary, SolveError>, PathBuf) {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+        let out = root.join("target/unit-scratch/driver").join(name);
+        let _ = std::fs::remove_dir_all(&out);
+        let sets = [(
+            "mesh_options.params".to_string(),
+            "{ n = 4, m = 4, l = 1 }".to_string(),
+        )];
+        let case = Case::read(&root.join("cases/block.toml"))
+            .and_then(|c| c.with_sets(&sets))
+            .unwrap();
+        let opts = SolveOptions {
+            out_dir: Some(out.clone()),
+            quiet: true,
+            ..Default::default()
+        };
+        let mut folder = RunFolder::open(&out).unwrap();
+        let (mut model, probes, staged) = checked_model(&case, &out, true).unwrap();
+        folder.replace_previous().unwrap();
+        commit_mesh(&mut folder, &mut model, staged).unwrap();
+        let start = Instant::now();
+        let mut run = Run::new(
+            &case,
+            &model,
+            &probes,
+            Some(folder),
+            out.clone(),
+            &opts,
+            start,
+        )
+        .unwrap();
+        let calls = Arc::new(AtomicUsize::new(0));
+        run.wrap_solvers(|inner| {
+            let kind = inner.kind;
+            let scripted = Scripted {
+                inner,
+                script,
+                calls: calls.clone(),
+            };
+            LinearSolver::with(kind, Box::new(scripted))
+        });
+        let result = run.record_initial().and_then(|_| step_to_end(run));
+        (result, out)
+    }
+
+    fn summary_in(dir: &Path) -> serde_json::Value {
+        serde_json::from_slice(&std::fs::read(dir.join("summary.json")).unwrap()).unwrap()
+    }
+
+    fn history_rows(dir: &Path) -> usize {
+        std::fs::read_to_string(dir.join("history.csv"))
+            .unwrap()
+            .lines()
+            .count()
+            - 1
+    }
+
+    fn gap(s: &Summary) -> f64 {
+        s.probes["gap"]
+    }
+
+    #[test]
+    fn a_failure_a_smaller_step_may_mend_cuts_the_step_and_the_run_goes_on() {
+        let (clean, _) = solve_scripted("clean", |_| None);
+        let clean = clean.unwrap();
+        assert!(clean.converged && clean.rejected_steps == 0);
+        // the 4th and 9th factorisations fail as a singular tangent would
+        let (cut, dir) = solve_scripted("cut", |k| {
+            (k == 3 || k == 8).then(|| LinearError::Factor("scripted".into()))
+        });
+        let cut = cut.unwrap();
+        assert!(cut.converged, "{}", cut.message);
+        assert_eq!(cut.rejected_steps, 2);
+        assert!(cut.message.contains("2 rejected attempts") && cut.message.contains("scripted"));
+        assert_eq!(cut.lambda, 1.0);
+        // each rejected attempt left nothing behind: one history row per accepted step
+        assert_eq!(history_rows(&dir), cut.load_steps + 1);
+        // the same end state, by another path (hyperelastic: the path does not matter)
+        let rel = (gap(&cut) - gap(&clean)).abs() / gap(&clean);
+        assert!(rel < 1e-6, "gap {} against {}", gap(&cut), gap(&clean));
+    }
+
+    #[test]
+    fn an_engine_failure_ends_the_run_keeping_what_it_accepted_and_a_restart_finishes_it() {
+        let (clean, _) = solve_scripted("unbroken", |_| None);
+        let clean = clean.unwrap();
+        let (broken, dir) = solve_scripted("broken", |k| {
+            (k == 12).then(|| LinearError::Engine("scripted engine failure".into()))
+        });
+        let Err(SolveError::Linear(LinearError::Engine(m))) = broken else {
+            panic!("an engine failure ends the run: {broken:?}");
+        };
+        assert_eq!(m, "scripted engine failure");
+        // no step was cut for it, and the summary says why the run ended
+        let s = summary_in(&dir);
+        assert_eq!(s["converged"], false);
+        assert_eq!(s["rejected_steps"], 0);
+        assert!(
+            s["message"]
+                .as_str()
+                .unwrap()
+                .contains("scripted engine failure")
+        );
+        let steps = s["load_steps"].as_u64().unwrap() as usize;
+        assert!(steps > 0 && s["lambda"].as_f64().unwrap() < 1.0);
+        assert_eq!(history_rows(&dir), steps + 1);
+        // a restart (with a sound engine) goes on from the last accepted step to the end
+        let case = Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/block.toml");
+        let opts = SolveOptions {
+            out_dir: Some(dir.clone()),
+            quiet: true,
+            restart: true,
+            sets: vec![(
+                "mesh_options.params".to_string(),
+                "{ n = 4, m = 4, l = 1 }".to_string(),
+            )],
+            ..Default::default()
+        };
+        let resumed = run(&case, &opts).unwrap();
+        assert!(resumed.converged);
+        assert_eq!(resumed.load_steps, clean.load_steps);
+        assert_eq!(history_rows(&dir), clean.load_steps + 1);
+        assert_eq!(gap(&resumed).to_bits(), gap(&clean).to_bits());
+    }
+
+    #[test]
+    fn a_run_that_keeps_failing_stops_below_the_minimum_step_with_its_steps_kept() {
+        let (failed, dir) = solve_scripted("stuck", |k| {
+            (k >= 10).then_some(LinearError::Krylov {
+                iterations: 300,
+                residual: 0.5,
+            })
+        });
+        let Err(SolveError::StepTooSmall { steps, reason, .. }) = failed else {
+            panic!("a run that cannot step stops: {failed:?}");
+        };
+        assert!(reason.contains("GMRES did not converge"), "{reason}");
+        let s = summary_in(&dir);
+        assert_eq!(s["converged"], false);
+        assert_eq!(s["load_steps"].as_u64().unwrap() as usize, steps);
+        assert!(s["rejected_steps"].as_u64().unwrap() > 3);
+        assert_eq!(history_rows(&dir), steps + 1);
+    }
+}

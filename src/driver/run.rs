@@ -10,13 +10,13 @@ use super::{SolveError, SolveOptions};
 use crate::assembly::{
     Assembler, AssemblyError, convection_heat, friction_cells, friction_work, heat_stored,
 };
-use crate::case::{Case, EngineChoice};
-use crate::dofs::{Field, equation_structure};
+use crate::case::Case;
+use crate::dofs::Field;
 use crate::model::Model;
 use crate::output::probes::Probe;
 use crate::output::{History, OutputError, RunFolder, Series, write_atomic};
 use crate::parallel::Ranks;
-use crate::solver::engine::{Engine, Faer, System};
+use crate::solver::engine::{self, PlanError, Planned, Request, System};
 use crate::solver::linear::{LinearKind, LinearSolver};
 use crate::solver::newton::{Newton, Part, StepFailure, StepReport};
 use crate::solver::stepping::Controller;
@@ -88,113 +88,27 @@ impl Plan {
         let strategy = choose_strategy(&case.file.solver, &model.physics);
         let steps = &case.file.steps;
         let mut newton = Newton::new(model, steps.tol, steps.max_iter);
-        let ranks = Ranks::world();
-        if case.file.solver.engine == EngineChoice::Petsc || !ranks.is_serial() {
-            return Self::on_petsc(case, model, strategy, newton);
-        }
-        let asm = Assembler::new(model);
-        newton.idle = opts.idle_threads;
-        let structure = equation_structure(&model.dofs, &model.cons);
         let systems = Self::systems(model, &newton, strategy);
-        let solvers = Faer { whole: kind }.solvers(&systems, &asm.pattern, &structure)?;
-        Ok(Plan {
-            strategy,
-            asm,
-            newton,
-            solvers,
-        })
-    }
-
-    /// The plan on the PETSc engine: the mesh cut into one part per rank, each rank's
-    /// assembler running its part, PETSc systems for the strategy's parts (symmetric ones
-    /// marked so, for Cholesky or CG).
-    #[cfg(feature = "petsc")]
-    fn on_petsc(
-        case: &Case,
-        model: &Model,
-        strategy: Strategy,
-        mut newton: Newton,
-    ) -> Result<Plan, SolveError> {
-        use crate::mesh::partition::Partition;
-        use crate::parallel::petsc;
-        use crate::solver::petsc::{Hints, Ownership};
-        let solver = &case.file.solver;
-        if solver.linear != crate::case::LinearChoice::Auto {
-            let span = case.file.mesh.span();
-            return Err(case
-                .error::<()>(
-                    span,
-                    "[solver] linear chooses faer's solvers; on the PETSc engine choose with \
-                     [solver.petsc] options (e.g. \"-ksp_type gmres -pc_type gamg\")",
-                )
-                .unwrap_err()
-                .into());
-        }
-        let ranks = petsc::start().map_err(|e| SolveError::Setup(e.to_string()))?;
-        if let Some(o) = &solver.petsc.options {
-            petsc::insert_options(o.get_ref()).map_err(|e| {
-                let msg = format!("[solver.petsc] options: {e}");
-                SolveError::from(case.error::<()>(o.span(), msg).unwrap_err())
+        let request = Request {
+            solver: &case.file.solver,
+            whole: kind,
+            idle: opts.idle_threads,
+            span: case.file.mesh.span(),
+        };
+        let Planned { asm, solvers } = engine::plan(model, &request, &mut newton, &systems)
+            .map_err(|e| match e {
+                PlanError::Case { span, message } => {
+                    SolveError::from(case.error::<()>(span, message).unwrap_err())
+                }
+                PlanError::Setup(message) => SolveError::Setup(message),
+                PlanError::Linear(e) => SolveError::Linear(e),
             })?;
-        }
-        let asm = if ranks.is_serial() {
-            Assembler::new(model)
-        } else {
-            let partition = Partition::new(&model.mesh, ranks.size)
-                .map_err(|e| SolveError::Setup(format!("mpirun -n {}: {e}", ranks.size)))?;
-            Assembler::distributed(model, ranks, partition)
-        };
-        // PETSc's calls stay on this thread: no idle-thread runner around the solves
-        newton.idle = crate::solver::idle::IdleThreads::Sleep;
-        let structure = equation_structure(&model.dofs, &model.cons);
-        let rows = asm.rows_owned(model);
-        let own = Ownership {
-            ranks,
-            node_rank: asm.partition().map(|p| &p.node_rank[..]),
-            rows: rows.as_ref(),
-        };
-        let rigid = crate::model::rigid::rigid_motions(model);
-        let medium = model.medium_nodes();
-        let hints = Hints {
-            rigid: &rigid,
-            medium: &medium,
-        };
-        let on_ranks = crate::solver::engine::Petsc {
-            own,
-            hints,
-            method: solver.petsc.method,
-        };
-        let systems = Self::systems(model, &newton, strategy);
-        let solvers = on_ranks.solvers(&systems, &asm.pattern, &structure)?;
         Ok(Plan {
             strategy,
             asm,
             newton,
             solvers,
         })
-    }
-
-    #[cfg(not(feature = "petsc"))]
-    fn on_petsc(
-        case: &Case,
-        _model: &Model,
-        _strategy: Strategy,
-        _newton: Newton,
-    ) -> Result<Plan, SolveError> {
-        if !Ranks::world().is_serial() || crate::parallel::launched_size().unwrap_or(1) > 1 {
-            return Err(SolveError::Setup(crate::parallel::NOT_BUILT.into()));
-        }
-        let span = case.file.mesh.span();
-        Err(case
-            .error::<()>(
-                span,
-                format!(
-                    "[solver] engine = \"petsc\": {}",
-                    crate::parallel::NOT_BUILT
-                ),
-            )
-            .unwrap_err()
-            .into())
     }
 
     /// The systems `strategy` solves: the whole system, or mechanics and then heat.
@@ -248,10 +162,8 @@ impl<'a> Run<'a> {
         let mut summary =
             Summary::start(case, model, solvers[0].1.kind, strategy, &layout, &out_dir);
         summary.ranks = asm.ranks.size;
-        if let Some(solver) = solvers[0].1.engine_solver() {
-            summary.engine = "petsc".into();
-            summary.petsc_solver = Some(solver);
-        }
+        summary.engine = solvers[0].1.engine().into();
+        summary.petsc_solver = solvers[0].1.engine_solver();
         let mut series = Series::new(&out_dir, &case.name(), model);
         if let Some(part) = asm.partition().filter(|p| p.parts > 1) {
             let rank = asm.ranks.rank as u32;
@@ -360,6 +272,16 @@ impl<'a> Run<'a> {
                 self.finish(false, err.to_string())?;
                 Err(err)
             }
+        }
+    }
+
+    /// Every solver replaced by what `wrap` makes of it (a test's scripted engine).
+    #[cfg(test)]
+    pub(super) fn wrap_solvers(&mut self, wrap: impl Fn(LinearSolver) -> LinearSolver) {
+        for (_, solver) in self.solvers.iter_mut() {
+            let kind = solver.kind;
+            let taken = std::mem::replace(solver, LinearSolver::with(kind, Box::new(Taken)));
+            *solver = wrap(taken);
         }
     }
 
@@ -897,4 +819,19 @@ fn progress_bar(quiet: bool) -> indicatif::ProgressBar {
         .expect("valid template"),
     );
     pb
+}
+
+/// What a solver's place holds while a test wraps it: never used.
+#[cfg(test)]
+struct Taken;
+
+#[cfg(test)]
+impl crate::solver::linear::Factorization for Taken {
+    fn factor(&mut self, _: &[f64]) -> Result<(), crate::solver::linear::LinearError> {
+        unreachable!("a solver taken to be wrapped")
+    }
+
+    fn solve(&mut self, _: &mut [f64]) -> Result<usize, crate::solver::linear::LinearError> {
+        unreachable!("a solver taken to be wrapped")
+    }
 }

@@ -104,7 +104,10 @@ mod tests {
             files: Files {
                 series: 3,
                 written: Some(6),
-                history: Mark { bytes: 10, hash: u64::MAX },
+                history: Mark {
+                    bytes: 10,
+                    hash: u64::MAX,
+                },
             },
             wall: 12.5,
         };
@@ -113,7 +116,10 @@ mod tests {
         assert_eq!(serde_json::to_string(&back).unwrap(), text);
         let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
         assert_eq!(bits(&back.x), bits(&state.x));
-        assert_eq!(back.newton.run_ref[0].to_bits(), state.newton.run_ref[0].to_bits());
+        assert_eq!(
+            back.newton.run_ref[0].to_bits(),
+            state.newton.run_ref[0].to_bits()
+        );
         assert_eq!(back.clock, state.clock);
         assert_eq!(back.totals.heat_in, state.totals.heat_in);
     }

@@ -1,11 +1,20 @@
 //! The linear engines behind one trait. A run's plan says which systems its strategy solves
 //! ([`System`]: the equations of a part and the symmetry of its tangent); the engine sets up a
 //! solver for each: [`Faer`] on this process (LDLᵀ, LU with static pivots, GMRES with the
-//! block-triangular preconditioner), or `Petsc` over the ranks of an MPI run.
+//! block-triangular preconditioner), or `Petsc` over the ranks of an MPI run. [`plan`] chooses
+//! the engine from `[solver]` and the ranks the run has, and sets it up with the assembler
+//! that goes with it (on several ranks, each rank's part of the mesh): the driver asks for a
+//! plan and never names an engine.
 
+use super::idle::IdleThreads;
 use super::linear::{LinearError, LinearKind, LinearSolver};
-use super::newton::Part;
-use crate::dofs::{Pattern, Structure};
+use super::newton::{Newton, Part};
+use crate::assembly::Assembler;
+use crate::case::{EngineChoice, Solver};
+use crate::dofs::{Pattern, Structure, equation_structure};
+use crate::model::Model;
+use crate::parallel::Ranks;
+use std::ops::Range;
 
 /// One system a strategy solves.
 #[derive(Clone, Debug)]
@@ -84,7 +93,7 @@ impl Engine for Petsc<'_> {
         pattern: &Pattern,
         structure: &Structure,
     ) -> Result<LinearSolver, LinearError> {
-        LinearSolver::petsc(
+        let on_ranks = super::petsc::PetscSystem::new(
             pattern,
             structure,
             &system.eqs,
@@ -92,8 +101,138 @@ impl Engine for Petsc<'_> {
             system.symmetric,
             &self.hints,
             self.method,
-        )
+        )?;
+        Ok(LinearSolver::with(LinearKind::Petsc, Box::new(on_ranks)))
     }
+}
+
+/// What a run asks of its linear algebra: `[solver]` (engine, method and the PETSc engine's
+/// options), the method chosen for faer's monolithic system, and what the other threads do
+/// during faer's solves.
+pub struct Request<'a> {
+    pub solver: &'a Solver,
+    pub whole: LinearKind,
+    pub idle: IdleThreads,
+    /// Where an error about the engine as a whole points in the case (a byte range).
+    pub span: Range<usize>,
+}
+
+/// The assembler and the solvers a run uses, their symbolic analyses done.
+pub struct Planned {
+    pub asm: Assembler,
+    /// One solver per system, in the order asked for.
+    pub solvers: Vec<(Part, LinearSolver)>,
+}
+
+/// Why a run's linear algebra could not be set up.
+#[derive(Debug, thiserror::Error)]
+pub enum PlanError {
+    /// Something the case says, at `span` (a byte range of its text).
+    #[error("{message}")]
+    Case { span: Range<usize>, message: String },
+    /// The processes could not be set up (MPI, the mesh's partition).
+    #[error("{0}")]
+    Setup(String),
+    #[error(transparent)]
+    Linear(#[from] LinearError),
+}
+
+/// Set up the engine `request` asks for (PETSc when the case says so or the run has several
+/// ranks, faer otherwise): its assembler (on several ranks, each rank's part of the mesh) and
+/// one solver for each of `systems`. Newton's threads are told what to do during solves.
+pub fn plan(
+    model: &Model,
+    request: &Request,
+    newton: &mut Newton,
+    systems: &[System],
+) -> Result<Planned, PlanError> {
+    if request.solver.engine == EngineChoice::Petsc || !Ranks::world().is_serial() {
+        return on_ranks(model, request, newton, systems);
+    }
+    let asm = Assembler::new(model);
+    newton.idle = request.idle;
+    let structure = equation_structure(&model.dofs, &model.cons);
+    let solvers = Faer {
+        whole: request.whole,
+    }
+    .solvers(systems, &asm.pattern, &structure)?;
+    Ok(Planned { asm, solvers })
+}
+
+/// The PETSc engine: the mesh cut into one part per rank, each rank's assembler running its
+/// part, PETSc systems for the strategy's parts (symmetric ones marked so, for Cholesky or CG).
+#[cfg(feature = "petsc")]
+fn on_ranks(
+    model: &Model,
+    request: &Request,
+    newton: &mut Newton,
+    systems: &[System],
+) -> Result<Planned, PlanError> {
+    use super::petsc::{Hints, Ownership};
+    use crate::case::LinearChoice;
+    use crate::mesh::partition::Partition;
+    use crate::parallel::petsc;
+    let solver = request.solver;
+    if solver.linear != LinearChoice::Auto {
+        return Err(PlanError::Case {
+            span: request.span.clone(),
+            message: "[solver] linear chooses faer's solvers; on the PETSc engine choose with \
+                      [solver.petsc] options (e.g. \"-ksp_type gmres -pc_type gamg\")"
+                .into(),
+        });
+    }
+    let ranks = petsc::start().map_err(|e| PlanError::Setup(e.to_string()))?;
+    if let Some(o) = &solver.petsc.options {
+        petsc::insert_options(o.get_ref()).map_err(|e| PlanError::Case {
+            span: o.span(),
+            message: format!("[solver.petsc] options: {e}"),
+        })?;
+    }
+    let asm = if ranks.is_serial() {
+        Assembler::new(model)
+    } else {
+        let partition = Partition::new(&model.mesh, ranks.size)
+            .map_err(|e| PlanError::Setup(format!("mpirun -n {}: {e}", ranks.size)))?;
+        Assembler::distributed(model, ranks, partition)
+    };
+    // PETSc's calls stay on this thread: no idle-thread runner around the solves
+    newton.idle = IdleThreads::Sleep;
+    let structure = equation_structure(&model.dofs, &model.cons);
+    let rows = asm.rows_owned(model);
+    let rigid = crate::model::rigid::rigid_motions(model);
+    let medium = model.medium_nodes();
+    let on_ranks = Petsc {
+        own: Ownership {
+            ranks,
+            node_rank: asm.partition().map(|p| &p.node_rank[..]),
+            rows: rows.as_ref(),
+        },
+        hints: Hints {
+            rigid: &rigid,
+            medium: &medium,
+        },
+        method: solver.petsc.method,
+    };
+    let solvers = on_ranks.solvers(systems, &asm.pattern, &structure)?;
+    Ok(Planned { asm, solvers })
+}
+
+/// Without the PETSc engine built in: what to do to have it.
+#[cfg(not(feature = "petsc"))]
+fn on_ranks(
+    _model: &Model,
+    request: &Request,
+    _newton: &mut Newton,
+    _systems: &[System],
+) -> Result<Planned, PlanError> {
+    use crate::parallel::{NOT_BUILT, launched_size};
+    if !Ranks::world().is_serial() || launched_size().unwrap_or(1) > 1 {
+        return Err(PlanError::Setup(NOT_BUILT.into()));
+    }
+    Err(PlanError::Case {
+        span: request.span.clone(),
+        message: format!("[solver] engine = \"petsc\": {NOT_BUILT}"),
+    })
 }
 
 #[cfg(test)]

@@ -66,13 +66,28 @@ impl LinearError {
     }
 }
 
-#[cfg(feature = "petsc")]
-impl From<super::petsc::EngineError> for LinearError {
-    fn from(e: super::petsc::EngineError) -> LinearError {
-        match e {
-            super::petsc::EngineError::Failed(m) => LinearError::Engine(m),
-            super::petsc::EngineError::Diverged(m) => LinearError::Diverged(m),
-        }
+/// One system's solver as an engine makes it: a numeric factorisation (or a preconditioner's
+/// set-up) per tangent, then solves. [`LinearSolver`] holds one and counts its Krylov
+/// iterations; an engine is a way of making them (`super::engine`).
+pub trait Factorization: Send {
+    /// Take the matrix with the analysed pattern and these `values` (the whole system's; on
+    /// several ranks, this rank's part).
+    fn factor(&mut self, values: &[f64]) -> Result<(), LinearError>;
+    /// b → A⁻¹ b in place with the last factorisation; the Krylov iterations it took (0 for
+    /// a direct solve).
+    fn solve(&mut self, b: &mut [f64]) -> Result<usize, LinearError>;
+    /// Entries of the factor(s) as the symbolic analysis laid them out, before any numeric
+    /// work; `None` where the engine lays its factor out when it factorises.
+    fn entries(&self) -> Option<usize> {
+        None
+    }
+    /// The engine's own words for its solver and preconditioner, where it has them.
+    fn describe(&self) -> Option<String> {
+        None
+    }
+    /// The engine, as `summary.json` names it.
+    fn engine(&self) -> &'static str {
+        "faer"
     }
 }
 
@@ -86,7 +101,7 @@ const PARALLEL_FACTOR_NNZ: usize = 30_000_000;
 /// A sparse direct solver for a fixed pattern.
 pub struct LinearSolver {
     pub kind: LinearKind,
-    backend: Backend,
+    backend: Box<dyn Factorization>,
     /// Krylov iterations of the last solve and since the last `take_krylov` (0 for direct).
     pub krylov_last: usize,
     krylov_count: usize,
@@ -212,12 +227,48 @@ impl<T: Real> LaggedLu<T> {
     }
 }
 
-enum Backend {
-    Lu(Box<LaggedLu<f64>>),
-    Ldlt(Box<SymFactor>),
-    BlockGmres(Box<BlockTriangular>),
-    #[cfg(feature = "petsc")]
-    Petsc(Box<super::petsc::PetscSystem>),
+impl Factorization for LaggedLu<f64> {
+    fn factor(&mut self, values: &[f64]) -> Result<(), LinearError> {
+        LaggedLu::factor(self, values)
+    }
+
+    fn solve(&mut self, b: &mut [f64]) -> Result<usize, LinearError> {
+        LaggedLu::solve(self, b)
+    }
+
+    fn entries(&self) -> Option<usize> {
+        Some(self.staticlu.entries())
+    }
+}
+
+impl Factorization for SymFactor {
+    fn factor(&mut self, values: &[f64]) -> Result<(), LinearError> {
+        SymFactor::factor(self, values)
+    }
+
+    fn solve(&mut self, b: &mut [f64]) -> Result<usize, LinearError> {
+        SymFactor::solve(self, b);
+        Ok(0)
+    }
+
+    fn entries(&self) -> Option<usize> {
+        Some(self.symbolic.len_val())
+    }
+}
+
+impl Factorization for BlockTriangular {
+    fn factor(&mut self, values: &[f64]) -> Result<(), LinearError> {
+        BlockTriangular::factor(self, values)
+    }
+
+    fn solve(&mut self, b: &mut [f64]) -> Result<usize, LinearError> {
+        BlockTriangular::solve(self, b)
+    }
+
+    fn entries(&self) -> Option<usize> {
+        let mech = self.fm.as_ref().map_or(Some(0), MechanicsFactor::entries)?;
+        Some(mech + self.ft.as_ref().map_or(0, |f| f.symbolic.len_val()))
+    }
 }
 
 impl LinearSolver {
@@ -225,16 +276,7 @@ impl LinearSolver {
     /// work (an LU that falls back to partial pivoting has other fill); `None` on PETSc, which
     /// lays its factor out when it factorises.
     pub fn factor_entries(&self) -> Option<usize> {
-        match &self.backend {
-            Backend::Lu(f) => Some(f.staticlu.entries()),
-            #[cfg(feature = "petsc")]
-            Backend::Petsc(_) => None,
-            Backend::Ldlt(f) => Some(f.symbolic.len_val()),
-            Backend::BlockGmres(b) => {
-                let mech = b.fm.as_ref().map_or(Some(0), MechanicsFactor::entries)?;
-                Some(mech + b.ft.as_ref().map_or(0, |f| f.symbolic.len_val()))
-            }
-        }
+        self.backend.entries()
     }
 
     /// Symbolic analysis of the pattern (once per mesh).
@@ -245,7 +287,7 @@ impl LinearSolver {
             LinearKind::Ldlt => Self::block_ldlt(p, s, &all),
             LinearKind::BlockGmres => Self::block_gmres(p, s, false),
             LinearKind::Petsc => Err(LinearError::Engine(
-                "the PETSc engine is built by LinearSolver::petsc".into(),
+                "the PETSc engine sets up its solvers itself (solver::engine::Petsc)".into(),
             )),
         }
     }
@@ -259,8 +301,8 @@ impl LinearSolver {
     ) -> Result<LinearSolver, LinearError> {
         let sub = SubMatrix::new(p, eqs, eqs);
         let nodes = nodes_of(s, eqs);
-        let backend = Backend::Ldlt(Box::new(SymFactor::new(sub, &nodes, Precision::Double)?));
-        Ok(Self::with(LinearKind::Ldlt, backend))
+        let backend = SymFactor::new(sub, &nodes, Precision::Double)?;
+        Ok(Self::with(LinearKind::Ldlt, Box::new(backend)))
     }
 
     /// GMRES with the block-triangular preconditioner, its mechanics block factorised by LU
@@ -270,8 +312,8 @@ impl LinearSolver {
         s: &Structure,
         unsymmetric: bool,
     ) -> Result<LinearSolver, LinearError> {
-        let backend = Backend::BlockGmres(Box::new(BlockTriangular::new(p, s, unsymmetric)?));
-        Ok(Self::with(LinearKind::BlockGmres, backend))
+        let backend = BlockTriangular::new(p, s, unsymmetric)?;
+        Ok(Self::with(LinearKind::BlockGmres, Box::new(backend)))
     }
 
     /// LU of the (unsymmetric) sub-block of equations `eqs` (increasing): `factor` takes the
@@ -282,42 +324,23 @@ impl LinearSolver {
         eqs: &[usize],
     ) -> Result<LinearSolver, LinearError> {
         let sub = SubMatrix::new(p, eqs, eqs);
-        Ok(Self::with(
-            LinearKind::Lu,
-            Backend::Lu(Box::new(LaggedLu::new(sub, &nodes_of(s, eqs)))),
-        ))
+        let backend: LaggedLu<f64> = LaggedLu::new(sub, &nodes_of(s, eqs));
+        Ok(Self::with(LinearKind::Lu, Box::new(backend)))
     }
 
-    /// The equations `eqs` (increasing) solved on PETSc, each rank holding the rows of the
-    /// nodes it owns: `factor` takes this rank's part of the whole system's values, `solve`
-    /// vectors of `eqs.len()` (the same on every rank).
-    #[cfg(feature = "petsc")]
-    pub fn petsc(
-        p: &Pattern,
-        s: &Structure,
-        eqs: &[usize],
-        own: &super::petsc::Ownership,
-        symmetric: bool,
-        hints: &super::petsc::Hints,
-        method: crate::case::PetscMethod,
-    ) -> Result<LinearSolver, LinearError> {
-        let system = super::petsc::PetscSystem::new(p, s, eqs, own, symmetric, hints, method)?;
-        Ok(Self::with(
-            LinearKind::Petsc,
-            Backend::Petsc(Box::new(system)),
-        ))
-    }
-
-    /// PETSc's solver and preconditioner (`ksp_type/pc_type`), on the PETSc engine.
+    /// The engine's own words for its solver and preconditioner (PETSc's `ksp_type/pc_type`),
+    /// where it has them.
     pub fn engine_solver(&self) -> Option<String> {
-        match &self.backend {
-            #[cfg(feature = "petsc")]
-            Backend::Petsc(p) => Some(p.describe()),
-            _ => None,
-        }
+        self.backend.describe()
     }
 
-    fn with(kind: LinearKind, backend: Backend) -> LinearSolver {
+    /// The engine, as `summary.json` names it.
+    pub fn engine(&self) -> &'static str {
+        self.backend.engine()
+    }
+
+    /// A solver of the `kind` an engine made.
+    pub fn with(kind: LinearKind, backend: Box<dyn Factorization>) -> LinearSolver {
         LinearSolver {
             kind,
             backend,
@@ -328,38 +351,15 @@ impl LinearSolver {
 
     /// Numeric factorisation of the matrix with this pattern and `values`.
     pub fn factor(&mut self, values: &[f64]) -> Result<(), LinearError> {
-        match &mut self.backend {
-            Backend::Lu(lu) => lu.factor(values)?,
-            Backend::Ldlt(f) => f.factor(values)?,
-            Backend::BlockGmres(b) => b.factor(values)?,
-            #[cfg(feature = "petsc")]
-            Backend::Petsc(p) => p.factor(values)?,
-        }
-        Ok(())
+        self.backend.factor(values)
     }
 
     /// Solve A x = b in place (b → x) with the last factorisation.
     pub fn solve(&mut self, b: &mut [f64]) -> Result<(), LinearError> {
         self.krylov_last = 0;
-        match &mut self.backend {
-            Backend::Lu(lu) => {
-                let its = lu.solve(b)?;
-                self.krylov_last = its;
-                self.krylov_count += its;
-            }
-            Backend::Ldlt(f) => f.solve(b),
-            Backend::BlockGmres(bt) => {
-                let its = bt.solve(b)?;
-                self.krylov_last = its;
-                self.krylov_count += its;
-            }
-            #[cfg(feature = "petsc")]
-            Backend::Petsc(p) => {
-                let its = p.solve(b)?;
-                self.krylov_last = its;
-                self.krylov_count += its;
-            }
-        }
+        let its = self.backend.solve(b)?;
+        self.krylov_last = its;
+        self.krylov_count += its;
         Ok(())
     }
 

@@ -8,6 +8,7 @@
 //! solver; without them, tmc's defaults: MUMPS, Cholesky for a symmetric system and LU
 //! otherwise.
 
+use super::linear::{Factorization, LinearError};
 use crate::case::PetscMethod;
 use crate::dofs::{Pattern, Structure};
 use crate::parallel::Ranks;
@@ -30,6 +31,33 @@ pub enum EngineError {
 impl From<PetscError> for EngineError {
     fn from(e: PetscError) -> EngineError {
         EngineError::Failed(e.to_string())
+    }
+}
+
+impl From<EngineError> for LinearError {
+    fn from(e: EngineError) -> LinearError {
+        match e {
+            EngineError::Failed(m) => LinearError::Engine(m),
+            EngineError::Diverged(m) => LinearError::Diverged(m),
+        }
+    }
+}
+
+impl Factorization for PetscSystem {
+    fn factor(&mut self, values: &[f64]) -> Result<(), LinearError> {
+        Ok(PetscSystem::factor(self, values)?)
+    }
+
+    fn solve(&mut self, b: &mut [f64]) -> Result<usize, LinearError> {
+        Ok(PetscSystem::solve(self, b)?)
+    }
+
+    fn describe(&self) -> Option<String> {
+        Some(PetscSystem::describe(self))
+    }
+
+    fn engine(&self) -> &'static str {
+        "petsc"
     }
 }
 
