@@ -325,7 +325,7 @@ impl<'a> Run<'a> {
         Ok((trial, report.expect("at least one part")))
     }
 
-    /// Take a converged step: its reactions, work, history row, VTU and progress line.
+    /// Take a converged step: the run's state moves to it, then its files and progress line.
     pub(super) fn accept(
         &mut self,
         target: f64,
@@ -333,8 +333,20 @@ impl<'a> Run<'a> {
         rep: StepReport,
     ) -> Result<(), SolveError> {
         let model = self.model;
-        let lambda = model.path.lambda(target);
-        let dl = lambda - model.path.lambda(self.ctl.t);
+        let dlambda = model.path.lambda(target) - model.path.lambda(self.ctl.t);
+        self.advance(target, trial, &rep)?;
+        self.output(target, dlambda, &rep)
+    }
+
+    /// Move the run's state to the converged `trial` at `target`: the controller, the totals,
+    /// the reactions and the history of the converged state, the heat and work done.
+    fn advance(
+        &mut self,
+        target: f64,
+        trial: Vec<f64>,
+        rep: &StepReport,
+    ) -> Result<(), SolveError> {
+        let model = self.model;
         let x_last = std::mem::replace(&mut self.x, trial);
         let dt = target - self.ctl.t;
         self.ctl.accept(target, rep.iterations);
@@ -345,13 +357,14 @@ impl<'a> Run<'a> {
         tot.energy = rep.stats.energy;
         tot.lower_min_J(rep.stats.min_J_solid, rep.stats.min_J_medium);
         // reactions at the converged state (the residual of the last assembly)
+        let invalid =
+            |e: AssemblyError| SolveError::Setup(format!("converged state is invalid: {e}"));
         let t0 = Instant::now();
         self.asm
             .assemble(model, &self.x, target, false, None)
-            .map_err(|e| SolveError::Setup(format!("converged state is invalid: {e}")))?;
+            .map_err(invalid)?;
         self.totals.t_reactions += t0.elapsed().as_secs_f64();
-        let convected = convection_heat(model, &self.x)
-            .map_err(|e| SolveError::Setup(format!("converged state is invalid: {e}")))?;
+        let convected = convection_heat(model, &self.x).map_err(invalid)?;
         self.totals.reactions = group_flows(model, &self.asm.r_full, &convected, target);
         // the history of the converged state (just assembled) is what the next step starts from
         self.asm.commit(target);
@@ -370,10 +383,16 @@ impl<'a> Run<'a> {
             .map(|(&d, (a, b))| 0.5 * (a + b) * (self.x[d] - x_last[d]))
             .sum::<f64>();
         tot.f_last = f_now;
+        Ok(())
+    }
+
+    /// What an accepted step leaves: its `.vtu` (when `[output] every` asks), its history row,
+    /// the checkpoint, and its progress line.
+    fn output(&mut self, target: f64, dlambda: f64, rep: &StepReport) -> Result<(), SolveError> {
         let row = StepRow {
             step: self.ctl.accepted,
-            lambda,
-            dlambda: dl,
+            lambda: self.model.path.lambda(target),
+            dlambda,
             iterations: rep.iterations,
             residuals: rep.history.last().copied().unwrap_or([0.0; 3]),
             min_J_solid: rep.stats.min_J_solid,
@@ -406,7 +425,7 @@ impl<'a> Run<'a> {
             // a step taken: the previous run's files go for good
             folder.settle()?;
         }
-        self.report_step(&row, &rep);
+        self.report_step(&row, rep);
         Ok(())
     }
 
@@ -607,11 +626,15 @@ impl<'a> Run<'a> {
             self.series
                 .write(self.model, step, &self.x, self.ctl.t, friction.as_deref())
         });
-        self.asm
-            .ranks
-            .agree(written, OutputError::to_string, |text| {
-                OutputError::OtherRank(text.into())
-            })?;
+        let ranks = self.asm.ranks;
+        let agree = |r| {
+            ranks.agree(r, OutputError::to_string, |t| {
+                OutputError::OtherRank(t.into())
+            })
+        };
+        // every rank's part on disk before the first rank's .pvtu names them
+        agree(written)?;
+        agree(self.series.collect())?;
         self.written = Some(step);
         Ok(())
     }

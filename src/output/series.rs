@@ -4,13 +4,14 @@
 //! `step_NNNN_K.vtu` for rank K, and the first rank the `step_NNNN.pvtu` that puts them
 //! together, which the `.pvd` lists.
 
-use super::OutputError;
 use super::fields::all_cell_fields;
 use super::nodal::nodal_fields;
-use super::vtu::{Piece, StepFields, ZLIB_LEVEL, read_pvd, write_pvd, write_pvtu, write_vtu};
+use super::vtu::{Piece, StepFields, ZLIB_LEVEL, pvtu_text, read_pvd, write_pvd, write_vtu};
+use super::{OutputError, write_atomic};
 use crate::assembly::FrictionCell;
 use crate::case::RegionKind;
 use crate::dofs::{Field, NONE};
+
 use crate::model::Model;
 use std::path::{Path, PathBuf};
 
@@ -29,6 +30,9 @@ pub struct Series {
     piece: Piece,
     /// On several ranks: (this rank, ranks).
     ranks: Option<(usize, usize)>,
+    /// On the first of several ranks, the step written but not yet collected: its time, its
+    /// `.pvtu`'s name and text.
+    pending: Option<(f64, String, String)>,
 }
 
 impl Series {
@@ -53,6 +57,7 @@ impl Series {
             zlib_level: ZLIB_LEVEL,
             piece: Piece::whole(&model.mesh),
             ranks: None,
+            pending: None,
         }
     }
 
@@ -111,7 +116,9 @@ impl Series {
     }
 
     /// Write the state `x` as step `step` at `time` (with friction, its cells' slip state), and
-    /// the updated `.pvd`.
+    /// the updated `.pvd`. On several ranks, this rank's part only: once every rank's part is
+    /// on disk, [`Series::collect`] writes the `.pvtu` and the `.pvd` (a `.pvtu` never names a
+    /// part that is not there, whichever rank dies when).
     pub fn write(
         &mut self,
         model: &Model,
@@ -173,7 +180,9 @@ impl Series {
         match self.ranks {
             Some((0, ranks)) => {
                 let parts: Vec<String> = (0..ranks).map(|k| part_name(step, k)).collect();
-                write_pvtu(&self.dir.join(&file), &model.mesh, &fields, &parts)?;
+                let text = pvtu_text(&model.mesh, &fields, &parts);
+                self.pending = Some((time, file, text));
+                return Ok(());
             }
             Some(_) => {
                 // the first rank writes the collection
@@ -182,6 +191,19 @@ impl Series {
             }
             None => {}
         }
+        self.written.push((time, file));
+        write_pvd(&self.pvd, &self.written)
+    }
+}
+
+impl Series {
+    /// On the first of several ranks, after every rank's part of the last step is written:
+    /// the `.pvtu` that puts them together, and the `.pvd` that lists it. Nothing elsewhere.
+    pub fn collect(&mut self) -> Result<(), OutputError> {
+        let Some((time, file, text)) = self.pending.take() else {
+            return Ok(());
+        };
+        write_atomic(&self.dir.join(&file), text.as_bytes())?;
         self.written.push((time, file));
         write_pvd(&self.pvd, &self.written)
     }

@@ -130,7 +130,7 @@ impl Piece {
 }
 
 /// The point and cell data arrays of the nodes and cells of `piece`: what `write_vtu` writes
-/// and, from an empty part, what `write_pvtu` declares.
+/// and, from an empty part, what `pvtu_text` declares.
 fn data_arrays(mesh: &Mesh, f: &StepFields, piece: &Piece) -> (Vec<Array>, Vec<Array>) {
     let (pn, pc) = (&piece.nodes, &piece.cells);
     let ns = &f.nodal.sigma;
@@ -359,14 +359,9 @@ fn xml_escape(s: &str) -> String {
         .replace('"', "&quot;")
 }
 
-/// Write the `.pvtu` that puts the parts `pieces` (file names, beside it) of one step
+/// The text of the `.pvtu` that puts the parts `pieces` (file names, beside it) of one step
 /// together, declaring the arrays [`write_vtu`] writes for `fields` of a part.
-pub fn write_pvtu(
-    path: &Path,
-    mesh: &Mesh,
-    f: &StepFields,
-    pieces: &[String],
-) -> Result<(), OutputError> {
+pub fn pvtu_text(mesh: &Mesh, f: &StepFields, pieces: &[String]) -> String {
     let declare = |a: &Array| format!("<PDataArray{}/>\n", attributes(a));
     let none = Piece {
         cells: Vec::new(),
@@ -388,7 +383,7 @@ pub fn write_pvtu(
         s.push_str(&format!("<Piece Source=\"{}\"/>\n", xml_escape(p)));
     }
     s.push_str("</PUnstructuredGrid>\n</VTKFile>\n");
-    write_atomic(path, s.as_bytes())
+    s
 }
 
 /// The (time, file name) pairs a `.pvd` of [`write_pvd`] lists; the error says what is wrong.
