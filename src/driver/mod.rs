@@ -174,7 +174,7 @@ fn model_on(case: &Case, mesh: Mesh, quiet: bool) -> Result<(Model, Vec<Probe>),
             crate::note!("warning: {}: {w}", mesh.source.display());
         }
     }
-    case.validate(&mesh)?;
+    crate::model::validate::validate(case, &mesh)?;
     let model = build(case, mesh)?;
     if !quiet {
         for w in &model.warnings {

@@ -6,20 +6,15 @@ use super::{
     BcGroup, BlockInfo, CapacityBlock, FacetBlock, FluxGroup, FrictionBlock, LoadPath, Model,
     Physics, SlipNormals, decide_physics, facet_weights,
 };
-use crate::case::{Bc, Case, CaseError, Region, RegionKind, SlipNormal, SolidLawKey};
+use crate::case::{Bc, Case, CaseError, RegionKind, SlipNormal};
 use crate::dofs::{Constraints, DofMap, Field, Layout, NONE, Prescribed};
 use crate::kernel::CellMaterial;
 use crate::kernel::friction::FrictionMaterial;
-use crate::material::conduction::TABLE_POINTS;
-use crate::material::{
-    BoundaryFlux, Conductivity, Convection, MooneyRivlin, Radiation, Regularization, SolidLaw,
-    ThermoElastic,
-};
+use crate::material::{Conductivity, Regularization, SolidLaw};
 use crate::mesh::Mesh;
 use crate::mesh::centroid;
 use crate::mesh::faces::{Face, NearestFace, shared_faces};
 use nalgebra::Vector3;
-use toml::Spanned;
 
 /// Build the model. The case must already be validated against the mesh.
 pub fn build(case: &Case, mesh: Mesh) -> Result<Model, CaseError> {
@@ -180,7 +175,7 @@ fn region_materials(case: &Case, d: f64) -> Vec<CellMaterial> {
             let k = r.k.as_ref().map(|k| *k.get_ref()).unwrap_or(1.0);
             match r.kind {
                 RegionKind::Solid => CellMaterial {
-                    law: solid_law(r),
+                    law: r.solid_law(),
                     cond: Conductivity::Constant(k),
                     medium: false,
                     reg: None,
@@ -193,8 +188,8 @@ fn region_materials(case: &Case, d: f64) -> Vec<CellMaterial> {
                         .map(|v| *v.get_ref())
                         .unwrap_or(k_max_default.max(k));
                     CellMaterial {
-                        law: SolidLaw::NeoHooke(medium_law(r)),
-                        cond: medium_conductivity(r, k, k_max),
+                        law: SolidLaw::NeoHooke(r.medium_law()),
+                        cond: r.medium_conductivity(k, k_max),
                         medium: true,
                         reg: Some(Regularization {
                             beta1: r.beta1.as_ref().map(|v| *v.get_ref()).unwrap_or(1.0),
@@ -283,69 +278,6 @@ fn cell_blocks(
         });
     }
     (blocks, p_nodes)
-}
-
-/// A solid region's law, of the moduli its `law` takes (checked present).
-fn solid_law(r: &Region) -> SolidLaw {
-    let v = |key: &Option<Spanned<f64>>| *key.as_ref().expect("checked").get_ref();
-    let K = v(&r.K);
-    let (alpha, theta0) = (r.alpha, r.theta0);
-    match r
-        .law
-        .as_ref()
-        .map_or(SolidLawKey::NeoHooke, |l| *l.get_ref())
-    {
-        SolidLawKey::NeoHooke => SolidLaw::NeoHooke(ThermoElastic {
-            K,
-            mu: v(&r.mu),
-            alpha,
-            theta0,
-        }),
-        SolidLawKey::MooneyRivlin => SolidLaw::MooneyRivlin(MooneyRivlin {
-            C10: v(&r.C10),
-            C01: v(&r.C01),
-            K,
-            alpha,
-            theta0,
-        }),
-    }
-}
-
-/// A medium region's conductivity: its table, the paper's law capped by a closed layer's
-/// conductance, or the paper's law (`k` = k_TM and `k_max` given or defaulted).
-fn medium_conductivity(r: &Region, k_tm: f64, k_max: f64) -> Conductivity {
-    if let Some(rows) = &r.k_table {
-        let mut rows = rows.get_ref().clone();
-        rows.sort_by(|a, b| a[0].total_cmp(&b[0]));
-        let (mut J, mut k) = ([0.0; TABLE_POINTS], [0.0; TABLE_POINTS]);
-        for (i, row) in rows.iter().enumerate() {
-            (J[i], k[i]) = (row[0], row[1]);
-        }
-        return Conductivity::Table {
-            n: rows.len(),
-            J,
-            k,
-        };
-    }
-    match (&r.h_closed, &r.thickness) {
-        (Some(h), Some(t)) => Conductivity::Closed {
-            k_tm,
-            k_max,
-            hc_t0: h.get_ref() * t.get_ref(),
-        },
-        _ => Conductivity::Medium { k_tm, k_max },
-    }
-}
-
-/// A medium region's law: eq. (12) with K = μ = γ (eq. 13).
-fn medium_law(r: &Region) -> ThermoElastic {
-    let gamma = *r.gamma.as_ref().expect("checked").get_ref();
-    ThermoElastic {
-        K: gamma,
-        mu: gamma,
-        alpha: r.alpha,
-        theta0: r.theta0,
-    }
 }
 
 /// Initial temperature of each node: θ0 of its region (the last region listed wins on shared
@@ -618,7 +550,7 @@ fn friction_blocks(
             region: info.region,
             mat: FrictionMaterial {
                 mu: *fr.mu.get_ref(),
-                medium: medium_law(region),
+                medium: region.medium_law(),
                 c_f: fr.c_f.as_ref().map_or(1.0, |v| *v.get_ref()),
             },
             normals,
@@ -680,22 +612,8 @@ fn boundary_flux_blocks(
     }
     let with_flux = case.file.bc.iter().filter(|bc| has_flux(bc));
     for (gi, bc) in with_flux.enumerate() {
-        let convection = bc.h.as_ref().zip(bc.theta_inf.as_ref()).map(|(h, t)| {
-            BoundaryFlux::Convection(Convection {
-                h: *h.get_ref(),
-                theta_inf: *t.get_ref(),
-            })
-        });
-        let radiation = bc.radiation.as_ref().map(|r| {
-            let r = r.get_ref();
-            BoundaryFlux::Radiation(Radiation {
-                emissivity: *r.emissivity.get_ref(),
-                theta_inf: *r.theta_inf.get_ref(),
-                sigma: *r.sigma.get_ref(),
-            })
-        });
         let g = mesh.group(bc.group.get_ref()).expect("validated");
-        for law in convection.into_iter().chain(radiation) {
+        for law in bc.boundary_fluxes() {
             for (fb, b) in mesh.facets.iter().enumerate() {
                 if !b.groups.contains(&g) {
                     continue;

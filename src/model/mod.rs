@@ -7,6 +7,7 @@ pub mod held;
 pub mod loads;
 pub mod physics;
 pub mod rigid;
+pub mod validate;
 
 pub use build::build;
 pub use loads::{LoadPath, facet_weights};

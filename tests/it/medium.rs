@@ -413,7 +413,7 @@ fn mixed_element_orders_are_refused() {
     };
     let text = "mesh = \"mixed.msh\"\n[[region]]\ngroup = \"solid\"\nkind = \"solid\"\nK = 1.0\nmu = 1.0\n[[bc]]\ngroup = \"bottom\"\nuy = -0.1\n";
     let case = Case::parse(std::path::Path::new("mixed.toml"), text.into()).unwrap();
-    case.validate(&mesh).unwrap();
+    tmc::model::validate::validate(&case, &mesh).unwrap();
     let err = tmc::model::build(&case, mesh).unwrap_err().to_string();
     assert!(
         err.contains("mixes linear and quadratic") && err.contains("T2 (tri6)"),

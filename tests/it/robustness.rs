@@ -324,7 +324,7 @@ fn mutated_case_files_never_panic() {
         let path = dir.join(format!("{name}.toml"));
         let through = |text: String| -> Result<(), String> {
             let case = Case::parse(&path, text).map_err(|e| e.to_string())?;
-            case.validate(&mesh).map_err(|e| e.to_string())?;
+            tmc::model::validate::validate(&case, &mesh).map_err(|e| e.to_string())?;
             let model = tmc::model::build(&case, mesh.clone()).map_err(|e| e.to_string())?;
             tmc::output::probes::build(&case, &model.mesh).map_err(|e| e.to_string())?;
             Ok(())

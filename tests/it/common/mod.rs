@@ -192,7 +192,7 @@ pub fn model_order(
     let text = format!("mesh = \"{}\"\n{case_text}", msh.display());
     let case = Case::parse(&dir.join("case.toml"), text).unwrap();
     let mesh = read_msh(&msh).unwrap();
-    case.validate(&mesh).unwrap();
+    tmc::model::validate::validate(&case, &mesh).unwrap();
     let model = build(&case, mesh).unwrap();
     (case, model)
 }

@@ -1,0 +1,621 @@
+//! `[[region]]`: the material of one physical group of cells, a solid's law and moduli or
+//! the medium's, its conduction and friction; their checks.
+
+use super::{Case, CaseError};
+use crate::material::conduction::TABLE_POINTS;
+use crate::material::{Conductivity, MooneyRivlin, SolidLaw, ThermoElastic};
+use serde::Deserialize;
+use toml::Spanned;
+
+/// Region kinds.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum RegionKind {
+    Solid,
+    Medium,
+}
+
+/// `law` of a solid region.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum SolidLawKey {
+    /// Eq. (12), with `K` and `mu` (the default).
+    NeoHooke,
+    /// Abaqus' compressible Mooney-Rivlin, with `C10`, `C01` and `K`.
+    MooneyRivlin,
+}
+
+/// `[[region]]`: the material of one physical group of cells.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, expecting = "a [[region]] table")]
+#[allow(non_snake_case)]
+pub struct Region {
+    pub group: Spanned<String>,
+    pub kind: RegionKind,
+    /// Bulk modulus (solid).
+    pub K: Option<Spanned<f64>>,
+    /// Shear modulus (solid, Neo-Hooke).
+    pub mu: Option<Spanned<f64>>,
+    /// A solid's stress law (default: Neo-Hooke).
+    pub law: Option<Spanned<SolidLawKey>>,
+    /// Mooney-Rivlin's coefficients of Ī₁ − 3 and Ī₂ − 3.
+    pub C10: Option<Spanned<f64>>,
+    pub C01: Option<Spanned<f64>>,
+    /// Conductivity k (solid) or gas conductivity k_TM (medium).
+    pub k: Option<Spanned<f64>>,
+    /// Thermal expansion coefficient α_t.
+    #[serde(default)]
+    pub alpha: f64,
+    /// Reference temperature θ0.
+    #[serde(default)]
+    pub theta0: f64,
+    /// Medium stiffness γ (K = μ = γ).
+    pub gamma: Option<Spanned<f64>>,
+    /// Cap of the medium's conductivity (default: largest solid k).
+    pub k_max: Option<Spanned<f64>>,
+    /// A medium's conductivity as a table of `[J, k]` rows, linear in J between them (instead
+    /// of `k` and `k_max`).
+    pub k_table: Option<Spanned<Vec<Vec<f64>>>>,
+    /// A medium's conductance across its closed layer h_c (heat per area, time and degree),
+    /// with `thickness`, the layer's undeformed thickness t0: k ≤ h_c t0 J.
+    pub h_closed: Option<Spanned<f64>>,
+    pub thickness: Option<Spanned<f64>>,
+    /// Regularization weights β1, β2 (eq. 20) and α_r (eq. 18).
+    pub beta1: Option<Spanned<f64>>,
+    pub beta2: Option<Spanned<f64>>,
+    pub alpha_r: Option<Spanned<f64>>,
+    /// Body force per reference volume (ramped).
+    pub body_force: Option<Vec<f64>>,
+    /// Heat source per reference volume (ramped).
+    pub heat_source: Option<f64>,
+    /// Heat capacity ρc per reference volume: with `[time]`, the region stores heat
+    /// (ρc θ̇ by backward Euler); without, it is stationary.
+    pub rho_c: Option<Spanned<f64>>,
+    /// Coulomb friction in a slip plane of the medium (medium regions only).
+    pub friction: Option<Spanned<FrictionKey>>,
+}
+
+/// `friction = { mu = 0.3, normal = [0, 1] }` (or `normal = "auto"`) of a medium region.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(
+    deny_unknown_fields,
+    expecting = "a table such as { mu = 0.3, normal = [0, 1] }"
+)]
+pub struct FrictionKey {
+    /// Coulomb coefficient μ_f ≥ 0.
+    pub mu: Spanned<f64>,
+    /// The slip plane's normal in the undeformed mesh: a vector of the mesh's dimension (need
+    /// not be of unit length), or `"auto"`: each cell's from the solid surface nearest to it.
+    pub normal: Spanned<SlipNormal>,
+    /// Fraction of the dissipated work that becomes heat, in [0, 1] (default 1); heat is made
+    /// only in scenes with `[time]` that conduct.
+    pub heat_fraction: Option<Spanned<f64>>,
+    /// Stick stiffness factor c_f > 0 of the friction modulus c_f K (1 − ln J)/J² (default 1).
+    pub c_f: Option<Spanned<f64>>,
+}
+
+/// `normal` of a `friction`: given, or `"auto"` (any other word is an error at validation).
+#[derive(Clone, Debug, Deserialize)]
+#[serde(
+    untagged,
+    expecting = "`normal` must be \"auto\" or the slip plane's normal as numbers, such as [0, 1]"
+)]
+pub enum SlipNormal {
+    Given(Vec<f64>),
+    Word(String),
+}
+
+impl FrictionKey {
+    /// The fraction of the dissipation that becomes heat.
+    pub fn heat_fraction(&self) -> f64 {
+        self.heat_fraction.as_ref().map_or(1.0, |v| *v.get_ref())
+    }
+}
+
+/// The laws a checked region's keys give (each key its check found present and in range).
+#[allow(non_snake_case)]
+impl Region {
+    /// A solid region's law, of the moduli its `law` takes (checked present when the case was read).
+    pub fn solid_law(&self) -> SolidLaw {
+        let r = self;
+        let v = |key: &Option<Spanned<f64>>| *key.as_ref().expect("checked").get_ref();
+        let K = v(&r.K);
+        let (alpha, theta0) = (r.alpha, r.theta0);
+        match r
+            .law
+            .as_ref()
+            .map_or(SolidLawKey::NeoHooke, |l| *l.get_ref())
+        {
+            SolidLawKey::NeoHooke => SolidLaw::NeoHooke(ThermoElastic {
+                K,
+                mu: v(&r.mu),
+                alpha,
+                theta0,
+            }),
+            SolidLawKey::MooneyRivlin => SolidLaw::MooneyRivlin(MooneyRivlin {
+                C10: v(&r.C10),
+                C01: v(&r.C01),
+                K,
+                alpha,
+                theta0,
+            }),
+        }
+    }
+
+    /// A medium region's conductivity: its table, the paper's law capped by a closed layer's
+    /// conductance, or the paper's law (`k` = k_TM and `k_max` given or defaulted).
+    pub fn medium_conductivity(&self, k_tm: f64, k_max: f64) -> Conductivity {
+        let r = self;
+        if let Some(rows) = &r.k_table {
+            let mut rows = rows.get_ref().clone();
+            rows.sort_by(|a, b| a[0].total_cmp(&b[0]));
+            let (mut J, mut k) = ([0.0; TABLE_POINTS], [0.0; TABLE_POINTS]);
+            for (i, row) in rows.iter().enumerate() {
+                (J[i], k[i]) = (row[0], row[1]);
+            }
+            return Conductivity::Table {
+                n: rows.len(),
+                J,
+                k,
+            };
+        }
+        match (&r.h_closed, &r.thickness) {
+            (Some(h), Some(t)) => Conductivity::Closed {
+                k_tm,
+                k_max,
+                hc_t0: h.get_ref() * t.get_ref(),
+            },
+            _ => Conductivity::Medium { k_tm, k_max },
+        }
+    }
+
+    /// A medium region's law: eq. (12) with K = μ = γ (eq. 13).
+    pub fn medium_law(&self) -> ThermoElastic {
+        let r = self;
+        let gamma = *r.gamma.as_ref().expect("checked").get_ref();
+        ThermoElastic {
+            K: gamma,
+            mu: gamma,
+            alpha: r.alpha,
+            theta0: r.theta0,
+        }
+    }
+}
+
+impl Case {
+    /// Every region: its kind's required moduli positive, no key of the other kind, a
+    /// positive finite `rho_c`.
+    pub(super) fn check_regions(&self) -> Result<(), CaseError> {
+        let f = &self.file;
+        for (i, r) in f.region.iter().enumerate() {
+            let at = r.group.span();
+            let name = r.group.get_ref();
+            let positive_if_given =
+                |key: &str, v: &Option<Spanned<f64>>| -> Result<(), CaseError> {
+                    match v {
+                        Some(v) if !(*v.get_ref() > 0.0) => self.error(
+                            v.span(),
+                            format!(
+                                "region[{i}] (\"{name}\"): `{key}` must be positive, got {}",
+                                v.get_ref()
+                            ),
+                        ),
+                        _ => Ok(()),
+                    }
+                };
+            let need = |key: &str, v: &Option<Spanned<f64>>| -> Result<(), CaseError> {
+                if v.is_none() {
+                    return self.error(
+                        at.clone(),
+                        format!("region[{i}] (\"{name}\"): `{key}` is required"),
+                    );
+                }
+                positive_if_given(key, v)
+            };
+            if let Some(v) = &r.rho_c
+                && !(*v.get_ref() > 0.0 && v.get_ref().is_finite())
+            {
+                return self.error(
+                    v.span(),
+                    format!(
+                        "region[{i}] (\"{name}\"): `rho_c` must be positive and finite, got {}",
+                        v.get_ref()
+                    ),
+                );
+            }
+            if let Some(fr) = &r.friction {
+                if r.kind == RegionKind::Solid {
+                    return self.error(
+                        fr.span(),
+                        format!(
+                            "region[{i}] (\"{name}\"): `friction` acts in a medium's slip plane; \
+                             this region is a solid (give it to the medium region between the bodies)"
+                        ),
+                    );
+                }
+                self.check_friction(i, name, fr.get_ref())?;
+            }
+            match r.kind {
+                RegionKind::Solid => {
+                    need("K", &r.K)?;
+                    self.check_solid_law(i, name, r)?;
+                    positive_if_given("k", &r.k)?;
+                    for (key, v) in [
+                        ("gamma", &r.gamma),
+                        ("k_max", &r.k_max),
+                        ("h_closed", &r.h_closed),
+                        ("thickness", &r.thickness),
+                        ("beta1", &r.beta1),
+                        ("beta2", &r.beta2),
+                        ("alpha_r", &r.alpha_r),
+                    ] {
+                        if let Some(v) = v {
+                            return self.error(v.span(), format!("region[{i}] (\"{name}\"): `{key}` is a medium key; this region is a solid"));
+                        }
+                    }
+                }
+                RegionKind::Medium => {
+                    need("gamma", &r.gamma)?;
+                    positive_if_given("k", &r.k)?;
+                    positive_if_given("k_max", &r.k_max)?;
+                    positive_if_given("beta1", &r.beta1)?;
+                    positive_if_given("beta2", &r.beta2)?;
+                    positive_if_given("alpha_r", &r.alpha_r)?;
+                    self.check_medium_conductivity(i, name, r)?;
+                    for (key, v) in [("K", &r.K), ("mu", &r.mu), ("C10", &r.C10), ("C01", &r.C01)] {
+                        if let Some(v) = v {
+                            return self.error(v.span(), format!("region[{i}] (\"{name}\"): `{key}` is a solid key; the medium's moduli are `gamma`"));
+                        }
+                    }
+                    if let Some(law) = &r.law {
+                        return self.error(
+                            law.span(),
+                            format!(
+                                "region[{i}] (\"{name}\"): `law` chooses a solid's law; the medium's \
+                                 is eq. (13), Neo-Hooke with K = μ = `gamma`"
+                            ),
+                        );
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// A medium's conductivity law: the paper's (`k`, `k_max`), capped by a closed layer's
+    /// conductance (`h_closed` with `thickness`), or a table (`k_table`, alone).
+    pub(super) fn check_medium_conductivity(
+        &self,
+        i: usize,
+        name: &str,
+        r: &Region,
+    ) -> Result<(), CaseError> {
+        let at = |msg: String, span: std::ops::Range<usize>| {
+            self.error::<()>(span, format!("region[{i}] (\"{name}\"): {msg}"))
+        };
+        for (key, v) in [("h_closed", &r.h_closed), ("thickness", &r.thickness)] {
+            if let Some(v) = v
+                && !(*v.get_ref() > 0.0 && v.get_ref().is_finite())
+            {
+                return at(
+                    format!("`{key}` must be positive, got {}", v.get_ref()),
+                    v.span(),
+                );
+            }
+        }
+        match (&r.h_closed, &r.thickness) {
+            (Some(h), None) => {
+                return at(
+                    "`h_closed` needs `thickness`, the layer's undeformed thickness".into(),
+                    h.span(),
+                );
+            }
+            (None, Some(t)) => {
+                return at(
+                    "`thickness` is that of a closed layer whose conductance is `h_closed`; give `h_closed` too".into(),
+                    t.span(),
+                );
+            }
+            _ => {}
+        }
+        let Some(table) = &r.k_table else {
+            return Ok(());
+        };
+        for (key, v) in [("k", &r.k), ("k_max", &r.k_max), ("h_closed", &r.h_closed)] {
+            if let Some(v) = v {
+                return at(
+                    format!("`{key}` and `k_table` are two conductivity laws; give one"),
+                    v.span(),
+                );
+            }
+        }
+        let rows = table.get_ref();
+        let bad = |why: &str| {
+            at(
+                format!(
+                    "`k_table` {why} (rows [J, k]: 2 to {TABLE_POINTS}, J > 0 all different, k > 0)"
+                ),
+                table.span(),
+            )
+        };
+        if !(2..=TABLE_POINTS).contains(&rows.len()) {
+            return bad(&format!("has {} rows", rows.len()));
+        }
+        if let Some((n, row)) = rows
+            .iter()
+            .enumerate()
+            .find(|(_, row)| row.len() != 2 || !row.iter().all(|v| *v > 0.0 && v.is_finite()))
+        {
+            return bad(&format!("row {n} is {row:?}"));
+        }
+        let mut js: Vec<f64> = rows.iter().map(|row| row[0]).collect();
+        js.sort_by(f64::total_cmp);
+        if let Some(w) = js.windows(2).find(|w| w[0] == w[1]) {
+            return bad(&format!("gives J = {} twice", w[0]));
+        }
+        Ok(())
+    }
+
+    /// A solid region's law and its moduli: Neo-Hooke's `mu` > 0, or Mooney-Rivlin's `C10` > 0
+    /// and `C01` ≥ 0; no key of the other law.
+    pub(super) fn check_solid_law(
+        &self,
+        i: usize,
+        name: &str,
+        r: &Region,
+    ) -> Result<(), CaseError> {
+        let law = r
+            .law
+            .as_ref()
+            .map_or(SolidLawKey::NeoHooke, |l| *l.get_ref());
+        let at = || r.law.as_ref().map_or(r.group.span(), |l| l.span());
+        type Keys<'a, T> = &'a [(&'a str, &'a Option<Spanned<f64>>, T)];
+        let (needed, other): (Keys<bool>, Keys<()>) = match law {
+            SolidLawKey::NeoHooke => (
+                &[("mu", &r.mu, true)],
+                &[("C10", &r.C10, ()), ("C01", &r.C01, ())],
+            ),
+            SolidLawKey::MooneyRivlin => (
+                &[("C10", &r.C10, true), ("C01", &r.C01, false)],
+                &[("mu", &r.mu, ())],
+            ),
+        };
+        let law_name = match law {
+            SolidLawKey::NeoHooke => "neo-hooke",
+            SolidLawKey::MooneyRivlin => "mooney-rivlin",
+        };
+        for &(key, v, ()) in other {
+            if let Some(v) = v {
+                return self.error(
+                    v.span(),
+                    format!(
+                        "region[{i}] (\"{name}\"): `{key}` is not a key of law \"{law_name}\" \
+                         (neo-hooke takes `K` and `mu`; mooney-rivlin `K`, `C10` and `C01`)"
+                    ),
+                );
+            }
+        }
+        for &(key, v, positive) in needed {
+            let Some(v) = v else {
+                return self.error(
+                    at(),
+                    format!("region[{i}] (\"{name}\"): law \"{law_name}\" needs `{key}`"),
+                );
+            };
+            let x = *v.get_ref();
+            let ok = x.is_finite() && if positive { x > 0.0 } else { x >= 0.0 };
+            if !ok {
+                let must = if positive { "positive" } else { "≥ 0" };
+                return self.error(
+                    v.span(),
+                    format!("region[{i}] (\"{name}\"): `{key}` must be {must}, got {x}"),
+                );
+            }
+        }
+        Ok(())
+    }
+
+    /// A medium region's `friction`: μ ≥ 0, a normal of 2 or 3 finite components not all
+    /// zero or "auto", `heat_fraction` in [0, 1], `c_f` positive (the normal's dimension is checked
+    /// against the mesh's in `model::validate`).
+    pub(super) fn check_friction(
+        &self,
+        i: usize,
+        name: &str,
+        fr: &FrictionKey,
+    ) -> Result<(), CaseError> {
+        let key = |k: &str| format!("region[{i}] (\"{name}\"): `friction.{k}`");
+        let mu = *fr.mu.get_ref();
+        if !(mu >= 0.0 && mu.is_finite()) {
+            return self.error(
+                fr.mu.span(),
+                format!("{} must be finite and ≥ 0, got {mu}", key("mu")),
+            );
+        }
+        let bad_normal = |got: String| {
+            self.error(
+                fr.normal.span(),
+                format!(
+                    "{} must be \"auto\" or a vector of 2 (2D) or 3 (3D) finite components, not all zero; got {got}",
+                    key("normal")
+                ),
+            )
+        };
+        match fr.normal.get_ref() {
+            SlipNormal::Given(n) => {
+                let length = n.iter().map(|v| v * v).sum::<f64>().sqrt();
+                if !(2..=3).contains(&n.len())
+                    || !n.iter().all(|v| v.is_finite())
+                    || !(length > 0.0)
+                {
+                    return bad_normal(format!("{n:?}"));
+                }
+            }
+            SlipNormal::Word(w) if w != "auto" => return bad_normal(format!("\"{w}\"")),
+            SlipNormal::Word(_) => {}
+        }
+        if let Some(v) = &fr.heat_fraction
+            && !(0.0..=1.0).contains(v.get_ref())
+        {
+            return self.error(
+                v.span(),
+                format!(
+                    "{} must be in [0, 1], got {}",
+                    key("heat_fraction"),
+                    v.get_ref()
+                ),
+            );
+        }
+        if let Some(v) = &fr.c_f
+            && !(*v.get_ref() > 0.0 && v.get_ref().is_finite())
+        {
+            return self.error(
+                v.span(),
+                format!(
+                    "{} must be positive and finite, got {}",
+                    key("c_f"),
+                    v.get_ref()
+                ),
+            );
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::tests::{parsed, refused};
+    use crate::material::{Conductivity, SolidLaw};
+
+    const SOLID: &str = "[[region]]\ngroup = \"s\"\nkind = \"solid\"\n";
+    const MEDIUM: &str = "[[region]]\ngroup = \"m\"\nkind = \"medium\"\ngamma = 1e-4\n";
+
+    fn region(body: &str) -> super::Region {
+        parsed(body).unwrap().file.region.remove(0)
+    }
+
+    #[test]
+    fn a_solid_s_keys_give_its_law() {
+        let nh = region(&format!(
+            "{SOLID}K = 20.0\nmu = 10.0\nalpha = 1e-5\ntheta0 = 20.0\n"
+        ));
+        let SolidLaw::NeoHooke(l) = nh.solid_law() else {
+            panic!("neo-hooke is the default")
+        };
+        assert_eq!((l.K, l.mu, l.alpha, l.theta0), (20.0, 10.0, 1e-5, 20.0));
+        let mr = region(&format!(
+            "{SOLID}law = \"mooney-rivlin\"\nK = 20.0\nC10 = 3.0\nC01 = 1.0\n"
+        ));
+        let SolidLaw::MooneyRivlin(l) = mr.solid_law() else {
+            panic!("mooney-rivlin asked for")
+        };
+        assert_eq!((l.C10, l.C01, l.K), (3.0, 1.0, 20.0));
+    }
+
+    #[test]
+    fn a_region_refuses_the_keys_of_another_law_or_kind() {
+        let e = refused(&format!("{SOLID}K = 20.0\nmu = 10.0\ngamma = 1e-4\n"));
+        assert!(
+            e.starts_with("t.toml:7:")
+                && e.contains("`gamma` is a medium key; this region is a solid"),
+            "{e}"
+        );
+        let e = refused(&format!(
+            "{SOLID}law = \"mooney-rivlin\"\nK = 20.0\nC01 = 1.0\n"
+        ));
+        assert!(e.contains("law \"mooney-rivlin\" needs `C10`"), "{e}");
+        let e = refused(&format!(
+            "{SOLID}law = \"mooney-rivlin\"\nK = 20.0\nC10 = 3.0\nmu = 1.0\n"
+        ));
+        assert!(
+            e.contains("`mu` is not a key of law \"mooney-rivlin\""),
+            "{e}"
+        );
+        let e = refused(&format!("{MEDIUM}K = 1.0\n"));
+        assert!(
+            e.contains("`K` is a solid key; the medium's moduli are `gamma`"),
+            "{e}"
+        );
+        let e = refused(&format!("{SOLID}mu = 10.0\n"));
+        assert!(e.contains("`K` is required"), "{e}");
+    }
+
+    #[test]
+    fn a_medium_s_conductivity_is_the_law_its_keys_name() {
+        let paper = region(&format!("{MEDIUM}k = 1e-4\n"));
+        assert!(matches!(
+            paper.medium_conductivity(1e-4, 50.0),
+            Conductivity::Medium { k_tm, k_max } if k_tm == 1e-4 && k_max == 50.0
+        ));
+        let closed = region(&format!(
+            "{MEDIUM}k = 1e-4\nh_closed = 40.0\nthickness = 0.25\n"
+        ));
+        assert!(matches!(
+            closed.medium_conductivity(1e-4, 50.0),
+            Conductivity::Closed { hc_t0, .. } if hc_t0 == 10.0
+        ));
+        // a table's rows in any order, kept sorted by J
+        let table = region(&format!(
+            "{MEDIUM}k_table = [[1.0, 1e-4], [1e-3, 2.0], [0.1, 0.5]]\n"
+        ));
+        let Conductivity::Table { n, J, k } = table.medium_conductivity(0.0, 0.0) else {
+            panic!("a table")
+        };
+        assert_eq!(
+            (n, &J[..3], &k[..3]),
+            (3, &[1e-3, 0.1, 1.0][..], &[2.0, 0.5, 1e-4][..])
+        );
+        for (keys, says) in [
+            ("h_closed = 40.0\n", "`h_closed` needs `thickness`"),
+            (
+                "k = 1.0\nk_table = [[0.1, 1.0], [1.0, 2.0]]\n",
+                "two conductivity laws",
+            ),
+            ("k_table = [[0.1, 1.0]]\n", "has 1 rows"),
+            (
+                "k_table = [[0.1, 1.0], [0.1, 2.0]]\n",
+                "gives J = 0.1 twice",
+            ),
+        ] {
+            let e = refused(&format!("{MEDIUM}{keys}"));
+            assert!(e.contains(says), "{keys}: {e}");
+        }
+    }
+
+    #[test]
+    fn friction_is_a_medium_s_and_its_values_are_checked() {
+        let ok = region(&format!(
+            "{MEDIUM}friction = {{ mu = 0.3, normal = \"auto\", heat_fraction = 0.5 }}\n"
+        ));
+        assert_eq!(ok.friction.unwrap().get_ref().heat_fraction(), 0.5);
+        for (friction, says) in [
+            (
+                "{ mu = -0.1, normal = [0, 1] }",
+                "`friction.mu` must be finite and ≥ 0",
+            ),
+            (
+                "{ mu = 0.3, normal = \"up\" }",
+                "`friction.normal` must be \"auto\"",
+            ),
+            (
+                "{ mu = 0.3, normal = [0, 0] }",
+                "not all zero; got [0.0, 0.0]",
+            ),
+            (
+                "{ mu = 0.3, normal = [0, 1], heat_fraction = 2.0 }",
+                "must be in [0, 1]",
+            ),
+            (
+                "{ mu = 0.3, normal = [0, 1], c_f = 0.0 }",
+                "`friction.c_f` must be positive",
+            ),
+        ] {
+            let e = refused(&format!("{MEDIUM}friction = {friction}\n"));
+            assert!(e.contains(says), "{friction}: {e}");
+        }
+        let e = refused(&format!(
+            "{SOLID}K = 1.0\nmu = 1.0\nfriction = {{ mu = 0.3, normal = [0, 1] }}\n"
+        ));
+        assert!(e.contains("this region is a solid"), "{e}");
+    }
+}
