@@ -107,13 +107,9 @@ fn not_geo(geo: &Path) -> Result<(), GmshError> {
     })
 }
 
-/// Mesh `geo` and write MSH 4.1 to `out`.
-///
-/// gmsh runs in a child process, so that a `.geo` that calls `Exit` or a crash inside gmsh
-/// ends only that process and is reported. The mesh is written to a temporary name, read back
-/// (a truncated file, e.g. on a full disk, fails here), synced and renamed: `out` is either the
-/// complete new mesh or untouched.
-pub fn mesh_geo(geo: &Path, out: &Path, opts: &MeshOptions) -> Result<MeshReport, GmshError> {
+/// The `.geo` a file that exists, its parameters its own, and `out` a file whose folder can
+/// be made.
+fn paths_usable(geo: &Path, out: &Path, opts: &MeshOptions) -> Result<(), GmshError> {
     not_geo(geo)?;
     if geo.is_dir() {
         return Err(GmshError::NotAFile {
@@ -138,6 +134,17 @@ pub fn mesh_geo(geo: &Path, out: &Path, opts: &MeshOptions) -> Result<MeshReport
             source,
         })?;
     }
+    Ok(())
+}
+
+/// Mesh `geo` and write MSH 4.1 to `out`.
+///
+/// gmsh runs in a child process, so that a `.geo` that calls `Exit` or a crash inside gmsh
+/// ends only that process and is reported. The mesh is written to a temporary name, read back
+/// (a truncated file, e.g. on a full disk, fails here), synced and renamed: `out` is either the
+/// complete new mesh or untouched.
+pub fn mesh_geo(geo: &Path, out: &Path, opts: &MeshOptions) -> Result<MeshReport, GmshError> {
+    paths_usable(geo, out, opts)?;
     // .geo parameters: not gmsh's `-setnumber`, whose values stay in a process-wide table that
     // every later `open` re-applies; instead a wrapper defines them before including the file,
     // and `DefineConstant` keeps an existing definition.

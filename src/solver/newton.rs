@@ -329,64 +329,21 @@ impl Newton {
         // the last update was small: the step most likely ends at the next residual
         let mut expect_converged = false;
         loop {
-            let t0 = std::time::Instant::now();
             let first = it == 0;
-            // A step that is about to converge reuses its factorisation for the last update, so
-            // its last tangent would be thrown away: then the residual is assembled alone, and
-            // the tangent only if the residual turns out not converged after all.
-            let mut tangent = first || !expect_converged;
-            let mut damped = 0;
-            let (stats, pending, rel, residual_ok) = loop {
-                let (stats, pending) =
-                    match self.assemble_admissible(&mut st, model, asm, x, t, tangent, first) {
-                        Ok(a) => a,
-                        Err(e) => {
-                            self.spent.assembly += t0.elapsed().as_secs_f64();
-                            return Err(e);
-                        }
-                    };
-                let rel = self.relative_residual(&mut st, model, asm, pending, first);
-                let residual_ok = rel.iter().all(|&r| r <= self.tol);
-                // a full update can overshoot: where the medium closes (its stiffness grows
-                // without bound) and at friction's stick–slip switches. While the residual
-                // grows, halve the update (a few times, then go on regardless). Undamped,
-                // Newton wandered at residuals of 0.1–10 until the iteration limit, 25 % of
-                // block-plate-3d's iterations, on a path that round-off alone could change
-                let grew = st
-                    .history
-                    .last()
-                    .is_some_and(|last| worst(&rel) > worst(last));
-                if !first && !residual_ok && grew && damped < MAX_DAMPING {
-                    damped += 1;
-                    st.cuts += 1;
-                    st.halve_update(x);
-                    tangent = true;
-                    continue;
-                }
-                if !tangent && (!residual_ok || pending) {
-                    tangent = true;
-                    continue;
-                }
-                break (stats, pending, rel, residual_ok);
-            };
-            self.spent.assembly += t0.elapsed().as_secs_f64();
-            st.history.push(rel);
-            if it >= self.max_iter && !residual_ok {
+            let r = self.damped_residual(&mut st, model, asm, x, t, first, expect_converged)?;
+            st.history.push(r.rel);
+            if it >= self.max_iter && !r.converged {
                 return Err(StepFailure::NotConverged {
                     iterations: it,
-                    last: rel,
+                    last: r.rel,
                 });
             }
-            self.solve_update(&mut st, solver, asm, residual_ok && !first)?;
+            self.solve_update(&mut st, solver, asm, r.converged && !first)?;
             let last_update = self.norms(&st.rhs);
-            st.apply(model, x, pending);
+            st.apply(model, x, r.pending);
             if first {
                 // the prescribed increments are the step's first update
-                let mut n = [0.0; 3];
-                for (d, v) in st.dx_p.iter().enumerate() {
-                    n[idx(model.dofs.field[d])] += v * v;
-                }
-                st.du_ref = n.map(f64::sqrt);
+                st.du_ref = st.prescribed_norms(model);
             }
             for f in 0..3 {
                 st.du_ref[f] = st.du_ref[f].max(last_update[f]);
@@ -395,7 +352,7 @@ impl Newton {
                 Some(self.heat_converged(&mut st, model, asm, x, t)?)
             } else {
                 let (done, expect) =
-                    self.converged(&st, model, x, &last_update, residual_ok, first);
+                    self.converged(&st, model, x, &last_update, r.converged, first);
                 expect_converged = expect;
                 done.then_some(it)
             };
@@ -404,20 +361,77 @@ impl Newton {
                     iterations,
                     halvings: st.cuts,
                     history: st.history,
-                    stats,
+                    stats: r.stats,
                     krylov: solver.take_krylov(),
-                    tangents_skipped: usize::from(!tangent),
+                    tangents_skipped: usize::from(!r.tangent),
                 });
             }
             if it >= self.max_iter {
                 return Err(StepFailure::NotConverged {
                     iterations: it,
-                    last: rel,
+                    last: r.rel,
                 });
             }
             it += 1;
             self.spent.iterations += 1;
         }
+    }
+
+    /// An iteration's residual at `x`, and its tangent unless the step is `expect_converged`
+    /// (a step about to converge reuses its factorisation for the last update, so its last
+    /// tangent would be thrown away: then the residual is assembled alone, and the tangent only
+    /// if the residual turns out not converged after all). A full update can overshoot: where
+    /// the medium closes (its stiffness grows without bound) and at friction's stick–slip
+    /// switches. While the residual grows, the update is halved (a few times, then kept
+    /// regardless). Undamped, Newton wandered at residuals of 0.1–10 until the iteration
+    /// limit, 25 % of block-plate-3d's iterations, on a path that round-off alone could change.
+    #[allow(clippy::too_many_arguments)]
+    fn damped_residual(
+        &mut self,
+        st: &mut StepState,
+        model: &Model,
+        asm: &mut Assembler,
+        x: &mut [f64],
+        t: f64,
+        first: bool,
+        expect_converged: bool,
+    ) -> Result<Residual, StepFailure> {
+        let t0 = std::time::Instant::now();
+        let mut tangent = first || !expect_converged;
+        let mut damped = 0;
+        let out = loop {
+            let (stats, pending) =
+                match self.assemble_admissible(st, model, asm, x, t, tangent, first) {
+                    Ok(a) => a,
+                    Err(e) => break Err(e),
+                };
+            let rel = self.relative_residual(st, model, asm, pending, first);
+            let converged = rel.iter().all(|&r| r <= self.tol);
+            let grew = st
+                .history
+                .last()
+                .is_some_and(|last| worst(&rel) > worst(last));
+            if !first && !converged && grew && damped < MAX_DAMPING {
+                damped += 1;
+                st.cuts += 1;
+                st.halve_update(x);
+                tangent = true;
+                continue;
+            }
+            if !tangent && (!converged || pending) {
+                tangent = true;
+                continue;
+            }
+            break Ok(Residual {
+                stats,
+                pending,
+                rel,
+                converged,
+                tangent,
+            });
+        };
+        self.spent.assembly += t0.elapsed().as_secs_f64();
+        out
     }
 
     /// Assemble at `x`, the prescribed increments still to apply lifted to the right-hand
@@ -641,7 +655,27 @@ struct StepState {
     cuts: usize,
 }
 
+/// An iteration's residual: the assembly's statistics, whether prescribed increments are
+/// still to apply, the relative residual per field and whether it is converged, and whether
+/// the tangent was assembled with it.
+struct Residual {
+    stats: AssemblyStats,
+    pending: bool,
+    rel: FieldNorms,
+    converged: bool,
+    tangent: bool,
+}
+
 impl StepState {
+    /// The norms per field of the step's prescribed increments (its first update).
+    fn prescribed_norms(&self, model: &Model) -> FieldNorms {
+        let mut n = [0.0; 3];
+        for (d, v) in self.dx_p.iter().enumerate() {
+            n[idx(model.dofs.field[d])] += v * v;
+        }
+        n.map(f64::sqrt)
+    }
+
     fn new(newton: &Newton, model: &Model, n_dofs: usize, t: f64, part: Part) -> StepState {
         let sub = (part != Part::All).then(|| newton.equations(part));
         StepState {

@@ -137,55 +137,15 @@ impl PetscSystem {
         hints: &Hints,
         method: PetscMethod,
     ) -> Result<PetscSystem, EngineError> {
-        let me = own.ranks.rank as u32;
-        let mut place = vec![usize::MAX; p.n];
-        for (k, &e) in eqs.iter().enumerate() {
-            place[e] = k;
-        }
-        let owner = |e: usize| own.node_rank.map_or(0, |r| r[s.node[e] as usize]);
-        // rows in rank order, each rank's in equation order
-        let mut order: Vec<usize> = (0..eqs.len()).collect();
-        order.sort_by_key(|&k| (owner(eqs[k]), k));
-        let mut row = vec![0 as PetscInt; eqs.len()];
-        for (r, &k) in order.iter().enumerate() {
-            row[k] = r as PetscInt;
-        }
-        let local: Vec<usize> = order
-            .iter()
-            .copied()
-            .filter(|&k| owner(eqs[k]) == me)
-            .collect();
-        let first = local.first().map_or(0, |&k| row[k]);
-        let mine = |r: PetscInt| r >= first && r < first + local.len() as PetscInt;
-        // the pattern is structurally symmetric: row e's columns are column e's rows; on
-        // several ranks `p` has this rank's cells' entries only, `own.rows` the whole rows
-        let whole = own.rows.unwrap_or(p);
-        let (mut diag, mut off) = (Vec::new(), Vec::new());
-        for &k in &local {
-            let (d, o) = within(whole, &place, eqs[k]).fold((0, 0), |(d, o), (_, i)| {
-                if mine(row[i]) { (d + 1, o) } else { (d, o + 1) }
-            });
-            diag.push(d);
-            off.push(o);
-        }
-        // sized exactly: these two span every entry this rank adds, for the whole run
-        let entries = eqs.iter().map(|&e| within(p, &place, e).count()).sum();
-        let (mut columns, mut slots, mut rows) = (
-            Vec::new(),
-            Vec::with_capacity(entries),
-            Vec::with_capacity(entries),
-        );
-        for (k, &e) in eqs.iter().enumerate() {
-            let start = slots.len();
-            for (j, i) in within(p, &place, e) {
-                slots.push(j as u32);
-                rows.push(row[i]);
-            }
-            // a column without entries here (another rank's cells') is not added
-            if slots.len() > start {
-                columns.push((row[k], slots.len()));
-            }
-        }
+        let RowLayout {
+            row,
+            local,
+            diag,
+            off,
+            columns,
+            slots,
+            rows,
+        } = RowLayout::new(p, s, eqs, own);
         let mut mat = Matrix::aij(eqs.len(), local.len(), &diag, &off, symmetric)?;
         // the rows of the medium's nodes (every field), the solids' mechanical rows with their
         // rigid motions, the solids' thermal rows
@@ -344,6 +304,82 @@ impl PetscSystem {
     /// PETSc's solver and preconditioner, as `ksp_type/pc_type`.
     pub fn describe(&self) -> String {
         self.ksp.describe()
+    }
+}
+
+/// Where a system's equations go on PETSc: rows in rank order (each rank's in equation
+/// order), this rank's rows with their entries in and out of its diagonal block (for the
+/// matrix's preallocation), and the entries this rank adds, column by column.
+struct RowLayout {
+    row: Vec<PetscInt>,
+    local: Vec<usize>,
+    diag: Vec<PetscInt>,
+    off: Vec<PetscInt>,
+    columns: Vec<(PetscInt, usize)>,
+    slots: Vec<u32>,
+    rows: Vec<PetscInt>,
+}
+
+impl RowLayout {
+    fn new(p: &Pattern, s: &Structure, eqs: &[usize], own: &Ownership) -> RowLayout {
+        let me = own.ranks.rank as u32;
+        let mut place = vec![usize::MAX; p.n];
+        for (k, &e) in eqs.iter().enumerate() {
+            place[e] = k;
+        }
+        let owner = |e: usize| own.node_rank.map_or(0, |r| r[s.node[e] as usize]);
+        // rows in rank order, each rank's in equation order
+        let mut order: Vec<usize> = (0..eqs.len()).collect();
+        order.sort_by_key(|&k| (owner(eqs[k]), k));
+        let mut row = vec![0 as PetscInt; eqs.len()];
+        for (r, &k) in order.iter().enumerate() {
+            row[k] = r as PetscInt;
+        }
+        let local: Vec<usize> = order
+            .iter()
+            .copied()
+            .filter(|&k| owner(eqs[k]) == me)
+            .collect();
+        let first = local.first().map_or(0, |&k| row[k]);
+        let mine = |r: PetscInt| r >= first && r < first + local.len() as PetscInt;
+        // the pattern is structurally symmetric: row e's columns are column e's rows; on
+        // several ranks `p` has this rank's cells' entries only, `own.rows` the whole rows
+        let whole = own.rows.unwrap_or(p);
+        let (mut diag, mut off) = (Vec::new(), Vec::new());
+        for &k in &local {
+            let (d, o) = within(whole, &place, eqs[k]).fold((0, 0), |(d, o), (_, i)| {
+                if mine(row[i]) { (d + 1, o) } else { (d, o + 1) }
+            });
+            diag.push(d);
+            off.push(o);
+        }
+        // sized exactly: these two span every entry this rank adds, for the whole run
+        let entries = eqs.iter().map(|&e| within(p, &place, e).count()).sum();
+        let (mut columns, mut slots, mut rows) = (
+            Vec::new(),
+            Vec::with_capacity(entries),
+            Vec::with_capacity(entries),
+        );
+        for (k, &e) in eqs.iter().enumerate() {
+            let start = slots.len();
+            for (j, i) in within(p, &place, e) {
+                slots.push(j as u32);
+                rows.push(row[i]);
+            }
+            // a column without entries here (another rank's cells') is not added
+            if slots.len() > start {
+                columns.push((row[k], slots.len()));
+            }
+        }
+        RowLayout {
+            row,
+            local,
+            diag,
+            off,
+            columns,
+            slots,
+            rows,
+        }
     }
 }
 
