@@ -371,6 +371,7 @@ fn check_command(case: &std::path::Path, sets: Vec<(String, String)>) -> ExitCod
             let unknowns: Vec<String> =
                 r.unknowns.iter().map(|(f, n)| format!("{n} {f}")).collect();
             say!("unknowns: {} ({} free)", unknowns.join(", "), r.free);
+            say!("linear solver: {}", r.linear.join("; "));
             match r.factor_entries {
                 Some(n) => say!(
                     "tangent: {} entries; factor: {n} entries; about {:.0} MB for the linear algebra",

@@ -21,6 +21,9 @@ pub struct CheckReport {
     pub free: usize,
     /// Stored entries of the tangent.
     pub tangent_entries: usize,
+    /// The linear solver of each system a solve factorises (its part, then the engine and
+    /// method), in words.
+    pub linear: Vec<String>,
     /// Entries of the direct factors (known before factorising for LDLᵀ), if known.
     pub factor_entries: Option<usize>,
     /// The probes' names.
@@ -97,6 +100,9 @@ pub fn check(case_path: &Path, opts: &SolveOptions) -> Result<CheckReport, Solve
         free: model.cons.n_eq,
         tangent_entries: plan.asm.pattern.row_idx.len(),
         factor_entries,
+        linear: (plan.solvers.iter())
+            .map(|(part, s)| format!("{}: {}", part.name(), s.method()))
+            .collect(),
         probes: probes.iter().map(|p| p.name.clone()).collect(),
         expansion: expansion(&case),
         warnings: model.warnings,

@@ -339,6 +339,22 @@ impl LinearSolver {
         self.backend.engine()
     }
 
+    /// The engine and its method, in words (what `tmc check` says a solve will use).
+    pub fn method(&self) -> String {
+        let how = self.backend.describe().unwrap_or_else(|| {
+            match self.kind {
+                LinearKind::Ldlt => "LDLᵀ in nested-dissection order",
+                LinearKind::Lu => "LU without row exchanges in nested-dissection order, with GMRES",
+                LinearKind::BlockGmres => {
+                    "GMRES preconditioned by the block-triangular factor (LDLᵀ or LU blocks in single precision)"
+                }
+                LinearKind::Petsc => "KSP",
+            }
+            .to_string()
+        });
+        format!("{} {how}", self.engine())
+    }
+
     /// A solver of the `kind` an engine made.
     pub fn with(kind: LinearKind, backend: Box<dyn Factorization>) -> LinearSolver {
         LinearSolver {

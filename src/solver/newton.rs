@@ -124,6 +124,15 @@ pub enum Part {
 }
 
 impl Part {
+    /// What the part solves, in words.
+    pub fn name(self) -> &'static str {
+        match self {
+            Part::All => "the whole system",
+            Part::Mechanics => "mechanics",
+            Part::Heat => "heat",
+        }
+    }
+
     /// The equations a kernel call must fill for this part.
     pub fn active(self) -> crate::kernel::Active {
         crate::kernel::Active {

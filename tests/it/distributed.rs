@@ -786,4 +786,11 @@ fn check_says_what_it_can_size_on_each_engine() {
             && !petsc.contains("for the linear algebra"),
         "{petsc}"
     );
+    // and which solver each engine will use: on PETSc, its own words for KSP and PC
+    assert!(
+        petsc.contains(
+            "linear solver: mechanics: petsc preonly/cholesky; heat: petsc preonly/cholesky"
+        ),
+        "{petsc}"
+    );
 }

@@ -115,6 +115,8 @@ fn check_reports_what_a_solve_would_use_and_writes_nothing() {
         "group \"top\" (1D): 8 elements",
         "one-way coupled",
         "unknowns: ",
+        // a one-way scene: two symmetric systems, each by faer's LDLᵀ
+        "linear solver: mechanics: faer LDLᵀ in nested-dissection order; heat: faer LDLᵀ",
         "factor: ",
         "probes: gap",
     ] {
