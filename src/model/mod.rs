@@ -242,3 +242,90 @@ impl Model {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::case::Case;
+    use crate::mesh::gmsh::{MeshOptions, mesh_geo};
+    use std::path::Path;
+
+    /// The model of the shipped case `name`, its `.geo` meshed as the case says (with `params`
+    /// over its own) into `target/unit-scratch/model/`.
+    fn model_of(name: &str, params: &[(&str, f64)]) -> Model {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+        let case = Case::read(&root.join(format!("cases/{name}.toml"))).unwrap();
+        let mut set: std::collections::BTreeMap<String, f64> =
+            case.file.mesh_options.params.clone();
+        set.extend(params.iter().map(|(k, v)| (k.to_string(), *v)));
+        let out = root.join(format!("target/unit-scratch/model/{name}.msh"));
+        let opts = MeshOptions {
+            order: case.file.mesh_options.order.unwrap_or(1),
+            incomplete: false,
+            set_numbers: set.into_iter().collect(),
+            verbose: false,
+        };
+        let mesh = mesh_geo(&case.mesh_path(), &out, &opts).unwrap().mesh;
+        validate::validate(&case, &mesh).unwrap();
+        build::build(&case, mesh).unwrap()
+    }
+
+    /// (bulk, flux, capacity, friction) terms of a model.
+    fn kinds(model: &Model) -> [usize; 4] {
+        let mut n = [0; 4];
+        for t in model.terms() {
+            n[kinds_rank(&t) as usize] += 1;
+        }
+        n
+    }
+
+    #[test]
+    fn a_model_lists_one_term_per_block_of_what_its_scene_calls_for() {
+        let coarse = [("n", 4.0), ("m", 4.0), ("l", 1.0)];
+        // (case, mesh parameters, whether each kind of term is there: flux, capacity, friction)
+        type Scene<'a> = (&'a str, &'a [(&'a str, f64)], [bool; 3]);
+        let scenes: [Scene; 4] = [
+            ("block", &coarse, [false, false, false]),
+            ("slab-radiation", &[], [true, false, false]),
+            ("block-transient", &coarse, [true, true, false]),
+            ("friction-heating", &coarse, [false, true, true]),
+        ];
+        for (name, params, has) in scenes {
+            let model = model_of(name, params);
+            let terms = model.terms();
+            let n = kinds(&model);
+            assert_eq!(
+                n[0],
+                model.blocks.len(),
+                "{name}: a bulk term per cell block"
+            );
+            assert_eq!([n[1] > 0, n[2] > 0, n[3] > 0], has, "{name}: {n:?}");
+            // in the assembler's order: bulk, flux, capacity, friction
+            let ordered = terms
+                .windows(2)
+                .all(|w| kinds_rank(&w[0]) <= kinds_rank(&w[1]));
+            assert!(ordered, "{name}: {terms:?}");
+            for t in &terms {
+                let (block, layout) = t.block(&model);
+                // the term's layout is its mesh block's kind
+                assert_eq!(layout.n, block.kind.n_nodes(), "{name}: {t:?}");
+                match t {
+                    Term::Flux(_) => assert!(layout.has_theta && block.kind.dim() < model.mesh.dim),
+                    Term::Capacity(_) => assert!(layout.has_theta),
+                    Term::Friction(_) => assert!(layout.has_u),
+                    Term::Bulk(_) => assert_eq!(block.kind.dim(), model.mesh.dim),
+                }
+            }
+        }
+    }
+
+    /// A term's place in the assembler's order.
+    fn kinds_rank(t: &Term) -> u8 {
+        match t {
+            Term::Bulk(_) => 0,
+            Term::Flux(_) => 1,
+            Term::Capacity(_) => 2,
+            Term::Friction(_) => 3,
+        }
+    }
+}
