@@ -26,10 +26,10 @@ use crate::dofs::{Pattern, build_pattern, build_pattern_of};
 use crate::element::RefElement;
 use crate::kernel::friction::{HISTORY_PER_POINT, SlipFields};
 use crate::kernel::{Active, KernelError};
-use crate::mesh::partition::Partition;
 use crate::mesh::{Block, centroid};
 use crate::model::{FacetBlock, Model, Term};
 use crate::parallel::Ranks;
+use crate::parallel::{Distribution, Partition};
 use cells::{Arrays, Cells, SlabView};
 use history::{PointHistory, Slab};
 use rayon::prelude::*;
@@ -263,7 +263,7 @@ pub struct Assembler {
     /// own cells, then the ranks sum their residuals and agree on errors and statistics, so
     /// that every rank holds the whole residual; the tangent keeps this rank's cells' part.
     pub ranks: Ranks,
-    partition: Option<Partition>,
+    distribution: Option<Distribution>,
 }
 
 /// Length of the pieces the whole-array passes below are cut into, one task each.
@@ -280,17 +280,17 @@ impl Assembler {
         Self::with_ranks(model, Ranks::SERIAL, None)
     }
 
-    /// The assembler of rank `ranks.rank`: its cells are those `partition` gives it.
-    pub fn distributed(model: &Model, ranks: Ranks, partition: Partition) -> Assembler {
-        Self::with_ranks(model, ranks, Some(partition))
+    /// The assembler of one rank of a distributed run: its cells are those the distribution
+    /// gives it.
+    pub fn distributed(model: &Model, distribution: Distribution) -> Assembler {
+        Self::with_ranks(model, distribution.ranks, Some(distribution))
     }
 
-    fn with_ranks(model: &Model, ranks: Ranks, partition: Option<Partition>) -> Assembler {
+    fn with_ranks(model: &Model, ranks: Ranks, distribution: Option<Distribution>) -> Assembler {
         let terms = model.terms();
+        let partition = distribution.as_ref().map(|d| &d.partition);
         let mine = |bi: usize, c: usize| {
-            partition
-                .as_ref()
-                .is_none_or(|p| term_rank(model, p, terms[bi], c) == ranks.rank)
+            partition.is_none_or(|p| term_rank(model, p, terms[bi], c) == ranks.rank)
         };
         // on several ranks, the entries of this rank's cells only
         let pattern = match partition {
@@ -361,35 +361,32 @@ impl Assembler {
             first_cell,
             prefetch: true,
             ranks,
-            partition,
+            distribution,
         }
     }
 
     /// Whether cell `c` of mesh cell block `block` is assembled here.
     pub fn owns_cell(&self, block: usize, c: usize) -> bool {
-        self.partition
-            .as_ref()
-            .is_none_or(|p| p.cell_rank[block][c] as usize == self.ranks.rank)
+        (self.distribution.as_ref()).is_none_or(|d| d.owns_cell(block, c))
     }
 
     /// On several ranks, the whole rows of the equations of this rank's nodes (`None` on one
     /// rank: the pattern's): what every rank's cells add to them, for a parallel matrix's
     /// preallocation. Built from all cells, kept only for this rank's nodes.
     pub fn rows_owned(&self, model: &Model) -> Option<Pattern> {
-        let p = self.partition.as_ref()?;
-        let me = self.ranks.rank as u32;
+        let d = self.distribution.as_ref()?;
         let terms = model.terms();
         let (nn, cells) = (
             model.mesh.coords.len(),
             cells_of(model, &terms, |_, _| true),
         );
-        let owned = |a: usize| p.node_rank[a] == me;
+        let owned = |a: usize| d.owns_node(a);
         Some(build_pattern_of(nn, cells, owned, &model.dofs, &model.cons))
     }
 
-    /// The partition of a distributed run.
-    pub fn partition(&self) -> Option<&Partition> {
-        self.partition.as_ref()
+    /// The distribution of a distributed run.
+    pub fn distribution(&self) -> Option<&Distribution> {
+        self.distribution.as_ref()
     }
 
     /// A step to time `t` was accepted at the state last assembled: its history becomes the

@@ -165,15 +165,8 @@ impl<'a> Run<'a> {
         summary.engine = solvers[0].1.engine().into();
         summary.petsc_solver = solvers[0].1.engine_solver();
         let mut series = Series::new(&out_dir, &case.name(), model);
-        if let Some(part) = asm.partition().filter(|p| p.parts > 1) {
-            let rank = asm.ranks.rank as u32;
-            let mine: Vec<bool> = part
-                .cell_rank
-                .iter()
-                .flatten()
-                .map(|&r| r == rank)
-                .collect();
-            series = series.in_parts(model, asm.ranks.rank, part.parts, &mine);
+        if let Some(d) = asm.distribution().filter(|d| d.partition.parts > 1) {
+            series = series.in_parts(model, d);
         }
         Ok(Run {
             model,

@@ -13,6 +13,7 @@ use crate::case::RegionKind;
 use crate::dofs::{Field, NONE};
 
 use crate::model::Model;
+use crate::parallel::Distribution;
 use std::path::{Path, PathBuf};
 
 pub struct Series {
@@ -61,11 +62,11 @@ impl Series {
         }
     }
 
-    /// On several ranks: this process writes the cells `mine` (per cell, mesh block order)
-    /// as part `rank` of `ranks`.
-    pub fn in_parts(mut self, model: &Model, rank: usize, ranks: usize, mine: &[bool]) -> Series {
-        self.piece = Piece::part(&model.mesh, mine);
-        self.ranks = Some((rank, ranks));
+    /// On several ranks: this process writes the cells `distribution` gives it, as its part
+    /// of each step.
+    pub fn in_parts(mut self, model: &Model, distribution: &Distribution) -> Series {
+        self.piece = Piece::part(&model.mesh, &distribution.my_cells());
+        self.ranks = Some((distribution.ranks.rank, distribution.partition.parts));
         self
     }
 

@@ -24,6 +24,61 @@ pub struct Ranks {
     pub size: usize,
 }
 
+/// Which rank owns each cell, boundary facet and node of a mesh (`mesh::partition` cuts it).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Partition {
+    pub parts: usize,
+    /// Per cell block of the mesh, the rank of each cell.
+    pub cell_rank: Vec<Vec<u32>>,
+    /// Per facet block of the mesh, the rank of each facet.
+    pub facet_rank: Vec<Vec<u32>>,
+    /// The rank of each node.
+    pub node_rank: Vec<u32>,
+}
+
+impl Partition {
+    /// Cells per rank.
+    pub fn cells_per_rank(&self) -> Vec<usize> {
+        let mut n = vec![0; self.parts];
+        for r in self.cell_rank.iter().flatten() {
+            n[*r as usize] += 1;
+        }
+        n
+    }
+}
+
+/// How a distributed run is spread: its ranks and which of them owns what. Made once when
+/// the run is planned, and handed to the assembler (the cells a rank assembles), the engine
+/// (the rows a rank holds) and the output (the part of each step a rank writes).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Distribution {
+    pub ranks: Ranks,
+    pub partition: Partition,
+}
+
+impl Distribution {
+    /// Whether this rank owns cell `c` of mesh cell block `block`.
+    pub fn owns_cell(&self, block: usize, c: usize) -> bool {
+        self.partition.cell_rank[block][c] as usize == self.ranks.rank
+    }
+
+    /// Whether this rank owns node `n` (and the rows of its equations).
+    pub fn owns_node(&self, n: usize) -> bool {
+        self.partition.node_rank[n] as usize == self.ranks.rank
+    }
+
+    /// Per cell, the cell blocks one after another: whether this rank owns it.
+    pub fn my_cells(&self) -> Vec<bool> {
+        let me = self.ranks.rank as u32;
+        self.partition
+            .cell_rank
+            .iter()
+            .flatten()
+            .map(|&r| r == me)
+            .collect()
+    }
+}
+
 /// The number of processes `mpirun` (Open MPI, or a PMI launcher) started this one among,
 /// read from the environment it sets; `None` when not started by a launcher.
 pub fn launched_size() -> Option<usize> {

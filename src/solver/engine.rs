@@ -170,7 +170,8 @@ fn on_ranks(
 ) -> Result<Planned, PlanError> {
     use super::petsc::{Hints, Ownership};
     use crate::case::LinearChoice;
-    use crate::mesh::partition::Partition;
+    use crate::mesh::partition;
+    use crate::parallel::Distribution;
     use crate::parallel::petsc;
     let solver = request.solver;
     if solver.linear != LinearChoice::Auto {
@@ -191,9 +192,9 @@ fn on_ranks(
     let asm = if ranks.is_serial() {
         Assembler::new(model)
     } else {
-        let partition = Partition::new(&model.mesh, ranks.size)
+        let partition = partition::cut(&model.mesh, ranks.size)
             .map_err(|e| PlanError::Setup(format!("mpirun -n {}: {e}", ranks.size)))?;
-        Assembler::distributed(model, ranks, partition)
+        Assembler::distributed(model, Distribution { ranks, partition })
     };
     // PETSc's calls stay on this thread: no idle-thread runner around the solves
     newton.idle = IdleThreads::Sleep;
@@ -204,7 +205,7 @@ fn on_ranks(
     let on_ranks = Petsc {
         own: Ownership {
             ranks,
-            node_rank: asm.partition().map(|p| &p.node_rank[..]),
+            node_rank: asm.distribution().map(|d| &d.partition.node_rank[..]),
             rows: rows.as_ref(),
         },
         hints: Hints {

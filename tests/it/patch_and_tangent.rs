@@ -668,18 +668,22 @@ fn rigid_motions_are_the_tangent_s_kernel_2d_and_3d() {
 /// whole pattern's columns of the equations of its nodes, other columns empty.
 #[test]
 fn each_rank_s_pattern_is_its_cells_part_of_the_whole() {
-    use tmc::mesh::partition::Partition;
-    use tmc::parallel::Ranks;
+    use tmc::mesh::partition;
+    use tmc::parallel::{Distribution, Ranks};
     let (_, model) = model_from(&case_body("block"), "block.geo", "pattern-ranks");
     let whole = Assembler::new(&model).pattern;
     let column =
         |p: &tmc::dofs::Pattern, e: usize| p.row_idx[p.col_ptr[e]..p.col_ptr[e + 1]].to_vec();
     let node = tmc::dofs::equation_structure(&model.dofs, &model.cons).node;
     for size in [2, 3] {
-        let partition = Partition::new(&model.mesh, size).unwrap();
+        let partition = partition::cut(&model.mesh, size).unwrap();
         let mut union = vec![std::collections::BTreeSet::new(); whole.n];
         for rank in 0..size {
-            let asm = Assembler::distributed(&model, Ranks { rank, size }, partition.clone());
+            let distribution = Distribution {
+                ranks: Ranks { rank, size },
+                partition: partition.clone(),
+            };
+            let asm = Assembler::distributed(&model, distribution);
             let (local, rows) = (&asm.pattern, asm.rows_owned(&model).unwrap());
             assert_eq!((local.n, rows.n), (whole.n, whole.n));
             assert!(
