@@ -16,7 +16,7 @@ mod solver;
 mod steps;
 
 pub use bc::{Bc, RAMPED_VALUES, RadiationKey, Ramp};
-pub use output::{Output, Probe, Units};
+pub use output::{Measure, Output, Probe, Units};
 pub use region::{FrictionKey, Region, RegionKind, SlipNormal, SolidLawKey};
 pub use sets::set_path;
 pub use solver::{CouplingChoice, EngineChoice, LinearChoice, PetscMethod, PetscOptions, Solver};

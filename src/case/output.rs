@@ -18,6 +18,54 @@ pub struct Probe {
     pub axis: Option<String>,
 }
 
+/// What a probe measures, as its keys say.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Measure<'a> {
+    /// The displacement's component (0, 1, 2: x, y, z) at a point.
+    U(usize, &'a [f64]),
+    /// The temperature at a point.
+    Theta(&'a [f64]),
+    /// The distance along an axis (0, 1, 2) between two material points.
+    Distance(usize, &'a [f64], &'a [f64]),
+}
+
+impl Probe {
+    /// What the probe measures; the error says which key is missing or wrong.
+    pub fn measure(&self) -> Result<Measure<'_>, String> {
+        let name = self.name.get_ref();
+        let field = self.field.get_ref().as_str();
+        let at = || {
+            (self.at.as_deref())
+                .ok_or_else(|| format!("probe \"{name}\": field \"{field}\" needs `at`"))
+        };
+        match field {
+            "ux" | "uy" | "uz" => Ok(Measure::U(usize::from(field.as_bytes()[1] - b'x'), at()?)),
+            "theta" => Ok(Measure::Theta(at()?)),
+            "distance" => {
+                let (Some(from), Some(to), Some(axis)) = (&self.from, &self.to, &self.axis) else {
+                    return Err(format!(
+                        "probe \"{name}\": a distance needs `from`, `to` and `axis`"
+                    ));
+                };
+                let axis = match axis.as_str() {
+                    "x" => 0,
+                    "y" => 1,
+                    "z" => 2,
+                    _ => {
+                        return Err(format!(
+                            "probe \"{name}\": axis must be \"x\", \"y\" or \"z\""
+                        ));
+                    }
+                };
+                Ok(Measure::Distance(axis, from, to))
+            }
+            other => Err(format!(
+                "probe \"{name}\": unknown field \"{other}\" (ux, uy, uz, theta, distance)"
+            )),
+        }
+    }
+}
+
 /// `[units]`: the names of the case's units, for plot axes and `summary.json` only. tmc
 /// converts nothing: the numbers are read and written in whatever consistent set the case uses.
 #[derive(Clone, Debug, Deserialize, Default, PartialEq, Eq)]
@@ -55,48 +103,8 @@ impl Case {
     pub(super) fn check_probes(&self) -> Result<(), CaseError> {
         let f = &self.file;
         for p in &f.probe {
-            let field = p.field.get_ref().as_str();
-            match field {
-                "ux" | "uy" | "uz" | "theta" => {
-                    if p.at.is_none() {
-                        return self.error(
-                            p.field.span(),
-                            format!(
-                                "probe \"{}\": field \"{field}\" needs `at`",
-                                p.name.get_ref()
-                            ),
-                        );
-                    }
-                }
-                "distance" => {
-                    if p.from.is_none() || p.to.is_none() || p.axis.is_none() {
-                        return self.error(
-                            p.field.span(),
-                            format!(
-                                "probe \"{}\": a distance needs `from`, `to` and `axis`",
-                                p.name.get_ref()
-                            ),
-                        );
-                    }
-                    if !matches!(p.axis.as_deref(), Some("x" | "y" | "z")) {
-                        return self.error(
-                            p.field.span(),
-                            format!(
-                                "probe \"{}\": axis must be \"x\", \"y\" or \"z\"",
-                                p.name.get_ref()
-                            ),
-                        );
-                    }
-                }
-                other => {
-                    return self.error(
-                        p.field.span(),
-                        format!(
-                            "probe \"{}\": unknown field \"{other}\" (ux, uy, uz, theta, distance)",
-                            p.name.get_ref()
-                        ),
-                    );
-                }
+            if let Err(msg) = p.measure() {
+                return self.error(p.field.span(), msg);
             }
         }
         let mut names: Vec<&str> = f.probe.iter().map(|p| p.name.get_ref().as_str()).collect();
@@ -119,6 +127,7 @@ impl Case {
 #[cfg(test)]
 mod tests {
     use super::super::tests::{parsed, refused};
+    use super::Measure;
 
     const PROBE: &str = "[[probe]]\nname = \"gap\"\n";
 
@@ -126,6 +135,17 @@ mod tests {
     fn probes_are_checked_and_units_are_names() {
         let case = parsed(&format!("{PROBE}field = \"distance\"\nfrom = [0, 0]\nto = [0, 1]\naxis = \"y\"\n[units]\nlength = \"mm\"\n")).unwrap();
         assert_eq!(case.file.units.length.as_deref(), Some("mm"));
+        // what each probe measures, read once from its keys
+        let measure = case.file.probe[0].measure();
+        assert_eq!(
+            measure,
+            Ok(Measure::Distance(1, &[0.0, 0.0][..], &[0.0, 1.0][..]))
+        );
+        let uz = parsed(&format!("{PROBE}field = \"uz\"\nat = [1, 2, 3]\n")).unwrap();
+        assert_eq!(
+            uz.file.probe[0].measure(),
+            Ok(Measure::U(2, &[1.0, 2.0, 3.0][..]))
+        );
         for (keys, says) in [
             ("field = \"ux\"\n", "field \"ux\" needs `at`"),
             (

@@ -1,6 +1,6 @@
 //! Probes: named scalar outputs evaluated at material points of the undeformed body.
 
-use crate::case::{Case, CaseError};
+use crate::case::{Case, CaseError, Measure};
 use crate::dofs::DofMap;
 use crate::element::{RefElement, invert_small};
 use crate::mesh::Mesh;
@@ -167,43 +167,24 @@ fn inverse_map<const N: usize, const D: usize, E: RefElement<N, D>>(
 pub fn build(case: &Case, mesh: &Mesh) -> Result<Vec<Probe>, CaseError> {
     let mut out = Vec::new();
     for p in &case.file.probe {
-        let find = |pt: &Vec<f64>| locate(mesh, pt).ok_or(());
         let name = p.name.get_ref().clone();
-        let not_found = |pt: &Vec<f64>| {
-            case.error::<Probe>(
-                p.name.span(),
-                format!("probe \"{name}\": point {pt:?} is not inside the mesh"),
-            )
+        let measure = match p.measure() {
+            Ok(m) => m,
+            Err(msg) => return case.error(p.field.span(), msg),
         };
-        let kind = match p.field.get_ref().as_str() {
-            f @ ("ux" | "uy" | "uz") => {
-                let at = p.at.as_ref().expect("checked");
-                let Ok(mp) = find(at) else {
-                    return not_found(at).map(|_| Vec::new());
-                };
-                ProbeKind::U((f.as_bytes()[1] - b'x') as usize, mp)
+        let at = |pt: &[f64]| -> Result<_, CaseError> {
+            match locate(mesh, pt) {
+                Some(mp) => Ok(mp),
+                None => case.error(
+                    p.name.span(),
+                    format!("probe \"{name}\": point {pt:?} is not inside the mesh"),
+                ),
             }
-            "theta" => {
-                let at = p.at.as_ref().expect("checked");
-                let Ok(mp) = find(at) else {
-                    return not_found(at).map(|_| Vec::new());
-                };
-                ProbeKind::Theta(mp)
-            }
-            _ => {
-                let (a, b) = (
-                    p.from.as_ref().expect("checked"),
-                    p.to.as_ref().expect("checked"),
-                );
-                let Ok(ma) = find(a) else {
-                    return not_found(a).map(|_| Vec::new());
-                };
-                let Ok(mb) = find(b) else {
-                    return not_found(b).map(|_| Vec::new());
-                };
-                let axis = (p.axis.as_deref().expect("checked").as_bytes()[0] - b'x') as usize;
-                ProbeKind::Distance(axis, ma, mb)
-            }
+        };
+        let kind = match measure {
+            Measure::U(c, pt) => ProbeKind::U(c, at(pt)?),
+            Measure::Theta(pt) => ProbeKind::Theta(at(pt)?),
+            Measure::Distance(axis, a, b) => ProbeKind::Distance(axis, at(a)?, at(b)?),
         };
         out.push(Probe { name, kind });
     }
