@@ -139,47 +139,26 @@ impl Friction {
                     dtau[(I, c)] -= tau[I] * dsize / size;
                 }
             }
-            // ∂τ/∂(μ p_n)
+            // ∂τ/∂(μ p_n): the limit moves with the normal traction
             let e = trial / size;
-            let mut dtau_dtheta = Vector3::zeros();
-            if p_n > 0.0 {
-                let project = (Matrix3::identity() - n * n.transpose()) / m.norm();
-                for (k, L) in (0..9).map(|c| (c / 3, c % 3)) {
-                    let dm = -Finv.row(L).transpose() * m[k];
-                    let dn = project * dm;
-                    let mut dt = Vector3::zeros();
-                    for i in 0..3 {
-                        dt[i] = (0..3)
-                            .map(|A| medium.dP_dF[(3 * i + A, 3 * k + L)] * N[A])
-                            .sum();
-                    }
-                    let dp = -dn.dot(&t) - n.dot(&dt);
-                    for I in 0..3 {
-                        dtau[(I, 3 * k + L)] += self.mu * dp * e[I];
-                    }
-                }
-                dtau_dtheta = e * (-self.mu * n.dot(&(medium.dP_dtheta * N)));
-            }
+            let dtau_dtheta = if p_n > 0.0 {
+                self.limit_moves(&mut dtau, &e, &m, &Finv, medium)
+            } else {
+                Vector3::zeros()
+            };
             (tau, dtau, dtau_dtheta, gamma - tau / G)
         };
-        // the heat: D = τ · (g − gₙ), zero in stick; in slip g = γ − τ/G, so
-        // dD = dτ · Δg + τ · (dγ − dτ/G + τ dG/G²), dG/dF = G'(J) J F⁻ᵀ
         let step = new_slip - slip;
-        let mut ddissipated_dF = Matrix3::zeros();
-        let mut ddissipated_dtheta = 0.0;
-        if slipping {
-            for (k, L) in (0..9).map(|c| (c / 3, c % 3)) {
-                let c = 3 * k + L;
-                let dGc = dG * J * Finv[(L, k)];
-                let mut d = 0.0;
-                for I in 0..3 {
-                    let dslip = dgamma[(I, c)] - dtau[(I, c)] / G + tau[I] * dGc / (G * G);
-                    d += dtau[(I, c)] * step[I] + tau[I] * dslip;
-                }
-                ddissipated_dF[(k, L)] = d;
-            }
-            ddissipated_dtheta = dtau_dtheta.dot(&step) - tau.dot(&dtau_dtheta) / G;
-        }
+        let (ddissipated_dF, ddissipated_dtheta) = if slipping {
+            let slip_rate = SlipDerivatives {
+                dgamma: &dgamma,
+                dtau: &dtau,
+                dtau_dtheta: &dtau_dtheta,
+            };
+            slip_rate.dissipation(&tau, &step, (G, dG * J), &Finv)
+        } else {
+            (Matrix3::zeros(), 0.0)
+        };
         let S = N * tau.transpose() + tau * N.transpose();
         // A_iJkL = δ_ik S_LJ + (F N)_i dτ_J/dF_kL + (F dτ/dF)_i,kL N_J
         let Fdtau = F * dtau;
@@ -202,6 +181,75 @@ impl Friction {
             ddissipated_dF,
             ddissipated_dtheta,
         })
+    }
+}
+
+impl Friction {
+    /// A slipping point's τ = μ p_n e moves with the normal traction p_n = −n · P N, n = m/|m|,
+    /// m = F⁻ᵀ N: its derivative in F is added to `dtau`, its derivative in θ returned.
+    fn limit_moves(
+        &self,
+        dtau: &mut VectorByF,
+        e: &Vector3<f64>,
+        m: &Vector3<f64>,
+        Finv: &Matrix3<f64>,
+        medium: &MediumStress,
+    ) -> Vector3<f64> {
+        let N = self.normal;
+        let n = m / m.norm();
+        let t = medium.P * N;
+        let project = (Matrix3::identity() - n * n.transpose()) / m.norm();
+        for (k, L) in (0..9).map(|c| (c / 3, c % 3)) {
+            let dm = -Finv.row(L).transpose() * m[k];
+            let dn = project * dm;
+            let mut dt = Vector3::zeros();
+            for i in 0..3 {
+                dt[i] = (0..3)
+                    .map(|A| medium.dP_dF[(3 * i + A, 3 * k + L)] * N[A])
+                    .sum();
+            }
+            let dp = -dn.dot(&t) - n.dot(&dt);
+            for I in 0..3 {
+                dtau[(I, 3 * k + L)] += self.mu * dp * e[I];
+            }
+        }
+        e * (-self.mu * n.dot(&(medium.dP_dtheta * N)))
+    }
+}
+
+/// The derivatives of a slipping point's shear γ and traction τ in F (3 × 9, column 3k + L
+/// for F_kL) and of τ in θ.
+struct SlipDerivatives<'a> {
+    dgamma: &'a VectorByF,
+    dtau: &'a VectorByF,
+    dtau_dtheta: &'a Vector3<f64>,
+}
+
+impl SlipDerivatives<'_> {
+    /// The derivatives in F and θ of the heat made, D = τ · (g − gₙ) with g = γ − τ/G in slip:
+    /// dD = dτ · Δg + τ · (dγ − dτ/G + τ dG/G²), with dG/dF = G'(J) J F⁻ᵀ (`modulus`: G and
+    /// G'(J) J).
+    fn dissipation(
+        &self,
+        tau: &Vector3<f64>,
+        step: &Vector3<f64>,
+        modulus: (f64, f64),
+        Finv: &Matrix3<f64>,
+    ) -> (Matrix3<f64>, f64) {
+        let (G, dG_J) = modulus;
+        let mut dF = Matrix3::zeros();
+        for (k, L) in (0..9).map(|c| (c / 3, c % 3)) {
+            let c = 3 * k + L;
+            let dGc = dG_J * Finv[(L, k)];
+            let mut d = 0.0;
+            for I in 0..3 {
+                let dslip = self.dgamma[(I, c)] - self.dtau[(I, c)] / G + tau[I] * dGc / (G * G);
+                d += self.dtau[(I, c)] * step[I] + tau[I] * dslip;
+            }
+            dF[(k, L)] = d;
+        }
+        let dtheta = self.dtau_dtheta.dot(step) - tau.dot(self.dtau_dtheta) / G;
+        (dF, dtheta)
     }
 }
 
