@@ -3,7 +3,7 @@
 
 use super::{Case, CaseError};
 use crate::material::conduction::TABLE_POINTS;
-use crate::material::{Conductivity, MooneyRivlin, SolidLaw, ThermoElastic};
+use crate::material::{Conductivity, MooneyRivlin, Regularization, SolidLaw, ThermoElastic};
 use serde::Deserialize;
 use toml::Spanned;
 
@@ -166,6 +166,27 @@ impl Region {
                 hc_t0: h.get_ref() * t.get_ref(),
             },
             _ => Conductivity::Medium { k_tm, k_max },
+        }
+    }
+
+    /// A medium region's regularization of eq. (20) over the mesh's extent `d` (eq. 21):
+    /// `beta1` and `beta2`, 1 and 1e-2 unless given.
+    pub fn regularization(&self, d: f64) -> Regularization {
+        let or =
+            |v: &Option<Spanned<f64>>, default: f64| v.as_ref().map_or(default, |v| *v.get_ref());
+        Regularization {
+            beta1: or(&self.beta1, 1.0),
+            beta2: or(&self.beta2, 1e-2),
+            d,
+        }
+    }
+
+    /// A quadratic medium's weight γ α_r of eq. (18): `alpha_r` given, or β2 d², which weighs
+    /// |∇f|² as eq. (20) does with p = d f.
+    pub fn direct_regularization(&self, d: f64) -> f64 {
+        match &self.alpha_r {
+            Some(a) => self.medium_law().K * a.get_ref(),
+            None => self.regularization(d).beta2 * d * d,
         }
     }
 
@@ -510,6 +531,22 @@ mod tests {
             panic!("mooney-rivlin asked for")
         };
         assert_eq!((l.C10, l.C01, l.K), (3.0, 1.0, 20.0));
+    }
+
+    #[test]
+    fn a_medium_s_regularization_has_its_defaults_and_its_direct_weight() {
+        let plain = region(MEDIUM);
+        let reg = plain.regularization(2.0);
+        assert_eq!((reg.beta1, reg.beta2, reg.d), (1.0, 1e-2, 2.0));
+        // eq. (18) weighs like eq. (20) with p = d f: β2 d²
+        assert_eq!(plain.direct_regularization(2.0), 1e-2 * 4.0);
+        let given = region(&format!(
+            "{MEDIUM}beta1 = 0.5\nbeta2 = 0.1\nalpha_r = 3.0\n"
+        ));
+        let reg = given.regularization(2.0);
+        assert_eq!((reg.beta1, reg.beta2), (0.5, 0.1));
+        // α_r given: γ α_r
+        assert_eq!(given.direct_regularization(2.0), 1e-4 * 3.0);
     }
 
     #[test]

@@ -10,7 +10,7 @@ use crate::case::{Bc, Case, CaseError, RegionKind, SlipNormal};
 use crate::dofs::{Constraints, DofMap, Field, Layout, NONE, Prescribed};
 use crate::kernel::CellMaterial;
 use crate::kernel::friction::FrictionMaterial;
-use crate::material::{Conductivity, Regularization, SolidLaw};
+use crate::material::{Conductivity, SolidLaw};
 use crate::mesh::Mesh;
 use crate::mesh::centroid;
 use crate::mesh::faces::{Face, NearestFace, shared_faces};
@@ -191,11 +191,7 @@ fn region_materials(case: &Case, d: f64) -> Vec<CellMaterial> {
                         law: SolidLaw::NeoHooke(r.medium_law()),
                         cond: r.medium_conductivity(k, k_max),
                         medium: true,
-                        reg: Some(Regularization {
-                            beta1: r.beta1.as_ref().map(|v| *v.get_ref()).unwrap_or(1.0),
-                            beta2: r.beta2.as_ref().map(|v| *v.get_ref()).unwrap_or(1e-2),
-                            d,
-                        }),
+                        reg: Some(r.regularization(d)),
                         reg_direct: None,
                     }
                 }
@@ -253,15 +249,7 @@ fn cell_blocks(
             }
         }
         if medium && b.kind.order() == 2 && physics.mechanics {
-            // γ α_r: given, or β2 d² so that it weighs |∇f|² like eq. 20 with p = d f
-            let r = &f.region[region];
-            let gamma = *r.gamma.as_ref().expect("checked").get_ref();
-            let beta2 = mat.reg.map_or(1e-2, |g| g.beta2);
-            mat.reg_direct = Some(
-                r.alpha_r
-                    .as_ref()
-                    .map_or(beta2 * d * d, |a| gamma * *a.get_ref()),
-            );
+            mat.reg_direct = Some(f.region[region].direct_regularization(d));
             mat.reg = None;
         }
         blocks.push(BlockInfo {
