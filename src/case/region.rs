@@ -169,6 +169,20 @@ impl Region {
         }
     }
 
+    /// The region's conductivity law: a solid's constant `k` (1 unless given), a medium's
+    /// ([`Region::medium_conductivity`]) with k_TM = `k` and `k_max` given, or else the largest
+    /// of `solids_k`, the solids' largest k, and its own k_TM.
+    pub fn conductivity(&self, solids_k: f64) -> Conductivity {
+        let k = self.k.as_ref().map_or(1.0, |k| *k.get_ref());
+        match self.kind {
+            RegionKind::Solid => Conductivity::Constant(k),
+            RegionKind::Medium => {
+                let k_max = (self.k_max.as_ref()).map_or(solids_k.max(k), |v| *v.get_ref());
+                self.medium_conductivity(k, k_max)
+            }
+        }
+    }
+
     /// A medium region's regularization of eq. (20) over the mesh's extent `d` (eq. 21):
     /// `beta1` and `beta2`, 1 and 1e-2 unless given.
     pub fn regularization(&self, d: f64) -> Regularization {
@@ -575,6 +589,23 @@ mod tests {
         );
         let e = refused(&format!("{SOLID}mu = 10.0\n"));
         assert!(e.contains("`K` is required"), "{e}");
+    }
+
+    #[test]
+    fn a_region_s_conductivity_defaults_from_its_kind() {
+        // a solid: its k, or 1
+        let solid = region(&format!("{SOLID}K = 1.0\nmu = 1.0\n"));
+        assert!(matches!(solid.conductivity(50.0), Conductivity::Constant(k) if k == 1.0));
+        // a medium: capped by the solids' largest k, or its own k_TM if larger, or `k_max`
+        let capped = |keys: &str, solids_k: f64| match region(&format!("{MEDIUM}{keys}"))
+            .conductivity(solids_k)
+        {
+            Conductivity::Medium { k_tm, k_max } => (k_tm, k_max),
+            other => panic!("{other:?}"),
+        };
+        assert_eq!(capped("k = 1e-4\n", 50.0), (1e-4, 50.0));
+        assert_eq!(capped("k = 80.0\n", 50.0), (80.0, 80.0));
+        assert_eq!(capped("k = 1e-4\nk_max = 5.0\n", 50.0), (1e-4, 5.0));
     }
 
     #[test]

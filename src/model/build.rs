@@ -10,7 +10,7 @@ use crate::case::{Bc, Case, CaseError, RegionKind, SlipNormal};
 use crate::dofs::{Constraints, DofMap, Field, Layout, NONE, Prescribed};
 use crate::kernel::CellMaterial;
 use crate::kernel::friction::FrictionMaterial;
-use crate::material::{Conductivity, SolidLaw};
+use crate::material::SolidLaw;
 use crate::mesh::Mesh;
 use crate::mesh::centroid;
 use crate::mesh::faces::{Face, NearestFace, shared_faces};
@@ -163,7 +163,8 @@ fn require_conductivities(case: &Case, physics: &Physics) -> Result<(), CaseErro
 /// The material of each `[[region]]`, in case order; `d` is the mesh's extent (eq. 21).
 fn region_materials(case: &Case, d: f64) -> Vec<CellMaterial> {
     let f = &case.file;
-    let k_max_default = f
+    // the solids' largest k: a medium's cap unless it gives `k_max`
+    let solids_k = f
         .region
         .iter()
         .filter(|r| r.kind == RegionKind::Solid)
@@ -171,31 +172,21 @@ fn region_materials(case: &Case, d: f64) -> Vec<CellMaterial> {
         .fold(0.0f64, f64::max);
     f.region
         .iter()
-        .map(|r| {
-            let k = r.k.as_ref().map(|k| *k.get_ref()).unwrap_or(1.0);
-            match r.kind {
-                RegionKind::Solid => CellMaterial {
-                    law: r.solid_law(),
-                    cond: Conductivity::Constant(k),
-                    medium: false,
-                    reg: None,
-                    reg_direct: None,
-                },
-                RegionKind::Medium => {
-                    let k_max = r
-                        .k_max
-                        .as_ref()
-                        .map(|v| *v.get_ref())
-                        .unwrap_or(k_max_default.max(k));
-                    CellMaterial {
-                        law: SolidLaw::NeoHooke(r.medium_law()),
-                        cond: r.medium_conductivity(k, k_max),
-                        medium: true,
-                        reg: Some(r.regularization(d)),
-                        reg_direct: None,
-                    }
-                }
-            }
+        .map(|r| match r.kind {
+            RegionKind::Solid => CellMaterial {
+                law: r.solid_law(),
+                cond: r.conductivity(solids_k),
+                medium: false,
+                reg: None,
+                reg_direct: None,
+            },
+            RegionKind::Medium => CellMaterial {
+                law: SolidLaw::NeoHooke(r.medium_law()),
+                cond: r.conductivity(solids_k),
+                medium: true,
+                reg: Some(r.regularization(d)),
+                reg_direct: None,
+            },
         })
         .collect()
 }
