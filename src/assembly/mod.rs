@@ -375,10 +375,9 @@ impl Assembler {
     /// preallocation. Built from all cells, kept only for this rank's nodes.
     pub fn rows_owned(&self, model: &Model) -> Option<Pattern> {
         let d = self.distribution.as_ref()?;
-        let terms = model.terms();
         let (nn, cells) = (
             model.mesh.coords.len(),
-            cells_of(model, &terms, |_, _| true),
+            cells_of(model, &self.terms, |_, _| true),
         );
         let owned = |a: usize| d.owns_node(a);
         Some(build_pattern_of(nn, cells, owned, &model.dofs, &model.cons))

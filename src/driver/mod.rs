@@ -408,18 +408,20 @@ mod tests {
         }
     }
 
+    /// The block scene's coarse mesh, as `--set` says it.
+    fn coarse() -> Vec<(String, String)> {
+        let params = ("mesh_options.params", "{ n = 4, m = 4, l = 1 }");
+        vec![(params.0.to_string(), params.1.to_string())]
+    }
+
     /// The block scene on a coarse mesh, solved into `target/unit-scratch/NAME` with the
     /// engine's failures scripted; the run's result and its folder.
     fn solve_scripted(name: &str, script: Script) -> (Result<Summary, SolveError>, PathBuf) {
         let root = Path::new(env!("CARGO_MANIFEST_DIR"));
         let out = root.join("target/unit-scratch/driver").join(name);
         let _ = std::fs::remove_dir_all(&out);
-        let sets = [(
-            "mesh_options.params".to_string(),
-            "{ n = 4, m = 4, l = 1 }".to_string(),
-        )];
         let case = Case::read(&root.join("cases/block.toml"))
-            .and_then(|c| c.with_sets(&sets))
+            .and_then(|c| c.with_sets(&coarse()))
             .unwrap();
         let opts = SolveOptions {
             out_dir: Some(out.clone()),
@@ -522,10 +524,7 @@ mod tests {
             out_dir: Some(dir.clone()),
             quiet: true,
             restart: true,
-            sets: vec![(
-                "mesh_options.params".to_string(),
-                "{ n = 4, m = 4, l = 1 }".to_string(),
-            )],
+            sets: coarse(),
             ..Default::default()
         };
         let resumed = run(&case, &opts).unwrap();

@@ -95,14 +95,15 @@ impl Plan {
             idle: opts.idle_threads,
             span: case.file.mesh.span(),
         };
-        let Planned { asm, solvers } = engine::plan(model, &request, &mut newton, &systems)
-            .map_err(|e| match e {
+        let Planned { asm, solvers, idle } =
+            engine::plan(model, &request, &systems).map_err(|e| match e {
                 PlanError::Case { span, message } => {
                     SolveError::from(case.error::<()>(span, message).unwrap_err())
                 }
                 PlanError::Setup(message) => SolveError::Setup(message),
                 PlanError::Linear(e) => SolveError::Linear(e),
             })?;
+        newton.idle = idle;
         Ok(Plan {
             strategy,
             asm,
@@ -271,11 +272,8 @@ impl<'a> Run<'a> {
     /// Every solver replaced by what `wrap` makes of it (a test's scripted engine).
     #[cfg(test)]
     pub(super) fn wrap_solvers(&mut self, wrap: impl Fn(LinearSolver) -> LinearSolver) {
-        for (_, solver) in self.solvers.iter_mut() {
-            let kind = solver.kind;
-            let taken = std::mem::replace(solver, LinearSolver::with(kind, Box::new(Taken)));
-            *solver = wrap(taken);
-        }
+        let solvers = std::mem::take(&mut self.solvers);
+        self.solvers = solvers.into_iter().map(|(p, s)| (p, wrap(s))).collect();
     }
 
     /// The run's ranks (their decisions to stop are taken together).
@@ -835,19 +833,4 @@ fn progress_bar(quiet: bool) -> indicatif::ProgressBar {
         .expect("valid template"),
     );
     pb
-}
-
-/// What a solver's place holds while a test wraps it: never used.
-#[cfg(test)]
-struct Taken;
-
-#[cfg(test)]
-impl crate::solver::linear::Factorization for Taken {
-    fn factor(&mut self, _: &[f64]) -> Result<(), crate::solver::linear::LinearError> {
-        unreachable!("a solver taken to be wrapped")
-    }
-
-    fn solve(&mut self, _: &mut [f64]) -> Result<usize, crate::solver::linear::LinearError> {
-        unreachable!("a solver taken to be wrapped")
-    }
 }

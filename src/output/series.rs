@@ -11,7 +11,6 @@ use super::{OutputError, write_atomic};
 use crate::assembly::FrictionCell;
 use crate::case::RegionKind;
 use crate::dofs::{Field, NONE};
-
 use crate::model::Model;
 use crate::parallel::Distribution;
 use std::path::{Path, PathBuf};
@@ -195,9 +194,7 @@ impl Series {
         self.written.push((time, file));
         write_pvd(&self.pvd, &self.written)
     }
-}
 
-impl Series {
     /// On the first of several ranks, after every rank's part of the last step is written:
     /// the `.pvtu` that puts them together, and the `.pvd` that lists it. Nothing elsewhere.
     pub fn collect(&mut self) -> Result<(), OutputError> {

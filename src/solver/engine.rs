@@ -8,7 +8,7 @@
 
 use super::idle::IdleThreads;
 use super::linear::{LinearError, LinearKind, LinearSolver};
-use super::newton::{Newton, Part};
+use super::newton::Part;
 use crate::assembly::Assembler;
 use crate::case::{EngineChoice, Solver};
 use crate::dofs::{Pattern, Structure, equation_structure};
@@ -117,11 +117,13 @@ pub struct Request<'a> {
     pub span: Range<usize>,
 }
 
-/// The assembler and the solvers a run uses, their symbolic analyses done.
+/// The assembler and the solvers a run uses, their symbolic analyses done, and what Newton's
+/// other threads may do during the solves.
 pub struct Planned {
     pub asm: Assembler,
     /// One solver per system, in the order asked for.
     pub solvers: Vec<(Part, LinearSolver)>,
+    pub idle: IdleThreads,
 }
 
 /// Why a run's linear algebra could not be set up.
@@ -139,35 +141,28 @@ pub enum PlanError {
 
 /// Set up the engine `request` asks for (PETSc when the case says so or the run has several
 /// ranks, faer otherwise): its assembler (on several ranks, each rank's part of the mesh) and
-/// one solver for each of `systems`. Newton's threads are told what to do during solves.
-pub fn plan(
-    model: &Model,
-    request: &Request,
-    newton: &mut Newton,
-    systems: &[System],
-) -> Result<Planned, PlanError> {
+/// one solver for each of `systems`.
+pub fn plan(model: &Model, request: &Request, systems: &[System]) -> Result<Planned, PlanError> {
     if request.solver.engine == EngineChoice::Petsc || !Ranks::world().is_serial() {
-        return on_ranks(model, request, newton, systems);
+        return on_ranks(model, request, systems);
     }
     let asm = Assembler::new(model);
-    newton.idle = request.idle;
     let structure = equation_structure(&model.dofs, &model.cons);
     let solvers = Faer {
         whole: request.whole,
     }
     .solvers(systems, &asm.pattern, &structure)?;
-    Ok(Planned { asm, solvers })
+    Ok(Planned {
+        asm,
+        solvers,
+        idle: request.idle,
+    })
 }
 
 /// The PETSc engine: the mesh cut into one part per rank, each rank's assembler running its
 /// part, PETSc systems for the strategy's parts (symmetric ones marked so, for Cholesky or CG).
 #[cfg(feature = "petsc")]
-fn on_ranks(
-    model: &Model,
-    request: &Request,
-    newton: &mut Newton,
-    systems: &[System],
-) -> Result<Planned, PlanError> {
+fn on_ranks(model: &Model, request: &Request, systems: &[System]) -> Result<Planned, PlanError> {
     use super::petsc::{Hints, Ownership};
     use crate::case::LinearChoice;
     use crate::mesh::partition;
@@ -196,8 +191,6 @@ fn on_ranks(
             .map_err(|e| PlanError::Setup(format!("mpirun -n {}: {e}", ranks.size)))?;
         Assembler::distributed(model, Distribution { ranks, partition })
     };
-    // PETSc's calls stay on this thread: no idle-thread runner around the solves
-    newton.idle = IdleThreads::Sleep;
     let structure = equation_structure(&model.dofs, &model.cons);
     let rows = asm.rows_owned(model);
     let rigid = crate::model::rigid::rigid_motions(model);
@@ -215,17 +208,17 @@ fn on_ranks(
         method: solver.petsc.method,
     };
     let solvers = on_ranks.solvers(systems, &asm.pattern, &structure)?;
-    Ok(Planned { asm, solvers })
+    Ok(Planned {
+        asm,
+        solvers,
+        // PETSc's calls stay on this thread: no idle-thread runner around the solves
+        idle: IdleThreads::Sleep,
+    })
 }
 
 /// Without the PETSc engine built in: what to do to have it.
 #[cfg(not(feature = "petsc"))]
-fn on_ranks(
-    _model: &Model,
-    request: &Request,
-    _newton: &mut Newton,
-    _systems: &[System],
-) -> Result<Planned, PlanError> {
+fn on_ranks(_model: &Model, request: &Request, _systems: &[System]) -> Result<Planned, PlanError> {
     use crate::parallel::{NOT_BUILT, launched_size};
     if !Ranks::world().is_serial() || launched_size().unwrap_or(1) > 1 {
         return Err(PlanError::Setup(NOT_BUILT.into()));

@@ -148,17 +148,6 @@ impl<T: Real> LaggedLu<T> {
         }
     }
 
-    /// Take the whole system's `values` as the current tangent; factorised at once only the
-    /// first time.
-    fn factor(&mut self, values: &[f64]) -> Result<(), LinearError> {
-        self.sub.update(values);
-        self.current = false;
-        if !self.factored {
-            self.refactor()?;
-        }
-        Ok(())
-    }
-
     fn refactor(&mut self) -> Result<(), LinearError> {
         self.factored = false;
         self.pivoted = None;
@@ -178,6 +167,28 @@ impl<T: Real> LaggedLu<T> {
         }
         self.factored = true;
         self.current = true;
+        Ok(())
+    }
+
+    /// b → A⁻¹ b with the factor held, of the current values or of earlier ones.
+    fn apply(&self, b: &mut [f64]) {
+        let n = b.len();
+        match &self.pivoted {
+            Some(lu) => lu.solve_in_place(MatMut::from_column_major_slice_mut(b, n, 1)),
+            None => self.staticlu.solve(b),
+        }
+    }
+}
+
+impl Factorization for LaggedLu<f64> {
+    /// Take the whole system's `values` as the current tangent; factorised at once only the
+    /// first time.
+    fn factor(&mut self, values: &[f64]) -> Result<(), LinearError> {
+        self.sub.update(values);
+        self.current = false;
+        if !self.factored {
+            self.refactor()?;
+        }
         Ok(())
     }
 
@@ -217,25 +228,6 @@ impl<T: Real> LaggedLu<T> {
         }
     }
 
-    /// b → A⁻¹ b with the factor held, of the current values or of earlier ones.
-    fn apply(&self, b: &mut [f64]) {
-        let n = b.len();
-        match &self.pivoted {
-            Some(lu) => lu.solve_in_place(MatMut::from_column_major_slice_mut(b, n, 1)),
-            None => self.staticlu.solve(b),
-        }
-    }
-}
-
-impl Factorization for LaggedLu<f64> {
-    fn factor(&mut self, values: &[f64]) -> Result<(), LinearError> {
-        LaggedLu::factor(self, values)
-    }
-
-    fn solve(&mut self, b: &mut [f64]) -> Result<usize, LinearError> {
-        LaggedLu::solve(self, b)
-    }
-
     fn entries(&self) -> Option<usize> {
         Some(self.staticlu.entries())
     }
@@ -258,11 +250,36 @@ impl Factorization for SymFactor {
 
 impl Factorization for BlockTriangular {
     fn factor(&mut self, values: &[f64]) -> Result<(), LinearError> {
-        BlockTriangular::factor(self, values)
+        self.whole.update(values);
+        // the temperature block factors on the other core while the mechanics block does
+        let mech =
+            |f: &mut Option<MechanicsFactor>| f.as_mut().map_or(Ok(()), |f| f.factor(values));
+        let heat = |f: &mut Option<SymFactor>| f.as_mut().map_or(Ok(()), |f| f.factor(values));
+        let (m, t) = rayon::join(|| mech(&mut self.fm), || heat(&mut self.ft));
+        m.and(t)?;
+        self.coupling.update(values);
+        Ok(())
     }
 
     fn solve(&mut self, b: &mut [f64]) -> Result<usize, LinearError> {
-        BlockTriangular::solve(self, b)
+        let matvec = |x: &[f64], y: &mut [f64]| self.whole.mul(x, y);
+        let rhs = b.to_vec();
+        let out = gmres(
+            &matvec,
+            &|r: &[f64], z: &mut [f64]| self.precondition(r, z),
+            &rhs,
+            b,
+            GMRES_TOL,
+            GMRES_RESTART,
+            GMRES_MAX,
+        );
+        match out {
+            Ok(its) => Ok(its),
+            Err((iterations, residual)) => Err(LinearError::Krylov {
+                iterations,
+                residual,
+            }),
+        }
     }
 
     fn entries(&self) -> Option<usize> {
@@ -787,18 +804,6 @@ impl BlockTriangular {
         })
     }
 
-    fn factor(&mut self, values: &[f64]) -> Result<(), LinearError> {
-        self.whole.update(values);
-        // the temperature block factors on the other core while the mechanics block does
-        let mech =
-            |f: &mut Option<MechanicsFactor>| f.as_mut().map_or(Ok(()), |f| f.factor(values));
-        let heat = |f: &mut Option<SymFactor>| f.as_mut().map_or(Ok(()), |f| f.factor(values));
-        let (m, t) = rayon::join(|| mech(&mut self.fm), || heat(&mut self.ft));
-        m.and(t)?;
-        self.coupling.update(values);
-        Ok(())
-    }
-
     /// z = P⁻¹ r: z_m = K_mm⁻¹ r_m, z_θ = K_θθ⁻¹ (r_θ − K_θm z_m).
     fn precondition(&self, r: &[f64], z: &mut [f64]) {
         let mut zm: Vec<f64> = self.mech.iter().map(|&e| r[e]).collect();
@@ -815,27 +820,6 @@ impl BlockTriangular {
         }
         for (&e, v) in self.heat.iter().zip(&zt) {
             z[e] = *v;
-        }
-    }
-
-    fn solve(&self, b: &mut [f64]) -> Result<usize, LinearError> {
-        let matvec = |x: &[f64], y: &mut [f64]| self.whole.mul(x, y);
-        let rhs = b.to_vec();
-        let out = gmres(
-            &matvec,
-            &|r: &[f64], z: &mut [f64]| self.precondition(r, z),
-            &rhs,
-            b,
-            GMRES_TOL,
-            GMRES_RESTART,
-            GMRES_MAX,
-        );
-        match out {
-            Ok(its) => Ok(its),
-            Err((iterations, residual)) => Err(LinearError::Krylov {
-                iterations,
-                residual,
-            }),
         }
     }
 }

@@ -52,8 +52,9 @@ impl Factorization for PetscSystem {
         Ok(PetscSystem::solve(self, b)?)
     }
 
+    /// PETSc's solver and preconditioner, as `ksp_type/pc_type`.
     fn describe(&self) -> Option<String> {
-        Some(PetscSystem::describe(self))
+        Some(self.ksp.describe())
     }
 
     fn engine(&self) -> &'static str {
@@ -299,11 +300,6 @@ impl PetscSystem {
         } else {
             wasted + report.iterations
         })
-    }
-
-    /// PETSc's solver and preconditioner, as `ksp_type/pc_type`.
-    pub fn describe(&self) -> String {
-        self.ksp.describe()
     }
 }
 
