@@ -8,7 +8,7 @@ use std::time::Instant;
 use tmc::dofs::{CellState, Layout};
 use tmc::element::{Hex8, Hex27, Quad4, RefElement, Tet4, Tri3};
 use tmc::kernel::{Active, CellMaterial, bulk, lanes};
-use tmc::material::{Conductivity, Regularization, SolidLaw, ThermoElastic};
+use tmc::material::{Conductivity, MooneyRivlin, Regularization, SolidLaw, ThermoElastic};
 
 const SOLID: CellMaterial = CellMaterial {
     law: SolidLaw::NeoHooke(ThermoElastic {
@@ -21,6 +21,18 @@ const SOLID: CellMaterial = CellMaterial {
     medium: false,
     reg: None,
     reg_direct: None,
+};
+
+/// A law without the coefficient form: the lanes contract its full ∂P/∂F.
+const RUBBER: CellMaterial = CellMaterial {
+    law: SolidLaw::MooneyRivlin(MooneyRivlin {
+        C10: 3.0,
+        C01: 2.0,
+        K: 20.0,
+        alpha: 1e-5,
+        theta0: 0.0,
+    }),
+    ..SOLID
 };
 
 const MEDIUM: CellMaterial = CellMaterial {
@@ -113,7 +125,7 @@ fn main() {
     println!("\nkernel::bulk, residual + tangent of one cell, one thread (µs per cell)\n");
     println!("| element | physics | dofs | µs | lanes µs |");
     println!("|---|---|---:|---:|---:|");
-    let rows: [Row; 10] = [
+    let rows: [Row; 11] = [
         ("T1", "solid u", 6, || time::<3, 2, Tri3>(&SOLID, false)),
         ("Q1", "solid u, θ", 12, || {
             time::<4, 2, Quad4>(&SOLID, true)
@@ -126,6 +138,9 @@ fn main() {
         }),
         ("H1", "solid u", 24, || time::<8, 3, Hex8>(&SOLID, false)),
         ("H1", "solid u, θ", 32, || time::<8, 3, Hex8>(&SOLID, true)),
+        ("H1", "Mooney-Rivlin solid u, θ", 32, || {
+            time::<8, 3, Hex8>(&RUBBER, true)
+        }),
         ("H1", "medium u, θ", 32, || {
             time::<8, 3, Hex8>(&MEDIUM_NO_P, true)
         }),

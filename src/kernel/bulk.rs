@@ -477,7 +477,7 @@ mod tests {
         check::<4, 2, Quad4>(&SOLID);
         check::<4, 3, Tet4>(&SOLID);
         check::<8, 3, Hex8>(&SOLID);
-        // a law the lanes do not know takes this kernel: the same checks
+        // a law without the coefficient form: the same checks
         let rubber = CellMaterial {
             law: SolidLaw::MooneyRivlin(crate::material::MooneyRivlin {
                 C10: 3.0,

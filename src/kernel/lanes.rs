@@ -2,17 +2,20 @@
 //! doubles): the solids and the linear medium with its p fields, most of a mesh.
 //!
 //! The laws are not here: they are `material`'s, evaluated in the lane type `V` (which
-//! implements `material::Real`), the same code the one-cell kernel runs in `f64` —
-//! `ThermoElastic::scalars` and `coefficients`, `Conductivity::conductance`,
-//! `rotation_measure_of` and `Regularization::penalty`. What this file does is move data: the
-//! four cells' nodal values into lanes, the kinematics per point, the contraction of the
-//! laws' coefficients with the shape gradients, and the lanes back into each cell's r and K.
+//! implements `material::Real`), the same code the one-cell kernel runs in `f64` — a solid
+//! law's `Stress::isotropic_form`, `Conductivity::conductance`, `rotation_measure_of` and
+//! `Regularization::penalty`. What this file does is move data: the four cells' nodal values
+//! into lanes, the kinematics per point, the contraction of the laws' coefficients with the
+//! shape gradients, and the lanes back into each cell's r and K.
 //! With g_I the physical shape gradients, h_I = F⁻ᵀ g_I and f_I = F g_I:
 //!
 //! - r_u(I) = ∫ P g_I = ∫ c_H h_I + m f_I,
 //! - ∂r_u(I,i)/∂u(K,k) = ∫ c1 h_Ii h_Kk + c2 h_Ki h_Ik + t (f_Ii h_Kk + h_Ii f_Kk)
 //!   \+ m δ_ik g_I·g_K (the law's ∂P/∂F contracted with g_I and g_K),
 //! - ∂r_u(I,i)/∂θ_K = ∫ e h_Ii N_K,
+//! - for a solid law without that form (`isotropic_form` is `None`, e.g. Mooney-Rivlin): its
+//!   P, ∂P/∂F and ∂P/∂θ from `Stress::stress`, lane by lane, and r_u(I,i) = ∫ P_iJ g_IJ,
+//!   ∂r_u(I,i)/∂u(K,k) = ∫ A_iJkL g_IJ g_KL, ∂r_u(I,i)/∂θ_K = ∫ ∂P_iJ/∂θ g_IJ N_K,
 //! - with Q = −(J k) C⁻¹ ∇θ, w = F⁻ᵀ ∇θ, v = C⁻¹ ∇θ = F⁻¹ w:
 //!   r_θ(I) = ∫ J k v·g_I, ∂r_θ(I)/∂θ_K = ∫ J k h_I·h_K, and
 //!   ∂r_θ(I)/∂u(K,k) = ∫ (k + J k') J (v·g_I) h_Kk − J k h_Ik (v·g_K) − J k w_k h_I·h_K;
@@ -31,7 +34,7 @@ use super::{Active, CellMaterial, CellSummary, KernelError};
 use crate::dofs::{CellState, Layout};
 use crate::element::RefElement;
 use crate::material::regularization::{rotation_denominator, rotation_measure_of};
-use crate::material::{Real, ThermoElastic};
+use crate::material::{Coefficients, Real, Stress, Tensor4};
 
 /// Cells per call.
 pub const W: usize = 4;
@@ -127,8 +130,6 @@ pub fn available() -> bool {
 #[derive(Clone, Copy, Debug)]
 pub struct LaneBlock {
     mat: CellMaterial,
-    /// The block's law: the lanes are written for Neo-Hooke's stress.
-    law: ThermoElastic,
     lay: Layout,
 }
 
@@ -140,10 +141,8 @@ impl LaneBlock {
             && mat.reg_direct.is_none()
             && act.mechanics
             && (!lay.has_theta || act.heat);
-        let law = *mat.law.neo_hooke()?;
         ok.then_some(LaneBlock {
             mat: *mat,
-            law,
             lay: *lay,
         })
     }
@@ -301,6 +300,106 @@ fn cofactors(a: &[[V; 3]; 3]) -> [[V; 3]; 3] {
     ]
 }
 
+/// On failure, the error and the lowest lane it occurred in.
+type LaneResult<T> = Result<T, (KernelError, usize)>;
+
+/// P, ∂P/∂F (9 × 9, index pair (i, J) ↦ 3 i + J) and ∂P/∂θ, lane by lane: a solid law's
+/// response at one point where it has no [`Stress::isotropic_form`].
+struct FullStress {
+    P: [[V; 3]; 3],
+    A: [[V; 9]; 9],
+    dP_dtheta: [[V; 3]; 3],
+}
+
+/// The energy of `law` at F and θ, and its coefficient form where it has one; otherwise
+/// `None`, with [`Stress::stress`] per lane in `full`.
+#[inline(always)]
+fn point_stress<L: Stress>(
+    law: &L,
+    F: &[[V; 3]; 3],
+    (J, I1, theta): (V, V, V),
+    full: &mut FullStress,
+) -> LaneResult<(V, Option<Coefficients<V>>)> {
+    if let Some((psi, co)) = law.isotropic_form(J, I1, theta) {
+        return Ok((psi, Some(co)));
+    }
+    let mut psi = V::default();
+    for l in 0..W {
+        let Fl = nalgebra::Matrix3::from_fn(|i, j| F[i][j].0[l]);
+        let resp: Option<crate::material::StressResponse> = law.stress(&Fl, theta.0[l]);
+        let Some(resp) = resp else {
+            return Err((KernelError::Inverted { J: J.0[l] }, l));
+        };
+        psi.0[l] = resp.psi;
+        let A: &Tensor4 = &resp.dP_dF;
+        for i in 0..3 {
+            for j in 0..3 {
+                full.P[i][j].0[l] = resp.P[(i, j)];
+                full.dP_dtheta[i][j].0[l] = resp.dP_dtheta[(i, j)];
+            }
+        }
+        for a in 0..9 {
+            for b in 0..9 {
+                full.A[a][b].0[l] = A[(a, b)];
+            }
+        }
+    }
+    Ok((psi, None))
+}
+
+/// r_u(I,i) += ∫ P_iJ g_IJ and, with `TANGENT`, the upper blocks of
+/// ∂r_u(I,i)/∂u(K,k) += ∫ A_iJkL g_IJ g_KL, for a law's full tensors.
+#[inline(always)]
+fn contract_full<const N: usize, const D: usize, const TANGENT: bool>(
+    fs: &FullStress,
+    g: &[[V; 3]; N],
+    dV: V,
+    ru: &mut [[V; 3]; N],
+    kuu: &mut [[[[V; 3]; 3]; N]; N],
+) {
+    let zero = V::default();
+    for I in 0..N {
+        for i in 0..D {
+            let mut pg = zero;
+            for J in 0..D {
+                pg = fs.P[i][J].mul_add(g[I][J], pg);
+            }
+            ru[I][i] = pg.mul_add(dV, ru[I][i]);
+        }
+    }
+    if !TANGENT {
+        return;
+    }
+    // ag[I][i][k][L] = dV Σ_J A_iJkL g_IJ, then contracted with g_KL
+    let mut ag = [[[[zero; 3]; 3]; 3]; N];
+    for I in 0..N {
+        for i in 0..D {
+            for k in 0..D {
+                for L in 0..D {
+                    let mut a = zero;
+                    for J in 0..D {
+                        a = fs.A[3 * i + J][3 * k + L].mul_add(g[I][J], a);
+                    }
+                    ag[I][i][k][L] = a * dV;
+                }
+            }
+        }
+    }
+    for I in 0..N {
+        for K in I..N {
+            let blk = &mut kuu[I][K];
+            for i in 0..D {
+                for k in 0..D {
+                    for L in 0..D {
+                        blk[i][k] = ag[I][i][k][L].mul_add(g[K][L], blk[i][k]);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The point loop of [`body_of`] for the law the block holds, compiled per law.
 #[inline(always)]
 fn body<const N: usize, const D: usize, E: RefElement<N, D>, const TANGENT: bool>(
     blk: &LaneBlock,
@@ -308,7 +407,20 @@ fn body<const N: usize, const D: usize, E: RefElement<N, D>, const TANGENT: bool
     r: &mut [f64],
     k: &mut [f64],
 ) -> Result<[CellSummary; W], (KernelError, usize)> {
-    let (mat, lay, law) = (&blk.mat, &blk.lay, &blk.law);
+    crate::with_solid_law!(&blk.mat.law, |law| body_of::<N, D, E, TANGENT, _>(
+        law, blk, s, r, k
+    ))
+}
+
+#[inline(always)]
+fn body_of<const N: usize, const D: usize, E: RefElement<N, D>, const TANGENT: bool, L: Stress>(
+    law: &L,
+    blk: &LaneBlock,
+    s: &[CellState<N>; W],
+    r: &mut [f64],
+    k: &mut [f64],
+) -> Result<[CellSummary; W], (KernelError, usize)> {
+    let (mat, lay) = (&blk.mat, &blk.lay);
     let nd = lay.ndof();
     let thermal = lay.has_theta;
     let zero = V::default();
@@ -345,6 +457,12 @@ fn body<const N: usize, const D: usize, E: RefElement<N, D>, const TANGENT: bool
     let mut rp = [[zero; 3]; N];
     let mut energy = zero;
     let mut min_J = V::splat(f64::INFINITY);
+    // a law's full tensors at the point, where it has no coefficient form
+    let mut full = FullStress {
+        P: [[zero; 3]; 3],
+        A: [[zero; 9]; 9],
+        dP_dtheta: [[zero; 3]; 3],
+    };
     for (xi, w) in E::quadrature() {
         let dN = E::grad(xi);
         let Nv = E::shape(xi);
@@ -378,7 +496,7 @@ fn body<const N: usize, const D: usize, E: RefElement<N, D>, const TANGENT: bool
         for c in 0..3 {
             F[c][c] = V::splat(1.0);
         }
-        let mut theta = V::splat(law.theta0);
+        let mut theta = V::splat(law.theta0());
         let mut gt = [zero; 3];
         for I in 0..N {
             for i in 0..D {
@@ -407,14 +525,12 @@ fn body<const N: usize, const D: usize, E: RefElement<N, D>, const TANGENT: bool
                 I1 = F[i][j].mul_add(F[i][j], I1);
             }
         }
-        // the law's scalars and the conductivity, lane by lane
-        // the laws, evaluated for the four cells at once
-        let sc = law.scalars(J, I1, theta);
-        let co = law.coefficients(&sc, I1);
+        // the solid law, evaluated for the four cells at once
+        let (psi, iso) = point_stress(law, &F, (J, I1, theta), &mut full)?;
         for l in 0..W {
             min_J.0[l] = min_J.0[l].min(J.0[l]);
         }
-        energy = sc.psi.mul_add(dV, energy);
+        energy = psi.mul_add(dV, energy);
         let mut Jinv = [0.0; W];
         for l in 0..W {
             Jinv[l] = 1.0 / J.0[l];
@@ -438,47 +554,52 @@ fn body<const N: usize, const D: usize, E: RefElement<N, D>, const TANGENT: bool
                 }
             }
         }
-        // P g_I = c_H h_I + m f_I
-        let mdV = co.m * dV;
-        let c_h = co.c_H * dV;
-        for I in 0..N {
-            for i in 0..D {
-                ru[I][i] = c_h.mul_add(h[I][i], mdV.mul_add(f[I][i], ru[I][i]));
-            }
-        }
-        if TANGENT {
-            // ∂r_u/∂u: per node e_I = c1 h_I + t f_I, q_I = c2 h_I, t_I = t h_I (all × dV)
-            let c1 = co.c1 * dV;
-            let c2 = co.c2 * dV;
-            let tw = co.t * dV;
-            let mut e = [[zero; 3]; N];
-            let mut q = [[zero; 3]; N];
-            let mut t = [[zero; 3]; N];
+        if let Some(co) = &iso {
+            // P g_I = c_H h_I + m f_I
+            let mdV = co.m * dV;
+            let c_h = co.c_H * dV;
             for I in 0..N {
-                for i in 0..3 {
-                    e[I][i] = c1.mul_add(h[I][i], tw * f[I][i]);
-                    q[I][i] = c2 * h[I][i];
-                    t[I][i] = tw * h[I][i];
+                for i in 0..D {
+                    ru[I][i] = c_h.mul_add(h[I][i], mdV.mul_add(f[I][i], ru[I][i]));
                 }
             }
-            for I in 0..N {
-                for K in I..N {
-                    let mut gg = zero;
-                    for c in 0..D {
-                        gg = g[I][c].mul_add(g[K][c], gg);
+            if TANGENT {
+                // ∂r_u/∂u: per node e_I = c1 h_I + t f_I, q_I = c2 h_I, t_I = t h_I (all × dV)
+                let c1 = co.c1 * dV;
+                let c2 = co.c2 * dV;
+                let tw = co.t * dV;
+                let mut e = [[zero; 3]; N];
+                let mut q = [[zero; 3]; N];
+                let mut t = [[zero; 3]; N];
+                for I in 0..N {
+                    for i in 0..3 {
+                        e[I][i] = c1.mul_add(h[I][i], tw * f[I][i]);
+                        q[I][i] = c2 * h[I][i];
+                        t[I][i] = tw * h[I][i];
                     }
-                    let blk = &mut kuu[I][K];
-                    for i in 0..D {
-                        for kk in 0..D {
-                            blk[i][kk] = e[I][i].mul_add(
-                                h[K][kk],
-                                q[K][i].mul_add(h[I][kk], t[I][i].mul_add(f[K][kk], blk[i][kk])),
-                            );
+                }
+                for I in 0..N {
+                    for K in I..N {
+                        let mut gg = zero;
+                        for c in 0..D {
+                            gg = g[I][c].mul_add(g[K][c], gg);
                         }
-                        blk[i][i] = mdV.mul_add(gg, blk[i][i]);
+                        let blk = &mut kuu[I][K];
+                        for i in 0..D {
+                            for kk in 0..D {
+                                blk[i][kk] = e[I][i].mul_add(
+                                    h[K][kk],
+                                    q[K][i]
+                                        .mul_add(h[I][kk], t[I][i].mul_add(f[K][kk], blk[i][kk])),
+                                );
+                            }
+                            blk[i][i] = mdV.mul_add(gg, blk[i][i]);
+                        }
                     }
                 }
             }
+        } else {
+            contract_full::<N, D, TANGENT>(&full, &g, dV, &mut ru, &mut kuu);
         }
         if np > 0 {
             let reg = mat.reg.expect("a cell with p fields has a regularization");
@@ -603,10 +724,19 @@ fn body<const N: usize, const D: usize, E: RefElement<N, D>, const TANGENT: bool
             if !TANGENT {
                 continue;
             }
-            let xdV = co.e * dV;
             for I in 0..N {
                 for i in 0..D {
-                    let a_i = xdV * h[I][i];
+                    // ∂(P g_I)_i/∂θ dV
+                    let a_i = match &iso {
+                        Some(co) => co.e * dV * h[I][i],
+                        None => {
+                            let mut a = zero;
+                            for J in 0..D {
+                                a = full.dP_dtheta[i][J].mul_add(g[I][J], a);
+                            }
+                            a * dV
+                        }
+                    };
                     for K in 0..N {
                         kut[I][i][K] = a_i.mul_add(V::splat(Nv[K]), kut[I][i][K]);
                     }
@@ -726,7 +856,21 @@ mod tests {
     use super::*;
     use crate::element::{Hex8, Hex20, Hex27, Quad4, Quad9, Tet4, Tet10, Tri3};
     use crate::kernel::bulk;
-    use crate::material::{Conductivity, Regularization, SolidLaw, ThermoElastic};
+    use crate::material::{Conductivity, MooneyRivlin, Regularization, SolidLaw, ThermoElastic};
+
+    /// A rubber: a law without the coefficient form, contracted from its full ∂P/∂F.
+    fn rubber(cond: Conductivity) -> CellMaterial {
+        CellMaterial {
+            law: SolidLaw::MooneyRivlin(MooneyRivlin {
+                C10: 3.0,
+                C01: 2.0,
+                K: 20.0,
+                alpha: 2e-3,
+                theta0: 10.0,
+            }),
+            ..material(cond)
+        }
+    }
 
     fn material(cond: Conductivity) -> CellMaterial {
         CellMaterial {
@@ -796,6 +940,7 @@ mod tests {
             (material(Conductivity::Constant(3.0)), 0),
             (material(medium), 0),
             (regularized, D * (D - 1) / 2),
+            (rubber(Conductivity::Constant(3.0)), 0),
         ] {
             for has_theta in [true, false] {
                 let lay = Layout {
@@ -878,28 +1023,28 @@ mod tests {
         np: 0,
     };
 
-    /// The lanes are Neo-Hooke's: a block of another law is left to the one-cell kernel.
+    /// Every solid law runs in lanes: the law is not what decides.
     #[test]
-    fn only_neo_hooke_blocks_run_in_lanes() {
-        let nh = material(Conductivity::Constant(1.0));
-        let rubber = CellMaterial {
-            law: SolidLaw::MooneyRivlin(crate::material::MooneyRivlin {
-                C10: 3.0,
-                C01: 2.0,
-                K: 20.0,
-                alpha: 0.0,
-                theta0: 0.0,
-            }),
-            ..nh
-        };
-        let lay = HEX8_U_THETA;
-        assert!(LaneBlock::new(&nh, &lay, Active::ALL).is_some());
-        assert!(LaneBlock::new(&rubber, &lay, Active::ALL).is_none());
+    fn any_solid_law_runs_in_lanes() {
+        for mat in [
+            material(Conductivity::Constant(1.0)),
+            rubber(Conductivity::Constant(1.0)),
+        ] {
+            assert!(LaneBlock::new(&mat, &HEX8_U_THETA, Active::ALL).is_some());
+        }
     }
 
     #[test]
     fn an_inverted_lane_is_reported() {
-        let mat = material(Conductivity::Constant(1.0));
+        for mat in [
+            material(Conductivity::Constant(1.0)),
+            rubber(Conductivity::Constant(1.0)),
+        ] {
+            inverted_lane_is_reported(&mat);
+        }
+    }
+
+    fn inverted_lane_is_reported(mat: &CellMaterial) {
         let lay = HEX8_U_THETA;
         let mut s: [CellState<8>; W] = std::array::from_fn(state::<8, 3, Hex8>);
         // lane 2 squashed through itself along z
@@ -909,7 +1054,7 @@ mod tests {
         let nd = lay.ndof();
         let (mut r, mut k) = (vec![0.0; W * nd], vec![0.0; W * nd * nd]);
         for lanes in [bulk_lanes::<8, 3, Hex8>, bulk_lanes_portable::<8, 3, Hex8>] {
-            let blk = LaneBlock::new(&mat, &lay, Active::ALL).unwrap();
+            let blk = LaneBlock::new(mat, &lay, Active::ALL).unwrap();
             match lanes(&blk, &s, &mut r, Some(&mut k)) {
                 Err((KernelError::Inverted { J }, 2)) => assert!(J <= 0.0),
                 other => panic!("{other:?}"),

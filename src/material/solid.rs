@@ -2,7 +2,7 @@
 //! its own. The medium is always Neo-Hooke with K = μ = γ (eq. 13).
 #![allow(non_snake_case)]
 
-use super::{MooneyRivlin, StressResponse, ThermoElastic};
+use super::{Coefficients, MooneyRivlin, Real, StressResponse, ThermoElastic};
 use nalgebra::Matrix3;
 
 /// A solid law as the kernels call it: each law its own type, so that a kernel is compiled
@@ -14,6 +14,16 @@ pub trait Stress {
     fn stress(&self, F: &Matrix3<f64>, theta: f64) -> Option<StressResponse>;
     /// K + μ at small strain: the scale of the stresses a strain makes.
     fn stiffness_scale(&self) -> f64;
+    /// The energy and the stress and tangent in [`Coefficients`]' form (P = c_H F⁻ᵀ + m F, …)
+    /// at J, I1 = tr C and θ, in any scalar type: the lane kernel evaluates them for four
+    /// cells at once and contracts them with the shape gradients in O(N²) per point. A law
+    /// of this form overrides it for speed; the default, `None`, makes the lane kernel
+    /// contract the law's full ∂P/∂F from [`Stress::stress`], lane by lane, which is right
+    /// for any law.
+    #[inline(always)]
+    fn isotropic_form<S: Real>(&self, _J: S, _I1: S, _theta: S) -> Option<(S, Coefficients<S>)> {
+        None
+    }
 }
 
 impl Stress for ThermoElastic {
@@ -27,6 +37,11 @@ impl Stress for ThermoElastic {
     }
     fn stiffness_scale(&self) -> f64 {
         self.K + self.mu
+    }
+    #[inline(always)]
+    fn isotropic_form<S: Real>(&self, J: S, I1: S, theta: S) -> Option<(S, Coefficients<S>)> {
+        let sc = self.scalars(J, I1, theta);
+        Some((sc.psi, self.coefficients(&sc, I1)))
     }
 }
 
@@ -47,7 +62,7 @@ impl Stress for MooneyRivlin {
 /// A solid's stress law.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum SolidLaw {
-    /// Eq. (12): the paper's law, and the one the vectorised kernel is written for.
+    /// Eq. (12): the paper's law.
     NeoHooke(ThermoElastic),
     /// Abaqus' compressible Mooney-Rivlin.
     MooneyRivlin(MooneyRivlin),
@@ -80,14 +95,5 @@ impl SolidLaw {
     /// K + μ at small strain: the scale of the stresses a strain makes.
     pub fn stiffness_scale(&self) -> f64 {
         crate::with_solid_law!(self, |l| Stress::stiffness_scale(l))
-    }
-
-    /// The law as the vectorised kernel's Neo-Hooke, if it is one (others take the one-cell
-    /// kernel, which needs only [`SolidLaw::stress`]).
-    pub fn neo_hooke(&self) -> Option<&ThermoElastic> {
-        match self {
-            SolidLaw::NeoHooke(l) => Some(l),
-            _ => None,
-        }
     }
 }
