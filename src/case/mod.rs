@@ -17,7 +17,10 @@ mod steps;
 
 pub use bc::{Bc, RAMPED_VALUES, RadiationKey, Ramp};
 pub use output::{Measure, Output, Probe, Units};
-pub use region::{FrictionKey, Region, RegionKind, SlipNormal, SolidLawKey};
+pub use region::{
+    FrictionKey, Material, MediumConduction, MediumMaterial, Region, RegionKind, SlipNormal,
+    SolidLawKey, SolidMaterial,
+};
 pub use sets::set_path;
 pub use solver::{CouplingChoice, EngineChoice, LinearChoice, PetscMethod, PetscOptions, Solver};
 pub use steps::{Steps, Time};
@@ -105,6 +108,8 @@ pub struct Case {
     pub path: PathBuf,
     pub text: String,
     pub file: CaseFile,
+    /// Each `[[region]]`'s material, in case order (what its checked keys give).
+    pub materials: Vec<Material>,
 }
 
 /// Most load or time steps a case may ask for (a `path` value or a `dt` is at least one).
@@ -210,12 +215,13 @@ impl Case {
             path: path.to_owned(),
             msg: e.to_string().trim_end().to_string(),
         })?;
-        let case = Case {
+        let mut case = Case {
             path: path.to_owned(),
             text,
             file,
+            materials: Vec::new(),
         };
-        case.check_values()?;
+        case.materials = case.check_values()?;
         // what the checks of each key leave: any other number not finite or absurd
         check_numbers(&case.text).map_err(|(at, msg)| CaseError::Invalid {
             path: case.path.clone(),
@@ -258,8 +264,8 @@ impl Case {
         })
     }
 
-    /// Checks that need no mesh: moduli, steps, probes.
-    fn check_values(&self) -> Result<(), CaseError> {
+    /// Checks that need no mesh: moduli, steps, probes. Returns the regions' materials.
+    fn check_values(&self) -> Result<Vec<Material>, CaseError> {
         let every = &self.file.output.every;
         if *every.get_ref() < 1 {
             return self.error(
@@ -270,11 +276,12 @@ impl Case {
                 ),
             );
         }
-        self.check_regions()?;
+        let materials = self.check_regions()?;
         let n_path = self.check_steps()?;
         self.check_bc_values(n_path)?;
         self.check_petsc_options()?;
-        self.check_probes()
+        self.check_probes()?;
+        Ok(materials)
     }
 }
 

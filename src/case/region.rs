@@ -1,5 +1,14 @@
 //! `[[region]]`: the material of one physical group of cells, a solid's law and moduli or
-//! the medium's, its conduction and friction; their checks.
+//! the medium's, its conduction and friction; their checks, which turn a region's keys into
+//! its [`Material`].
+//!
+//! A region is read by serde as one table of optional keys ([`Region`]) and becomes a
+//! variant ([`Material`]: a solid with its law, or the medium with its conductivity law)
+//! only in [`Case`]'s checks. serde's tagged enums would do it in the parse, but they buffer
+//! a table before choosing the variant, which loses every key's position (`toml::Spanned`
+//! refuses to be read from the buffer) and reports a wrong key at the table's header: the
+//! checks keep the line of the key at fault. Past the checks, only the material is read: a
+//! law's keys are private to this file.
 
 use super::{Case, CaseError};
 use crate::material::conduction::TABLE_POINTS;
@@ -33,16 +42,16 @@ pub struct Region {
     pub group: Spanned<String>,
     pub kind: RegionKind,
     /// Bulk modulus (solid).
-    pub K: Option<Spanned<f64>>,
+    K: Option<Spanned<f64>>,
     /// Shear modulus (solid, Neo-Hooke).
-    pub mu: Option<Spanned<f64>>,
+    mu: Option<Spanned<f64>>,
     /// A solid's stress law (default: Neo-Hooke).
-    pub law: Option<Spanned<SolidLawKey>>,
+    law: Option<Spanned<SolidLawKey>>,
     /// Mooney-Rivlin's coefficients of Ī₁ − 3 and Ī₂ − 3.
-    pub C10: Option<Spanned<f64>>,
-    pub C01: Option<Spanned<f64>>,
+    C10: Option<Spanned<f64>>,
+    C01: Option<Spanned<f64>>,
     /// Conductivity k (solid) or gas conductivity k_TM (medium).
-    pub k: Option<Spanned<f64>>,
+    k: Option<Spanned<f64>>,
     /// Thermal expansion coefficient α_t.
     #[serde(default)]
     pub alpha: f64,
@@ -50,20 +59,20 @@ pub struct Region {
     #[serde(default)]
     pub theta0: f64,
     /// Medium stiffness γ (K = μ = γ).
-    pub gamma: Option<Spanned<f64>>,
+    gamma: Option<Spanned<f64>>,
     /// Cap of the medium's conductivity (default: largest solid k).
-    pub k_max: Option<Spanned<f64>>,
+    k_max: Option<Spanned<f64>>,
     /// A medium's conductivity as a table of `[J, k]` rows, linear in J between them (instead
     /// of `k` and `k_max`).
-    pub k_table: Option<Spanned<Vec<Vec<f64>>>>,
+    k_table: Option<Spanned<Vec<Vec<f64>>>>,
     /// A medium's conductance across its closed layer h_c (heat per area, time and degree),
     /// with `thickness`, the layer's undeformed thickness t0: k ≤ h_c t0 J.
-    pub h_closed: Option<Spanned<f64>>,
-    pub thickness: Option<Spanned<f64>>,
+    h_closed: Option<Spanned<f64>>,
+    thickness: Option<Spanned<f64>>,
     /// Regularization weights β1, β2 (eq. 20) and α_r (eq. 18).
-    pub beta1: Option<Spanned<f64>>,
-    pub beta2: Option<Spanned<f64>>,
-    pub alpha_r: Option<Spanned<f64>>,
+    beta1: Option<Spanned<f64>>,
+    beta2: Option<Spanned<f64>>,
+    alpha_r: Option<Spanned<f64>>,
     /// Body force per reference volume (ramped).
     pub body_force: Option<Vec<f64>>,
     /// Heat source per reference volume (ramped).
@@ -112,85 +121,106 @@ impl FrictionKey {
     }
 }
 
-/// The laws a checked region's keys give (each key its check found present and in range).
-#[allow(non_snake_case)]
-impl Region {
-    /// A solid region's law, of the moduli its `law` takes (checked present when the case was read).
-    pub fn solid_law(&self) -> SolidLaw {
-        let r = self;
-        let v = |key: &Option<Spanned<f64>>| *key.as_ref().expect("checked").get_ref();
-        let K = v(&r.K);
-        let (alpha, theta0) = (r.alpha, r.theta0);
-        match r
-            .law
-            .as_ref()
-            .map_or(SolidLawKey::NeoHooke, |l| *l.get_ref())
-        {
-            SolidLawKey::NeoHooke => SolidLaw::NeoHooke(ThermoElastic {
-                K,
-                mu: v(&r.mu),
-                alpha,
-                theta0,
-            }),
-            SolidLawKey::MooneyRivlin => SolidLaw::MooneyRivlin(MooneyRivlin {
-                C10: v(&r.C10),
-                C01: v(&r.C01),
-                K,
-                alpha,
-                theta0,
-            }),
+/// A region's material: what its keys give once checked (a law a variant, every modulus it
+/// needs present and in range, defaults filled in).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Material {
+    Solid(SolidMaterial),
+    Medium(MediumMaterial),
+}
+
+/// A solid region's material.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SolidMaterial {
+    /// `law` with its moduli, `alpha` and `theta0`.
+    pub law: SolidLaw,
+    /// `k`, where given.
+    pub k: Option<f64>,
+}
+
+/// A medium region's material.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MediumMaterial {
+    /// Eq. (12) with K = μ = `gamma` (eq. 13).
+    pub law: ThermoElastic,
+    pub conduction: MediumConduction,
+    /// The regularization weights β1 and β2 of eq. (20) (1 and 1e-2 unless given).
+    pub beta1: f64,
+    pub beta2: f64,
+    /// α_r of eq. (18), where given.
+    pub alpha_r: Option<f64>,
+}
+
+/// A medium region's conductivity law.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum MediumConduction {
+    /// The paper's k_TM (1 + ln² J) with k_TM = `k` where given, capped at `k_max` where given
+    /// (else at the solids' largest k), and at h_c t0 J (`h_closed` × `thickness`) where given.
+    Paper {
+        k_tm: Option<f64>,
+        k_max: Option<f64>,
+        hc_t0: Option<f64>,
+    },
+    /// `k_table`: k against J ([`Conductivity::Table`]).
+    Table(Conductivity),
+}
+
+impl Material {
+    /// The stress law: a solid's, or the medium's eq. (13).
+    pub fn law(&self) -> SolidLaw {
+        match self {
+            Material::Solid(s) => s.law,
+            Material::Medium(m) => SolidLaw::NeoHooke(m.law),
         }
     }
 
-    /// A medium region's conductivity: its table, the paper's law capped by a closed layer's
-    /// conductance, or the paper's law (`k` = k_TM and `k_max` given or defaulted).
-    pub fn medium_conductivity(&self, k_tm: f64, k_max: f64) -> Conductivity {
-        let r = self;
-        if let Some(rows) = &r.k_table {
-            let mut rows = rows.get_ref().clone();
-            rows.sort_by(|a, b| a[0].total_cmp(&b[0]));
-            let (mut J, mut k) = ([0.0; TABLE_POINTS], [0.0; TABLE_POINTS]);
-            for (i, row) in rows.iter().enumerate() {
-                (J[i], k[i]) = (row[0], row[1]);
-            }
-            return Conductivity::Table {
-                n: rows.len(),
-                J,
-                k,
-            };
+    /// The medium's material, if the region is one.
+    pub fn medium(&self) -> Option<&MediumMaterial> {
+        match self {
+            Material::Solid(_) => None,
+            Material::Medium(m) => Some(m),
         }
-        match (&r.h_closed, &r.thickness) {
-            (Some(h), Some(t)) => Conductivity::Closed {
-                k_tm,
-                k_max,
-                hc_t0: h.get_ref() * t.get_ref(),
+    }
+
+    /// Whether the region gives its conductivity (`k`, or a medium's `k_table`): a scene that
+    /// conducts needs it.
+    pub fn gives_conductivity(&self) -> bool {
+        match self {
+            Material::Solid(s) => s.k.is_some(),
+            Material::Medium(m) => match m.conduction {
+                MediumConduction::Paper { k_tm, .. } => k_tm.is_some(),
+                MediumConduction::Table(_) => true,
             },
-            _ => Conductivity::Medium { k_tm, k_max },
         }
     }
 
-    /// The region's conductivity law: a solid's constant `k` (1 unless given), a medium's
-    /// ([`Region::medium_conductivity`]) with k_TM = `k` and `k_max` given, or else the largest
-    /// of `solids_k`, the solids' largest k, and its own k_TM.
+    /// The conductivity law: a solid's constant `k` (1 unless given), a medium's with k_TM =
+    /// `k` (1 unless given) capped at `k_max`, or else at the largest of `solids_k`, the solids'
+    /// largest k, and its own k_TM.
     pub fn conductivity(&self, solids_k: f64) -> Conductivity {
-        let k = self.k.as_ref().map_or(1.0, |k| *k.get_ref());
-        match self.kind {
-            RegionKind::Solid => Conductivity::Constant(k),
-            RegionKind::Medium => {
-                let k_max = (self.k_max.as_ref()).map_or(solids_k.max(k), |v| *v.get_ref());
-                self.medium_conductivity(k, k_max)
-            }
+        match self {
+            Material::Solid(s) => Conductivity::Constant(s.k.unwrap_or(1.0)),
+            Material::Medium(m) => match m.conduction {
+                MediumConduction::Table(table) => table,
+                MediumConduction::Paper { k_tm, k_max, hc_t0 } => {
+                    let k_tm = k_tm.unwrap_or(1.0);
+                    let k_max = k_max.unwrap_or(solids_k.max(k_tm));
+                    match hc_t0 {
+                        Some(hc_t0) => Conductivity::Closed { k_tm, k_max, hc_t0 },
+                        None => Conductivity::Medium { k_tm, k_max },
+                    }
+                }
+            },
         }
     }
+}
 
-    /// A medium region's regularization of eq. (20) over the mesh's extent `d` (eq. 21):
-    /// `beta1` and `beta2`, 1 and 1e-2 unless given.
+impl MediumMaterial {
+    /// The regularization of eq. (20) over the mesh's extent `d` (eq. 21).
     pub fn regularization(&self, d: f64) -> Regularization {
-        let or =
-            |v: &Option<Spanned<f64>>, default: f64| v.as_ref().map_or(default, |v| *v.get_ref());
         Regularization {
-            beta1: or(&self.beta1, 1.0),
-            beta2: or(&self.beta2, 1e-2),
+            beta1: self.beta1,
+            beta2: self.beta2,
             d,
         }
     }
@@ -198,30 +228,19 @@ impl Region {
     /// A quadratic medium's weight γ α_r of eq. (18): `alpha_r` given, or β2 d², which weighs
     /// |∇f|² as eq. (20) does with p = d f.
     pub fn direct_regularization(&self, d: f64) -> f64 {
-        match &self.alpha_r {
-            Some(a) => self.medium_law().K * a.get_ref(),
-            None => self.regularization(d).beta2 * d * d,
-        }
-    }
-
-    /// A medium region's law: eq. (12) with K = μ = γ (eq. 13).
-    pub fn medium_law(&self) -> ThermoElastic {
-        let r = self;
-        let gamma = *r.gamma.as_ref().expect("checked").get_ref();
-        ThermoElastic {
-            K: gamma,
-            mu: gamma,
-            alpha: r.alpha,
-            theta0: r.theta0,
+        match self.alpha_r {
+            Some(a) => self.law.K * a,
+            None => self.beta2 * d * d,
         }
     }
 }
 
 impl Case {
-    /// Every region: its kind's required moduli positive, no key of the other kind, a
-    /// positive finite `rho_c`.
-    pub(super) fn check_regions(&self) -> Result<(), CaseError> {
+    /// Every region's material, in case order: its kind's required moduli positive, no key of
+    /// the other kind, a positive finite `rho_c`.
+    pub(super) fn check_regions(&self) -> Result<Vec<Material>, CaseError> {
         let f = &self.file;
+        let mut materials = Vec::with_capacity(f.region.len());
         for (i, r) in f.region.iter().enumerate() {
             let at = r.group.span();
             let name = r.group.get_ref();
@@ -270,10 +289,14 @@ impl Case {
                 }
                 self.check_friction(i, name, fr.get_ref())?;
             }
-            match r.kind {
+            let or = |v: &Option<Spanned<f64>>, default: f64| {
+                v.as_ref().map_or(default, |v| *v.get_ref())
+            };
+            let given = |v: &Option<Spanned<f64>>| v.as_ref().map(|v| *v.get_ref());
+            materials.push(match r.kind {
                 RegionKind::Solid => {
                     need("K", &r.K)?;
-                    self.check_solid_law(i, name, r)?;
+                    let law = self.check_solid_law(i, name, r)?;
                     positive_if_given("k", &r.k)?;
                     for (key, v) in [
                         ("gamma", &r.gamma),
@@ -288,6 +311,10 @@ impl Case {
                             return self.error(v.span(), format!("region[{i}] (\"{name}\"): `{key}` is a medium key; this region is a solid"));
                         }
                     }
+                    Material::Solid(SolidMaterial {
+                        law,
+                        k: given(&r.k),
+                    })
                 }
                 RegionKind::Medium => {
                     need("gamma", &r.gamma)?;
@@ -296,7 +323,7 @@ impl Case {
                     positive_if_given("beta1", &r.beta1)?;
                     positive_if_given("beta2", &r.beta2)?;
                     positive_if_given("alpha_r", &r.alpha_r)?;
-                    self.check_medium_conductivity(i, name, r)?;
+                    let conduction = self.check_medium_conductivity(i, name, r)?;
                     for (key, v) in [("K", &r.K), ("mu", &r.mu), ("C10", &r.C10), ("C01", &r.C01)] {
                         if let Some(v) = v {
                             return self.error(v.span(), format!("region[{i}] (\"{name}\"): `{key}` is a solid key; the medium's moduli are `gamma`"));
@@ -311,10 +338,23 @@ impl Case {
                             ),
                         );
                     }
+                    let gamma = or(&r.gamma, 0.0);
+                    Material::Medium(MediumMaterial {
+                        law: ThermoElastic {
+                            K: gamma,
+                            mu: gamma,
+                            alpha: r.alpha,
+                            theta0: r.theta0,
+                        },
+                        conduction,
+                        beta1: or(&r.beta1, 1.0),
+                        beta2: or(&r.beta2, 1e-2),
+                        alpha_r: given(&r.alpha_r),
+                    })
                 }
-            }
+            });
         }
-        Ok(())
+        Ok(materials)
     }
 
     /// A medium's conductivity law: the paper's (`k`, `k_max`), capped by a closed layer's
@@ -324,9 +364,9 @@ impl Case {
         i: usize,
         name: &str,
         r: &Region,
-    ) -> Result<(), CaseError> {
+    ) -> Result<MediumConduction, CaseError> {
         let at = |msg: String, span: std::ops::Range<usize>| {
-            self.error::<()>(span, format!("region[{i}] (\"{name}\"): {msg}"))
+            self.error::<MediumConduction>(span, format!("region[{i}] (\"{name}\"): {msg}"))
         };
         for (key, v) in [("h_closed", &r.h_closed), ("thickness", &r.thickness)] {
             if let Some(v) = v
@@ -354,7 +394,14 @@ impl Case {
             _ => {}
         }
         let Some(table) = &r.k_table else {
-            return Ok(());
+            let given = |v: &Option<Spanned<f64>>| v.as_ref().map(|v| *v.get_ref());
+            return Ok(MediumConduction::Paper {
+                k_tm: given(&r.k),
+                k_max: given(&r.k_max),
+                hc_t0: given(&r.h_closed)
+                    .zip(given(&r.thickness))
+                    .map(|(h, t)| h * t),
+            });
         };
         for (key, v) in [("k", &r.k), ("k_max", &r.k_max), ("h_closed", &r.h_closed)] {
             if let Some(v) = v {
@@ -388,17 +435,28 @@ impl Case {
         if let Some(w) = js.windows(2).find(|w| w[0] == w[1]) {
             return bad(&format!("gives J = {} twice", w[0]));
         }
-        Ok(())
+        let mut rows = rows.clone();
+        rows.sort_by(|a, b| a[0].total_cmp(&b[0]));
+        let (mut J, mut k) = ([0.0; TABLE_POINTS], [0.0; TABLE_POINTS]);
+        for (i, row) in rows.iter().enumerate() {
+            (J[i], k[i]) = (row[0], row[1]);
+        }
+        Ok(MediumConduction::Table(Conductivity::Table {
+            n: rows.len(),
+            J,
+            k,
+        }))
     }
 
     /// A solid region's law and its moduli: Neo-Hooke's `mu` > 0, or Mooney-Rivlin's `C10` > 0
     /// and `C01` ≥ 0; no key of the other law.
+    #[allow(non_snake_case)]
     pub(super) fn check_solid_law(
         &self,
         i: usize,
         name: &str,
         r: &Region,
-    ) -> Result<(), CaseError> {
+    ) -> Result<SolidLaw, CaseError> {
         let law = r
             .law
             .as_ref()
@@ -447,7 +505,23 @@ impl Case {
                 );
             }
         }
-        Ok(())
+        let v = |key: &Option<Spanned<f64>>| key.as_ref().map_or(0.0, |v| *v.get_ref());
+        let (K, alpha, theta0) = (v(&r.K), r.alpha, r.theta0);
+        Ok(match law {
+            SolidLawKey::NeoHooke => SolidLaw::NeoHooke(ThermoElastic {
+                K,
+                mu: v(&r.mu),
+                alpha,
+                theta0,
+            }),
+            SolidLawKey::MooneyRivlin => SolidLaw::MooneyRivlin(MooneyRivlin {
+                C10: v(&r.C10),
+                C01: v(&r.C01),
+                K,
+                alpha,
+                theta0,
+            }),
+        })
     }
 
     /// A medium region's `friction`: μ ≥ 0, a normal of 2 or 3 finite components not all
@@ -520,6 +594,7 @@ impl Case {
 #[cfg(test)]
 mod tests {
     use super::super::tests::{parsed, refused};
+    use super::{Material, MediumMaterial};
     use crate::material::{Conductivity, SolidLaw};
 
     const SOLID: &str = "[[region]]\ngroup = \"s\"\nkind = \"solid\"\n";
@@ -529,19 +604,27 @@ mod tests {
         parsed(body).unwrap().file.region.remove(0)
     }
 
+    fn material(body: &str) -> Material {
+        parsed(body).unwrap().materials.remove(0)
+    }
+
+    fn medium(body: &str) -> MediumMaterial {
+        *material(body).medium().expect("a medium")
+    }
+
     #[test]
     fn a_solid_s_keys_give_its_law() {
-        let nh = region(&format!(
+        let nh = material(&format!(
             "{SOLID}K = 20.0\nmu = 10.0\nalpha = 1e-5\ntheta0 = 20.0\n"
         ));
-        let SolidLaw::NeoHooke(l) = nh.solid_law() else {
+        let SolidLaw::NeoHooke(l) = nh.law() else {
             panic!("neo-hooke is the default")
         };
         assert_eq!((l.K, l.mu, l.alpha, l.theta0), (20.0, 10.0, 1e-5, 20.0));
-        let mr = region(&format!(
+        let mr = material(&format!(
             "{SOLID}law = \"mooney-rivlin\"\nK = 20.0\nC10 = 3.0\nC01 = 1.0\n"
         ));
-        let SolidLaw::MooneyRivlin(l) = mr.solid_law() else {
+        let SolidLaw::MooneyRivlin(l) = mr.law() else {
             panic!("mooney-rivlin asked for")
         };
         assert_eq!((l.C10, l.C01, l.K), (3.0, 1.0, 20.0));
@@ -549,12 +632,15 @@ mod tests {
 
     #[test]
     fn a_medium_s_regularization_has_its_defaults_and_its_direct_weight() {
-        let plain = region(MEDIUM);
+        let plain = medium(MEDIUM);
+        // eq. (13): Neo-Hooke with K = μ = γ
+        assert_eq!((plain.law.K, plain.law.mu), (1e-4, 1e-4));
+        assert!(matches!(material(MEDIUM).law(), SolidLaw::NeoHooke(l) if l == plain.law));
         let reg = plain.regularization(2.0);
         assert_eq!((reg.beta1, reg.beta2, reg.d), (1.0, 1e-2, 2.0));
         // eq. (18) weighs like eq. (20) with p = d f: β2 d²
         assert_eq!(plain.direct_regularization(2.0), 1e-2 * 4.0);
-        let given = region(&format!(
+        let given = medium(&format!(
             "{MEDIUM}beta1 = 0.5\nbeta2 = 0.1\nalpha_r = 3.0\n"
         ));
         let reg = given.regularization(2.0);
@@ -594,10 +680,14 @@ mod tests {
     #[test]
     fn a_region_s_conductivity_defaults_from_its_kind() {
         // a solid: its k, or 1
-        let solid = region(&format!("{SOLID}K = 1.0\nmu = 1.0\n"));
+        let solid = material(&format!("{SOLID}K = 1.0\nmu = 1.0\n"));
         assert!(matches!(solid.conductivity(50.0), Conductivity::Constant(k) if k == 1.0));
+        assert!(!solid.gives_conductivity());
+        let solid = material(&format!("{SOLID}K = 1.0\nmu = 1.0\nk = 3.0\n"));
+        assert!(matches!(solid.conductivity(50.0), Conductivity::Constant(k) if k == 3.0));
+        assert!(solid.gives_conductivity());
         // a medium: capped by the solids' largest k, or its own k_TM if larger, or `k_max`
-        let capped = |keys: &str, solids_k: f64| match region(&format!("{MEDIUM}{keys}"))
+        let capped = |keys: &str, solids_k: f64| match material(&format!("{MEDIUM}{keys}"))
             .conductivity(solids_k)
         {
             Conductivity::Medium { k_tm, k_max } => (k_tm, k_max),
@@ -610,23 +700,24 @@ mod tests {
 
     #[test]
     fn a_medium_s_conductivity_is_the_law_its_keys_name() {
-        let paper = region(&format!("{MEDIUM}k = 1e-4\n"));
+        let paper = material(&format!("{MEDIUM}k = 1e-4\n"));
         assert!(matches!(
-            paper.medium_conductivity(1e-4, 50.0),
+            paper.conductivity(50.0),
             Conductivity::Medium { k_tm, k_max } if k_tm == 1e-4 && k_max == 50.0
         ));
-        let closed = region(&format!(
+        let closed = material(&format!(
             "{MEDIUM}k = 1e-4\nh_closed = 40.0\nthickness = 0.25\n"
         ));
         assert!(matches!(
-            closed.medium_conductivity(1e-4, 50.0),
+            closed.conductivity(50.0),
             Conductivity::Closed { hc_t0, .. } if hc_t0 == 10.0
         ));
         // a table's rows in any order, kept sorted by J
-        let table = region(&format!(
+        let table = material(&format!(
             "{MEDIUM}k_table = [[1.0, 1e-4], [1e-3, 2.0], [0.1, 0.5]]\n"
         ));
-        let Conductivity::Table { n, J, k } = table.medium_conductivity(0.0, 0.0) else {
+        assert!(table.gives_conductivity() && !material(MEDIUM).gives_conductivity());
+        let Conductivity::Table { n, J, k } = table.conductivity(0.0) else {
             panic!("a table")
         };
         assert_eq!(

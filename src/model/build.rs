@@ -6,11 +6,10 @@ use super::{
     BcGroup, BlockInfo, CapacityBlock, FacetBlock, FluxGroup, FrictionBlock, LoadPath, Model,
     Physics, SlipNormals, decide_physics, facet_weights,
 };
-use crate::case::{Bc, Case, CaseError, RegionKind, SlipNormal};
+use crate::case::{Bc, Case, CaseError, Material, RegionKind, SlipNormal};
 use crate::dofs::{Constraints, DofMap, Field, Layout, NONE, Prescribed};
 use crate::kernel::CellMaterial;
 use crate::kernel::friction::FrictionMaterial;
-use crate::material::SolidLaw;
 use crate::mesh::Mesh;
 use crate::mesh::centroid;
 use crate::mesh::faces::{Face, NearestFace, shared_faces};
@@ -148,8 +147,10 @@ fn require_conductivities(case: &Case, physics: &Physics) -> Result<(), CaseErro
     if !physics.conduction {
         return Ok(());
     }
-    match (case.file.region.iter()).find(|r| r.k.is_none() && r.k_table.is_none()) {
-        Some(r) => case.error(
+    let without_k =
+        (case.file.region.iter().zip(&case.materials)).find(|(_, m)| !m.gives_conductivity());
+    match without_k {
+        Some((r, _)) => case.error(
             r.group.span(),
             format!(
                 "region \"{}\": the scene conducts heat, so `k` is required",
@@ -162,31 +163,23 @@ fn require_conductivities(case: &Case, physics: &Physics) -> Result<(), CaseErro
 
 /// The material of each `[[region]]`, in case order; `d` is the mesh's extent (eq. 21).
 fn region_materials(case: &Case, d: f64) -> Vec<CellMaterial> {
-    let f = &case.file;
     // the solids' largest k: a medium's cap unless it gives `k_max`
-    let solids_k = f
-        .region
-        .iter()
-        .filter(|r| r.kind == RegionKind::Solid)
-        .filter_map(|r| r.k.as_ref().map(|k| *k.get_ref()))
+    let solids_k = (case.materials.iter())
+        .filter_map(|m| match m {
+            Material::Solid(s) => s.k,
+            Material::Medium(_) => None,
+        })
         .fold(0.0f64, f64::max);
-    f.region
-        .iter()
-        .map(|r| match r.kind {
-            RegionKind::Solid => CellMaterial {
-                law: r.solid_law(),
-                cond: r.conductivity(solids_k),
-                medium: false,
-                reg: None,
+    (case.materials.iter())
+        .map(|m| {
+            let medium = m.medium();
+            CellMaterial {
+                law: m.law(),
+                cond: m.conductivity(solids_k),
+                medium: medium.is_some(),
+                reg: medium.map(|md| md.regularization(d)),
                 reg_direct: None,
-            },
-            RegionKind::Medium => CellMaterial {
-                law: SolidLaw::NeoHooke(r.medium_law()),
-                cond: r.conductivity(solids_k),
-                medium: true,
-                reg: Some(r.regularization(d)),
-                reg_direct: None,
-            },
+            }
         })
         .collect()
 }
@@ -239,8 +232,11 @@ fn cell_blocks(
                 p_nodes[n] = true;
             }
         }
-        if medium && b.kind.order() == 2 && physics.mechanics {
-            mat.reg_direct = Some(f.region[region].direct_regularization(d));
+        if let Some(md) = case.materials[region].medium()
+            && b.kind.order() == 2
+            && physics.mechanics
+        {
+            mat.reg_direct = Some(md.direct_regularization(d));
             mat.reg = None;
         }
         blocks.push(BlockInfo {
@@ -498,7 +494,11 @@ fn friction_blocks(
     let mut out = Vec::new();
     for info in blocks {
         let region = &case.file.region[info.region];
-        let Some(fr) = region.friction.as_ref().map(|f| f.get_ref()) else {
+        // friction is a medium's (checked)
+        let (Some(fr), Some(md)) = (
+            region.friction.as_ref().map(|f| f.get_ref()),
+            case.materials[info.region].medium(),
+        ) else {
             continue;
         };
         let normals = match fr.normal.get_ref() {
@@ -529,7 +529,7 @@ fn friction_blocks(
             region: info.region,
             mat: FrictionMaterial {
                 mu: *fr.mu.get_ref(),
-                medium: region.medium_law(),
+                medium: md.law,
                 c_f: fr.c_f.as_ref().map_or(1.0, |v| *v.get_ref()),
             },
             normals,
