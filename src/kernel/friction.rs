@@ -14,7 +14,7 @@ use super::point::{Point, point};
 use super::{Active, KernelError};
 use crate::dofs::{CellState, Layout};
 use crate::element::{RefElement, physical_gradients};
-use crate::material::ThermoElastic;
+use crate::material::SolidLaw;
 use crate::material::friction::{Friction, MediumStress, shear_modulus};
 use nalgebra::Vector3;
 
@@ -30,7 +30,7 @@ pub struct FrictionMaterial {
     pub mu: f64,
     /// The medium's own law: the normal traction across the plane is its stress, and the
     /// friction modulus scales with its bulk modulus.
-    pub medium: ThermoElastic,
+    pub medium: SolidLaw,
     /// c_f of the friction modulus G_f = c_f K (1 − ln J)/J².
     pub c_f: f64,
 }
@@ -69,7 +69,7 @@ pub fn friction<const N: usize, const D: usize, E: RefElement<N, D>>(
             F,
             theta,
             ..
-        } = point::<N, D, E>(xi, *w, lay, s, mat.medium.theta0)?;
+        } = point::<N, D, E>(xi, *w, lay, s, mat.medium.theta0())?;
         let inverted = KernelError::Inverted { J: F.determinant() };
         let m = mat.medium.stress(&F, theta).ok_or(inverted)?;
         let h = &committed[q * HISTORY_PER_POINT..(q + 1) * HISTORY_PER_POINT];
@@ -83,7 +83,7 @@ pub fn friction<const N: usize, const D: usize, E: RefElement<N, D>>(
             .respond(
                 &F,
                 &slip,
-                shear_modulus(mat.c_f, mat.medium.K, m.J),
+                shear_modulus(mat.c_f, mat.medium.bulk_modulus(), m.J),
                 &medium,
             )
             .ok_or(inverted)?;
@@ -216,12 +216,12 @@ mod tests {
     const NORMAL: Vector3<f64> = Vector3::new(0.0, 1.0, 0.0);
     const MATERIAL: FrictionMaterial = FrictionMaterial {
         mu: 0.3,
-        medium: ThermoElastic {
+        medium: SolidLaw::NeoHooke(crate::material::ThermoElastic {
             K: 1e-2,
             mu: 1e-2,
             alpha: 1e-2,
             theta0: 10.0,
-        },
+        }),
         c_f: 1.0,
     };
 

@@ -14,6 +14,8 @@ pub trait Stress {
     fn stress(&self, F: &Matrix3<f64>, theta: f64) -> Option<StressResponse>;
     /// K + μ at small strain: the scale of the stresses a strain makes.
     fn stiffness_scale(&self) -> f64;
+    /// The bulk modulus K at small strain (friction's modulus in the medium scales with it).
+    fn bulk_modulus(&self) -> f64;
     /// The energy and the stress and tangent in [`Coefficients`]' form (P = c_H F⁻ᵀ + m F, …)
     /// at J, I1 = tr C and θ, in any scalar type: the lane kernel evaluates them for four
     /// cells at once and contracts them with the shape gradients in O(N²) per point. A law
@@ -38,6 +40,9 @@ impl Stress for ThermoElastic {
     fn stiffness_scale(&self) -> f64 {
         self.K + self.mu
     }
+    fn bulk_modulus(&self) -> f64 {
+        self.K
+    }
     #[inline(always)]
     fn isotropic_form<S: Real>(&self, J: S, I1: S, theta: S) -> Option<(S, Coefficients<S>)> {
         let sc = self.scalars(J, I1, theta);
@@ -56,6 +61,9 @@ impl Stress for MooneyRivlin {
     }
     fn stiffness_scale(&self) -> f64 {
         self.K + self.shear_modulus()
+    }
+    fn bulk_modulus(&self) -> f64 {
+        self.K
     }
 }
 
@@ -95,5 +103,10 @@ impl SolidLaw {
     /// K + μ at small strain: the scale of the stresses a strain makes.
     pub fn stiffness_scale(&self) -> f64 {
         crate::with_solid_law!(self, |l| Stress::stiffness_scale(l))
+    }
+
+    /// The bulk modulus K at small strain.
+    pub fn bulk_modulus(&self) -> f64 {
+        crate::with_solid_law!(self, |l| Stress::bulk_modulus(l))
     }
 }

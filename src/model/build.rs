@@ -494,11 +494,7 @@ fn friction_blocks(
     let mut out = Vec::new();
     for info in blocks {
         let region = &case.file.region[info.region];
-        // friction is a medium's (checked)
-        let (Some(fr), Some(md)) = (
-            region.friction.as_ref().map(|f| f.get_ref()),
-            case.materials[info.region].medium(),
-        ) else {
+        let Some(fr) = region.friction.as_ref().map(|f| f.get_ref()) else {
             continue;
         };
         let normals = match fr.normal.get_ref() {
@@ -529,7 +525,7 @@ fn friction_blocks(
             region: info.region,
             mat: FrictionMaterial {
                 mu: *fr.mu.get_ref(),
-                medium: md.law,
+                medium: case.materials[info.region].law(),
                 c_f: fr.c_f.as_ref().map_or(1.0, |v| *v.get_ref()),
             },
             normals,
