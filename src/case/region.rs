@@ -235,6 +235,122 @@ impl MediumMaterial {
     }
 }
 
+/// The checks of one region's keys, with what names it in a message.
+struct RegionKeys<'a> {
+    case: &'a Case,
+    i: usize,
+    r: &'a Region,
+}
+
+impl RegionKeys<'_> {
+    fn fail<T>(&self, span: std::ops::Range<usize>, msg: String) -> Result<T, CaseError> {
+        let (i, name) = (self.i, self.r.group.get_ref());
+        self.case
+            .error(span, format!("region[{i}] (\"{name}\"): {msg}"))
+    }
+
+    fn positive_if_given(&self, key: &str, v: &Option<Spanned<f64>>) -> Result<(), CaseError> {
+        match v {
+            Some(v) if !(*v.get_ref() > 0.0) => self.fail(
+                v.span(),
+                format!("`{key}` must be positive, got {}", v.get_ref()),
+            ),
+            _ => Ok(()),
+        }
+    }
+
+    fn need(&self, key: &str, v: &Option<Spanned<f64>>) -> Result<(), CaseError> {
+        if v.is_none() {
+            return self.fail(self.r.group.span(), format!("`{key}` is required"));
+        }
+        self.positive_if_given(key, v)
+    }
+
+    /// An error at the first of `keys` given, saying `why` it does not belong.
+    fn refuse(&self, keys: &[(&str, &Option<Spanned<f64>>)], why: &str) -> Result<(), CaseError> {
+        match keys
+            .iter()
+            .find_map(|(key, v)| v.as_ref().map(|v| (key, v)))
+        {
+            Some((key, v)) => self.fail(v.span(), format!("`{key}` {why}")),
+            None => Ok(()),
+        }
+    }
+
+    /// A solid's material: `K`, its law's moduli, no medium key.
+    fn solid(&self) -> Result<Material, CaseError> {
+        let r = self.r;
+        self.need("K", &r.K)?;
+        let law = self.case.check_solid_law(self.i, r.group.get_ref(), r)?;
+        self.positive_if_given("k", &r.k)?;
+        self.refuse(
+            &[
+                ("gamma", &r.gamma),
+                ("k_max", &r.k_max),
+                ("h_closed", &r.h_closed),
+                ("thickness", &r.thickness),
+                ("beta1", &r.beta1),
+                ("beta2", &r.beta2),
+                ("alpha_r", &r.alpha_r),
+            ],
+            "is a medium key; this region is a solid",
+        )?;
+        Ok(Material::Solid(SolidMaterial {
+            law,
+            k: given(&r.k),
+        }))
+    }
+
+    /// A medium's material: `gamma`, its conductivity law, its weights, no solid key.
+    fn medium(&self) -> Result<Material, CaseError> {
+        let r = self.r;
+        self.need("gamma", &r.gamma)?;
+        for (key, v) in [
+            ("k", &r.k),
+            ("k_max", &r.k_max),
+            ("beta1", &r.beta1),
+            ("beta2", &r.beta2),
+            ("alpha_r", &r.alpha_r),
+        ] {
+            self.positive_if_given(key, v)?;
+        }
+        let conduction = self
+            .case
+            .check_medium_conductivity(self.i, r.group.get_ref(), r)?;
+        self.refuse(
+            &[("K", &r.K), ("mu", &r.mu), ("C10", &r.C10), ("C01", &r.C01)],
+            "is a solid key; the medium's moduli are `gamma`",
+        )?;
+        if let Some(law) = &r.law {
+            return self.fail(
+                law.span(),
+                "`law` chooses a solid's law; the medium's is eq. (13), Neo-Hooke with K = μ = \
+                 `gamma`"
+                    .into(),
+            );
+        }
+        let or = |v: &Option<Spanned<f64>>, default: f64| given(v).unwrap_or(default);
+        let gamma = or(&r.gamma, 0.0);
+        Ok(Material::Medium(MediumMaterial {
+            law: ThermoElastic {
+                K: gamma,
+                mu: gamma,
+                alpha: r.alpha,
+                theta0: r.theta0,
+            },
+            conduction,
+            beta1: or(&r.beta1, 1.0),
+            beta2: or(&r.beta2, 1e-2),
+            alpha_r: given(&r.alpha_r),
+        }))
+    }
+}
+
+/// A key's value, where given.
+fn given(v: &Option<Spanned<f64>>) -> Option<f64> {
+    v.as_ref().map(|v| *v.get_ref())
+}
+
 impl Case {
     /// Every region's material, in case order: its kind's required moduli positive, no key of
     /// the other kind, a positive finite `rho_c`.
@@ -242,116 +358,29 @@ impl Case {
         let f = &self.file;
         let mut materials = Vec::with_capacity(f.region.len());
         for (i, r) in f.region.iter().enumerate() {
-            let at = r.group.span();
-            let name = r.group.get_ref();
-            let positive_if_given =
-                |key: &str, v: &Option<Spanned<f64>>| -> Result<(), CaseError> {
-                    match v {
-                        Some(v) if !(*v.get_ref() > 0.0) => self.error(
-                            v.span(),
-                            format!(
-                                "region[{i}] (\"{name}\"): `{key}` must be positive, got {}",
-                                v.get_ref()
-                            ),
-                        ),
-                        _ => Ok(()),
-                    }
-                };
-            let need = |key: &str, v: &Option<Spanned<f64>>| -> Result<(), CaseError> {
-                if v.is_none() {
-                    return self.error(
-                        at.clone(),
-                        format!("region[{i}] (\"{name}\"): `{key}` is required"),
-                    );
-                }
-                positive_if_given(key, v)
-            };
+            let keys = RegionKeys { case: self, i, r };
             if let Some(v) = &r.rho_c
                 && !(*v.get_ref() > 0.0 && v.get_ref().is_finite())
             {
-                return self.error(
+                return keys.fail(
                     v.span(),
-                    format!(
-                        "region[{i}] (\"{name}\"): `rho_c` must be positive and finite, got {}",
-                        v.get_ref()
-                    ),
+                    format!("`rho_c` must be positive and finite, got {}", v.get_ref()),
                 );
             }
             if let Some(fr) = &r.friction {
                 if r.kind == RegionKind::Solid {
-                    return self.error(
+                    return keys.fail(
                         fr.span(),
-                        format!(
-                            "region[{i}] (\"{name}\"): `friction` acts in a medium's slip plane; \
-                             this region is a solid (give it to the medium region between the bodies)"
-                        ),
+                        "`friction` acts in a medium's slip plane; this region is a solid (give \
+                         it to the medium region between the bodies)"
+                            .into(),
                     );
                 }
-                self.check_friction(i, name, fr.get_ref())?;
+                self.check_friction(i, r.group.get_ref(), fr.get_ref())?;
             }
-            let or = |v: &Option<Spanned<f64>>, default: f64| {
-                v.as_ref().map_or(default, |v| *v.get_ref())
-            };
-            let given = |v: &Option<Spanned<f64>>| v.as_ref().map(|v| *v.get_ref());
             materials.push(match r.kind {
-                RegionKind::Solid => {
-                    need("K", &r.K)?;
-                    let law = self.check_solid_law(i, name, r)?;
-                    positive_if_given("k", &r.k)?;
-                    for (key, v) in [
-                        ("gamma", &r.gamma),
-                        ("k_max", &r.k_max),
-                        ("h_closed", &r.h_closed),
-                        ("thickness", &r.thickness),
-                        ("beta1", &r.beta1),
-                        ("beta2", &r.beta2),
-                        ("alpha_r", &r.alpha_r),
-                    ] {
-                        if let Some(v) = v {
-                            return self.error(v.span(), format!("region[{i}] (\"{name}\"): `{key}` is a medium key; this region is a solid"));
-                        }
-                    }
-                    Material::Solid(SolidMaterial {
-                        law,
-                        k: given(&r.k),
-                    })
-                }
-                RegionKind::Medium => {
-                    need("gamma", &r.gamma)?;
-                    positive_if_given("k", &r.k)?;
-                    positive_if_given("k_max", &r.k_max)?;
-                    positive_if_given("beta1", &r.beta1)?;
-                    positive_if_given("beta2", &r.beta2)?;
-                    positive_if_given("alpha_r", &r.alpha_r)?;
-                    let conduction = self.check_medium_conductivity(i, name, r)?;
-                    for (key, v) in [("K", &r.K), ("mu", &r.mu), ("C10", &r.C10), ("C01", &r.C01)] {
-                        if let Some(v) = v {
-                            return self.error(v.span(), format!("region[{i}] (\"{name}\"): `{key}` is a solid key; the medium's moduli are `gamma`"));
-                        }
-                    }
-                    if let Some(law) = &r.law {
-                        return self.error(
-                            law.span(),
-                            format!(
-                                "region[{i}] (\"{name}\"): `law` chooses a solid's law; the medium's \
-                                 is eq. (13), Neo-Hooke with K = μ = `gamma`"
-                            ),
-                        );
-                    }
-                    let gamma = or(&r.gamma, 0.0);
-                    Material::Medium(MediumMaterial {
-                        law: ThermoElastic {
-                            K: gamma,
-                            mu: gamma,
-                            alpha: r.alpha,
-                            theta0: r.theta0,
-                        },
-                        conduction,
-                        beta1: or(&r.beta1, 1.0),
-                        beta2: or(&r.beta2, 1e-2),
-                        alpha_r: given(&r.alpha_r),
-                    })
-                }
+                RegionKind::Solid => keys.solid()?,
+                RegionKind::Medium => keys.medium()?,
             });
         }
         Ok(materials)
@@ -394,7 +423,6 @@ impl Case {
             _ => {}
         }
         let Some(table) = &r.k_table else {
-            let given = |v: &Option<Spanned<f64>>| v.as_ref().map(|v| *v.get_ref());
             return Ok(MediumConduction::Paper {
                 k_tm: given(&r.k),
                 k_max: given(&r.k_max),
