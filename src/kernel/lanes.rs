@@ -34,7 +34,7 @@ use super::{Active, CellMaterial, CellSummary, KernelError};
 use crate::dofs::{CellState, Layout};
 use crate::element::RefElement;
 use crate::material::regularization::{rotation_denominator, rotation_measure_of};
-use crate::material::{Coefficients, Real, Stress, Tensor4};
+use crate::material::{Coefficients, Real, Stress};
 
 /// Cells per call.
 pub const W: usize = 4;
@@ -326,12 +326,10 @@ fn point_stress<L: Stress>(
     let mut psi = V::default();
     for l in 0..W {
         let Fl = nalgebra::Matrix3::from_fn(|i, j| F[i][j].0[l]);
-        let resp: Option<crate::material::StressResponse> = law.stress(&Fl, theta.0[l]);
-        let Some(resp) = resp else {
+        let Some(resp) = law.stress(&Fl, theta.0[l]) else {
             return Err((KernelError::Inverted { J: J.0[l] }, l));
         };
         psi.0[l] = resp.psi;
-        let A: &Tensor4 = &resp.dP_dF;
         for i in 0..3 {
             for j in 0..3 {
                 full.P[i][j].0[l] = resp.P[(i, j)];
@@ -340,7 +338,7 @@ fn point_stress<L: Stress>(
         }
         for a in 0..9 {
             for b in 0..9 {
-                full.A[a][b].0[l] = A[(a, b)];
+                full.A[a][b].0[l] = resp.dP_dF[(a, b)];
             }
         }
     }
