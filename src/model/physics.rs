@@ -44,11 +44,8 @@ pub fn decide_physics(case: &Case) -> Physics {
     let theta_varies = f.bc.iter().any(|b| {
         b.theta.is_some_and(differs)
             || b.heat_flux.is_some_and(|q| q != 0.0)
-            || (b.h.as_ref().is_some_and(|h| *h.get_ref() > 0.0)
-                && b.theta_inf.as_ref().is_some_and(|t| differs(*t.get_ref())))
-            || b.radiation
-                .as_ref()
-                .is_some_and(|r| differs(*r.get_ref().theta_inf.get_ref()))
+            || b.boundary_fluxes()
+                .any(|q| q.anchors_temperature() && differs(q.ambient()))
     }) || f
         .region
         .iter()
