@@ -235,6 +235,9 @@ impl MediumMaterial {
     }
 }
 
+/// Keys by name.
+type Keys<'a> = [(&'a str, &'a Option<Spanned<f64>>)];
+
 /// The checks of one region's keys, with what names it in a message.
 struct RegionKeys<'a> {
     case: &'a Case,
@@ -267,7 +270,7 @@ impl RegionKeys<'_> {
     }
 
     /// An error at the first of `keys` given, saying `why` it does not belong.
-    fn refuse(&self, keys: &[(&str, &Option<Spanned<f64>>)], why: &str) -> Result<(), CaseError> {
+    fn refuse(&self, keys: &Keys, why: &str) -> Result<(), CaseError> {
         match keys
             .iter()
             .find_map(|(key, v)| v.as_ref().map(|v| (key, v)))
@@ -281,7 +284,7 @@ impl RegionKeys<'_> {
     fn solid(&self) -> Result<Material, CaseError> {
         let r = self.r;
         self.need("K", &r.K)?;
-        let law = self.case.check_solid_law(self.i, r.group.get_ref(), r)?;
+        let law = self.solid_law()?;
         self.positive_if_given("k", &r.k)?;
         self.refuse(
             &[
@@ -314,9 +317,7 @@ impl RegionKeys<'_> {
         ] {
             self.positive_if_given(key, v)?;
         }
-        let conduction = self
-            .case
-            .check_medium_conductivity(self.i, r.group.get_ref(), r)?;
+        let conduction = self.medium_conduction()?;
         self.refuse(
             &[("K", &r.K), ("mu", &r.mu), ("C10", &r.C10), ("C01", &r.C01)],
             "is a solid key; the medium's moduli are `gamma`",
@@ -376,7 +377,7 @@ impl Case {
                             .into(),
                     );
                 }
-                self.check_friction(i, r.group.get_ref(), fr.get_ref())?;
+                keys.friction(fr.get_ref())?;
             }
             materials.push(match r.kind {
                 RegionKind::Solid => keys.solid()?,
@@ -385,39 +386,35 @@ impl Case {
         }
         Ok(materials)
     }
+}
 
+impl RegionKeys<'_> {
     /// A medium's conductivity law: the paper's (`k`, `k_max`), capped by a closed layer's
     /// conductance (`h_closed` with `thickness`), or a table (`k_table`, alone).
-    pub(super) fn check_medium_conductivity(
-        &self,
-        i: usize,
-        name: &str,
-        r: &Region,
-    ) -> Result<MediumConduction, CaseError> {
-        let at = |msg: String, span: std::ops::Range<usize>| {
-            self.error::<MediumConduction>(span, format!("region[{i}] (\"{name}\"): {msg}"))
-        };
+    #[allow(non_snake_case)]
+    fn medium_conduction(&self) -> Result<MediumConduction, CaseError> {
+        let r = self.r;
         for (key, v) in [("h_closed", &r.h_closed), ("thickness", &r.thickness)] {
             if let Some(v) = v
                 && !(*v.get_ref() > 0.0 && v.get_ref().is_finite())
             {
-                return at(
-                    format!("`{key}` must be positive, got {}", v.get_ref()),
+                return self.fail(
                     v.span(),
+                    format!("`{key}` must be positive, got {}", v.get_ref()),
                 );
             }
         }
         match (&r.h_closed, &r.thickness) {
             (Some(h), None) => {
-                return at(
-                    "`h_closed` needs `thickness`, the layer's undeformed thickness".into(),
+                return self.fail(
                     h.span(),
+                    "`h_closed` needs `thickness`, the layer's undeformed thickness".into(),
                 );
             }
             (None, Some(t)) => {
-                return at(
-                    "`thickness` is that of a closed layer whose conductance is `h_closed`; give `h_closed` too".into(),
+                return self.fail(
                     t.span(),
+                    "`thickness` is that of a closed layer whose conductance is `h_closed`; give `h_closed` too".into(),
                 );
             }
             _ => {}
@@ -431,23 +428,19 @@ impl Case {
                     .map(|(h, t)| h * t),
             });
         };
-        for (key, v) in [("k", &r.k), ("k_max", &r.k_max), ("h_closed", &r.h_closed)] {
-            if let Some(v) = v {
-                return at(
-                    format!("`{key}` and `k_table` are two conductivity laws; give one"),
-                    v.span(),
-                );
-            }
-        }
-        let rows = table.get_ref();
+        self.refuse(
+            &[("k", &r.k), ("k_max", &r.k_max), ("h_closed", &r.h_closed)],
+            "and `k_table` are two conductivity laws; give one",
+        )?;
         let bad = |why: &str| {
-            at(
+            self.fail(
+                table.span(),
                 format!(
                     "`k_table` {why} (rows [J, k]: 2 to {TABLE_POINTS}, J > 0 all different, k > 0)"
                 ),
-                table.span(),
             )
         };
+        let mut rows = table.get_ref().clone();
         if !(2..=TABLE_POINTS).contains(&rows.len()) {
             return bad(&format!("has {} rows", rows.len()));
         }
@@ -458,13 +451,10 @@ impl Case {
         {
             return bad(&format!("row {n} is {row:?}"));
         }
-        let mut js: Vec<f64> = rows.iter().map(|row| row[0]).collect();
-        js.sort_by(f64::total_cmp);
-        if let Some(w) = js.windows(2).find(|w| w[0] == w[1]) {
-            return bad(&format!("gives J = {} twice", w[0]));
-        }
-        let mut rows = rows.clone();
         rows.sort_by(|a, b| a[0].total_cmp(&b[0]));
+        if let Some(w) = rows.windows(2).find(|w| w[0][0] == w[1][0]) {
+            return bad(&format!("gives J = {} twice", w[0][0]));
+        }
         let (mut J, mut k) = ([0.0; TABLE_POINTS], [0.0; TABLE_POINTS]);
         for (i, row) in rows.iter().enumerate() {
             (J[i], k[i]) = (row[0], row[1]);
@@ -479,61 +469,44 @@ impl Case {
     /// A solid region's law and its moduli: Neo-Hooke's `mu` > 0, or Mooney-Rivlin's `C10` > 0
     /// and `C01` ≥ 0; no key of the other law.
     #[allow(non_snake_case)]
-    pub(super) fn check_solid_law(
-        &self,
-        i: usize,
-        name: &str,
-        r: &Region,
-    ) -> Result<SolidLaw, CaseError> {
+    fn solid_law(&self) -> Result<SolidLaw, CaseError> {
+        let r = self.r;
         let law = r
             .law
             .as_ref()
             .map_or(SolidLawKey::NeoHooke, |l| *l.get_ref());
-        let at = || r.law.as_ref().map_or(r.group.span(), |l| l.span());
-        type Keys<'a, T> = &'a [(&'a str, &'a Option<Spanned<f64>>, T)];
-        let (needed, other): (Keys<bool>, Keys<()>) = match law {
-            SolidLawKey::NeoHooke => (
-                &[("mu", &r.mu, true)],
-                &[("C10", &r.C10, ()), ("C01", &r.C01, ())],
-            ),
+        type Needed<'a> = &'a [(&'a str, &'a Option<Spanned<f64>>, bool)];
+        let (needed, other): (Needed, &Keys) = match law {
+            SolidLawKey::NeoHooke => (&[("mu", &r.mu, true)], &[("C10", &r.C10), ("C01", &r.C01)]),
             SolidLawKey::MooneyRivlin => (
                 &[("C10", &r.C10, true), ("C01", &r.C01, false)],
-                &[("mu", &r.mu, ())],
+                &[("mu", &r.mu)],
             ),
         };
         let law_name = match law {
             SolidLawKey::NeoHooke => "neo-hooke",
             SolidLawKey::MooneyRivlin => "mooney-rivlin",
         };
-        for &(key, v, ()) in other {
-            if let Some(v) = v {
-                return self.error(
-                    v.span(),
-                    format!(
-                        "region[{i}] (\"{name}\"): `{key}` is not a key of law \"{law_name}\" \
-                         (neo-hooke takes `K` and `mu`; mooney-rivlin `K`, `C10` and `C01`)"
-                    ),
-                );
-            }
-        }
+        self.refuse(
+            other,
+            &format!(
+                "is not a key of law \"{law_name}\" (neo-hooke takes `K` and `mu`; mooney-rivlin \
+                 `K`, `C10` and `C01`)"
+            ),
+        )?;
         for &(key, v, positive) in needed {
             let Some(v) = v else {
-                return self.error(
-                    at(),
-                    format!("region[{i}] (\"{name}\"): law \"{law_name}\" needs `{key}`"),
-                );
+                let at = r.law.as_ref().map_or(r.group.span(), |l| l.span());
+                return self.fail(at, format!("law \"{law_name}\" needs `{key}`"));
             };
             let x = *v.get_ref();
             let ok = x.is_finite() && if positive { x > 0.0 } else { x >= 0.0 };
             if !ok {
                 let must = if positive { "positive" } else { "≥ 0" };
-                return self.error(
-                    v.span(),
-                    format!("region[{i}] (\"{name}\"): `{key}` must be {must}, got {x}"),
-                );
+                return self.fail(v.span(), format!("`{key}` must be {must}, got {x}"));
             }
         }
-        let v = |key: &Option<Spanned<f64>>| key.as_ref().map_or(0.0, |v| *v.get_ref());
+        let v = |key: &Option<Spanned<f64>>| given(key).unwrap_or(0.0);
         let (K, alpha, theta0) = (v(&r.K), r.alpha, r.theta0);
         Ok(match law {
             SolidLawKey::NeoHooke => SolidLaw::NeoHooke(ThermoElastic {
@@ -555,26 +528,19 @@ impl Case {
     /// A medium region's `friction`: μ ≥ 0, a normal of 2 or 3 finite components not all
     /// zero or "auto", `heat_fraction` in [0, 1], `c_f` positive (the normal's dimension is checked
     /// against the mesh's in `model::validate`).
-    pub(super) fn check_friction(
-        &self,
-        i: usize,
-        name: &str,
-        fr: &FrictionKey,
-    ) -> Result<(), CaseError> {
-        let key = |k: &str| format!("region[{i}] (\"{name}\"): `friction.{k}`");
+    fn friction(&self, fr: &FrictionKey) -> Result<(), CaseError> {
         let mu = *fr.mu.get_ref();
         if !(mu >= 0.0 && mu.is_finite()) {
-            return self.error(
+            return self.fail(
                 fr.mu.span(),
-                format!("{} must be finite and ≥ 0, got {mu}", key("mu")),
+                format!("`friction.mu` must be finite and ≥ 0, got {mu}"),
             );
         }
         let bad_normal = |got: String| {
-            self.error(
+            self.fail(
                 fr.normal.span(),
                 format!(
-                    "{} must be \"auto\" or a vector of 2 (2D) or 3 (3D) finite components, not all zero; got {got}",
-                    key("normal")
+                    "`friction.normal` must be \"auto\" or a vector of 2 (2D) or 3 (3D) finite components, not all zero; got {got}"
                 ),
             )
         };
@@ -594,11 +560,10 @@ impl Case {
         if let Some(v) = &fr.heat_fraction
             && !(0.0..=1.0).contains(v.get_ref())
         {
-            return self.error(
+            return self.fail(
                 v.span(),
                 format!(
-                    "{} must be in [0, 1], got {}",
-                    key("heat_fraction"),
+                    "`friction.heat_fraction` must be in [0, 1], got {}",
                     v.get_ref()
                 ),
             );
@@ -606,11 +571,10 @@ impl Case {
         if let Some(v) = &fr.c_f
             && !(*v.get_ref() > 0.0 && v.get_ref().is_finite())
         {
-            return self.error(
+            return self.fail(
                 v.span(),
                 format!(
-                    "{} must be positive and finite, got {}",
-                    key("c_f"),
+                    "`friction.c_f` must be positive and finite, got {}",
                     v.get_ref()
                 ),
             );
