@@ -77,6 +77,7 @@ pub struct SmallPivot {
 
 /// One supernode: columns `begin..end` of the permuted matrix, the rows below them, and
 /// where its panels start in the factor's storage.
+#[derive(Clone)]
 struct Supernode {
     begin: usize,
     end: usize,
@@ -216,6 +217,25 @@ impl<T: Real> StaticLu<T> {
             l: vec![T::default(); l_at],
             u: vec![T::default(); u_at],
             nodes,
+        }
+    }
+
+    /// The same layout for a factor of precision `U` (its values are computed by its first
+    /// [`StaticLu::factor`]).
+    pub fn in_precision<U: Real>(&self) -> StaticLu<U> {
+        StaticLu {
+            l: vec![U::default(); self.l.len()],
+            u: vec![U::default(); self.u.len()],
+            n: self.n,
+            perm: self.perm.clone(),
+            inv: self.inv.clone(),
+            a_ptr: self.a_ptr.clone(),
+            a_row: self.a_row.clone(),
+            a_src: self.a_src.clone(),
+            a_mirror: self.a_mirror.clone(),
+            nodes: self.nodes.clone(),
+            node_of: self.node_of.clone(),
+            rows: self.rows.clone(),
         }
     }
 
