@@ -417,7 +417,7 @@ impl LinearSolver {
         let how = self.backend.describe().unwrap_or_else(|| {
             match self.kind {
                 LinearKind::Ldlt => "LDLᵀ in nested-dissection order",
-                LinearKind::Lu => "LU without row exchanges in nested-dissection order, with GMRES",
+                LinearKind::Lu => "LU without row exchanges in nested-dissection order (single precision above 10⁶ entries), with GMRES",
                 LinearKind::BlockGmres => {
                     "GMRES preconditioned by the block-triangular factor (LDLᵀ or LU blocks in single precision)"
                 }
