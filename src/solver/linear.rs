@@ -16,8 +16,10 @@
 //!   twice LDLᵀ's entries), by faer's partially pivoted LU (fill bounded by AᵀA's pattern)
 //!   only where a pivot vanishes in that order. A factor is kept across Newton iterations
 //!   while it preconditions the newer tangents: GMRES with it reaches 1e-10 in a few
-//!   products, or the tangent is refactorised. In the block preconditioner above, friction's
-//!   mechanics block is factorised the same way in single precision, at every factorisation.
+//!   products, or the tangent is refactorised. A factor of more than `SINGLE_LU_ENTRIES`
+//!   is held in single precision (a pivot it refuses: the same factor in double first). In
+//!   the block preconditioner above, friction's mechanics block is factorised the same way in
+//!   single precision, at every factorisation.
 
 use super::static_lu::{Real, StaticLu};
 use crate::dofs::{Pattern, Structure};
