@@ -18,6 +18,7 @@ use faer::sparse::SymbolicSparseColMat;
 use faer::traits::ComplexField;
 use faer::{Accum, MatMut, MatRef, Par};
 use std::ops::{Div, Mul, Sub, SubAssign};
+use std::sync::Arc;
 
 /// The precision of a factor: f64, or f32 where it only preconditions a Krylov method that
 /// keeps the residual in f64 (half the memory traffic).
@@ -77,7 +78,6 @@ pub struct SmallPivot {
 
 /// One supernode: columns `begin..end` of the permuted matrix, the rows below them, and
 /// where its panels start in the factor's storage.
-#[derive(Clone)]
 struct Supernode {
     begin: usize,
     end: usize,
@@ -96,8 +96,9 @@ impl Supernode {
     }
 }
 
-/// The factor's layout, computed once per pattern, and its values.
-pub struct StaticLu<T: Real> {
+/// Where a factor's entries go, computed once per pattern and shared by the factors of any
+/// precision that follow it.
+struct Layout {
     n: usize,
     /// `perm[new] = old`, `inv[old] = new`.
     perm: Vec<usize>,
@@ -112,6 +113,11 @@ pub struct StaticLu<T: Real> {
     /// The supernode of each column.
     node_of: Vec<usize>,
     rows: Vec<usize>,
+}
+
+/// The factor's layout and its values.
+pub struct StaticLu<T: Real> {
+    layout: Arc<Layout>,
     l: Vec<T>,
     u: Vec<T>,
 }
@@ -205,37 +211,30 @@ impl<T: Real> StaticLu<T> {
             }
         }
         StaticLu {
-            n,
-            perm: perm.to_vec(),
-            inv,
-            a_ptr,
-            a_row,
-            a_src,
-            a_mirror,
-            node_of,
-            rows,
+            layout: Arc::new(Layout {
+                n,
+                perm: perm.to_vec(),
+                inv,
+                a_ptr,
+                a_row,
+                a_src,
+                a_mirror,
+                node_of,
+                rows,
+                nodes,
+            }),
             l: vec![T::default(); l_at],
             u: vec![T::default(); u_at],
-            nodes,
         }
     }
 
-    /// The same layout for a factor of precision `U` (its values are computed by its first
-    /// [`StaticLu::factor`]).
+    /// A factor of precision `U` with the same layout, shared (its values are computed by its
+    /// first [`StaticLu::factor`]).
     pub fn in_precision<U: Real>(&self) -> StaticLu<U> {
         StaticLu {
+            layout: Arc::clone(&self.layout),
             l: vec![U::default(); self.l.len()],
             u: vec![U::default(); self.u.len()],
-            n: self.n,
-            perm: self.perm.clone(),
-            inv: self.inv.clone(),
-            a_ptr: self.a_ptr.clone(),
-            a_row: self.a_row.clone(),
-            a_src: self.a_src.clone(),
-            a_mirror: self.a_mirror.clone(),
-            nodes: self.nodes.clone(),
-            node_of: self.node_of.clone(),
-            rows: self.rows.clone(),
         }
     }
 
@@ -247,28 +246,28 @@ impl<T: Real> StaticLu<T> {
     /// Factorise the matrix of the pattern given to [`StaticLu::new`] with `values` (in its
     /// slots).
     pub fn factor(&mut self, values: &[f64]) -> Result<(), SmallPivot> {
-        let n = self.n;
+        let n = self.layout.n;
         // the largest entry of each row and column, for the pivot test
         let mut scale = vec![0.0f64; n];
         for j in 0..n {
-            for k in self.a_ptr[j]..self.a_ptr[j + 1] {
-                let a = values[self.a_src[k]].abs();
+            for k in self.layout.a_ptr[j]..self.layout.a_ptr[j + 1] {
+                let a = values[self.layout.a_src[k]].abs();
                 scale[j] = scale[j].max(a);
-                scale[self.a_row[k]] = scale[self.a_row[k]].max(a);
+                scale[self.layout.a_row[k]] = scale[self.layout.a_row[k]].max(a);
             }
         }
         // local position of each row in the supernode being factored
         let mut pos = vec![NONE; n];
         // the earlier supernodes whose next rows fall in each supernode, and how far down
         // their rows each has been applied
-        let mut waiting: Vec<Vec<usize>> = vec![Vec::new(); self.nodes.len()];
-        let mut cursor = vec![0; self.nodes.len()];
+        let mut waiting: Vec<Vec<usize>> = vec![Vec::new(); self.layout.nodes.len()];
+        let mut cursor = vec![0; self.layout.nodes.len()];
         let (mut into_l, mut into_u): (Vec<T>, Vec<T>) = (Vec::new(), Vec::new());
-        for s in 0..self.nodes.len() {
-            let sn = &self.nodes[s];
+        for s in 0..self.layout.nodes.len() {
+            let sn = &self.layout.nodes[s];
             let (b, w, nr) = (sn.begin, sn.width(), sn.n_rows);
             let m = w + nr;
-            let below = &self.rows[sn.rows_at..sn.rows_at + nr];
+            let below = &self.layout.rows[sn.rows_at..sn.rows_at + nr];
             for t in 0..w {
                 pos[b + t] = t;
             }
@@ -280,24 +279,24 @@ impl<T: Real> StaticLu<T> {
             self.l[l_at..l_at + m * w].fill(T::default());
             self.u[u_at..u_at + nr * w].fill(T::default());
             for j in b..sn.end {
-                for p in self.a_ptr[j]..self.a_ptr[j + 1] {
-                    let i = self.a_row[p];
+                for p in self.layout.a_ptr[j]..self.layout.a_ptr[j + 1] {
+                    let i = self.layout.a_row[p];
                     if i < b {
                         continue;
                     }
                     let r = pos[i];
-                    self.l[l_at + (j - b) * m + r] = T::of(values[self.a_src[p]]);
+                    self.l[l_at + (j - b) * m + r] = T::of(values[self.layout.a_src[p]]);
                     if r >= w {
                         self.u[u_at + (j - b) * nr + r - w] =
-                            T::of(values[self.a_src[self.a_mirror[p]]]);
+                            T::of(values[self.layout.a_src[self.layout.a_mirror[p]]]);
                     }
                 }
             }
             // the updates of the earlier supernodes that reach these columns
             for d in std::mem::take(&mut waiting[s]) {
-                let dn = &self.nodes[d];
+                let dn = &self.layout.nodes[d];
                 let (wd, nd) = (dn.width(), dn.n_rows);
-                let drows = &self.rows[dn.rows_at..dn.rows_at + nd];
+                let drows = &self.layout.rows[dn.rows_at..dn.rows_at + nd];
                 let c0 = cursor[d];
                 let c1 = c0 + drows[c0..].partition_point(|&i| i < sn.end);
                 let (k, k1, k2) = (nd - c0, c1 - c0, nd - c1);
@@ -338,7 +337,7 @@ impl<T: Real> StaticLu<T> {
                 }
                 cursor[d] = c1;
                 if c1 < nd {
-                    waiting[self.node_of[drows[c1]]].push(d);
+                    waiting[self.layout.node_of[drows[c1]]].push(d);
                 }
             }
             // the diagonal block, then the panels against it: L_RJ U_JJ = A_RJ and
@@ -347,7 +346,7 @@ impl<T: Real> StaticLu<T> {
             let panel = MatMut::from_column_major_slice_mut(&mut l[l_at..l_at + m * w], m, w);
             let (mut diag, lower) = panel.split_at_row_mut(w);
             dense_lu(diag.rb_mut(), &scale[b..b + w]).map_err(|(t, pivot)| SmallPivot {
-                equation: self.perm[b + t],
+                equation: self.layout.perm[b + t],
                 pivot,
             })?;
             let diag = diag.into_const();
@@ -367,7 +366,7 @@ impl<T: Real> StaticLu<T> {
                 pos[i] = NONE;
             }
             if nr > 0 {
-                waiting[self.node_of[below[0]]].push(s);
+                waiting[self.layout.node_of[below[0]]].push(s);
             }
         }
         Ok(())
@@ -375,12 +374,17 @@ impl<T: Real> StaticLu<T> {
 
     /// b → A⁻¹ b.
     pub fn solve(&self, b: &mut [f64]) {
-        let mut z: Vec<T> = self.perm.iter().map(|&old| T::of(b[old])).collect();
+        let mut z: Vec<T> = self.layout.perm.iter().map(|&old| T::of(b[old])).collect();
         // the rows below a supernode, gathered: L_RJ z_J, or z_R for U_JR z_R
-        let widest = self.nodes.iter().map(|s| s.n_rows.max(s.width())).max();
+        let widest = self
+            .layout
+            .nodes
+            .iter()
+            .map(|s| s.n_rows.max(s.width()))
+            .max();
         let mut tmp = vec![T::default(); widest.unwrap_or(0)];
         // L z = b, supernode by supernode: z_J by the unit lower L_JJ, then z_R −= L_RJ z_J
-        for sn in &self.nodes {
+        for sn in &self.layout.nodes {
             let (bg, w, nr) = (sn.begin, sn.width(), sn.n_rows);
             let m = w + nr;
             let l = &self.l[sn.l_at..sn.l_at + m * w];
@@ -398,18 +402,21 @@ impl<T: Real> StaticLu<T> {
                 let zj = MatRef::from_column_major_slice(&z[bg..bg + w], w, 1);
                 let out = MatMut::from_column_major_slice_mut(&mut tmp[..nr], nr, 1);
                 faer::linalg::matmul::matmul(out, Accum::Replace, panel, zj, T::of(1.0), Par::Seq);
-                for (&i, &v) in self.rows[sn.rows_at..sn.rows_at + nr].iter().zip(&tmp) {
+                for (&i, &v) in self.layout.rows[sn.rows_at..sn.rows_at + nr]
+                    .iter()
+                    .zip(&tmp)
+                {
                     z[i] -= v;
                 }
             }
         }
         // U z = z, backwards: z_J −= U_JR z_R, then z_J by the upper U_JJ
-        for sn in self.nodes.iter().rev() {
+        for sn in self.layout.nodes.iter().rev() {
             let (bg, w, nr) = (sn.begin, sn.width(), sn.n_rows);
             let m = w + nr;
             let l = &self.l[sn.l_at..sn.l_at + m * w];
             if nr > 0 {
-                let below = &self.rows[sn.rows_at..sn.rows_at + nr];
+                let below = &self.layout.rows[sn.rows_at..sn.rows_at + nr];
                 for (t, &i) in tmp.iter_mut().zip(below) {
                     *t = z[i];
                 }
@@ -435,7 +442,7 @@ impl<T: Real> StaticLu<T> {
             }
         }
         for (old, v) in b.iter_mut().enumerate() {
-            *v = z[self.inv[old]].get();
+            *v = z[self.layout.inv[old]].get();
         }
     }
 }
@@ -659,7 +666,7 @@ mod tests {
         let n = p.nrows();
         let natural: Vec<usize> = (0..n).collect();
         let lu = StaticLu::<f64>::new(&p, &natural);
-        let widest = lu.nodes.iter().map(Supernode::width).max().unwrap();
+        let widest = lu.layout.nodes.iter().map(Supernode::width).max().unwrap();
         assert!(widest > 2 * BLOCK, "widest supernode {widest}");
         // no more than the band this order fills (columns of L reach at most 70 rows down)
         let band: usize = (0..n).map(|j| (n - 1 - j).min(70)).sum();
