@@ -80,7 +80,7 @@ pub fn friction<const N: usize, const D: usize, E: RefElement<N, D>>(
             dP_dtheta: &m.dP_dtheta,
         };
         let f = law
-            .respond(
+            .respond::<D>(
                 &F,
                 &slip,
                 shear_modulus(mat.c_f, mat.medium.bulk_modulus(), m.J),

@@ -85,9 +85,11 @@ pub fn shear_modulus(c_f: f64, K_m: f64, J: f64) -> (f64, f64) {
 
 impl Friction {
     /// The friction stress at `F`, from the previous accepted `slip`, with the friction modulus
-    /// `modulus` = (G_f, dG_f/dJ) at this J and the medium's own stress. `None` when F is
-    /// singular.
-    pub fn respond(
+    /// `modulus` = (G_f, dG_f/dJ) at this J and the medium's own stress, in `D` dimensions: in
+    /// 2D (plane strain) the derivatives are those in F's in-plane entries, the only ones a
+    /// variation of the plane's displacements moves (the others are left zero). `None` when F
+    /// is singular.
+    pub fn respond<const D: usize>(
         &self,
         F: &Matrix3<f64>,
         slip: &Vector3<f64>,
@@ -106,7 +108,7 @@ impl Friction {
         let (FN, FP) = (F * N, F * Pn);
         let mut dgamma = VectorByF::zeros();
         let mut dtrial = VectorByF::zeros();
-        for (I, k, L) in (0..27).map(|n| (n / 9, n / 3 % 3, n % 3)) {
+        for (I, k, L) in in_plane::<D>() {
             dgamma[(I, 3 * k + L)] = Pn[(I, L)] * FN[k] + FP[(k, I)] * N[L];
             dtrial[(I, 3 * k + L)] =
                 dG * J * Finv[(L, k)] * elastic[I] + G * dgamma[(I, 3 * k + L)];
@@ -132,17 +134,17 @@ impl Friction {
             // d|a| = a · (dF τ* + F dτ*) / |a|
             let Fdtrial = F * dtrial;
             let mut dtau = dtrial * scale;
-            for (k, L) in (0..9).map(|c| (c / 3, c % 3)) {
+            for (k, L) in columns::<D>() {
                 let c = 3 * k + L;
                 let dsize = (a[k] * trial[L] + a.dot(&Fdtrial.column(c))) / size;
-                for I in 0..3 {
+                for I in 0..D {
                     dtau[(I, c)] -= tau[I] * dsize / size;
                 }
             }
             // ∂τ/∂(μ p_n): the limit moves with the normal traction
             let e = trial / size;
             let dtau_dtheta = if p_n > 0.0 {
-                self.limit_moves(&mut dtau, &e, &m, &Finv, medium)
+                self.limit_moves::<D>(&mut dtau, &e, &m, &Finv, medium)
             } else {
                 Vector3::zeros()
             };
@@ -155,7 +157,7 @@ impl Friction {
                 dtau: &dtau,
                 dtau_dtheta: &dtau_dtheta,
             };
-            slip_rate.dissipation(&tau, &step, (G, dG * J), &Finv)
+            slip_rate.dissipation::<D>(&tau, &step, (G, dG * J), &Finv)
         } else {
             (Matrix3::zeros(), 0.0)
         };
@@ -163,7 +165,9 @@ impl Friction {
         // A_iJkL = δ_ik S_LJ + (F N)_i dτ_J/dF_kL + (F dτ/dF)_i,kL N_J
         let Fdtau = F * dtau;
         let mut A = Tensor4::zeros();
-        for (i, Jc, k, L) in (0..81).map(|c| (c / 27, c / 9 % 3, c / 3 % 3, c % 3)) {
+        for (i, Jc, k, L) in
+            in_plane::<D>().flat_map(|(i, k, L)| (0..D).map(move |Jc| (i, Jc, k, L)))
+        {
             let d = if i == k { S[(L, Jc)] } else { 0.0 };
             A[(3 * i + Jc, 3 * k + L)] =
                 d + FN[i] * dtau[(Jc, 3 * k + L)] + Fdtau[(i, 3 * k + L)] * N[Jc];
@@ -187,7 +191,7 @@ impl Friction {
 impl Friction {
     /// A slipping point's τ = μ p_n e moves with the normal traction p_n = −n · P N, n = m/|m|,
     /// m = F⁻ᵀ N: its derivative in F is added to `dtau`, its derivative in θ returned.
-    fn limit_moves(
+    fn limit_moves<const D: usize>(
         &self,
         dtau: &mut VectorByF,
         e: &Vector3<f64>,
@@ -199,22 +203,32 @@ impl Friction {
         let n = m / m.norm();
         let t = medium.P * N;
         let project = (Matrix3::identity() - n * n.transpose()) / m.norm();
-        for (k, L) in (0..9).map(|c| (c / 3, c % 3)) {
+        for (k, L) in columns::<D>() {
             let dm = -Finv.row(L).transpose() * m[k];
             let dn = project * dm;
             let mut dt = Vector3::zeros();
-            for i in 0..3 {
-                dt[i] = (0..3)
+            for i in 0..D {
+                dt[i] = (0..D)
                     .map(|A| medium.dP_dF[(3 * i + A, 3 * k + L)] * N[A])
                     .sum();
             }
             let dp = -dn.dot(&t) - n.dot(&dt);
-            for I in 0..3 {
+            for I in 0..D {
                 dtau[(I, 3 * k + L)] += self.mu * dp * e[I];
             }
         }
         e * (-self.mu * n.dot(&(medium.dP_dtheta * N)))
     }
+}
+
+/// The entries (k, L) of F that a variation in `D` dimensions moves.
+fn columns<const D: usize>() -> impl Iterator<Item = (usize, usize)> {
+    (0..D * D).map(|c| (c / D, c % D))
+}
+
+/// A vector's components I with the entries (k, L) of F: its derivatives in `D` dimensions.
+fn in_plane<const D: usize>() -> impl Iterator<Item = (usize, usize, usize)> {
+    (0..D).flat_map(|I| columns::<D>().map(move |(k, L)| (I, k, L)))
 }
 
 /// The derivatives of a slipping point's shear γ and traction τ in F (3 × 9, column 3k + L
@@ -229,7 +243,7 @@ impl SlipDerivatives<'_> {
     /// The derivatives in F and θ of the heat made, D = τ · (g − gₙ) with g = γ − τ/G in slip:
     /// dD = dτ · Δg + τ · (dγ − dτ/G + τ dG/G²), with dG/dF = G'(J) J F⁻ᵀ (`modulus`: G and
     /// G'(J) J).
-    fn dissipation(
+    fn dissipation<const D: usize>(
         &self,
         tau: &Vector3<f64>,
         step: &Vector3<f64>,
@@ -238,11 +252,11 @@ impl SlipDerivatives<'_> {
     ) -> (Matrix3<f64>, f64) {
         let (G, dG_J) = modulus;
         let mut dF = Matrix3::zeros();
-        for (k, L) in (0..9).map(|c| (c / 3, c % 3)) {
+        for (k, L) in columns::<D>() {
             let c = 3 * k + L;
             let dGc = dG_J * Finv[(L, k)];
             let mut d = 0.0;
-            for I in 0..3 {
+            for I in 0..D {
                 let dslip = self.dgamma[(I, c)] - self.dtau[(I, c)] / G + tau[I] * dGc / (G * G);
                 d += self.dtau[(I, c)] * step[I] + tau[I] * dslip;
             }
@@ -293,7 +307,11 @@ mod tests {
             dP_dF: &m.dP_dF,
             dP_dtheta: &m.dP_dtheta,
         };
-        law.respond(F, slip, modulus, &medium).unwrap()
+        if law.normal[2] == 0.0 {
+            law.respond::<2>(F, slip, modulus, &medium).unwrap()
+        } else {
+            law.respond::<3>(F, slip, modulus, &medium).unwrap()
+        }
     }
 
     fn respond(law: &Friction, F: &Matrix3<f64>, slip: &Vector3<f64>) -> FrictionResponse {
@@ -328,7 +346,8 @@ mod tests {
                 let h = 1e-7;
                 let scale = r.dP_dF.amax();
                 let heat_scale = r.ddissipated_dF.amax().max(1e-300);
-                for c in 0..9 {
+                // in 2D, F's in-plane entries (the others a plane's displacements never move)
+                for c in (0..9).filter(|c| dim == 3 || (c / 3 < 2 && c % 3 < 2)) {
                     let (mut p, mut m) = (F, F);
                     p[(c / 3, c % 3)] += h;
                     m[(c / 3, c % 3)] -= h;
@@ -400,7 +419,7 @@ mod tests {
             dP_dF: &A,
             dP_dtheta: &Matrix3::zeros(),
         };
-        let r = law.respond(&F, &g, (G, 0.0), &medium).unwrap();
+        let r = law.respond::<3>(&F, &g, (G, 0.0), &medium).unwrap();
         assert!(!r.slipping);
         let h = 1e-6;
         for c in 0..9 {
