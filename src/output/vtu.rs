@@ -15,7 +15,6 @@ use crate::mesh::Mesh;
 use base64::Engine;
 use base64::engine::general_purpose::STANDARD as BASE64;
 use rayon::prelude::*;
-use std::io::Write;
 use std::path::Path;
 
 /// zlib level of the data (0: uncompressed). `make bench` (output) measures the levels.
@@ -323,15 +322,7 @@ fn data_array(a: &Array, zlib_level: u32) -> String {
         let blocks: Vec<Vec<u8>> = a
             .bytes
             .chunks(BLOCK)
-            .map(|b| {
-                let mut z = flate2::write::ZlibEncoder::new(
-                    Vec::new(),
-                    flate2::Compression::new(zlib_level),
-                );
-                z.write_all(b)
-                    .and_then(|_| z.finish())
-                    .expect("deflating into memory")
-            })
+            .map(|b| deflate(b, zlib_level))
             .collect();
         let mut h = vec![
             blocks.len() as u64,
@@ -350,6 +341,38 @@ fn data_array(a: &Array, zlib_level: u32) -> String {
     BASE64.encode_string(data, &mut s);
     s.push_str("\n</DataArray>\n");
     s
+}
+
+/// `bytes` deflated into a zlib stream at `level`. The compressor is kept per thread and
+/// reset between blocks: a new one zeroes its tables (hundreds of kB) for every block, which
+/// cost more than compressing a small scene's arrays.
+fn deflate(bytes: &[u8], level: u32) -> Vec<u8> {
+    thread_local! {
+        static KEPT: std::cell::RefCell<Option<(u32, flate2::Compress)>> =
+            const { std::cell::RefCell::new(None) };
+    }
+    KEPT.with_borrow_mut(|kept| {
+        if kept.as_ref().is_none_or(|(l, _)| *l != level) {
+            *kept = Some((
+                level,
+                flate2::Compress::new(flate2::Compression::new(level), true),
+            ));
+        }
+        let (_, z) = kept.as_mut().expect("a compressor was just made");
+        z.reset();
+        // a stream never exceeds its input by more than a few bytes per 16 kB block
+        let mut out = Vec::with_capacity(bytes.len() + bytes.len() / 1000 + 64);
+        loop {
+            let read = z.total_in() as usize;
+            let status = z
+                .compress_vec(&bytes[read..], &mut out, flate2::FlushCompress::Finish)
+                .expect("deflating into memory");
+            if status == flate2::Status::StreamEnd {
+                return out;
+            }
+            out.reserve(out.capacity().max(64));
+        }
+    })
 }
 
 fn xml_escape(s: &str) -> String {
