@@ -109,9 +109,30 @@ pub struct LinearSolver {
     krylov_count: usize,
 }
 
-/// GMRES iterations a lagged LU factor may take to solve with a newer tangent before it is
-/// refactored (each iteration: a product with the matrix and a solve with the factor).
+/// GMRES iterations a lagged LU factor may take at most to solve with a newer tangent before
+/// it is refactored (each iteration: a product with the matrix and a solve with the factor).
+/// Measured on sphere-drag (a factor of 2.3 M entries): 4, 8, 12 and 24 iterations took
+/// 27.2, 26.0, 25.5 and 27.9 s.
 const LAG_MAX_ITS: usize = 12;
+
+/// How many times faster, per floating-point operation, a factorisation runs (dense blocks of
+/// supernodes) than a GMRES iteration with its factor (sparse products and triangular solves,
+/// bound by memory): the factor's price in iterations is its operations over an iteration's,
+/// divided by this. Measured on this machine: lagging pays from about 12 iterations' price
+/// (sphere-drag, 155 iterations' operations: best at 8–12) and not at 10 (friction-heating:
+/// never lagging took 0.64 s against 0.71 s with up to 12 iterations).
+const FACTOR_SPEEDUP: f64 = 12.0;
+
+/// The GMRES iterations worth one factorisation of `lu` for the block `sub`, at most
+/// [`LAG_MAX_ITS`]: a lagged factor that needs more costs more than refactoring would have
+/// (0: a factor this cheap is never lagged).
+fn lag_budget<T: Real>(lu: &StaticLu<T>, sub: &SubMatrix) -> usize {
+    let n = sub.pattern.nrows() as f64;
+    // products with L, U and A, and the orthogonalisation of a restart's dozen vectors
+    let iteration = 2.0 * lu.entries() as f64 + 2.0 * sub.values.len() as f64 + 30.0 * n;
+    let price = lu.flops() / iteration / FACTOR_SPEEDUP;
+    (price.floor() as usize).min(LAG_MAX_ITS)
+}
 
 /// An LU factor (of a whole system or of a part, not of a preconditioner's block) with more
 /// entries than this is held in single precision: above it the factorisations and the
@@ -123,8 +144,8 @@ const SINGLE_LU_ENTRIES: usize = 1_000_000;
 /// LU of an unsymmetric block, refactored only when its last factor no longer preconditions
 /// the current tangent well: between Newton iterations a tangent moves little, so GMRES with
 /// the last factor as its preconditioner reaches [`GMRES_TOL`] in a few products, each far
-/// cheaper than a factorisation. A factor that needs more than [`LAG_MAX_ITS`] is refactored
-/// with the current values.
+/// cheaper than a factorisation. A factor that needs more iterations than it is worth
+/// ([`lag_budget`]) is refactored with the current values.
 ///
 /// The factor is [`StaticLu`]: no pivoting, in the nested-dissection order of the symmetric
 /// pattern, so its entries are twice LDLᵀ's. Where a pivot vanishes in that order (in single
@@ -143,6 +164,8 @@ struct LaggedLu<T: Real> {
     symbolic: Option<SymbolicLu<usize>>,
     /// The factor the last factorisation left.
     held: Held,
+    /// GMRES iterations a factor of an older tangent may take ([`lag_budget`]).
+    lag: usize,
     factored: bool,
     current: bool,
 }
@@ -162,8 +185,10 @@ impl<T: Real> LaggedLu<T> {
     /// unknowns together).
     fn new(sub: SubMatrix, node: &[u32]) -> LaggedLu<T> {
         let (fwd, _) = nested_dissection(&sub.pattern, node);
+        let staticlu = StaticLu::<T>::new(&sub.pattern, &fwd);
         LaggedLu {
-            staticlu: StaticLu::new(&sub.pattern, &fwd),
+            lag: lag_budget(&staticlu, &sub),
+            staticlu,
             sub,
             double: None,
             symbolic: None,
@@ -176,6 +201,7 @@ impl<T: Real> LaggedLu<T> {
     /// The same block and layout, its factor held in precision `U`.
     fn in_precision<U: Real>(self) -> LaggedLu<U> {
         LaggedLu {
+            lag: self.lag,
             staticlu: self.staticlu.in_precision(),
             sub: self.sub,
             double: None,
@@ -250,7 +276,7 @@ impl<T: Real> Factorization for LaggedLu<T> {
         let rhs = b.to_vec();
         let mut spent = 0;
         loop {
-            let budget = if self.current { GMRES_MAX } else { LAG_MAX_ITS };
+            let budget = if self.current { GMRES_MAX } else { self.lag };
             let sub = &self.sub;
             let this = &*self;
             let out = gmres(
@@ -1067,7 +1093,24 @@ mod tests {
     fn a_lagged_lu_solves_newer_tangents_and_refactors_when_they_drift() {
         let (p, v, node, thermal) = system(40, 0.1, 0.3);
         let s = Structure { node, thermal };
+        // a factor this small costs less than one GMRES iteration with it is worth: the
+        // solver never lags it (a newer tangent is factorised and solved in one product)
+        let cheap = double_lu(&p, &s);
+        assert_eq!(cheap.lag, 0, "{} operations", cheap.staticlu.flops());
         let mut solver = LinearSolver::new(LinearKind::Lu, &p, &s).unwrap();
+        for scale in [1.0, 1.001] {
+            let w: Vec<f64> = v.iter().map(|a| a * scale).collect();
+            solver.factor(&w).unwrap();
+            let mut x: Vec<f64> = (0..p.n).map(|i| (i as f64).cos()).collect();
+            solver.solve(&mut x).unwrap();
+            assert_eq!(solver.krylov_last, 1);
+        }
+        // with a budget, as a larger factor has
+        let lagged = LaggedLu {
+            lag: LAG_MAX_ITS,
+            ..double_lu(&p, &s)
+        };
+        let mut solver = LinearSolver::with(LinearKind::Lu, Box::new(lagged));
         let b: Vec<f64> = (0..p.n).map(|i| (i as f64).cos()).collect();
         let solve = |solver: &mut LinearSolver, v: &[f64]| {
             solver.factor(v).unwrap();

@@ -243,6 +243,20 @@ impl<T: Real> StaticLu<T> {
         self.l.len() + self.u.len()
     }
 
+    /// Floating-point operations of one factorisation: per supernode of width w with r rows
+    /// below it, the LU of its diagonal block (2w³/3), the panels of L and U (r w² each) and
+    /// the update of the rows below (2 r² w).
+    pub fn flops(&self) -> f64 {
+        self.layout
+            .nodes
+            .iter()
+            .map(|s| {
+                let (w, r) = (s.width() as f64, s.n_rows as f64);
+                2.0 * w * w * w / 3.0 + 2.0 * r * w * w + 2.0 * r * r * w
+            })
+            .sum()
+    }
+
     /// Factorise the matrix of the pattern given to [`StaticLu::new`] with `values` (in its
     /// slots).
     pub fn factor(&mut self, values: &[f64]) -> Result<(), SmallPivot> {
