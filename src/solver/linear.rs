@@ -15,8 +15,8 @@
 //!   it is factorised without pivoting in the same nested-dissection order ([`StaticLu`]:
 //!   twice LDLᵀ's entries), by faer's partially pivoted LU (fill bounded by AᵀA's pattern)
 //!   only where a pivot vanishes in that order. A factor is kept across Newton iterations
-//!   while it preconditions the newer tangents: GMRES with it reaches 1e-10 in a few
-//!   products, or the tangent is refactorised. A factor of more than `SINGLE_LU_ENTRIES`
+//!   while it preconditions the newer tangents within the GMRES iterations a factorisation
+//!   is worth (none for a small factor), or the tangent is refactorised. A factor of more than `SINGLE_LU_ENTRIES`
 //!   is held in single precision (a pivot it refuses: the same factor in double first). In
 //!   the block preconditioner above, friction's mechanics block is factorised the same way in
 //!   single precision, at every factorisation.
@@ -260,12 +260,13 @@ impl<T: Real> LaggedLu<T> {
 }
 
 impl<T: Real> Factorization for LaggedLu<T> {
-    /// Take the whole system's `values` as the current tangent; factorised at once only the
-    /// first time.
+    /// Take the whole system's `values` as the current tangent; factorised at once the first
+    /// time and wherever no lag is worth it, otherwise only when the last factor no longer
+    /// solves with it.
     fn factor(&mut self, values: &[f64]) -> Result<(), LinearError> {
         self.sub.update(values);
         self.current = false;
-        if !self.factored {
+        if !self.factored || self.lag == 0 {
             self.refactor()?;
         }
         Ok(())
