@@ -41,6 +41,52 @@ pub fn check_inversion(model: &Model, x: &[f64]) -> Result<(), AssemblyError> {
     Ok(())
 }
 
+/// How many medium cells the state `x` inverts at a corner node that also belongs to a
+/// solid: there the solid has passed into the medium's cell between its quadrature points,
+/// where the medium's stiffening does not act (a bilinear or higher cell's J varies over it
+/// and can change sign at a corner while it stays positive at every point; a linear
+/// triangle's or tetrahedron's is one number, so those are not looked at).
+pub fn corners_through_medium(model: &Model, x: &[f64]) -> usize {
+    use crate::mesh::CellKind;
+    let mut solid = vec![false; model.mesh.coords.len()];
+    for info in model
+        .blocks
+        .iter()
+        .filter(|b| b.layout.has_u && !b.mat.medium)
+    {
+        for &n in &model.mesh.cells[info.block].conn {
+            solid[n] = true;
+        }
+    }
+    let mut cells = 0;
+    for info in &model.blocks {
+        let blk = &model.mesh.cells[info.block];
+        let simplex = matches!(blk.kind, CellKind::Tri3 | CellKind::Tet4);
+        if !info.layout.has_u || !info.mat.medium || simplex {
+            continue;
+        }
+        let corners = blk.kind.corners();
+        cells += crate::with_cell!(blk.kind, |N, D, E| {
+            (0..blk.n_cells())
+                .into_par_iter()
+                .with_min_len(MIN_PART_CELLS)
+                .filter(|&c| {
+                    let nodes = blk.cell(c);
+                    let s = gather::<N>(&model.mesh.coords, &model.dofs, nodes, x);
+                    let deformed =
+                        std::array::from_fn(|i| std::array::from_fn(|k| s.X[i][k] + s.u[i][k]));
+                    let looked_at = |k: usize| solid[nodes[k]];
+                    let worst = crate::element::worst_corner::<N, D, E>(
+                        &s.X, &deformed, corners, looked_at,
+                    );
+                    worst.1 <= 0.0
+                })
+                .count()
+        });
+    }
+    cells
+}
+
 /// The global arrays the cells add into.
 #[derive(Clone, Copy)]
 pub(super) struct Arrays {

@@ -20,7 +20,7 @@ pub mod history;
 mod scatter;
 mod schedule;
 
-pub use cells::check_inversion;
+pub use cells::{check_inversion, corners_through_medium};
 
 use crate::dofs::{Pattern, build_pattern, build_pattern_of};
 use crate::element::RefElement;

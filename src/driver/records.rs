@@ -91,6 +91,10 @@ pub struct Summary {
     pub petsc_solver: Option<String>,
     /// On several ranks, each rank's peak resident memory (MB); `peak_memory_mb` is rank 0's.
     pub peak_memory_mb_ranks: Option<Vec<f64>>,
+    /// The most medium cells an accepted step left inverted at a corner they share with a
+    /// solid: a solid that passed through the medium between its quadrature points (0 if
+    /// none did; linear triangles and tetrahedra cannot).
+    pub corners_through_medium: usize,
 }
 
 impl Summary {
@@ -155,6 +159,7 @@ impl Summary {
             engine: "faer".into(),
             petsc_solver: None,
             peak_memory_mb_ranks: None,
+            corners_through_medium: 0,
             output: out_dir.display().to_string(),
             units: Quantity::ALL
                 .into_iter()

@@ -8,7 +8,8 @@ use super::state::{Files, RunState, Totals};
 use super::strategy::{Strategy, choose_linear, choose_strategy, describe, symmetric_tangent};
 use super::{SolveError, SolveOptions};
 use crate::assembly::{
-    Assembler, AssemblyError, convection_heat, friction_cells, friction_work, heat_stored,
+    Assembler, AssemblyError, convection_heat, corners_through_medium, friction_cells,
+    friction_work, heat_stored,
 };
 use crate::case::Case;
 use crate::dofs::Field;
@@ -374,6 +375,8 @@ impl<'a> Run<'a> {
             .map(|(&d, (a, b))| 0.5 * (a + b) * (self.x[d] - x_last[d]))
             .sum::<f64>();
         tot.f_last = f_now;
+        let through = corners_through_medium(model, &self.x);
+        tot.corners_through = tot.corners_through.max(through);
         Ok(())
     }
 
@@ -780,6 +783,7 @@ impl<'a> Run<'a> {
         s.tangents_skipped = tot.tangents_skipped;
         s.heat_stored = tot.heat_stored;
         s.heat_in = tot.heat_in;
+        s.corners_through_medium = tot.corners_through;
         if let Some(folder) = &mut self.folder {
             let json = serde_json::to_string_pretty(&*s).expect("serialisable");
             write_atomic(&self.out_dir.join("summary.json"), json.as_bytes())?;

@@ -46,6 +46,10 @@ pub struct Totals {
     /// supplied over the run.
     pub heat_stored: Option<f64>,
     pub heat_in: Option<f64>,
+    /// The most medium cells an accepted step left inverted at a corner shared with a solid
+    /// (a checkpoint without it had none to count).
+    #[serde(default)]
+    pub corners_through: usize,
 }
 
 impl Totals {

@@ -271,16 +271,7 @@ pub fn physical_gradients<const N: usize, const D: usize>(
     dN_dxi: &[[f64; D]; N],
     X: &[[f64; 3]; N],
 ) -> Option<([[f64; D]; N], f64)> {
-    // Jacobian J_ij = ∂X_i/∂ξ_j
-    let mut jac = [[0.0; D]; D];
-    for (g, x) in dN_dxi.iter().zip(X) {
-        for i in 0..D {
-            for j in 0..D {
-                jac[i][j] += x[i] * g[j];
-            }
-        }
-    }
-    let (det, inv) = invert_small(&jac)?;
+    let (det, inv) = invert_small(&reference_jacobian(dN_dxi, X))?;
     if det <= 0.0 {
         return None;
     }
@@ -292,6 +283,50 @@ pub fn physical_gradients<const N: usize, const D: usize>(
         }
     }
     Some((out, det))
+}
+
+/// The reference map's Jacobian ∂X_i/∂ξ_j at a point with reference gradients `dN_dxi`, of
+/// the nodal coordinates `X` (their first `D` components).
+#[allow(non_snake_case)]
+#[inline(always)]
+fn reference_jacobian<const N: usize, const D: usize>(
+    dN_dxi: &[[f64; D]; N],
+    X: &[[f64; 3]; N],
+) -> [[f64; D]; D] {
+    let mut jac = [[0.0; D]; D];
+    for (g, x) in dN_dxi.iter().zip(X) {
+        for i in 0..D {
+            for j in 0..D {
+                jac[i][j] += x[i] * g[j];
+            }
+        }
+    }
+    jac
+}
+
+/// The corner of a cell where its shape `x` is the most inverted relative to its reference
+/// shape `X`: (corner, det ∂x/∂ξ / det ∂X/∂ξ there), over those of its first `corners` nodes
+/// that `looked_at` keeps (∞ if none). The ratio is ≤ 0 at a corner where the cell is
+/// inverted. A cell that is not a simplex of
+/// degree one has a Jacobian that varies over it, and it can change sign at a corner while it
+/// stays positive at every quadrature point; a linear simplex's is one number.
+#[allow(non_snake_case)]
+pub fn worst_corner<const N: usize, const D: usize, E: RefElement<N, D>>(
+    X: &[[f64; 3]; N],
+    x: &[[f64; 3]; N],
+    corners: usize,
+    looked_at: impl Fn(usize) -> bool,
+) -> (usize, f64) {
+    let det = |jac: [[f64; D]; D]| invert_small(&jac).map_or(0.0, |(d, _)| d);
+    let nodes = E::nodes();
+    (0..corners.min(N))
+        .filter(|&c| looked_at(c))
+        .map(|c| {
+            let g = E::grad(&nodes[c]);
+            let reference = det(reference_jacobian(&g, X));
+            (c, det(reference_jacobian(&g, x)) / reference)
+        })
+        .fold((0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a })
 }
 
 /// Determinant and inverse of a 1×1, 2×2 or 3×3 matrix; `None` if singular.
@@ -561,5 +596,47 @@ mod tests {
             let grad: [f64; 2] = [0, 1].map(|k| (0..4).map(|i| g[i][k] * f(&x[i])).sum());
             assert!((grad[0] - 3.0).abs() < 1e-12 && (grad[1] + 2.0).abs() < 1e-12);
         }
+    }
+
+    #[test]
+    #[allow(non_snake_case)]
+    fn a_flattened_quad_inverted_at_a_corner_keeps_every_quadrature_point_positive() {
+        // a cell of a closed medium layer, 0.0625 wide and 0.25 thick, flattened to a few
+        // thousandths with its top-left node (a solid's corner) pushed just below its bottom
+        // edge's line: inverted at that corner only
+        let X = [
+            [3.0, 0.0, 0.0],
+            [3.0625, 0.0, 0.0],
+            [3.0625, 0.25, 0.0],
+            [3.0, 0.25, 0.0],
+        ];
+        let x = [
+            [3.0, 0.0, 0.0],
+            [3.0625, 0.0, 0.0],
+            [3.0554, 0.0042, 0.0],
+            [3.0084, -2e-4, 0.0],
+        ];
+        for (xi, _) in Quad4::quadrature() {
+            let g = Quad4::grad(xi);
+            let (_, reference) = physical_gradients(&g, &X).unwrap();
+            let (_, deformed) = physical_gradients(&g, &x).expect("J > 0 at every point");
+            assert!(deformed / reference > 0.0);
+        }
+        let (corner, ratio) = worst_corner::<4, 2, Quad4>(&X, &x, 4, |_| true);
+        assert_eq!(corner, 3);
+        assert!(ratio < 0.0, "{ratio}");
+        // the edge from the bottom-left corner up to it dips below the bottom: inverted at
+        // both of its ends, not at the right-hand corners
+        assert!(worst_corner::<4, 2, Quad4>(&X, &x, 4, |c| c == 0).1 < 0.0);
+        let (_, others) = worst_corner::<4, 2, Quad4>(&X, &x, 4, |c| c == 1 || c == 2);
+        assert!(others > 0.0, "{others}");
+        // undeformed, and moved rigidly: 1 at every corner
+        let moved = X.map(|p| [p[0] + 0.3, p[1] - 0.1, 0.0]);
+        assert!((worst_corner::<4, 2, Quad4>(&X, &moved, 4, |_| true).1 - 1.0).abs() < 1e-12);
+        // a linear triangle's is its one J, the same at every corner
+        let (T, t) = ([X[0], X[1], X[3]], [x[0], x[1], [3.03, 0.001, 0.0]]);
+        let (_, j) = physical_gradients(&Tri3::grad(&[0.0, 0.0]), &t).unwrap();
+        let (_, j0) = physical_gradients(&Tri3::grad(&[0.0, 0.0]), &T).unwrap();
+        assert!((worst_corner::<3, 2, Tri3>(&T, &t, 3, |_| true).1 - j / j0).abs() < 1e-12);
     }
 }

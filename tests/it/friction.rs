@@ -887,6 +887,40 @@ fn a_pad_on_a_long_plate_slides_its_own_width() {
 }
 
 #[test]
+fn a_pad_corner_that_passes_below_the_plate_between_the_mediums_points_is_counted() {
+    // the pad with one (bilinear) cell across the medium stalls at μ = 0.5 after a drag of
+    // 0.155 (THEORY.md, "Where drags stall"); before that its leading corner has gone below
+    // the plate's surface while every quadrature point's J in the medium stayed positive: the
+    // cell ahead of it is inverted at that corner (measured: one cell, the corner at
+    // y = -7.9e-5 when the drag stops)
+    let case = drag_case(2, Some(0.5), 2.0, DRAG, 0.025).replace(
+        "[steps]",
+        "[[probe]]\nname = \"corner_y\"\nfield = \"uy\"\nat = [3.0, 0.25]\n[steps]",
+    );
+    let dir = common::scratch("pad-corner-through");
+    let path = dir.join("case.toml");
+    let geo = common::root().join("geo/pad.geo");
+    let mesh = format!(
+        "mesh = \"{}\"\n[mesh_options]\nparams = {{ n = 16, m = 8, l = 1 }}\n",
+        geo.display()
+    );
+    std::fs::write(&path, mesh + &case).unwrap();
+    let out = dir.join("out");
+    let o = common::solve_cli(&path, &out, &[]);
+    assert_eq!(o.status.code(), Some(1), "a stall: {}", common::stderr(&o));
+    let s = common::summary(&out);
+    let corner_y = 0.25 + s["probes"]["corner_y"].as_f64().unwrap();
+    let through = s["corners_through_medium"].as_u64().unwrap();
+    println!(
+        "pad, μ = 0.5: stops at t = {}, its corner at y = {corner_y:.3e}, {through} cell(s) through",
+        s["time"]
+    );
+    assert!(s["min_J_medium"].as_f64().unwrap() > 0.0);
+    assert!(corner_y < 0.0, "the corner is at y = {corner_y}");
+    assert!(through >= 1);
+}
+
+#[test]
 fn with_one_cell_across_the_medium_the_block_slides_four_times_its_thickness() {
     // One medium cell between block and base: nothing can fold inside the layer where the
     // block's leading corner pitches down (with 4 or 8 cells, drags at μ ≥ 0.3 stall there:
