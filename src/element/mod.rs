@@ -307,9 +307,8 @@ fn reference_jacobian<const N: usize, const D: usize>(
 /// The corner of a cell where its shape `x` is the most inverted relative to its reference
 /// shape `X`: (corner, det ∂x/∂ξ / det ∂X/∂ξ there), over those of its first `corners` nodes
 /// that `looked_at` keeps (∞ if none). The ratio is ≤ 0 at a corner where the cell is
-/// inverted. A cell that is not a simplex of
-/// degree one has a Jacobian that varies over it, and it can change sign at a corner while it
-/// stays positive at every quadrature point; a linear simplex's is one number.
+/// inverted. Only a linear simplex has one Jacobian; any other cell's varies over it and can
+/// change sign at a corner while it stays positive at every quadrature point.
 #[allow(non_snake_case)]
 pub fn worst_corner<const N: usize, const D: usize, E: RefElement<N, D>>(
     X: &[[f64; 3]; N],
