@@ -49,8 +49,12 @@ pub(super) struct Run<'a> {
     pb: indicatif::ProgressBar,
     /// Non-zero values held at full value from the start, as `uy = -0.2 on "top"`.
     held_in_full: Vec<String>,
-    /// The case steps over physical time (`[time]`): progress lines show t.
+    /// The case steps over physical time (`[time]`).
     transient_clock: bool,
+    /// Where a run stands is said in t as well as λ: over physical time, or over a pseudo-time
+    /// that λ does not follow (a path such as `[0, 1, 1]`, whose second segment drags at
+    /// λ = 1).
+    show_t: bool,
     /// `[output] every`, and the last step written.
     every: usize,
     written: Option<usize>,
@@ -198,6 +202,7 @@ impl<'a> Run<'a> {
                 .flat_map(|bc| bc.held_in_full())
                 .collect(),
             transient_clock: case.file.time.is_some(),
+            show_t: case.file.time.is_some() || !model.path.lambda_is_time(),
             every: *case.file.output.every.get_ref() as usize,
             written: None,
             fingerprint: (
@@ -635,10 +640,20 @@ impl<'a> Run<'a> {
 
     /// Where a step ended: λ, and the physical time with `[time]`.
     fn clock(&self, row: &StepRow) -> String {
-        if self.transient_clock {
-            format!("t {:.4e}  λ {:.4}", row.time, row.lambda)
+        if self.show_t {
+            format!("t {}  λ {:.4}", self.t_text(row.time), row.lambda)
         } else {
             format!("λ {:.4}", row.lambda)
+        }
+    }
+
+    /// A time for a message: physical time to five significant digits, pseudo-time to six
+    /// decimals (as λ).
+    fn t_text(&self, t: f64) -> String {
+        if self.transient_clock {
+            format!("{t:.4e}")
+        } else {
+            format!("{t:.6}")
         }
     }
 
@@ -651,8 +666,8 @@ impl<'a> Run<'a> {
         self.totals.last_failure = failure.to_string();
         if self.opts.verbose {
             let lambda = self.model.path.lambda(target);
-            let to = if self.transient_clock {
-                format!("t {target:.4e} (λ {lambda:.4})")
+            let to = if self.show_t {
+                format!("t {} (λ {lambda:.4})", self.t_text(target))
             } else {
                 format!("λ {lambda:.4}")
             };
@@ -666,7 +681,7 @@ impl<'a> Run<'a> {
         if let Err(dl) = self.ctl.reject() {
             self.pb.finish_and_clear();
             let reason = self.totals.last_failure.clone();
-            let step = if self.transient_clock {
+            let step = if self.show_t {
                 format!("Δt = {dl:.3e}")
             } else {
                 format!("Δλ = {dl:.3e}")
@@ -684,12 +699,13 @@ impl<'a> Run<'a> {
         Ok(())
     }
 
-    /// Where the run stands: "λ = 0.500000", or with `[time]` "t = 1.2000e0 (λ = 1.000000)".
+    /// Where the run stands: "λ = 0.500000", or with `[time]` "t = 1.2000e0 (λ = 1.000000)",
+    /// or on a path that λ does not follow "t = 1.077382 (λ = 1.000000)".
     fn position(&self) -> String {
         let t = self.ctl.t;
         let lambda = self.model.path.lambda(t);
-        if self.transient_clock {
-            format!("t = {t:.4e} (λ = {lambda:.6})")
+        if self.show_t {
+            format!("t = {} (λ = {lambda:.6})", self.t_text(t))
         } else {
             format!("λ = {lambda:.6}")
         }

@@ -61,6 +61,12 @@ impl LoadPath {
         self.interp(&self.lambda, t)
     }
 
+    /// Whether λ equals the pseudo-time along the whole path (the default `[0, 1]`, or
+    /// `[0, 1, 2, …]`): then λ alone says where a run stands.
+    pub fn lambda_is_time(&self) -> bool {
+        self.times == self.lambda
+    }
+
     /// All amplitudes at t: [1, λ(t), own paths…], indexed by `Prescribed::amp`.
     pub fn amplitudes(&self, t: f64) -> Vec<f64> {
         let mut a = vec![1.0, self.lambda(t)];
