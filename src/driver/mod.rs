@@ -42,10 +42,11 @@ pub enum SolveError {
     #[error("{0}")]
     Setup(String),
     /// `at`: where the run stands ("λ = 0.5", or "t = 1.2 (λ = 1)" with `[time]`); `step`:
-    /// the step that failed ("Δλ = 2e-5", or "Δt = 2e-5").
+    /// the step that failed ("Δλ = 2e-5", or "Δt = 2e-5"); `hint`: what the scene's physics
+    /// suggests to read ("" or a sentence starting with "; ").
     #[error(
         "load step from {at} failed with {step}, below the minimum step ({reason}); \
-         the {steps} converged steps up to {at} are in {dir}"
+         the {steps} converged steps up to {at} are in {dir}{hint}"
     )]
     StepTooSmall {
         at: String,
@@ -53,6 +54,7 @@ pub enum SolveError {
         reason: String,
         steps: usize,
         dir: PathBuf,
+        hint: &'static str,
     },
     #[error(
         "interrupted at {at} after {steps} converged steps; they are in {dir} \

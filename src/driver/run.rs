@@ -686,12 +686,21 @@ impl<'a> Run<'a> {
             } else {
                 format!("Δλ = {dl:.3e}")
             };
+            // friction's drags stall where the full slide begins (THEORY.md, "Where drags
+            // stall"): the user's guide says how far they get
+            let hint = if self.model.physics.friction {
+                "; with friction, drags stall where the full slide begins (docs/CASE.md, \
+                 \"How far friction slides\", says how far they get and what to mesh)"
+            } else {
+                ""
+            };
             let err = SolveError::StepTooSmall {
                 at: self.position(),
                 step,
                 reason,
                 steps: self.ctl.accepted,
                 dir: self.out_dir.clone(),
+                hint,
             };
             self.finish(false, err.to_string())?;
             return Err(err);

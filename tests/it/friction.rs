@@ -914,6 +914,12 @@ fn a_pad_corner_that_passes_below_the_plate_between_the_mediums_points_is_counte
         e.contains("load step from t = 1.07") && e.contains("(λ = 1.000000) failed with Δt = "),
         "{e}"
     );
+    // and that friction's drags stall where the full slide begins, with where to read more
+    assert!(
+        e.contains("with friction, drags stall where the full slide begins")
+            && e.contains("How far friction slides"),
+        "{e}"
+    );
     let s = common::summary(&out);
     let corner_y = 0.25 + s["probes"]["corner_y"].as_f64().unwrap();
     let through = s["corners_through_medium"].as_u64().unwrap();
