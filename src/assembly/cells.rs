@@ -48,16 +48,7 @@ pub fn check_inversion(model: &Model, x: &[f64]) -> Result<(), AssemblyError> {
 /// triangle's or tetrahedron's is one number, so those are not looked at).
 pub fn corners_through_medium(model: &Model, x: &[f64]) -> usize {
     use crate::mesh::CellKind;
-    let mut solid = vec![false; model.mesh.coords.len()];
-    for info in model
-        .blocks
-        .iter()
-        .filter(|b| b.layout.has_u && !b.mat.medium)
-    {
-        for &n in &model.mesh.cells[info.block].conn {
-            solid[n] = true;
-        }
-    }
+    let solid = model.nodes_of(crate::model::RegionKind::Solid);
     let mut cells = 0;
     for info in &model.blocks {
         let blk = &model.mesh.cells[info.block];

@@ -51,10 +51,6 @@ pub(super) struct Run<'a> {
     held_in_full: Vec<String>,
     /// The case steps over physical time (`[time]`).
     transient_clock: bool,
-    /// Where a run stands is said in t as well as λ: over physical time, or over a pseudo-time
-    /// that λ does not follow (a path such as `[0, 1, 1]`, whose second segment drags at
-    /// λ = 1).
-    show_t: bool,
     /// `[output] every`, and the last step written.
     every: usize,
     written: Option<usize>,
@@ -202,7 +198,6 @@ impl<'a> Run<'a> {
                 .flat_map(|bc| bc.held_in_full())
                 .collect(),
             transient_clock: case.file.time.is_some(),
-            show_t: case.file.time.is_some() || !model.path.lambda_is_time(),
             every: *case.file.output.every.get_ref() as usize,
             written: None,
             fingerprint: (
@@ -640,11 +635,18 @@ impl<'a> Run<'a> {
 
     /// Where a step ended: λ, and the physical time with `[time]`.
     fn clock(&self, row: &StepRow) -> String {
-        if self.show_t {
+        if self.show_t() {
             format!("t {}  λ {:.4}", self.t_text(row.time), row.lambda)
         } else {
             format!("λ {:.4}", row.lambda)
         }
+    }
+
+    /// Whether where a run stands is said in t as well as λ: over physical time, or over a
+    /// pseudo-time that λ does not follow (a path such as `[0, 1, 1]`, whose second segment
+    /// drags at λ = 1).
+    fn show_t(&self) -> bool {
+        self.transient_clock || !self.model.path.lambda_is_time()
     }
 
     /// A time for a message: physical time to five significant digits, pseudo-time to six
@@ -666,7 +668,7 @@ impl<'a> Run<'a> {
         self.totals.last_failure = failure.to_string();
         if self.opts.verbose {
             let lambda = self.model.path.lambda(target);
-            let to = if self.show_t {
+            let to = if self.show_t() {
                 format!("t {} (λ {lambda:.4})", self.t_text(target))
             } else {
                 format!("λ {lambda:.4}")
@@ -681,7 +683,7 @@ impl<'a> Run<'a> {
         if let Err(dl) = self.ctl.reject() {
             self.pb.finish_and_clear();
             let reason = self.totals.last_failure.clone();
-            let step = if self.show_t {
+            let step = if self.show_t() {
                 format!("Δt = {dl:.3e}")
             } else {
                 format!("Δλ = {dl:.3e}")
@@ -713,7 +715,7 @@ impl<'a> Run<'a> {
     fn position(&self) -> String {
         let t = self.ctl.t;
         let lambda = self.model.path.lambda(t);
-        if self.show_t {
+        if self.show_t() {
             format!("t = {} (λ = {lambda:.6})", self.t_text(t))
         } else {
             format!("λ = {lambda:.6}")

@@ -13,7 +13,7 @@ pub use build::build;
 pub use loads::{LoadPath, facet_weights};
 pub use physics::{Physics, decide_physics};
 
-use crate::case::RegionKind;
+pub use crate::case::RegionKind;
 use crate::dofs::{Constraints, DofMap, Field, Layout};
 use crate::kernel::CellMaterial;
 use crate::kernel::friction::FrictionMaterial;
@@ -219,13 +219,14 @@ impl Model {
         x
     }
 
-    /// Per mesh node: whether a third-medium cell has it (the medium's own nodes and the
-    /// solids' faces towards it). Where the medium closes, its stiffness and conductivity across
-    /// the gap grow without bound: a multigrid hands these rows to a direct solver.
-    pub fn medium_nodes(&self) -> Vec<bool> {
+    /// Per mesh node: whether a cell of a region of `kind` has it. Of the medium: its own
+    /// nodes and the solids' faces towards it (where the medium closes, its stiffness and
+    /// conductivity across the gap grow without bound: a multigrid hands these rows to a
+    /// direct solver).
+    pub fn nodes_of(&self, kind: RegionKind) -> Vec<bool> {
         let mut on = vec![false; self.mesh.coords.len()];
         for info in &self.blocks {
-            if self.regions[info.region].1 == RegionKind::Medium {
+            if self.regions[info.region].1 == kind {
                 for &n in &self.mesh.cells[info.block].conn {
                     on[n] = true;
                 }

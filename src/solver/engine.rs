@@ -194,7 +194,7 @@ fn on_ranks(model: &Model, request: &Request, systems: &[System]) -> Result<Plan
     let structure = equation_structure(&model.dofs, &model.cons);
     let rows = asm.rows_owned(model);
     let rigid = crate::model::rigid::rigid_motions(model);
-    let medium = model.medium_nodes();
+    let medium = model.nodes_of(crate::model::RegionKind::Medium);
     let on_ranks = Petsc {
         own: Ownership {
             ranks,

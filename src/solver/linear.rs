@@ -16,10 +16,10 @@
 //!   twice LDLᵀ's entries), by faer's partially pivoted LU (fill bounded by AᵀA's pattern)
 //!   only where a pivot vanishes in that order. A factor is kept across Newton iterations
 //!   while it preconditions the newer tangents within the GMRES iterations a factorisation
-//!   is worth (none for a small factor), or the tangent is refactorised. A factor of more than `SINGLE_LU_ENTRIES`
-//!   is held in single precision (a pivot it refuses: the same factor in double first). In
-//!   the block preconditioner above, friction's mechanics block is factorised the same way in
-//!   single precision, at every factorisation.
+//!   is worth (none for a small factor), or the tangent is refactorised. A factor of more
+//!   than `SINGLE_LU_ENTRIES` is held in single precision (a pivot it refuses: the same
+//!   factor in double first). In the block preconditioner above, friction's mechanics block
+//!   is factorised the same way in single precision, at every factorisation.
 
 use super::static_lu::{Real, StaticLu};
 use crate::dofs::{Pattern, Structure};

@@ -75,7 +75,7 @@ pub struct Hints<'a> {
     /// The rigid motions of all equations (see `model::rigid`): the near-kernel of the
     /// solids' mechanical rows.
     pub rigid: &'a [Vec<f64>],
-    /// Per mesh node: whether a medium cell has it (`Model::medium_nodes`). Those rows form
+    /// Per mesh node: whether a medium cell has it (`Model::nodes_of`). Those rows form
     /// a block of their own, solved directly: where the medium closes, its stiffness across
     /// the gap grows without bound and smoothers and aggregates of a multigrid fail there.
     pub medium: &'a [bool],

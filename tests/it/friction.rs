@@ -897,15 +897,13 @@ fn a_pad_corner_that_passes_below_the_plate_between_the_mediums_points_is_counte
         "[steps]",
         "[[probe]]\nname = \"corner_y\"\nfield = \"uy\"\nat = [3.0, 0.25]\n[steps]",
     );
-    let dir = common::scratch("pad-corner-through");
-    let path = dir.join("case.toml");
-    let geo = common::root().join("geo/pad.geo");
-    let mesh = format!(
-        "mesh = \"{}\"\n[mesh_options]\nparams = {{ n = 16, m = 8, l = 1 }}\n",
-        geo.display()
+    let path = common::case_file(
+        "pad-corner-through",
+        "pad.geo",
+        "params = { n = 16, m = 8, l = 1 }",
+        &case,
     );
-    std::fs::write(&path, mesh + &case).unwrap();
-    let out = dir.join("out");
+    let out = path.with_file_name("out");
     let o = common::solve_cli(&path, &out, &[]);
     let e = common::stderr(&o);
     assert_eq!(o.status.code(), Some(1), "a stall: {e}");

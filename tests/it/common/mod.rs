@@ -123,16 +123,22 @@ pub fn solve_text(tag: &str, geo: &str, params: &str, case_text: &str) -> (Summa
     solve_text_opts(tag, geo, &format!("params = {{ {params} }}"), case_text)
 }
 
-/// As [`solve_text`], with the whole `[mesh_options]` body (e.g. `order = 2`).
-pub fn solve_text_opts(tag: &str, geo: &str, options: &str, case_text: &str) -> (Summary, PathBuf) {
-    let dir = scratch(tag);
+/// `case.toml` in the scratch folder `tag`: `case_text` on `geo/GEO` meshed with the whole
+/// `[mesh_options]` body `options`. Its results go to `out` beside it.
+pub fn case_file(tag: &str, geo: &str, options: &str, case_text: &str) -> PathBuf {
     let text = format!(
         "mesh = \"{}\"\n[mesh_options]\n{options}\n{case_text}",
         root().join("geo").join(geo).display()
     );
-    let path = dir.join("case.toml");
+    let path = scratch(tag).join("case.toml");
     std::fs::write(&path, text).unwrap();
-    let out = dir.join("out");
+    path
+}
+
+/// As [`solve_text`], with the whole `[mesh_options]` body (e.g. `order = 2`).
+pub fn solve_text_opts(tag: &str, geo: &str, options: &str, case_text: &str) -> (Summary, PathBuf) {
+    let path = case_file(tag, geo, options, case_text);
+    let out = path.with_file_name("out");
     let s = run(
         &path,
         &SolveOptions {
