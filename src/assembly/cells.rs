@@ -299,6 +299,7 @@ impl Cells<'_> {
         mat: &FrictionMaterial,
         normals: &SlipNormals,
         heat_rate: f64,
+        inv_dt: f64,
         slab: &SlabView,
         cells: &[u32],
     ) -> Result<bool, (KernelError, usize)> {
@@ -310,6 +311,7 @@ impl Cells<'_> {
                 mat,
                 normals.of(cell),
                 heat_rate,
+                inv_dt,
                 &lay,
                 s,
                 committed,

@@ -577,6 +577,7 @@ fn run_block(
                 &fb.mat,
                 &fb.normals,
                 heat_rate,
+                inv_dt,
                 slab,
                 these
             ));

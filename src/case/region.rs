@@ -101,6 +101,9 @@ pub struct FrictionKey {
     pub heat_fraction: Option<Spanned<f64>>,
     /// Stick stiffness factor c_f > 0 of the friction modulus c_f K (1 − ln J)/J² (default 1).
     pub c_f: Option<Spanned<f64>>,
+    /// Slip viscosity η_s ≥ 0 (stress × time): slipping takes a traction μ p_n + η_s |ġ_p|,
+    /// ġ_p the slip rate per reference thickness (default 0: rate-independent Coulomb).
+    pub viscosity: Option<Spanned<f64>>,
 }
 
 /// `normal` of a `friction`: given, or `"auto"` (any other word is an error at validation).
@@ -118,6 +121,11 @@ impl FrictionKey {
     /// The fraction of the dissipation that becomes heat.
     pub fn heat_fraction(&self) -> f64 {
         self.heat_fraction.as_ref().map_or(1.0, |v| *v.get_ref())
+    }
+
+    /// The slip viscosity η_s (0 when not given).
+    pub fn viscosity(&self) -> f64 {
+        self.viscosity.as_ref().map_or(0.0, |v| *v.get_ref())
     }
 }
 
@@ -526,8 +534,8 @@ impl RegionKeys<'_> {
     }
 
     /// A medium region's `friction`: μ ≥ 0, a normal of 2 or 3 finite components not all
-    /// zero or "auto", `heat_fraction` in [0, 1], `c_f` positive (the normal's dimension is checked
-    /// against the mesh's in `model::validate`).
+    /// zero or "auto", `heat_fraction` in [0, 1], `c_f` positive, `viscosity` ≥ 0 (the normal's
+    /// dimension is checked against the mesh's in `model::validate`).
     fn friction(&self, fr: &FrictionKey) -> Result<(), CaseError> {
         let mu = *fr.mu.get_ref();
         if !(mu >= 0.0 && mu.is_finite()) {
@@ -575,6 +583,17 @@ impl RegionKeys<'_> {
                 v.span(),
                 format!(
                     "`friction.c_f` must be positive and finite, got {}",
+                    v.get_ref()
+                ),
+            );
+        }
+        if let Some(v) = &fr.viscosity
+            && !(*v.get_ref() >= 0.0 && v.get_ref().is_finite())
+        {
+            return self.fail(
+                v.span(),
+                format!(
+                    "`friction.viscosity` must be finite and ≥ 0, got {}",
                     v.get_ref()
                 ),
             );
@@ -759,6 +778,10 @@ mod tests {
             (
                 "{ mu = 0.3, normal = [0, 1], c_f = 0.0 }",
                 "`friction.c_f` must be positive",
+            ),
+            (
+                "{ mu = 0.3, normal = [0, 1], viscosity = -1e-3 }",
+                "`friction.viscosity` must be finite and ≥ 0, got -0.001",
             ),
         ] {
             let e = refused(&format!("{MEDIUM}friction = {friction}\n"));

@@ -33,6 +33,8 @@ pub struct FrictionMaterial {
     pub medium: SolidLaw,
     /// c_f of the friction modulus G_f = c_f K (1 − ln J)/J².
     pub c_f: f64,
+    /// η_s, the slip's viscosity (0: rate-independent).
+    pub viscosity: f64,
 }
 
 /// Residual and (optionally) tangent of the friction term of one medium cell with slip-plane
@@ -45,6 +47,7 @@ pub fn friction<const N: usize, const D: usize, E: RefElement<N, D>>(
     mat: &FrictionMaterial,
     normal: &Vector3<f64>,
     heat_rate: f64,
+    inv_dt: f64,
     lay: &Layout,
     s: &CellState<N>,
     committed: &[f64],
@@ -60,6 +63,7 @@ pub fn friction<const N: usize, const D: usize, E: RefElement<N, D>>(
     let law = Friction {
         mu: mat.mu,
         normal: *normal,
+        rate: mat.viscosity * inv_dt,
     };
     for (q, (xi, w)) in E::quadrature().iter().enumerate() {
         let Point {
@@ -223,7 +227,11 @@ mod tests {
             theta0: 10.0,
         }),
         c_f: 1.0,
+        viscosity: 0.0,
     };
+
+    /// 1/Δt of the checks' step (the slip viscosity acts over it).
+    const INV_DT: f64 = 4.0;
 
     /// A cell closed to a fifth of its height, slid along x and distorted a little, at
     /// temperatures that vary over it; every point's previous slip is 0.01 along x.
@@ -269,6 +277,7 @@ mod tests {
             mat,
             &NORMAL,
             heat_rate,
+            INV_DT,
             &lay,
             &s,
             &committed,
@@ -320,6 +329,7 @@ mod tests {
                     mat,
                     &NORMAL,
                     heat_rate,
+                    INV_DT,
                     &lay,
                     &t,
                     &committed,
@@ -355,11 +365,17 @@ mod tests {
 
     #[test]
     fn the_friction_tangent_is_the_derivative_of_its_residual_in_slip_and_in_stick() {
-        // μ = 0.3: the sheared cell slides; μ = 100: it sticks
+        // μ = 0.3: the sheared cell slides, with a viscosity too; μ = 100: it sticks
         let stuck = FrictionMaterial {
             mu: 100.0,
             ..MATERIAL
         };
+        let viscous = FrictionMaterial {
+            viscosity: 0.05,
+            ..MATERIAL
+        };
+        check::<4, 2, Quad4>(&viscous, true);
+        check::<8, 3, Hex8>(&viscous, true);
         check::<3, 2, Tri3>(&MATERIAL, true);
         check::<4, 2, Quad4>(&MATERIAL, true);
         check::<4, 3, Tet4>(&MATERIAL, true);

@@ -18,8 +18,10 @@
 //! The return is closed form: at fixed F, τ is linear in g_p and p_n does not depend on it, so
 //! the trial shear τ* = G_f (γ − gₙ) is scaled back along itself, τ = τ* μ p_n / |F τ*|. G_f(J) is a
 //! coefficient, not differentiated as part of an energy, so the shear puts no pressure on the
-//! plane; the tangent is unsymmetric, as Coulomb friction's always is. The slip of a step
-//! dissipates τ · Δg_p per reference volume (the frictional heat).
+//! plane; the tangent is unsymmetric, as Coulomb friction's always is. With a slip viscosity
+//! η_s the slip of a step pays a rate term as well, |F τ| = μ p_n + (η_s/Δt) |Δg_p|, and the
+//! return stays along τ*. The slip of a step dissipates τ · Δg_p per reference volume (the
+//! frictional heat).
 #![allow(non_snake_case)]
 
 use super::Tensor4;
@@ -38,6 +40,9 @@ pub struct Friction {
     pub mu: f64,
     /// The plane's unit normal N in the reference configuration.
     pub normal: Vector3<f64>,
+    /// η_s/Δt: the slip's viscosity over the step, so that slipping takes
+    /// |F τ| = μ p_n + (η_s/Δt) |Δg| (0: rate-independent Coulomb).
+    pub rate: f64,
 }
 
 /// The medium's own first Piola–Kirchhoff stress at the point and its derivatives: the normal
@@ -129,7 +134,10 @@ impl Friction {
         let (tau, dtau, dtau_dtheta, new_slip) = if !slipping {
             (trial, dtrial, Vector3::zeros(), *slip)
         } else {
-            let scale = limit / size;
+            // τ = s τ*, Δg = (1 − s) τ*/G: s |F τ*| = μ p_n + b (1 − s), b = (η_s/Δt) |γ − gₙ|
+            let b = self.rate * elastic.norm();
+            let denominator = size + b;
+            let scale = (limit + b) / denominator;
             let tau = trial * scale;
             // d|a| = a · (dF τ* + F dτ*) / |a|
             let Fdtrial = F * dtrial;
@@ -138,11 +146,20 @@ impl Friction {
                 let c = 3 * k + L;
                 let dsize = (a[k] * trial[L] + a.dot(&Fdtrial.column(c))) / size;
                 for I in 0..D {
-                    dtau[(I, c)] -= tau[I] * dsize / size;
+                    dtau[(I, c)] -= tau[I] * dsize / denominator;
+                }
+                if b > 0.0 {
+                    // db = (η_s/Δt) (γ − gₙ) · dγ / |γ − gₙ|
+                    let db: f64 = (0..D).map(|I| elastic[I] * dgamma[(I, c)]).sum::<f64>()
+                        * self.rate
+                        / elastic.norm();
+                    for I in 0..D {
+                        dtau[(I, c)] += trial[I] * db * (1.0 - scale) / denominator;
+                    }
                 }
             }
             // ∂τ/∂(μ p_n): the limit moves with the normal traction
-            let e = trial / size;
+            let e = trial / denominator;
             let dtau_dtheta = if p_n > 0.0 {
                 self.limit_moves::<D>(&mut dtau, &e, &m, &Finv, medium)
             } else {
@@ -290,7 +307,11 @@ mod tests {
         } else {
             Vector3::new(0.48, 0.6, 0.64)
         };
-        Friction { mu: 0.3, normal }
+        Friction {
+            mu: 0.3,
+            normal,
+            rate: 0.0,
+        }
     }
 
     /// The whole chain at F and θ: medium stress, modulus at J(F), friction.
@@ -331,8 +352,8 @@ mod tests {
 
     #[test]
     fn the_tangent_is_the_derivative_of_the_stress_in_stick_and_in_slip() {
-        for dim in [2, 3] {
-            let law = plane(dim);
+        for (dim, rate) in [(2, 0.0), (3, 0.0), (2, 5.0), (3, 5.0)] {
+            let law = Friction { rate, ..plane(dim) };
             let F = layer(law.normal, 0.05, 0.05, 0.3, 0.01);
             // from no slip, the trial leaves the cone; from half the elastic shear of the
             // return, it stays inside
@@ -477,6 +498,26 @@ mod tests {
             let open = layer(law.normal, 1.3, 0.3, 0.0, 0.0);
             let r = respond(&law, &open, &Vector3::zeros());
             assert!(r.p_n < 0.0 && r.tau.norm() == 0.0);
+        }
+    }
+
+    #[test]
+    fn a_viscous_slip_carries_its_rate_beyond_the_cone() {
+        for dim in [2, 3] {
+            let plain = plane(dim);
+            let F = layer(plain.normal, 1e-2, 0.3, 0.4, 1e-3);
+            let coulomb = respond(&plain, &F, &Vector3::zeros());
+            // η_s/Δt such that the overstress is about a third of the limit
+            let rate = 0.5 * plain.mu * coulomb.p_n / coulomb.slip.norm();
+            let law = Friction { rate, ..plain };
+            let r = respond(&law, &F, &Vector3::zeros());
+            assert!(r.slipping && (r.p_n - coulomb.p_n).abs() < 1e-12 * r.p_n);
+            // |F τ| = μ p_n + (η_s/Δt) |Δg|, with the slip along the inviscid one, but shorter
+            let over = (F * r.tau).norm() - law.mu * r.p_n;
+            assert!(over > 0.2 * law.mu * r.p_n, "{dim}D: {over}");
+            assert!((over - rate * r.slip.norm()).abs() < 1e-12 * over, "{dim}D");
+            assert!(r.slip.norm() < coulomb.slip.norm());
+            assert!(r.slip.normalize().dot(&coulomb.slip.normalize()) > 1.0 - 1e-12);
         }
     }
 }

@@ -527,6 +527,7 @@ fn friction_blocks(
                 mu: *fr.mu.get_ref(),
                 medium: case.materials[info.region].law(),
                 c_f: fr.c_f.as_ref().map_or(1.0, |v| *v.get_ref()),
+                viscosity: fr.viscosity(),
             },
             normals,
             heat_fraction: if physics.frictional_heating {
