@@ -10,7 +10,8 @@
 //! across the medium: how far each drag gets, the force ratio on the way, and how far the
 //! solid's leading bottom corner has slid by then, in cells of the layer (a drag that stops
 //! before that corner has slid a cell stops before any change of the medium's connectivity
-//! that follows the slide could act). `TMC_BENCH_PART=cost` or `reach` runs one table.
+//! that follows the slide could act), each friction drag without and with a slip viscosity
+//! η_s = 1e-3. `TMC_BENCH_PART=cost` or `reach` runs one table.
 
 mod common;
 use common::{case_text, root, solve};
@@ -42,11 +43,11 @@ fn leading_corner(geo: &str) -> f64 {
 }
 
 /// The drag of the second table: press the top 0.3 down (pseudo-time 0 to 1), then drag it
-/// 1.0 along x (1 to 2), Δt at most 0.025; friction `mu` (none for 0). The probe `corner_x`
-/// is the x displacement of the solid's leading bottom corner.
-fn drag_text(geo: &str, l: usize, mu: f64) -> String {
+/// 1.0 along x (1 to 2), Δt at most 0.025; friction `mu` (none for 0) with slip viscosity
+/// `eta`. The probe `corner_x` is the x displacement of the solid's leading bottom corner.
+fn drag_text(geo: &str, l: usize, mu: f64, eta: f64) -> String {
     let friction = if mu > 0.0 {
-        format!("friction = {{ mu = {mu}, normal = [0, 1] }}")
+        format!("friction = {{ mu = {mu}, normal = [0, 1], viscosity = {eta:e} }}")
     } else {
         String::new()
     };
@@ -96,15 +97,19 @@ path = [0.0, 1.0, 1.0]
 fn reach() {
     println!();
     println!(
-        "| scene | cells across the medium | μ | completes | drag reached | leading corner slid (cells) | load steps | Newton its | largest F_t/F_n | last F_t/F_n | wall s |"
+        "| scene | cells across the medium | μ | η_s | completes | drag reached | leading corner slid (cells) | load steps | Newton its | largest F_t/F_n | last F_t/F_n | wall s |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     let runs = [("block.geo", [1, 2, 4, 8].as_slice()), ("pad.geo", &[1, 4])];
     for (geo, layers) in runs {
         for &l in layers {
-            for mu in [0.0, 0.1, 0.3, 0.5, 1.0] {
-                let dir = root().join(format!("target/bench-friction/reach-{geo}-{l}-{mu}"));
-                let (ok, s) = solve(&dir, &drag_text(geo, l, mu));
+            let drags = [0.0, 0.1, 0.3, 0.5, 1.0].into_iter().flat_map(|mu| {
+                let etas: &[f64] = if mu > 0.0 { &[0.0, 1e-3] } else { &[0.0] };
+                etas.iter().map(move |&eta| (mu, eta))
+            });
+            for (mu, eta) in drags {
+                let dir = root().join(format!("target/bench-friction/reach-{geo}-{l}-{mu}-{eta}"));
+                let (ok, s) = solve(&dir, &drag_text(geo, l, mu, eta));
                 let text = std::fs::read_to_string(dir.join("out/history.csv")).unwrap();
                 let mut lines = text.lines();
                 let head: Vec<&str> = lines.next().unwrap().split(',').collect();
@@ -122,7 +127,7 @@ fn reach() {
                 let cell = 2.0 / CELLS as f64;
                 let slid = s["probes"]["corner_x"].as_f64().unwrap_or(f64::NAN) / cell;
                 println!(
-                    "| {} | {l} | {mu} | {} | {reached:.3} | {slid:.2} | {} | {} | {largest:.4} | {last:.4} | {:.1} |",
+                    "| {} | {l} | {mu} | {eta} | {} | {reached:.3} | {slid:.2} | {} | {} | {largest:.4} | {last:.4} | {:.1} |",
                     geo.trim_end_matches(".geo"),
                     if ok { "yes" } else { "no" },
                     s["load_steps"],
@@ -194,7 +199,7 @@ fn cost() {
     println!(
         "| scene | variant | dofs | strategy | linear solver | load steps | Newton its | friction work | wall s (median of {ROUNDS}) | linear solve s | wall / no friction |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     for ((name, variants), rounds) in scenes.iter().zip(&runs) {
         let wall = |r: &[serde_json::Value], key: &str| {
             median(r.iter().map(|s| s[key].as_f64().unwrap()).collect())
