@@ -104,6 +104,9 @@ pub struct FrictionKey {
     /// Slip viscosity η_s ≥ 0 (stress × time): slipping takes a traction μ p_n + η_s |ġ_p|,
     /// ġ_p the slip rate per reference thickness (default 0: rate-independent Coulomb).
     pub viscosity: Option<Spanned<f64>>,
+    /// The normal traction Coulomb's limit takes: `"current"` (default) or `"lagged"`, the
+    /// last accepted step's (the limit then stays put within a step).
+    pub limit: Option<Spanned<String>>,
 }
 
 /// `normal` of a `friction`: given, or `"auto"` (any other word is an error at validation).
@@ -126,6 +129,11 @@ impl FrictionKey {
     /// The slip viscosity η_s (0 when not given).
     pub fn viscosity(&self) -> f64 {
         self.viscosity.as_ref().map_or(0.0, |v| *v.get_ref())
+    }
+
+    /// Whether the limit takes the last accepted step's normal traction.
+    pub fn lagged_limit(&self) -> bool {
+        self.limit.as_ref().is_some_and(|w| w.get_ref() == "lagged")
     }
 }
 
@@ -534,8 +542,9 @@ impl RegionKeys<'_> {
     }
 
     /// A medium region's `friction`: μ ≥ 0, a normal of 2 or 3 finite components not all
-    /// zero or "auto", `heat_fraction` in [0, 1], `c_f` positive, `viscosity` ≥ 0 (the normal's
-    /// dimension is checked against the mesh's in `model::validate`).
+    /// zero or "auto", `heat_fraction` in [0, 1], `c_f` positive, `viscosity` ≥ 0, `limit`
+    /// "current" or "lagged" (the normal's dimension is checked against the mesh's in
+    /// `model::validate`).
     fn friction(&self, fr: &FrictionKey) -> Result<(), CaseError> {
         let mu = *fr.mu.get_ref();
         if !(mu >= 0.0 && mu.is_finite()) {
@@ -595,6 +604,17 @@ impl RegionKeys<'_> {
                 format!(
                     "`friction.viscosity` must be finite and ≥ 0, got {}",
                     v.get_ref()
+                ),
+            );
+        }
+        if let Some(w) = &fr.limit
+            && !["current", "lagged"].contains(&w.get_ref().as_str())
+        {
+            return self.fail(
+                w.span(),
+                format!(
+                    "`friction.limit` must be \"current\" or \"lagged\", got \"{}\"",
+                    w.get_ref()
                 ),
             );
         }
@@ -757,7 +777,14 @@ mod tests {
         let ok = region(&format!(
             "{MEDIUM}friction = {{ mu = 0.3, normal = \"auto\", heat_fraction = 0.5 }}\n"
         ));
-        assert_eq!(ok.friction.unwrap().get_ref().heat_fraction(), 0.5);
+        let fr = ok.friction.unwrap().into_inner();
+        assert_eq!(fr.heat_fraction(), 0.5);
+        assert!(fr.viscosity() == 0.0 && !fr.lagged_limit(), "the defaults");
+        let ok = region(&format!(
+            "{MEDIUM}friction = {{ mu = 0.3, normal = [0, 1], viscosity = 1e-3, limit = \"lagged\" }}\n"
+        ));
+        let fr = ok.friction.unwrap().into_inner();
+        assert!(fr.viscosity() == 1e-3 && fr.lagged_limit());
         for (friction, says) in [
             (
                 "{ mu = -0.1, normal = [0, 1] }",
@@ -782,6 +809,10 @@ mod tests {
             (
                 "{ mu = 0.3, normal = [0, 1], viscosity = -1e-3 }",
                 "`friction.viscosity` must be finite and ≥ 0, got -0.001",
+            ),
+            (
+                "{ mu = 0.3, normal = [0, 1], limit = \"late\" }",
+                "`friction.limit` must be \"current\" or \"lagged\", got \"late\"",
             ),
         ] {
             let e = refused(&format!("{MEDIUM}friction = {friction}\n"));

@@ -19,8 +19,9 @@ pub const FILE: &str = "restart.json";
 /// physical groups (a boundary group moved to other nodes changes the run). 4: `history.csv`
 /// and the `.pvd` are counted, not copied (their cost per step no longer grows with the run);
 /// sealed; the point history whole on several ranks too. 5: the run state as one value
-/// (Newton's tally, the totals and the files each an object of their own).
-pub const VERSION: u32 = 5;
+/// (Newton's tally, the totals and the files each an object of their own). 6: friction keeps
+/// the normal traction per point too (8 history values).
+pub const VERSION: u32 = 6;
 
 /// How a sealed checkpoint begins: `{"seal":"` and 16 hex digits, then `",` and the rest.
 const SEAL: &str = "{\"seal\":\"";

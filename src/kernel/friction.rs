@@ -6,8 +6,9 @@
 //! with D = τ · (g − gₙ) the step's dissipation per reference volume and η the fraction of it
 //! that becomes heat. The tangent is exact and unsymmetric (Coulomb's limit moves with the
 //! normal traction). History per quadrature point: the slip g (3 values), the work
-//! dissipated so far (1 value) and the slip of the step, g − gₙ (3 values, for output), read
-//! from the last accepted step and written for the trial.
+//! dissipated so far (1 value), the slip of the step, g − gₙ (3 values, for output) and the
+//! normal traction p_n (1 value, the limit's where it is lagged), read from the last accepted
+//! step and written for the trial.
 #![allow(non_snake_case)]
 
 use super::point::{Point, point};
@@ -18,9 +19,9 @@ use crate::material::SolidLaw;
 use crate::material::friction::{Friction, MediumStress, shear_modulus};
 use nalgebra::Vector3;
 
-/// History values per quadrature point: the slip (x, y, z), the work dissipated so far and the
-/// slip of the step (x, y, z).
-pub const HISTORY_PER_POINT: usize = 7;
+/// History values per quadrature point: the slip (x, y, z), the work dissipated so far, the
+/// slip of the step (x, y, z) and the normal traction p_n.
+pub const HISTORY_PER_POINT: usize = 8;
 
 /// The friction of a medium region (its slip planes are per cell: see `normal` of
 /// [`friction`]).
@@ -35,6 +36,8 @@ pub struct FrictionMaterial {
     pub c_f: f64,
     /// η_s, the slip's viscosity (0: rate-independent).
     pub viscosity: f64,
+    /// The Coulomb limit from the last accepted step's normal traction (fixed within a step).
+    pub lagged: bool,
 }
 
 /// Residual and (optionally) tangent of the friction term of one medium cell with slip-plane
@@ -64,6 +67,7 @@ pub fn friction<const N: usize, const D: usize, E: RefElement<N, D>>(
         mu: mat.mu,
         normal: *normal,
         rate: mat.viscosity * inv_dt,
+        lagged: None,
     };
     for (q, (xi, w)) in E::quadrature().iter().enumerate() {
         let Point {
@@ -78,6 +82,10 @@ pub fn friction<const N: usize, const D: usize, E: RefElement<N, D>>(
         let m = mat.medium.stress(&F, theta).ok_or(inverted)?;
         let h = &committed[q * HISTORY_PER_POINT..(q + 1) * HISTORY_PER_POINT];
         let slip = Vector3::new(h[0], h[1], h[2]);
+        let law = Friction {
+            lagged: mat.lagged.then_some(h[7]),
+            ..law
+        };
         let medium = MediumStress {
             P: &m.P,
             dP_dF: &m.dP_dF,
@@ -94,9 +102,10 @@ pub fn friction<const N: usize, const D: usize, E: RefElement<N, D>>(
         let now = &mut trial[q * HISTORY_PER_POINT..(q + 1) * HISTORY_PER_POINT];
         now[..3].copy_from_slice(f.slip.as_slice());
         now[3] = h[3] + f.dissipated;
-        for (d, (g1, g0)) in now[4..].iter_mut().zip(f.slip.iter().zip(&slip)) {
+        for (d, (g1, g0)) in now[4..7].iter_mut().zip(f.slip.iter().zip(&slip)) {
             *d = g1 - g0;
         }
+        now[7] = f.p_n;
         if mechanics {
             for I in 0..N {
                 for i in 0..D {
@@ -199,7 +208,7 @@ pub fn slip_fields<const N: usize, const D: usize, E: RefElement<N, D>>(
             out.slip[d] += h[d] * dV;
             out.increment[d] += h[4 + d] * dV;
         }
-        if h[4..].iter().any(|&d| d != 0.0) {
+        if h[4..7].iter().any(|&d| d != 0.0) {
             out.slipping += dV;
         }
         volume += dV;
@@ -228,13 +237,15 @@ mod tests {
         }),
         c_f: 1.0,
         viscosity: 0.0,
+        lagged: false,
     };
 
     /// 1/Δt of the checks' step (the slip viscosity acts over it).
     const INV_DT: f64 = 4.0;
 
     /// A cell closed to a fifth of its height, slid along x and distorted a little, at
-    /// temperatures that vary over it; every point's previous slip is 0.01 along x.
+    /// temperatures that vary over it; every point's previous slip is 0.01 along x and its
+    /// previous normal traction 0.05.
     fn state<const N: usize, const D: usize, E: RefElement<N, D>>() -> (CellState<N>, Vec<f64>) {
         let mut s = CellState::<N>::zero();
         for (I, xi) in E::nodes().iter().enumerate() {
@@ -250,6 +261,7 @@ mod tests {
         let mut h = vec![0.0; nq * HISTORY_PER_POINT];
         for q in 0..nq {
             h[q * HISTORY_PER_POINT] = 0.01;
+            h[q * HISTORY_PER_POINT + 7] = 0.05;
             h[q * HISTORY_PER_POINT + 3] = 0.7;
         }
         (s, h)
@@ -376,6 +388,12 @@ mod tests {
         };
         check::<4, 2, Quad4>(&viscous, true);
         check::<8, 3, Hex8>(&viscous, true);
+        let lagged = FrictionMaterial {
+            lagged: true,
+            ..MATERIAL
+        };
+        check::<3, 2, Tri3>(&lagged, true);
+        check::<8, 3, Hex8>(&lagged, true);
         check::<3, 2, Tri3>(&MATERIAL, true);
         check::<4, 2, Quad4>(&MATERIAL, true);
         check::<4, 3, Tet4>(&MATERIAL, true);

@@ -43,6 +43,9 @@ pub struct Friction {
     /// η_s/Δt: the slip's viscosity over the step, so that slipping takes
     /// |F τ| = μ p_n + (η_s/Δt) |Δg| (0: rate-independent Coulomb).
     pub rate: f64,
+    /// The normal traction the limit takes, when it is the last accepted step's (the limit
+    /// then does not move within the step: Tresca's); `None`: the current one.
+    pub lagged: Option<f64>,
 }
 
 /// The medium's own first Piola–Kirchhoff stress at the point and its derivatives: the normal
@@ -123,7 +126,7 @@ impl Friction {
         let n = m / m.norm();
         let t = medium.P * N;
         let p_n = -n.dot(&t);
-        let limit = self.mu * p_n.max(0.0);
+        let limit = self.mu * self.lagged.unwrap_or(p_n).max(0.0);
         // the trial's traction on the plane, F τ*, and its size
         let a = F * trial;
         let size = a.norm();
@@ -158,9 +161,9 @@ impl Friction {
                     }
                 }
             }
-            // ∂τ/∂(μ p_n): the limit moves with the normal traction
+            // ∂τ/∂(μ p_n): the limit moves with the normal traction (unless it is lagged)
             let e = trial / denominator;
-            let dtau_dtheta = if p_n > 0.0 {
+            let dtau_dtheta = if p_n > 0.0 && self.lagged.is_none() {
                 self.limit_moves::<D>(&mut dtau, &e, &m, &Finv, medium)
             } else {
                 Vector3::zeros()
@@ -311,6 +314,7 @@ mod tests {
             mu: 0.3,
             normal,
             rate: 0.0,
+            lagged: None,
         }
     }
 
@@ -352,8 +356,21 @@ mod tests {
 
     #[test]
     fn the_tangent_is_the_derivative_of_the_stress_in_stick_and_in_slip() {
-        for (dim, rate) in [(2, 0.0), (3, 0.0), (2, 5.0), (3, 5.0)] {
-            let law = Friction { rate, ..plane(dim) };
+        // rate-independent, viscous, and with the limit's p_n lagged (a value near the
+        // layer's own, 0.9)
+        for (dim, rate, lagged) in [
+            (2, 0.0, None),
+            (3, 0.0, None),
+            (2, 5.0, None),
+            (3, 5.0, None),
+            (2, 0.0, Some(0.9)),
+            (3, 5.0, Some(0.9)),
+        ] {
+            let law = Friction {
+                rate,
+                lagged,
+                ..plane(dim)
+            };
             let F = layer(law.normal, 0.05, 0.05, 0.3, 0.01);
             // from no slip, the trial leaves the cone; from half the elastic shear of the
             // return, it stays inside
@@ -408,8 +425,8 @@ mod tests {
                 );
                 assert_eq!(
                     r.dP_dtheta.amax() > 0.0,
-                    slips,
-                    "θ moves the limit only in slip"
+                    slips && lagged.is_none(),
+                    "θ moves the limit only in slip, and not a lagged one"
                 );
                 assert_eq!(r.dissipated > 0.0, slips);
             }

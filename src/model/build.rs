@@ -528,6 +528,7 @@ fn friction_blocks(
                 medium: case.materials[info.region].law(),
                 c_f: fr.c_f.as_ref().map_or(1.0, |v| *v.get_ref()),
                 viscosity: fr.viscosity(),
+                lagged: fr.lagged_limit(),
             },
             normals,
             heat_fraction: if physics.frictional_heating {

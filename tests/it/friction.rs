@@ -66,6 +66,16 @@ path = [0.0{ones}]
     )
 }
 
+/// (drag, F_t/F_n) of the top over the drag that follows the press (t > 1), the drag being
+/// `amplitude` per unit of t.
+fn drag_ratios(out: &Path, amplitude: f64) -> Vec<(f64, f64)> {
+    top_forces(out, 2)
+        .iter()
+        .filter(|(t, _, _)| *t > 1.0)
+        .map(|(t, ft, fnormal)| (amplitude * (t - 1.0), ft / fnormal))
+        .collect()
+}
+
 /// Column `name` of a history.
 fn column(cols: &[String], rows: &[Vec<f64>], name: &str) -> Vec<f64> {
     let i = cols
@@ -859,11 +869,7 @@ fn a_pad_on_a_long_plate_slides_its_own_width() {
             &drag_case(2, mu, 2.0, DRAG, 0.025),
         );
         assert!(s.converged, "μ = {mu:?}: {}", s.message);
-        let ratios: Vec<(f64, f64)> = top_forces(&out, 2)
-            .iter()
-            .filter(|(t, _, _)| *t > 1.0)
-            .map(|(t, ft, fnormal)| (2.0 * (t - 1.0), ft / fnormal))
-            .collect();
+        let ratios = drag_ratios(&out, 2.0);
         assert!(
             (ratios.last().unwrap().0 - 2.0).abs() < 1e-9,
             "the whole drag"
@@ -883,6 +889,34 @@ fn a_pad_on_a_long_plate_slides_its_own_width() {
                 }
             }
         }
+    }
+}
+
+#[test]
+fn with_the_limit_lagged_the_pad_slides_its_own_width_at_mu_0_5() {
+    // the pad of the test above at μ = 0.5, which stalls after a drag of 0.155 with the
+    // limit μ p_n moving with p_n inside the step (the test below): with the last accepted
+    // step's p_n, the whole drag of 2.0 completes. The largest force ratio is μ within 3 %
+    // (measured 0.511); as the pad leaves the plate's middle the ratio settles low as at
+    // μ = 0.3, here by up to 17 % (0.414 at the end; THEORY.md, "Where drags stall").
+    let mu = 0.5;
+    let case = drag_case(2, Some(mu), 2.0, DRAG, 0.025)
+        .replace("normal = [0, 1] }", "normal = [0, 1], limit = \"lagged\" }");
+    assert!(case.contains("limit = \"lagged\""));
+    let (s, out) = solve_text("pad-lagged", "pad.geo", "n = 16, m = 8, l = 1", &case);
+    assert!(s.converged, "{}", s.message);
+    let ratios = drag_ratios(&out, 2.0);
+    assert!(
+        (ratios.last().unwrap().0 - 2.0).abs() < 1e-9,
+        "the whole drag"
+    );
+    let largest = ratios.iter().map(|r| r.1).fold(0.0, f64::max);
+    let slip: Vec<_> = ratios.iter().skip_while(|r| r.1 < 0.97 * mu).collect();
+    println!("pad, μ = {mu}, limit lagged: largest F_t/F_n {largest}, in full slip {slip:?}");
+    assert!((largest / mu - 1.0).abs() < 0.03, "{largest}");
+    assert!(slip.len() >= 10 && slip[0].0 < 0.3, "full slip {slip:?}");
+    for (d, r) in slip {
+        assert!((r / mu - 1.0).abs() < 0.2, "drag {d}: ratio {r}");
     }
 }
 
@@ -1006,10 +1040,9 @@ fn with_a_slip_viscosity_the_block_slides_through_its_slip_events() {
             &case,
         );
         assert!(s.converged, "step {step}: {}", s.message);
-        let peak = top_forces(&out, 2)
+        let peak = drag_ratios(&out, 0.5)
             .iter()
-            .filter(|(t, _, _)| *t > 1.0)
-            .map(|(_, ft, fnormal)| ft / fnormal)
+            .map(|r| r.1)
             .fold(0.0f64, f64::max);
         println!("step {step}: largest F_t/F_n in the drag {peak}");
         assert!(peak > 0.95 * mu && peak < 1.01 * mu, "step {step}: {peak}");
