@@ -36,7 +36,9 @@ pub struct FrictionMaterial {
     pub c_f: f64,
     /// η_s, the slip's viscosity (0: rate-independent).
     pub viscosity: f64,
-    /// The Coulomb limit from the last accepted step's normal traction (fixed within a step).
+    /// The Coulomb limit from the last accepted step's normal traction (fixed within a step)
+    /// where that pressed the plane; from the current one where it did not (at the start, and
+    /// where the medium was open), so that nothing slips freely while the plane first closes.
     pub lagged: bool,
 }
 
@@ -83,7 +85,7 @@ pub fn friction<const N: usize, const D: usize, E: RefElement<N, D>>(
         let h = &committed[q * HISTORY_PER_POINT..(q + 1) * HISTORY_PER_POINT];
         let slip = Vector3::new(h[0], h[1], h[2]);
         let law = Friction {
-            lagged: mat.lagged.then_some(h[7]),
+            lagged: mat.lagged.then_some(h[7]).filter(|&p| p > 0.0),
             ..law
         };
         let medium = MediumStress {
@@ -373,6 +375,55 @@ mod tests {
                 "{heat} vs {work}"
             );
         }
+    }
+
+    #[test]
+    fn a_lagged_limit_takes_the_current_traction_where_the_last_did_not_press() {
+        let lay = Layout {
+            n: 4,
+            dim: 2,
+            has_u: true,
+            has_theta: true,
+            np: 0,
+        };
+        let nd = lay.ndof();
+        let (s, mut committed) = state::<4, 2, Quad4>();
+        let residual = |mat: &FrictionMaterial, committed: &[f64]| {
+            let mut trial = committed.to_vec();
+            let mut r = vec![0.0; nd];
+            friction::<4, 2, Quad4>(
+                mat,
+                &NORMAL,
+                2.5,
+                INV_DT,
+                &lay,
+                &s,
+                committed,
+                &mut trial,
+                Active::ALL,
+                &mut r,
+                None,
+            )
+            .unwrap();
+            r
+        };
+        let lagged = FrictionMaterial {
+            lagged: true,
+            ..MATERIAL
+        };
+        // pressed at the last step (0.05): the limit differs from the current one's
+        assert_ne!(
+            residual(&lagged, &committed),
+            residual(&MATERIAL, &committed)
+        );
+        // not pressed (open, or the start): the current one, exactly
+        for q in 0..Quad4::quadrature().len() {
+            committed[q * HISTORY_PER_POINT + 7] = -0.01;
+        }
+        assert_eq!(
+            residual(&lagged, &committed),
+            residual(&MATERIAL, &committed)
+        );
     }
 
     #[test]
