@@ -20,8 +20,9 @@
 //! coefficient, not differentiated as part of an energy, so the shear puts no pressure on the
 //! plane; the tangent is unsymmetric, as Coulomb friction's always is. With a slip viscosity
 //! η_s the slip of a step pays a rate term as well, |F τ| = μ p_n + (η_s/Δt) |Δg_p|, and the
-//! return stays along τ*. The slip of a step dissipates τ · Δg_p per reference volume (the
-//! frictional heat).
+//! return stays along τ*. With the limit lagged, μ p_n takes a given normal traction (the
+//! last accepted step's) and stays put within the step. The slip of a step dissipates
+//! τ · Δg_p per reference volume (the frictional heat).
 #![allow(non_snake_case)]
 
 use super::Tensor4;
