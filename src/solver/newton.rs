@@ -58,7 +58,12 @@ pub struct StepReport {
 
 #[derive(Debug)]
 pub enum StepFailure {
-    NotConverged { iterations: usize, last: FieldNorms },
+    /// `met`: the last residual was below tolerance, but the updates did not shrink.
+    NotConverged {
+        iterations: usize,
+        last: FieldNorms,
+        met: bool,
+    },
     Assembly(AssemblyError),
     Linear(LinearError),
 }
@@ -66,9 +71,24 @@ pub enum StepFailure {
 impl std::fmt::Display for StepFailure {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            StepFailure::NotConverged { iterations, last } => write!(
+            StepFailure::NotConverged {
+                iterations,
+                last,
+                met: false,
+            } => write!(
                 f,
                 "no convergence in {iterations} iterations (relative residuals u {:.1e}, theta {:.1e}, p {:.1e})",
+                last[0], last[1], last[2]
+            ),
+            StepFailure::NotConverged {
+                iterations,
+                last,
+                met: true,
+            } => write!(
+                f,
+                "no convergence in {iterations} iterations: the residual is below tolerance \
+                 (relative u {:.1e}, theta {:.1e}, p {:.1e}) but Newton's updates do not shrink \
+                 (the tangent is singular along them: the load path turns or branches here)",
                 last[0], last[1], last[2]
             ),
             StepFailure::Assembly(e) => write!(f, "{e}"),
@@ -345,6 +365,7 @@ impl Newton {
                 return Err(StepFailure::NotConverged {
                     iterations: it,
                     last: r.rel,
+                    met: false,
                 });
             }
             self.solve_update(&mut st, solver, asm, r.converged && !first)?;
@@ -379,6 +400,7 @@ impl Newton {
                 return Err(StepFailure::NotConverged {
                     iterations: it,
                     last: r.rel,
+                    met: r.converged,
                 });
             }
             it += 1;
@@ -602,6 +624,7 @@ impl Newton {
             return Err(StepFailure::NotConverged {
                 iterations: 1,
                 last: [0.0, rel, 0.0],
+                met: false,
             });
         }
         st.history.push([0.0, rel, 0.0]);

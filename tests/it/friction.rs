@@ -920,6 +920,17 @@ fn with_the_limit_lagged_the_pad_slides_its_own_width_at_mu_0_5() {
     }
 }
 
+/// `tmc solve` of the pad (`geo/pad.geo` with `params`) under `case`, which stalls: its error
+/// and its output folder.
+fn pad_stall(name: &str, params: &str, case: &str) -> (String, std::path::PathBuf) {
+    let path = common::case_file(name, "pad.geo", &format!("params = {{ {params} }}"), case);
+    let out = path.with_file_name("out");
+    let o = common::solve_cli(&path, &out, &[]);
+    let e = common::stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "a stall: {e}");
+    (e, out)
+}
+
 #[test]
 fn a_pad_corner_that_passes_below_the_plate_between_the_mediums_points_is_counted() {
     // the pad with one (bilinear) cell across the medium stalls at μ = 0.5 after a drag of
@@ -931,16 +942,7 @@ fn a_pad_corner_that_passes_below_the_plate_between_the_mediums_points_is_counte
         "[steps]",
         "[[probe]]\nname = \"corner_y\"\nfield = \"uy\"\nat = [3.0, 0.25]\n[steps]",
     );
-    let path = common::case_file(
-        "pad-corner-through",
-        "pad.geo",
-        "params = { n = 16, m = 8, l = 1 }",
-        &case,
-    );
-    let out = path.with_file_name("out");
-    let o = common::solve_cli(&path, &out, &[]);
-    let e = common::stderr(&o);
-    assert_eq!(o.status.code(), Some(1), "a stall: {e}");
+    let (e, out) = pad_stall("pad-corner-through", "n = 16, m = 8, l = 1", &case);
     // the drag runs at λ = 1 (its own path moves): where it stopped is said in t
     assert!(
         e.contains("load step from t = 1.07") && e.contains("(λ = 1.000000) failed with Δt = "),
@@ -962,6 +964,22 @@ fn a_pad_corner_that_passes_below_the_plate_between_the_mediums_points_is_counte
     assert!(s["min_J_medium"].as_f64().unwrap() > 0.0);
     assert!(corner_y < 0.0, "the corner is at y = {corner_y}");
     assert!(through >= 1);
+}
+
+#[test]
+fn a_stall_whose_residual_is_met_says_the_updates_do_not_shrink() {
+    // the one-cell pad on n = 32 at μ = 0.3 with a slip viscosity of 1e-3 stops after a drag
+    // of 0.176 (THEORY.md, "A slip viscosity"): there Newton's residual falls to 1.9e-13 of
+    // its reference while its updates stay at 7e-7, the tangent singular along them. The
+    // error says so rather than only "no convergence" beside a residual far below tolerance.
+    let case = drag_case(2, Some(0.3), 2.0, DRAG, 0.025)
+        .replace("normal = [0, 1] }", "normal = [0, 1], viscosity = 1e-3 }");
+    let (e, _) = pad_stall("pad-singular-stall", "n = 32, m = 16, l = 1", &case);
+    assert!(
+        e.contains("no convergence in 16 iterations: the residual is below tolerance")
+            && e.contains("but Newton's updates do not shrink (the tangent is singular along them"),
+        "{e}"
+    );
 }
 
 #[test]
