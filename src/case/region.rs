@@ -269,10 +269,21 @@ impl RegionKeys<'_> {
     }
 
     fn positive_if_given(&self, key: &str, v: &Option<Spanned<f64>>) -> Result<(), CaseError> {
+        self.check_if_given(key, v, |v| v > 0.0, "positive")
+    }
+
+    /// An error at `v` when it is given and not `ok`: "`key` must be `must`, got …".
+    fn check_if_given(
+        &self,
+        key: &str,
+        v: &Option<Spanned<f64>>,
+        ok: impl Fn(f64) -> bool,
+        must: &str,
+    ) -> Result<(), CaseError> {
         match v {
-            Some(v) if !(*v.get_ref() > 0.0) => self.fail(
+            Some(v) if !ok(*v.get_ref()) => self.fail(
                 v.span(),
-                format!("`{key}` must be positive, got {}", v.get_ref()),
+                format!("`{key}` must be {must}, got {}", v.get_ref()),
             ),
             _ => Ok(()),
         }
@@ -376,14 +387,12 @@ impl Case {
         let mut materials = Vec::with_capacity(f.region.len());
         for (i, r) in f.region.iter().enumerate() {
             let keys = RegionKeys { case: self, i, r };
-            if let Some(v) = &r.rho_c
-                && !(*v.get_ref() > 0.0 && v.get_ref().is_finite())
-            {
-                return keys.fail(
-                    v.span(),
-                    format!("`rho_c` must be positive and finite, got {}", v.get_ref()),
-                );
-            }
+            keys.check_if_given(
+                "rho_c",
+                &r.rho_c,
+                |v| v > 0.0 && v.is_finite(),
+                "positive and finite",
+            )?;
             if let Some(fr) = &r.friction {
                 if r.kind == RegionKind::Solid {
                     return keys.fail(
@@ -411,14 +420,7 @@ impl RegionKeys<'_> {
     fn medium_conduction(&self) -> Result<MediumConduction, CaseError> {
         let r = self.r;
         for (key, v) in [("h_closed", &r.h_closed), ("thickness", &r.thickness)] {
-            if let Some(v) = v
-                && !(*v.get_ref() > 0.0 && v.get_ref().is_finite())
-            {
-                return self.fail(
-                    v.span(),
-                    format!("`{key}` must be positive, got {}", v.get_ref()),
-                );
-            }
+            self.check_if_given(key, v, |v| v > 0.0 && v.is_finite(), "positive")?;
         }
         match (&r.h_closed, &r.thickness) {
             (Some(h), None) => {
@@ -574,39 +576,24 @@ impl RegionKeys<'_> {
             SlipNormal::Word(w) if w != "auto" => return bad_normal(format!("\"{w}\"")),
             SlipNormal::Word(_) => {}
         }
-        if let Some(v) = &fr.heat_fraction
-            && !(0.0..=1.0).contains(v.get_ref())
-        {
-            return self.fail(
-                v.span(),
-                format!(
-                    "`friction.heat_fraction` must be in [0, 1], got {}",
-                    v.get_ref()
-                ),
-            );
-        }
-        if let Some(v) = &fr.c_f
-            && !(*v.get_ref() > 0.0 && v.get_ref().is_finite())
-        {
-            return self.fail(
-                v.span(),
-                format!(
-                    "`friction.c_f` must be positive and finite, got {}",
-                    v.get_ref()
-                ),
-            );
-        }
-        if let Some(v) = &fr.viscosity
-            && !(*v.get_ref() >= 0.0 && v.get_ref().is_finite())
-        {
-            return self.fail(
-                v.span(),
-                format!(
-                    "`friction.viscosity` must be finite and ≥ 0, got {}",
-                    v.get_ref()
-                ),
-            );
-        }
+        self.check_if_given(
+            "friction.heat_fraction",
+            &fr.heat_fraction,
+            |v| (0.0..=1.0).contains(&v),
+            "in [0, 1]",
+        )?;
+        self.check_if_given(
+            "friction.c_f",
+            &fr.c_f,
+            |v| v > 0.0 && v.is_finite(),
+            "positive and finite",
+        )?;
+        self.check_if_given(
+            "friction.viscosity",
+            &fr.viscosity,
+            |v| v >= 0.0 && v.is_finite(),
+            "finite and ≥ 0",
+        )?;
         if let Some(w) = &fr.limit
             && !["current", "lagged"].contains(&w.get_ref().as_str())
         {

@@ -20,8 +20,11 @@ use crate::material::friction::{Friction, MediumStress, shear_modulus};
 use nalgebra::Vector3;
 
 /// History values per quadrature point: the slip (x, y, z), the work dissipated so far, the
-/// slip of the step (x, y, z) and the normal traction p_n.
+/// slip of the step (x, y, z) and the normal traction p_n, from these offsets.
 pub const HISTORY_PER_POINT: usize = 8;
+const WORK: usize = 3;
+const STEP: usize = 4;
+const P_N: usize = 7;
 
 /// The friction of a medium region (its slip planes are per cell: see `normal` of
 /// [`friction`]).
@@ -65,12 +68,6 @@ pub fn friction<const N: usize, const D: usize, E: RefElement<N, D>>(
     super::zero_local(nd, r, k.as_deref_mut());
     let mechanics = lay.has_u && act.mechanics;
     let heat = lay.has_theta && act.heat && heat_rate > 0.0;
-    let law = Friction {
-        mu: mat.mu,
-        normal: *normal,
-        rate: mat.viscosity * inv_dt,
-        lagged: None,
-    };
     for (q, (xi, w)) in E::quadrature().iter().enumerate() {
         let Point {
             g,
@@ -85,8 +82,10 @@ pub fn friction<const N: usize, const D: usize, E: RefElement<N, D>>(
         let h = &committed[q * HISTORY_PER_POINT..(q + 1) * HISTORY_PER_POINT];
         let slip = Vector3::new(h[0], h[1], h[2]);
         let law = Friction {
-            lagged: mat.lagged.then_some(h[7]).filter(|&p| p > 0.0),
-            ..law
+            mu: mat.mu,
+            normal: *normal,
+            rate: mat.viscosity * inv_dt,
+            lagged: mat.lagged.then_some(h[P_N]).filter(|&p| p > 0.0),
         };
         let medium = MediumStress {
             P: &m.P,
@@ -103,11 +102,11 @@ pub fn friction<const N: usize, const D: usize, E: RefElement<N, D>>(
             .ok_or(inverted)?;
         let now = &mut trial[q * HISTORY_PER_POINT..(q + 1) * HISTORY_PER_POINT];
         now[..3].copy_from_slice(f.slip.as_slice());
-        now[3] = h[3] + f.dissipated;
-        for (d, (g1, g0)) in now[4..7].iter_mut().zip(f.slip.iter().zip(&slip)) {
+        now[WORK] = h[WORK] + f.dissipated;
+        for (d, (g1, g0)) in now[STEP..P_N].iter_mut().zip(f.slip.iter().zip(&slip)) {
             *d = g1 - g0;
         }
-        now[7] = f.p_n;
+        now[P_N] = f.p_n;
         if mechanics {
             for I in 0..N {
                 for i in 0..D {
@@ -178,7 +177,7 @@ pub fn dissipated_work<const N: usize, const D: usize, E: RefElement<N, D>>(
     for (q, (xi, w)) in E::quadrature().iter().enumerate() {
         let (_, detJ) =
             physical_gradients::<N, D>(&E::grad(xi), X).ok_or(KernelError::BadGeometry)?;
-        e += history[q * HISTORY_PER_POINT + 3] * w * detJ;
+        e += history[q * HISTORY_PER_POINT + WORK] * w * detJ;
     }
     Ok(e)
 }
@@ -208,9 +207,9 @@ pub fn slip_fields<const N: usize, const D: usize, E: RefElement<N, D>>(
         let h = &history[q * HISTORY_PER_POINT..(q + 1) * HISTORY_PER_POINT];
         for d in 0..3 {
             out.slip[d] += h[d] * dV;
-            out.increment[d] += h[4 + d] * dV;
+            out.increment[d] += h[STEP + d] * dV;
         }
-        if h[4..7].iter().any(|&d| d != 0.0) {
+        if h[STEP..P_N].iter().any(|&d| d != 0.0) {
             out.slipping += dV;
         }
         volume += dV;
@@ -263,8 +262,8 @@ mod tests {
         let mut h = vec![0.0; nq * HISTORY_PER_POINT];
         for q in 0..nq {
             h[q * HISTORY_PER_POINT] = 0.01;
-            h[q * HISTORY_PER_POINT + 7] = 0.05;
-            h[q * HISTORY_PER_POINT + 3] = 0.7;
+            h[q * HISTORY_PER_POINT + P_N] = 0.05;
+            h[q * HISTORY_PER_POINT + WORK] = 0.7;
         }
         (s, h)
     }
@@ -305,7 +304,12 @@ mod tests {
         for q in 0..E::quadrature().len() {
             let h = &trial[q * HISTORY_PER_POINT..];
             assert_eq!(h[0] != 0.01, slips, "{N} nodes: point {q} slip {}", h[0]);
-            assert_eq!(h[3] > 0.7, slips, "{N} nodes: point {q} work {}", h[3]);
+            assert_eq!(
+                h[WORK] > 0.7,
+                slips,
+                "{N} nodes: point {q} work {}",
+                h[WORK]
+            );
         }
         // the cell's output: every point slipped or none did, by g − gₙ
         let cell = slip_fields::<N, D, E>(&s.X, &trial).unwrap();
@@ -418,7 +422,7 @@ mod tests {
         );
         // not pressed (open, or the start): the current one, exactly
         for q in 0..Quad4::quadrature().len() {
-            committed[q * HISTORY_PER_POINT + 7] = -0.01;
+            committed[q * HISTORY_PER_POINT + P_N] = -0.01;
         }
         assert_eq!(
             residual(&lagged, &committed),

@@ -74,23 +74,26 @@ impl std::fmt::Display for StepFailure {
             StepFailure::NotConverged {
                 iterations,
                 last,
-                met: false,
-            } => write!(
-                f,
-                "no convergence in {iterations} iterations (relative residuals u {:.1e}, theta {:.1e}, p {:.1e})",
-                last[0], last[1], last[2]
-            ),
-            StepFailure::NotConverged {
-                iterations,
-                last,
-                met: true,
-            } => write!(
-                f,
-                "no convergence in {iterations} iterations: the residual is below tolerance \
-                 (relative u {:.1e}, theta {:.1e}, p {:.1e}) but Newton's updates do not shrink \
-                 (the tangent is singular along them: the load path turns or branches here)",
-                last[0], last[1], last[2]
-            ),
+                met,
+            } => {
+                let fields = format!(
+                    "u {:.1e}, theta {:.1e}, p {:.1e}",
+                    last[0], last[1], last[2]
+                );
+                if *met {
+                    write!(
+                        f,
+                        "no convergence in {iterations} iterations: the residual is below \
+                         tolerance (relative {fields}) but Newton's updates do not shrink (the \
+                         tangent is singular along them: the load path turns or branches here)"
+                    )
+                } else {
+                    write!(
+                        f,
+                        "no convergence in {iterations} iterations (relative residuals {fields})"
+                    )
+                }
+            }
             StepFailure::Assembly(e) => write!(f, "{e}"),
             StepFailure::Linear(e) => write!(f, "{e}"),
         }
