@@ -9,7 +9,10 @@
 //!   symmetric and factorised by LDLᵀ in single precision (half the memory traffic of double,
 //!   twice the SIMD width; GMRES keeps the residual in double and reaches the same 1e-10).
 //!   Without thermal expansion (K_mθ = 0) the preconditioner is the exact inverse up to that
-//!   rounding, and GMRES stops after two or three iterations.
+//!   rounding, and GMRES stops after two or three iterations. Where Newton says the tangent
+//!   is near the last ([`Factorization::set_near`]: its quadratic tail, or a step's start),
+//!   the blocks' last factors precondition the new tangent while GMRES converges within the
+//!   iterations a factorisation is worth ([`block_lag_budget`]; none for a small system).
 //! - [`LinearKind::Lu`]: friction's unsymmetric mechanics, alone or as the first part of a
 //!   one-way split. The friction tangent has the symmetric pattern of the frictionless one, so
 //!   it is factorised without pivoting in the same nested-dissection order ([`StaticLu`]:
@@ -91,6 +94,10 @@ pub trait Factorization: Send {
     fn engine(&self) -> &'static str {
         "faer"
     }
+    /// Whether the next tangent is near the last (Newton's residual is small, or a step
+    /// starts from a converged state): an engine that may keep an older factor as the
+    /// preconditioner of a newer tangent does so only then.
+    fn set_near(&mut self, _near: bool) {}
 }
 
 /// Relative residual at which GMRES stops, and its iteration budget.
@@ -134,12 +141,126 @@ fn lag_budget<T: Real>(lu: &StaticLu<T>, sub: &SubMatrix) -> usize {
     (price.floor() as usize).min(LAG_MAX_ITS)
 }
 
+/// The GMRES iterations worth one factorisation of the block-triangular preconditioner's
+/// blocks, at most [`LAG_MAX_ITS`] (0: never lagged). The blocks factor side by side, so the
+/// price is the larger block's; an iteration applies both and multiplies by the whole matrix.
+/// A factor large enough to run on every core is cheaper by their number, its solves hardly.
+/// Priced so, Table 2 H1 (block-plate-3d-tm1) gets 4, 9 and 16.8 (12) at 3k, 20.5k and 147k
+/// unknowns; measured at 20.5k and 147k, a factorisation costs 8 and 14.6 iterations.
+/// Friction's LU block (two-way scenes) is refactored at every factorisation, as before:
+/// its stick–slip switches move the tangent between any two iterations.
+fn block_lag_budget(
+    fm: Option<&MechanicsFactor>,
+    ft: Option<&SymFactor>,
+    whole: &SubMatrix,
+) -> usize {
+    let Some(MechanicsFactor::Ldlt(m)) = fm else {
+        return 0;
+    };
+    let ft_flops = ft.map_or(0.0, SymFactor::flops);
+    let applied = m.apply_flops() + ft.map_or(0.0, SymFactor::apply_flops);
+    let n = whole.pattern.nrows() as f64;
+    let iteration = applied + 2.0 * whole.values.len() as f64 + 30.0 * n;
+    let cores = if m.par == Par::Seq {
+        1.0
+    } else {
+        rayon::current_num_threads() as f64
+    };
+    let price = m.flops().max(ft_flops) / iteration / FACTOR_SPEEDUP / cores;
+    (price.floor() as usize).min(LAG_MAX_ITS)
+}
+
 /// An LU factor (of a whole system or of a part, not of a preconditioner's block) with more
 /// entries than this is held in single precision: above it the factorisations and the
 /// triangular solves stream the factor from memory, and halving it pays for the extra GMRES
 /// products its rounding costs. Measured on the friction scenes (wall time, single against
 /// double): 28 k and 167 k entries (2D) 1.08×, 440 k (3D) 1.03×, 2.3 M (3D) 0.91×.
 const SINGLE_LU_ENTRIES: usize = 1_000_000;
+
+/// A solver whose factor may be of an older tangent than the matrix it solves with.
+trait Lagged {
+    /// The factor is of the current matrix.
+    fn current(&self) -> bool;
+    /// GMRES iterations an older factor may take.
+    fn lag(&self) -> usize;
+    /// y = A x with the current matrix.
+    fn mul(&self, x: &[f64], y: &mut [f64]);
+    /// z = M⁻¹ r with the factor held.
+    fn precondition(&self, r: &[f64], z: &mut [f64]);
+    /// Factorise the current matrix.
+    fn refactor(&mut self) -> Result<(), LinearError>;
+}
+
+/// b → A⁻¹ b by GMRES with the factor held: within the lag's budget where the factor is of an
+/// older tangent, refactorised and solved again where that budget runs out. The Krylov
+/// iterations of both attempts.
+fn solve_lagged(l: &mut impl Lagged, b: &mut [f64]) -> Result<usize, LinearError> {
+    let rhs = b.to_vec();
+    let mut spent = 0;
+    loop {
+        let budget = if l.current() { GMRES_MAX } else { l.lag() };
+        let this = &*l;
+        let out = gmres(
+            &|x: &[f64], y: &mut [f64]| this.mul(x, y),
+            &|r: &[f64], z: &mut [f64]| this.precondition(r, z),
+            &rhs,
+            b,
+            GMRES_TOL,
+            GMRES_RESTART.min(budget),
+            budget,
+        );
+        match out {
+            Ok(its) => return Ok(spent + its),
+            Err((iterations, residual)) if l.current() => {
+                return Err(LinearError::Krylov {
+                    iterations: spent + iterations,
+                    residual,
+                });
+            }
+            Err((its, _)) => {
+                spent += its;
+                l.refactor()?;
+            }
+        }
+    }
+}
+
+impl<T: Real> Lagged for LaggedLu<T> {
+    fn current(&self) -> bool {
+        self.current
+    }
+    fn lag(&self) -> usize {
+        self.lag
+    }
+    fn mul(&self, x: &[f64], y: &mut [f64]) {
+        self.sub.mul(x, y)
+    }
+    fn precondition(&self, r: &[f64], z: &mut [f64]) {
+        z.copy_from_slice(r);
+        self.apply(z)
+    }
+    fn refactor(&mut self) -> Result<(), LinearError> {
+        LaggedLu::refactor(self)
+    }
+}
+
+impl Lagged for BlockTriangular {
+    fn current(&self) -> bool {
+        self.current
+    }
+    fn lag(&self) -> usize {
+        self.lag
+    }
+    fn mul(&self, x: &[f64], y: &mut [f64]) {
+        self.whole.mul(x, y)
+    }
+    fn precondition(&self, r: &[f64], z: &mut [f64]) {
+        BlockTriangular::precondition(self, r, z)
+    }
+    fn refactor(&mut self) -> Result<(), LinearError> {
+        BlockTriangular::refactor(self)
+    }
+}
 
 /// LU of an unsymmetric block, refactored only when its last factor no longer preconditions
 /// the current tangent well: between Newton iterations a tangent moves little, so GMRES with
@@ -274,38 +395,7 @@ impl<T: Real> Factorization for LaggedLu<T> {
 
     /// b → A⁻¹ b; the Krylov iterations it took.
     fn solve(&mut self, b: &mut [f64]) -> Result<usize, LinearError> {
-        let rhs = b.to_vec();
-        let mut spent = 0;
-        loop {
-            let budget = if self.current { GMRES_MAX } else { self.lag };
-            let sub = &self.sub;
-            let this = &*self;
-            let out = gmres(
-                &|x: &[f64], y: &mut [f64]| sub.mul(x, y),
-                &|r: &[f64], z: &mut [f64]| {
-                    z.copy_from_slice(r);
-                    this.apply(z)
-                },
-                &rhs,
-                b,
-                GMRES_TOL,
-                GMRES_RESTART.min(budget),
-                budget,
-            );
-            match out {
-                Ok(its) => return Ok(spent + its),
-                Err((iterations, residual)) if self.current => {
-                    return Err(LinearError::Krylov {
-                        iterations: spent + iterations,
-                        residual,
-                    });
-                }
-                Err((its, _)) => {
-                    spent += its;
-                    self.refactor()?;
-                }
-            }
-        }
+        solve_lagged(self, b)
     }
 
     fn entries(&self) -> Option<usize> {
@@ -329,37 +419,25 @@ impl Factorization for SymFactor {
 }
 
 impl Factorization for BlockTriangular {
+    /// Take the whole system's `values` as the current tangent; the blocks are factorised at
+    /// once the first time and wherever no lag is worth it, otherwise only when the last
+    /// factors no longer precondition it within their budget.
     fn factor(&mut self, values: &[f64]) -> Result<(), LinearError> {
         self.whole.update(values);
-        // the temperature block factors on the other core while the mechanics block does
-        let mech =
-            |f: &mut Option<MechanicsFactor>| f.as_mut().map_or(Ok(()), |f| f.factor(values));
-        let heat = |f: &mut Option<SymFactor>| f.as_mut().map_or(Ok(()), |f| f.factor(values));
-        let (m, t) = rayon::join(|| mech(&mut self.fm), || heat(&mut self.ft));
-        m.and(t)?;
         self.coupling.update(values);
+        self.current = false;
+        if !self.factored || self.lag == 0 || !self.near {
+            self.refactor()?;
+        }
         Ok(())
     }
 
+    fn set_near(&mut self, near: bool) {
+        self.near = near;
+    }
+
     fn solve(&mut self, b: &mut [f64]) -> Result<usize, LinearError> {
-        let matvec = |x: &[f64], y: &mut [f64]| self.whole.mul(x, y);
-        let rhs = b.to_vec();
-        let out = gmres(
-            &matvec,
-            &|r: &[f64], z: &mut [f64]| self.precondition(r, z),
-            &rhs,
-            b,
-            GMRES_TOL,
-            GMRES_RESTART,
-            GMRES_MAX,
-        );
-        match out {
-            Ok(its) => Ok(its),
-            Err((iterations, residual)) => Err(LinearError::Krylov {
-                iterations,
-                residual,
-            }),
-        }
+        solve_lagged(self, b)
     }
 
     fn entries(&self) -> Option<usize> {
@@ -470,6 +548,11 @@ impl LinearSolver {
     /// Numeric factorisation of the matrix with this pattern and `values`.
     pub fn factor(&mut self, values: &[f64]) -> Result<(), LinearError> {
         self.backend.factor(values)
+    }
+
+    /// Whether the tangents factorised next are near the last ([`Factorization::set_near`]).
+    pub fn set_near(&mut self, near: bool) {
+        self.backend.set_near(near);
     }
 
     /// Solve A x = b in place (b → x) with the last factorisation.
@@ -667,6 +750,40 @@ impl SymFactor {
         Ok(())
     }
 
+    /// Floating-point operations of one numeric factorisation: per supernode of width w with
+    /// r rows below it, the LDLᵀ of its diagonal block (w³/3), its panel (r w²) and the
+    /// symmetric update of the rows below (r² w).
+    fn flops(&self) -> f64 {
+        use faer::sparse::linalg::cholesky::SymbolicCholeskyRaw;
+        match self.symbolic.raw() {
+            SymbolicCholeskyRaw::Supernodal(sn) => {
+                let (begin, end) = (sn.supernode_begin(), sn.supernode_end());
+                let rows = sn.col_ptr_for_row_idx();
+                (0..sn.n_supernodes())
+                    .map(|s| {
+                        let w = (end[s] - begin[s]) as f64;
+                        let r = (rows[s + 1] - rows[s]) as f64;
+                        w * w * w / 3.0 + r * w * w + r * r * w
+                    })
+                    .sum()
+            }
+            SymbolicCholeskyRaw::Simplicial(sp) => {
+                let cp = sp.col_ptr();
+                (0..sp.nrows())
+                    .map(|j| {
+                        let c = (cp[j + 1] - cp[j]) as f64;
+                        c * c
+                    })
+                    .sum()
+            }
+        }
+    }
+
+    /// Floating-point operations of one solve with the factor (L forward and back).
+    fn apply_flops(&self) -> f64 {
+        4.0 * self.symbolic.len_val() as f64
+    }
+
     fn solve(&self, b: &mut [f64]) {
         assert!(self.factored, "factored before solve");
         let mut guard = self.solve_mem.borrow_mut();
@@ -855,6 +972,13 @@ struct BlockTriangular {
     coupling: SubMatrix,
     /// Copy of the whole matrix for the products.
     whole: SubMatrix,
+    /// GMRES iterations a factor of an older tangent may take ([`block_lag_budget`]).
+    lag: usize,
+    factored: bool,
+    /// The factors are of the current values.
+    current: bool,
+    /// The tangent is near the last factorised one ([`Factorization::set_near`]).
+    near: bool,
 }
 
 impl BlockTriangular {
@@ -879,14 +1003,36 @@ impl BlockTriangular {
         } else {
             block(&mech)?.map(|f| MechanicsFactor::Ldlt(Box::new(f)))
         };
+        let whole = SubMatrix::new(p, &all, &all);
+        let ft = block(&heat)?;
+        let lag = block_lag_budget(fm.as_ref(), ft.as_ref(), &whole);
         Ok(BlockTriangular {
             fm,
-            ft: block(&heat)?,
+            ft,
             coupling: SubMatrix::new(p, &heat, &mech),
-            whole: SubMatrix::new(p, &all, &all),
+            whole,
             mech,
             heat,
+            lag,
+            factored: false,
+            current: false,
+            near: false,
         })
+    }
+
+    /// Factorise both diagonal blocks with the current values (the temperature block on the
+    /// other core while the mechanics block factors).
+    fn refactor(&mut self) -> Result<(), LinearError> {
+        self.factored = false;
+        let values = &self.whole.values;
+        let mech =
+            |f: &mut Option<MechanicsFactor>| f.as_mut().map_or(Ok(()), |f| f.factor(values));
+        let heat = |f: &mut Option<SymFactor>| f.as_mut().map_or(Ok(()), |f| f.factor(values));
+        let (m, t) = rayon::join(|| mech(&mut self.fm), || heat(&mut self.ft));
+        m.and(t)?;
+        self.factored = true;
+        self.current = true;
+        Ok(())
     }
 
     /// z = P⁻¹ r: z_m = K_mm⁻¹ r_m, z_θ = K_θθ⁻¹ (r_θ − K_θm z_m).
@@ -1161,6 +1307,61 @@ mod tests {
         assert!(residual(&p, &w, &x, &b) < 1e-9);
         // (11 measured; 78 with its mechanics block taken as symmetric by LDLᵀ)
         assert!(solver.krylov_last <= 15, "{}", solver.krylov_last);
+    }
+
+    #[test]
+    fn the_block_preconditioner_keeps_its_factors_only_for_a_near_tangent() {
+        let (p, v, node, thermal) = system(40, 0.05, 0.3);
+        let s = Structure { node, thermal };
+        // a system this small is never lagged by its price
+        let block = BlockTriangular::new(&p, &s, false).unwrap();
+        assert_eq!(block.lag, 0);
+        // with a budget, as Table 2's 147k row has
+        let lagged = BlockTriangular {
+            lag: LAG_MAX_ITS,
+            ..BlockTriangular::new(&p, &s, false).unwrap()
+        };
+        let mut solver = LinearSolver::with(LinearKind::BlockGmres, Box::new(lagged));
+        let b: Vec<f64> = (0..p.n).map(|i| (i as f64).cos()).collect();
+        let solve = |solver: &mut LinearSolver, v: &[f64], near: bool| {
+            solver.set_near(near);
+            solver.factor(v).unwrap();
+            let mut x = b.clone();
+            solver.solve(&mut x).unwrap();
+            let r = residual(&p, v, &x, &b);
+            assert!(r < 1e-9, "{r}");
+            solver.krylov_last
+        };
+        let fresh = solve(&mut solver, &v, true);
+        assert!(fresh > 1 && fresh < LAG_MAX_ITS, "{fresh}");
+        let near: Vec<f64> = v
+            .iter()
+            .enumerate()
+            .map(|(k, a)| a * (1.0 + 1e-3 * (k % 7) as f64))
+            .collect();
+        // not near (Newton far from converged): refactorised, as a new solver would be
+        let mut new = LinearSolver::new(LinearKind::BlockGmres, &p, &s).unwrap();
+        let fresh_near = solve(&mut new, &near, false);
+        assert_eq!(solve(&mut solver, &near, false), fresh_near);
+        // near: the last factor preconditions the newer tangent within the budget
+        let w: Vec<f64> = near.iter().map(|a| a * (1.0 + 1e-3)).collect();
+        let kept = solve(&mut solver, &w, true);
+        assert!(
+            kept > fresh && kept <= LAG_MAX_ITS,
+            "{kept} against {fresh}"
+        );
+        // near but moved far (the diagonal changed by up to 4 times the coupling's): the kept
+        // factor gives up after its budget, a new one solves
+        let mut far = v.clone();
+        for j in 0..p.n {
+            for k in p.col_ptr[j]..p.col_ptr[j + 1] {
+                if p.row_idx[k] == j {
+                    far[k] += 2.0 * (j % 3) as f64;
+                }
+            }
+        }
+        let its = solve(&mut solver, &far, true);
+        assert!(its > LAG_MAX_ITS && its < LAG_MAX_ITS + 30, "{its}");
     }
 
     /// A lagged LU of the whole system, in double.
