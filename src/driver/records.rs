@@ -41,6 +41,9 @@ pub struct Summary {
     /// Newton updates (linear solves) of every attempt, accepted or rejected: a mechanical
     /// step of n iterations makes n + 1. The count the assembly and solver seconds are spent on.
     pub linear_solves: usize,
+    /// Numeric factorisations of every attempt: one per linear solve, less the last updates
+    /// that reuse their factorisation and the updates whose engine kept an older factor.
+    pub factorisations: usize,
     pub wall_seconds: f64,
     /// Assembly time of the whole run: every attempt, and the converged states' reactions.
     pub assembly_seconds: f64,
@@ -138,6 +141,7 @@ impl Summary {
             newton_iterations: 0,
             rejected_iterations: 0,
             linear_solves: 0,
+            factorisations: 0,
             wall_seconds: 0.0,
             assembly_seconds: 0.0,
             solver_seconds: 0.0,

@@ -782,6 +782,7 @@ impl<'a> Run<'a> {
         s.newton_iterations = tot.iterations;
         s.rejected_iterations = spent.iterations - tot.iterations;
         s.linear_solves = spent.updates;
+        s.factorisations = spent.factorisations;
         s.wall_seconds = self.start.elapsed().as_secs_f64();
         s.assembly_seconds = spent.assembly + tot.t_reactions;
         s.solver_seconds = spent.solve;

@@ -98,6 +98,11 @@ pub trait Factorization: Send {
     /// starts from a converged state): an engine that may keep an older factor as the
     /// preconditioner of a newer tangent does so only then.
     fn set_near(&mut self, _near: bool) {}
+    /// Numeric factorisations so far, where the engine may keep a factor across calls of
+    /// [`Factorization::factor`] (`None`: each call is one).
+    fn factorisations(&self) -> Option<usize> {
+        None
+    }
 }
 
 /// Relative residual at which GMRES stops, and its iteration budget.
@@ -114,6 +119,9 @@ pub struct LinearSolver {
     /// Krylov iterations of the last solve and since the last `take_krylov` (0 for direct).
     pub krylov_last: usize,
     krylov_count: usize,
+    /// Calls of `factor`, and the factorisations already counted by `take_factorisations`.
+    factor_calls: usize,
+    factorisations_taken: usize,
 }
 
 /// GMRES iterations a lagged LU factor may take at most to solve with a newer tangent before
@@ -289,6 +297,8 @@ struct LaggedLu<T: Real> {
     lag: usize,
     factored: bool,
     current: bool,
+    /// Factorisations so far.
+    count: usize,
 }
 
 /// Which factor of a [`LaggedLu`] holds the last factorisation.
@@ -316,6 +326,7 @@ impl<T: Real> LaggedLu<T> {
             held: Held::Static,
             factored: false,
             current: false,
+            count: 0,
         }
     }
 
@@ -330,6 +341,7 @@ impl<T: Real> LaggedLu<T> {
             held: Held::Static,
             factored: false,
             current: false,
+            count: 0,
         }
     }
 
@@ -338,6 +350,7 @@ impl<T: Real> LaggedLu<T> {
         self.held = self.factor_held()?;
         self.factored = true;
         self.current = true;
+        self.count += 1;
         Ok(())
     }
 
@@ -398,6 +411,10 @@ impl<T: Real> Factorization for LaggedLu<T> {
         solve_lagged(self, b)
     }
 
+    fn factorisations(&self) -> Option<usize> {
+        Some(self.count)
+    }
+
     fn entries(&self) -> Option<usize> {
         Some(self.staticlu.entries())
     }
@@ -434,6 +451,10 @@ impl Factorization for BlockTriangular {
 
     fn set_near(&mut self, near: bool) {
         self.near = near;
+    }
+
+    fn factorisations(&self) -> Option<usize> {
+        Some(self.count)
     }
 
     fn solve(&mut self, b: &mut [f64]) -> Result<usize, LinearError> {
@@ -542,12 +563,22 @@ impl LinearSolver {
             backend,
             krylov_last: 0,
             krylov_count: 0,
+            factor_calls: 0,
+            factorisations_taken: 0,
         }
     }
 
     /// Numeric factorisation of the matrix with this pattern and `values`.
     pub fn factor(&mut self, values: &[f64]) -> Result<(), LinearError> {
+        self.factor_calls += 1;
         self.backend.factor(values)
+    }
+
+    /// Numeric factorisations since the last call (fewer than the calls of `factor` where
+    /// the engine kept an older factor).
+    pub fn take_factorisations(&mut self) -> usize {
+        let total = self.backend.factorisations().unwrap_or(self.factor_calls);
+        total - std::mem::replace(&mut self.factorisations_taken, total)
     }
 
     /// Whether the tangents factorised next are near the last ([`Factorization::set_near`]).
@@ -979,6 +1010,8 @@ struct BlockTriangular {
     current: bool,
     /// The tangent is near the last factorised one ([`Factorization::set_near`]).
     near: bool,
+    /// Factorisations so far.
+    count: usize,
 }
 
 impl BlockTriangular {
@@ -1017,6 +1050,7 @@ impl BlockTriangular {
             factored: false,
             current: false,
             near: false,
+            count: 0,
         })
     }
 
@@ -1032,6 +1066,7 @@ impl BlockTriangular {
         m.and(t)?;
         self.factored = true;
         self.current = true;
+        self.count += 1;
         Ok(())
     }
 

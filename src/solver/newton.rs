@@ -185,6 +185,9 @@ pub struct Spent {
     /// Newton updates, each one linear solve: one more than the iterations per attempt (the
     /// first update applies the step's prescribed increments).
     pub updates: usize,
+    /// Numeric factorisations (fewer than the updates where a factor was kept).
+    #[serde(default)]
+    pub factorisations: usize,
 }
 
 /// What Newton carries from one step to the next, and over a restart: the run's residual
@@ -606,6 +609,7 @@ impl Newton {
             }
         });
         self.spent.solve += t1.elapsed().as_secs_f64();
+        self.spent.factorisations += solver.take_factorisations();
         solved.map_err(StepFailure::Linear)?;
         self.spent.updates += 1;
         if !st.rhs.iter().all(|v| v.is_finite()) {
