@@ -71,9 +71,9 @@ fn main() {
         }
     };
     println!(
-        "| disc. | plan | cells | nodes / dofs (free) | load steps | iterations (+ rejected) | linear solves | gap | runs | solver s | K & R s | wall s | K & R per solve and cell, µs: median (best) | paper: dofs, steps, its, solver, K & R |"
+        "| disc. | plan | cells | nodes / dofs (free) | load steps | iterations (+ rejected) | linear solves | factorisations | gap | runs | solver s | K & R s | wall s | K & R per solve and cell, µs: median (best) | paper: dofs, steps, its, solver, K & R |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     for (disc, plan, options, paper) in variants {
         let dir = root()
             .join("target/bench/table2")
@@ -89,6 +89,7 @@ fn main() {
                 "newton_iterations",
                 "rejected_iterations",
                 "linear_solves",
+                "factorisations",
             ]
             .map(|k| s[k].clone())
         };
@@ -126,12 +127,13 @@ fn main() {
         let kr = sorted("assembly_seconds");
         let per = |t: f64| t / solves.max(1) as f64 / cells as f64 * 1e6;
         println!(
-            "| {disc} | {plan} | {cells} | {} / {} ({}) | {}{} | {its} (+{rejected}) | {solves} | {:.2e} | {runs} | {:.1} | {:.2} | {:.1} | {:.2} ({:.2}) | {paper} |",
+            "| {disc} | {plan} | {cells} | {} / {} ({}) | {}{} | {its} (+{rejected}) | {solves} | {} | {:.2e} | {runs} | {:.1} | {:.2} | {:.1} | {:.2} ({:.2}) | {paper} |",
             s["nodes"],
             s["dofs"]["total"],
             s["dofs"]["free"],
             s["load_steps"],
             if *ok { "" } else { " (failed)" },
+            s["factorisations"],
             s["probes"]["gap"].as_f64().unwrap_or(f64::NAN),
             median(&sorted("solver_seconds")),
             median(&kr),
