@@ -142,11 +142,58 @@ const FACTOR_SPEEDUP: f64 = 12.0;
 /// [`LAG_MAX_ITS`]: a lagged factor that needs more costs more than refactoring would have
 /// (0: a factor this cheap is never lagged).
 fn lag_budget<T: Real>(lu: &StaticLu<T>, sub: &SubMatrix) -> usize {
-    let n = sub.pattern.nrows() as f64;
-    // products with L, U and A, and the orthogonalisation of a restart's dozen vectors
-    let iteration = 2.0 * lu.entries() as f64 + 2.0 * sub.values.len() as f64 + 30.0 * n;
-    let price = lu.flops() / iteration / FACTOR_SPEEDUP;
+    iterations_worth(lu.flops(), 2.0 * lu.entries() as f64, sub, 1.0)
+}
+
+/// The GMRES iterations on the matrix `a` worth a factorisation of `factor_flops` operations
+/// run on `cores`, when applying the factor takes `apply_flops`; at most [`LAG_MAX_ITS`].
+fn iterations_worth(factor_flops: f64, apply_flops: f64, a: &SubMatrix, cores: f64) -> usize {
+    let n = a.pattern.nrows() as f64;
+    // the factor's solves, a product with A, and the orthogonalisation of a restart's dozen
+    // vectors
+    let iteration = apply_flops + 2.0 * a.values.len() as f64 + 30.0 * n;
+    let price = factor_flops / iteration / FACTOR_SPEEDUP / cores;
     (price.floor() as usize).min(LAG_MAX_ITS)
+}
+
+/// Whether a factor that may be kept across tangents is of the current one, its budget
+/// ([`lag_budget`], [`block_lag_budget`]) and the factorisations so far.
+struct Lag {
+    /// GMRES iterations a factor of an older tangent may take (0: never kept).
+    budget: usize,
+    factored: bool,
+    /// The factor is of the current values.
+    current: bool,
+    count: usize,
+}
+
+impl Lag {
+    fn new(budget: usize) -> Lag {
+        Lag {
+            budget,
+            factored: false,
+            current: false,
+            count: 0,
+        }
+    }
+
+    /// A new tangent arrived: whether it must be factorised at once (the first, where no
+    /// lag is worth it, or where it is not `near` the factor held).
+    fn next_tangent(&mut self, near: bool) -> bool {
+        self.current = false;
+        !self.factored || self.budget == 0 || !near
+    }
+
+    /// Around a factorisation: `factoring` before, `factored_now` after it succeeded.
+    fn factoring(&mut self) {
+        self.factored = false;
+    }
+
+    fn factored_now(&mut self) {
+        self.factored = true;
+        self.current = true;
+        self.count += 1;
+    }
 }
 
 /// The GMRES iterations worth one factorisation of the block-triangular preconditioner's
@@ -165,17 +212,14 @@ fn block_lag_budget(
     let Some(MechanicsFactor::Ldlt(m)) = fm else {
         return 0;
     };
-    let ft_flops = ft.map_or(0.0, SymFactor::flops);
     let applied = m.apply_flops() + ft.map_or(0.0, SymFactor::apply_flops);
-    let n = whole.pattern.nrows() as f64;
-    let iteration = applied + 2.0 * whole.values.len() as f64 + 30.0 * n;
     let cores = if m.par == Par::Seq {
         1.0
     } else {
         rayon::current_num_threads() as f64
     };
-    let price = m.flops().max(ft_flops) / iteration / FACTOR_SPEEDUP / cores;
-    (price.floor() as usize).min(LAG_MAX_ITS)
+    let flops = m.flops().max(ft.map_or(0.0, SymFactor::flops));
+    iterations_worth(flops, applied, whole, cores)
 }
 
 /// An LU factor (of a whole system or of a part, not of a preconditioner's block) with more
@@ -187,10 +231,8 @@ const SINGLE_LU_ENTRIES: usize = 1_000_000;
 
 /// A solver whose factor may be of an older tangent than the matrix it solves with.
 trait Lagged {
-    /// The factor is of the current matrix.
-    fn current(&self) -> bool;
-    /// GMRES iterations an older factor may take.
-    fn lag(&self) -> usize;
+    /// Whether the factor is of the current matrix, and the budget of an older one.
+    fn lag(&self) -> &Lag;
     /// y = A x with the current matrix.
     fn mul(&self, x: &[f64], y: &mut [f64]);
     /// z = M⁻¹ r with the factor held.
@@ -206,7 +248,8 @@ fn solve_lagged(l: &mut impl Lagged, b: &mut [f64]) -> Result<usize, LinearError
     let rhs = b.to_vec();
     let mut spent = 0;
     loop {
-        let budget = if l.current() { GMRES_MAX } else { l.lag() };
+        let lag = l.lag();
+        let budget = if lag.current { GMRES_MAX } else { lag.budget };
         let this = &*l;
         let out = gmres(
             &|x: &[f64], y: &mut [f64]| this.mul(x, y),
@@ -219,7 +262,7 @@ fn solve_lagged(l: &mut impl Lagged, b: &mut [f64]) -> Result<usize, LinearError
         );
         match out {
             Ok(its) => return Ok(spent + its),
-            Err((iterations, residual)) if l.current() => {
+            Err((iterations, residual)) if l.lag().current => {
                 return Err(LinearError::Krylov {
                     iterations: spent + iterations,
                     residual,
@@ -234,11 +277,8 @@ fn solve_lagged(l: &mut impl Lagged, b: &mut [f64]) -> Result<usize, LinearError
 }
 
 impl<T: Real> Lagged for LaggedLu<T> {
-    fn current(&self) -> bool {
-        self.current
-    }
-    fn lag(&self) -> usize {
-        self.lag
+    fn lag(&self) -> &Lag {
+        &self.lag
     }
     fn mul(&self, x: &[f64], y: &mut [f64]) {
         self.sub.mul(x, y)
@@ -253,11 +293,8 @@ impl<T: Real> Lagged for LaggedLu<T> {
 }
 
 impl Lagged for BlockTriangular {
-    fn current(&self) -> bool {
-        self.current
-    }
-    fn lag(&self) -> usize {
-        self.lag
+    fn lag(&self) -> &Lag {
+        &self.lag
     }
     fn mul(&self, x: &[f64], y: &mut [f64]) {
         self.whole.mul(x, y)
@@ -293,12 +330,8 @@ struct LaggedLu<T: Real> {
     symbolic: Option<SymbolicLu<usize>>,
     /// The factor the last factorisation left.
     held: Held,
-    /// GMRES iterations a factor of an older tangent may take ([`lag_budget`]).
-    lag: usize,
-    factored: bool,
-    current: bool,
-    /// Factorisations so far.
-    count: usize,
+    /// Budget ([`lag_budget`]) and state of the factor held.
+    lag: Lag,
 }
 
 /// Which factor of a [`LaggedLu`] holds the last factorisation.
@@ -318,39 +351,31 @@ impl<T: Real> LaggedLu<T> {
         let (fwd, _) = nested_dissection(&sub.pattern, node);
         let staticlu = StaticLu::<T>::new(&sub.pattern, &fwd);
         LaggedLu {
-            lag: lag_budget(&staticlu, &sub),
+            lag: Lag::new(lag_budget(&staticlu, &sub)),
             staticlu,
             sub,
             double: None,
             symbolic: None,
             held: Held::Static,
-            factored: false,
-            current: false,
-            count: 0,
         }
     }
 
     /// The same block and layout, its factor held in precision `U`.
     fn in_precision<U: Real>(self) -> LaggedLu<U> {
         LaggedLu {
-            lag: self.lag,
+            lag: Lag::new(self.lag.budget),
             staticlu: self.staticlu.in_precision(),
             sub: self.sub,
             double: None,
             symbolic: self.symbolic,
             held: Held::Static,
-            factored: false,
-            current: false,
-            count: 0,
         }
     }
 
     fn refactor(&mut self) -> Result<(), LinearError> {
-        self.factored = false;
+        self.lag.factoring();
         self.held = self.factor_held()?;
-        self.factored = true;
-        self.current = true;
-        self.count += 1;
+        self.lag.factored_now();
         Ok(())
     }
 
@@ -399,8 +424,7 @@ impl<T: Real> Factorization for LaggedLu<T> {
     /// solves with it.
     fn factor(&mut self, values: &[f64]) -> Result<(), LinearError> {
         self.sub.update(values);
-        self.current = false;
-        if !self.factored || self.lag == 0 {
+        if self.lag.next_tangent(true) {
             self.refactor()?;
         }
         Ok(())
@@ -412,7 +436,7 @@ impl<T: Real> Factorization for LaggedLu<T> {
     }
 
     fn factorisations(&self) -> Option<usize> {
-        Some(self.count)
+        Some(self.lag.count)
     }
 
     fn entries(&self) -> Option<usize> {
@@ -442,8 +466,7 @@ impl Factorization for BlockTriangular {
     fn factor(&mut self, values: &[f64]) -> Result<(), LinearError> {
         self.whole.update(values);
         self.coupling.update(values);
-        self.current = false;
-        if !self.factored || self.lag == 0 || !self.near {
+        if self.lag.next_tangent(self.near) {
             self.refactor()?;
         }
         Ok(())
@@ -454,7 +477,7 @@ impl Factorization for BlockTriangular {
     }
 
     fn factorisations(&self) -> Option<usize> {
-        Some(self.count)
+        Some(self.lag.count)
     }
 
     fn solve(&mut self, b: &mut [f64]) -> Result<usize, LinearError> {
@@ -1003,15 +1026,10 @@ struct BlockTriangular {
     coupling: SubMatrix,
     /// Copy of the whole matrix for the products.
     whole: SubMatrix,
-    /// GMRES iterations a factor of an older tangent may take ([`block_lag_budget`]).
-    lag: usize,
-    factored: bool,
-    /// The factors are of the current values.
-    current: bool,
+    /// Budget ([`block_lag_budget`]) and state of the factors held.
+    lag: Lag,
     /// The tangent is near the last factorised one ([`Factorization::set_near`]).
     near: bool,
-    /// Factorisations so far.
-    count: usize,
 }
 
 impl BlockTriangular {
@@ -1046,27 +1064,22 @@ impl BlockTriangular {
             whole,
             mech,
             heat,
-            lag,
-            factored: false,
-            current: false,
+            lag: Lag::new(lag),
             near: false,
-            count: 0,
         })
     }
 
     /// Factorise both diagonal blocks with the current values (the temperature block on the
     /// other core while the mechanics block factors).
     fn refactor(&mut self) -> Result<(), LinearError> {
-        self.factored = false;
+        self.lag.factoring();
         let values = &self.whole.values;
         let mech =
             |f: &mut Option<MechanicsFactor>| f.as_mut().map_or(Ok(()), |f| f.factor(values));
         let heat = |f: &mut Option<SymFactor>| f.as_mut().map_or(Ok(()), |f| f.factor(values));
         let (m, t) = rayon::join(|| mech(&mut self.fm), || heat(&mut self.ft));
         m.and(t)?;
-        self.factored = true;
-        self.current = true;
-        self.count += 1;
+        self.lag.factored_now();
         Ok(())
     }
 
@@ -1278,7 +1291,7 @@ mod tests {
         // a factor this small costs less than one GMRES iteration with it is worth: the
         // solver never lags it (a newer tangent is factorised and solved in one product)
         let cheap = double_lu(&p, &s);
-        assert_eq!(cheap.lag, 0, "{} operations", cheap.staticlu.flops());
+        assert_eq!(cheap.lag.budget, 0, "{} operations", cheap.staticlu.flops());
         let mut solver = LinearSolver::new(LinearKind::Lu, &p, &s).unwrap();
         for scale in [1.0, 1.001] {
             let w: Vec<f64> = v.iter().map(|a| a * scale).collect();
@@ -1289,7 +1302,7 @@ mod tests {
         }
         // with a budget, as a larger factor has
         let lagged = LaggedLu {
-            lag: LAG_MAX_ITS,
+            lag: Lag::new(LAG_MAX_ITS),
             ..double_lu(&p, &s)
         };
         let mut solver = LinearSolver::with(LinearKind::Lu, Box::new(lagged));
@@ -1350,10 +1363,10 @@ mod tests {
         let s = Structure { node, thermal };
         // a system this small is never lagged by its price
         let block = BlockTriangular::new(&p, &s, false).unwrap();
-        assert_eq!(block.lag, 0);
+        assert_eq!(block.lag.budget, 0);
         // with a budget, as Table 2's 147k row has
         let lagged = BlockTriangular {
-            lag: LAG_MAX_ITS,
+            lag: Lag::new(LAG_MAX_ITS),
             ..BlockTriangular::new(&p, &s, false).unwrap()
         };
         let mut solver = LinearSolver::with(LinearKind::BlockGmres, Box::new(lagged));

@@ -383,8 +383,9 @@ impl Newton {
             }
             // near: the tangent moved little since the last iteration's (a factor of a state
             // converged, or both residuals in the quadratic tail)
-            solver.set_near(first || worst(&r.rel).max(prev_rel) <= NEAR_RESIDUAL);
-            prev_rel = worst(&r.rel);
+            let rel = worst(&r.rel);
+            solver.set_near(first || rel.max(prev_rel) <= NEAR_RESIDUAL);
+            prev_rel = rel;
             self.solve_update(&mut st, solver, asm, r.converged && !first)?;
             let last_update = self.norms(&st.rhs);
             st.apply(model, x, r.pending);
