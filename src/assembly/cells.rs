@@ -8,7 +8,9 @@ use super::{AssemblyError, MIN_PART_CELLS, cell_error};
 use crate::dofs::{CellState, Layout, NONE, gather};
 use crate::element::RefElement;
 use crate::kernel::friction::FrictionMaterial;
-use crate::kernel::{self, Active, CellMaterial, KernelError, bulk, capacity, facet, lanes};
+use crate::kernel::{
+    self, Active, CellMaterial, KernelError, bulk, capacity, facet, inertia, lanes,
+};
 use crate::material::BoundaryFlux;
 use crate::mesh::Block;
 use crate::model::{Model, SlipNormals};
@@ -320,6 +322,23 @@ impl Cells<'_> {
                 r,
                 k,
             )
+        })
+    }
+
+    /// Add the inertia term of the cells `cells` (global numbers, all of this block) with the
+    /// mass density `rho`, 1/Δt and the block's history.
+    pub(super) fn run_inertia<const N: usize, const D: usize, E: RefElement<N, D>>(
+        self,
+        rho: f64,
+        inv_dt: f64,
+        slab: &SlabView,
+        cells: &[u32],
+    ) -> Result<bool, (KernelError, usize)> {
+        let (lay, act) = (self.lay, self.act);
+        self.each_cell::<N>(cells, |cell, s, r, k| {
+            // SAFETY: a cell runs once per assembly
+            let (hist_n, hist_now) = unsafe { slab.cell(cell) };
+            inertia::inertia::<N, D, E>(rho, inv_dt, &lay, s, hist_n, hist_now, act, r, k)
         })
     }
 

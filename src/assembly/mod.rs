@@ -603,6 +603,18 @@ fn run_block(
             finite(ok)?;
             Ok(AssemblyStats::EMPTY)
         }
+        (Term::Inertia(ii), Some(slab)) => {
+            let ib = &model.inertia_blocks[ii];
+            let res = crate::with_cell!(blk.kind, |N, D, E| job
+                .run_inertia::<N, D, E>(ib.rho, inv_dt, slab, these));
+            let ok = res.map_err(|(_, cell)| AssemblyError::BadMesh {
+                region: model.regions[ib.region].0.clone(),
+                cell,
+                at: centroid(&model.mesh.coords, blk.cell(cell)),
+            })?;
+            finite(ok)?;
+            Ok(AssemblyStats::EMPTY)
+        }
         (Term::Flux(f), _) => {
             let fb = &model.facet_blocks[f];
             let res = crate::with_element!(blk.kind, |N, D, E| job
@@ -624,7 +636,7 @@ fn run_block(
             stats.energy = energy;
             Ok(stats)
         }
-        (Term::Capacity(_) | Term::Friction(_), None) => {
+        (Term::Capacity(_) | Term::Friction(_) | Term::Inertia(_), None) => {
             unreachable!("initial_history gives every term with history its slab")
         }
     }
@@ -662,7 +674,7 @@ fn points_per_cell(blk: &Block) -> usize {
 
 /// The history at the initial state, one slab per term that keeps one (in term order), and
 /// each term's slab: of the capacity terms, θ0 at every point; of the friction terms, no slip
-/// and no work dissipated.
+/// and no work dissipated; of the inertia terms, at rest and undisplaced.
 fn initial_history(model: &Model, terms: &[Term]) -> (PointHistory, Vec<Option<usize>>) {
     let x0 = model.initial_state();
     let mut slabs: Vec<Slab> = Vec::new();
@@ -691,6 +703,10 @@ fn initial_history(model: &Model, terms: &[Term]) -> (PointHistory, Vec<Option<u
                 }
                 Term::Friction(_) => {
                     Slab::new(blk.n_cells(), HISTORY_PER_POINT * points_per_cell(blk), 0.0)
+                }
+                Term::Inertia(_) => {
+                    let per_point = crate::kernel::inertia::history_per_point(model.mesh.dim);
+                    Slab::new(blk.n_cells(), per_point * points_per_cell(blk), 0.0)
                 }
                 Term::Bulk(_) | Term::Flux(_) => return None,
             };
@@ -788,6 +804,31 @@ fn committed_friction<'a>(
                     (f, c, blk.cell(c), h)
                 })
         })
+}
+
+/// The kinetic energy at the last accepted step, ½ Σ ∫ ρ |v|² dV (of every rank's cells).
+pub fn kinetic_energy(model: &Model, asm: &Assembler) -> f64 {
+    let mut e = [0.0];
+    for (t, s) in asm.terms.iter().zip(&asm.slab_of) {
+        let (Term::Inertia(i), Some(s)) = (t, s) else {
+            continue;
+        };
+        let (ib, slab) = (&model.inertia_blocks[*i], &asm.history.slabs[*s]);
+        let blk = &model.mesh.cells[ib.block];
+        for c in (0..blk.n_cells()).filter(|&c| asm.owns_cell(ib.block, c)) {
+            let (nodes, h) = (
+                blk.cell(c),
+                &slab.committed[c * slab.width..(c + 1) * slab.width],
+            );
+            e[0] += crate::with_cell!(blk.kind, |N, D, E| {
+                let X = std::array::from_fn(|i| model.mesh.coords[nodes[i]]);
+                crate::kernel::inertia::kinetic_energy::<N, D, E>(ib.rho, &X, h)
+            })
+            .unwrap_or(f64::NAN);
+        }
+    }
+    asm.ranks.sum_into(&mut e);
+    e[0]
 }
 
 /// The work dissipated by friction so far, per friction block (indexed like

@@ -80,6 +80,9 @@ pub struct Region {
     /// Heat capacity ρc per reference volume: with `[time]`, the region stores heat
     /// (ρc θ̇ by backward Euler); without, it is stationary.
     pub rho_c: Option<Spanned<f64>>,
+    /// Mass per reference volume ρ: the region's displacements carry inertia, ρ ü by backward
+    /// Euler, over `[time]`'s time or the pseudo-time of a quasi-static path.
+    pub rho: Option<Spanned<f64>>,
     /// Coulomb friction in a slip plane of the medium (medium regions only).
     pub friction: Option<Spanned<FrictionKey>>,
 }
@@ -381,7 +384,7 @@ fn given(v: &Option<Spanned<f64>>) -> Option<f64> {
 
 impl Case {
     /// Every region's material, in case order: its kind's required moduli positive, no key of
-    /// the other kind, a positive finite `rho_c`.
+    /// the other kind, a positive finite `rho_c` and `rho`.
     pub(super) fn check_regions(&self) -> Result<Vec<Material>, CaseError> {
         let f = &self.file;
         let mut materials = Vec::with_capacity(f.region.len());
@@ -390,6 +393,12 @@ impl Case {
             keys.check_if_given(
                 "rho_c",
                 &r.rho_c,
+                |v| v > 0.0 && v.is_finite(),
+                "positive and finite",
+            )?;
+            keys.check_if_given(
+                "rho",
+                &r.rho,
                 |v| v > 0.0 && v.is_finite(),
                 "positive and finite",
             )?;

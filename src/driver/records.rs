@@ -80,6 +80,9 @@ pub struct Summary {
     /// Scenes with frictional heating: the heat friction made so far, Σ η ∫ τ · Δg dV, counted
     /// besides `heat_in` (`null` otherwise).
     pub friction_heat: Option<f64>,
+    /// Scenes with a mass density (`rho`): the kinetic energy of the last accepted state,
+    /// ½ ∫ ρ |v|² dV (`null` otherwise).
+    pub kinetic_energy: Option<f64>,
     pub output: String,
     /// The units the case names in `[units]` (and energy and power made from them), by
     /// quantity: "length", "force", "time", "temperature", "energy", "power".
@@ -159,6 +162,7 @@ impl Summary {
             heat_in: None,
             friction_work: None,
             friction_heat: None,
+            kinetic_energy: None,
             ranks: 1,
             engine: "faer".into(),
             petsc_solver: None,
@@ -287,6 +291,8 @@ pub struct StepRow {
     pub heat: Option<(f64, f64)>,
     /// Scenes with friction: (work dissipated by slip, heat it made, so far).
     pub friction: Option<(f64, f64)>,
+    /// Scenes with inertia: the kinetic energy.
+    pub kinetic_energy: Option<f64>,
     /// Seconds since the run started, when the step was accepted.
     pub wall: f64,
 }
@@ -294,7 +300,7 @@ pub struct StepRow {
 /// The columns of one model's `history.csv`: the step columns, `energy`, the probes, the
 /// reactions (`R_group_x`, `Q_group`), the solver columns and `work`; in transient scenes
 /// then `heat_stored` and `heat_in`; with friction `friction_work`, with frictional heating
-/// `friction_heat`; last `wall_seconds`.
+/// `friction_heat`; with inertia `kinetic_energy`; last `wall_seconds`.
 pub struct HistoryLayout {
     pub columns: Vec<String>,
     /// What each column measures (`None`: a count, a ratio or λ).
@@ -302,6 +308,7 @@ pub struct HistoryLayout {
     transient: bool,
     friction: bool,
     frictional_heating: bool,
+    inertia: bool,
     /// (group, component) of each reaction column.
     reactions: Vec<(String, String)>,
 }
@@ -363,6 +370,10 @@ impl HistoryLayout {
         if frictional_heating {
             columns.push(("friction_heat".into(), Some(Energy)));
         }
+        let inertia = model.physics.inertia;
+        if inertia {
+            columns.push(("kinetic_energy".into(), Some(Energy)));
+        }
         // seconds of this machine's clock, whatever the case's units
         columns.push(("wall_seconds".into(), None));
         let (columns, quantities) = columns.into_iter().unzip();
@@ -372,6 +383,7 @@ impl HistoryLayout {
             transient,
             friction,
             frictional_heating,
+            inertia,
             reactions,
         }
     }
@@ -409,6 +421,9 @@ impl HistoryLayout {
         }
         if self.frictional_heating {
             row.push(heat);
+        }
+        if self.inertia {
+            row.push(s.kinetic_energy.unwrap_or(0.0));
         }
         row.push(s.wall);
         row

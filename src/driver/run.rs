@@ -9,7 +9,7 @@ use super::strategy::{Strategy, choose_linear, choose_strategy, describe, symmet
 use super::{SolveError, SolveOptions};
 use crate::assembly::{
     Assembler, AssemblyError, convection_heat, corners_through_medium, friction_cells,
-    friction_work, heat_stored,
+    friction_work, heat_stored, kinetic_energy,
 };
 use crate::case::Case;
 use crate::dofs::Field;
@@ -216,6 +216,9 @@ impl<'a> Run<'a> {
             .asm
             .assemble(self.model, &self.x, 0.0, false, None)
             .map_err(|e| SolveError::Setup(format!("the initial state is invalid: {e}")))?;
+        // the state at λ = 0 (settled under what is held in full) is the first accepted one:
+        // the points' history starts there (inertia: displaced, at rest)
+        self.asm.commit(0.0);
         self.totals.energy = stats0.energy;
         let convected = convection_heat(self.model, &self.x)
             .map_err(|e| SolveError::Setup(format!("the initial state is invalid: {e}")))?;
@@ -366,6 +369,9 @@ impl<'a> Run<'a> {
         if model.physics.friction {
             self.account_friction();
         }
+        if model.physics.inertia {
+            self.summary.kinetic_energy = Some(kinetic_energy(model, &self.asm));
+        }
         let f_now = self.forces(target);
         let tot = &mut self.totals;
         tot.work += self
@@ -401,6 +407,7 @@ impl<'a> Run<'a> {
                 .summary
                 .friction_work
                 .map(|w| (w, self.summary.friction_heat.unwrap_or(0.0))),
+            kinetic_energy: self.summary.kinetic_energy,
             wall: self.start.elapsed().as_secs_f64(),
         };
         let values = self
@@ -509,6 +516,9 @@ impl<'a> Run<'a> {
         if self.model.physics.friction {
             // the dissipation so far is in the points' history, restored above
             self.account_friction();
+        }
+        if self.model.physics.inertia {
+            self.summary.kinetic_energy = Some(kinetic_energy(self.model, &self.asm));
         }
         self.written = state.files.written;
         // wall seconds go on from where the run stopped
@@ -690,7 +700,11 @@ impl<'a> Run<'a> {
             };
             // friction's drags stall where the full slide begins (THEORY.md, "Where drags
             // stall"): the user's guide says how far they get
-            let hint = if self.model.physics.friction {
+            let hint = if self.model.physics.friction && !self.model.physics.inertia {
+                "; with friction, drags stall where the full slide begins (docs/CASE.md, \
+                 \"How far friction slides\", says how far they get and what to mesh; a \
+                 small mass density `rho` on every region carries them through)"
+            } else if self.model.physics.friction {
                 "; with friction, drags stall where the full slide begins (docs/CASE.md, \
                  \"How far friction slides\", says how far they get and what to mesh)"
             } else {

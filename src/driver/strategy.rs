@@ -61,6 +61,9 @@ pub fn describe(physics: &Physics, strategy: Strategy) -> String {
             "friction"
         });
     }
+    if physics.inertia {
+        on.push("inertia");
+    }
     let coupling = match (physics.mechanics_to_heat, physics.heat_to_mechanics) {
         (true, true) => "two-way coupled",
         (true, false) => "one-way coupled (deformation → heat)",

@@ -7,6 +7,7 @@
 //! - [`regularization`]: the medium's regularization terms, with p fields (eq. 20) or direct
 //!   (eq. 18);
 //! - [`capacity`]: heat storage of transient conduction (backward Euler);
+//! - [`inertia`]: ρ ü of the displacements (backward Euler);
 //! - [`facet`]: integrals over boundary facets (convection);
 //! - [`fields`]: cell averages for output (σ, q, J, k).
 //!
@@ -19,6 +20,7 @@ pub mod capacity;
 pub mod facet;
 pub mod fields;
 pub mod friction;
+pub mod inertia;
 pub mod lanes;
 mod point;
 pub mod regularization;

@@ -3,8 +3,8 @@
 #![allow(non_snake_case)]
 
 use super::{
-    BcGroup, BlockInfo, CapacityBlock, FacetBlock, FluxGroup, FrictionBlock, LoadPath, Model,
-    Physics, SlipNormals, decide_physics, facet_weights,
+    BcGroup, BlockInfo, CapacityBlock, FacetBlock, FluxGroup, FrictionBlock, InertiaBlock,
+    LoadPath, Model, Physics, SlipNormals, decide_physics, facet_weights,
 };
 use crate::case::{Bc, Case, CaseError, Material, RegionKind, SlipNormal};
 use crate::dofs::{Constraints, DofMap, Field, Layout, NONE, Prescribed};
@@ -47,6 +47,7 @@ pub fn build(case: &Case, mesh: Mesh) -> Result<Model, CaseError> {
     let facet_blocks = boundary_flux_blocks(case, &mesh, &physics, &mut flux_groups);
     let capacity_blocks = capacity_blocks(case, &mesh, &physics, &blocks);
     let friction_blocks = friction_blocks(case, &mesh, &physics, &blocks)?;
+    let inertia_blocks = inertia_blocks(case, &mesh, &physics, &blocks);
     debug_assert!(cons.eq.iter().filter(|&&e| e != NONE).count() == cons.n_eq);
     let mut model = Model {
         physics,
@@ -57,6 +58,7 @@ pub fn build(case: &Case, mesh: Mesh) -> Result<Model, CaseError> {
         flux_groups,
         capacity_blocks,
         friction_blocks,
+        inertia_blocks,
         regions: case
             .file
             .region
@@ -99,6 +101,15 @@ fn unused_keys(case: &Case, model: &Model) -> Vec<String> {
             notes.push(format!(
                 "note: line {}: region[{i}] (\"{g}\"): `rho_c` has no effect: {why}",
                 line(rho_c.span())
+            ));
+        }
+        if let Some(rho) = &r.rho
+            && !model.physics.inertia
+        {
+            notes.push(format!(
+                "note: line {}: region[{i}] (\"{g}\"): `rho` has no effect: the scene does not \
+                 deform",
+                line(rho.span())
             ));
         }
         if let Some(fr) = &r.friction
@@ -445,6 +456,36 @@ fn external_loads(
         }
     }
     (f_ramp, f_full, groups)
+}
+
+/// The cell blocks of the regions with `rho`, in a scene that deforms.
+fn inertia_blocks(
+    case: &Case,
+    mesh: &Mesh,
+    physics: &Physics,
+    blocks: &[BlockInfo],
+) -> Vec<InertiaBlock> {
+    if !physics.inertia {
+        return Vec::new();
+    }
+    blocks
+        .iter()
+        .filter_map(|info| {
+            let rho = *case.file.region[info.region].rho.as_ref()?.get_ref();
+            Some(InertiaBlock {
+                block: info.block,
+                region: info.region,
+                rho,
+                layout: Layout {
+                    n: mesh.cells[info.block].kind.n_nodes(),
+                    dim: mesh.dim,
+                    has_u: true,
+                    has_theta: false,
+                    np: 0,
+                },
+            })
+        })
+        .collect()
 }
 
 /// The cell blocks of the regions with `rho_c`, in a transient scene.

@@ -1,7 +1,8 @@
 //! Before anything is solved: every connected body must be held. A body that no prescribed
 //! displacement holds in some direction (or against some rotation), or whose temperature
 //! nothing fixes, makes the tangent singular; the solver would only find out after every step
-//! cut. Said here per body, with the direction.
+//! cut. Said here per body, with the direction. A body with mass (`rho`) is held by its
+//! inertia: its tangent has ρ/Δt² on every displacement.
 
 use super::{Model, rigid};
 use crate::case::RegionKind;
@@ -27,7 +28,11 @@ pub fn unheld_body(model: &Model) -> Option<String> {
     for c in 0..n_comp {
         let nodes: Vec<usize> = (0..comp.len()).filter(|&n| comp[n] == c).collect();
         let name = || body_name(model, &comp, c, nodes.len(), n_comp);
-        if model.physics.mechanics && dofs.has(Field::U) {
+        let has_mass = || {
+            (model.inertia_blocks.iter())
+                .any(|ib| mesh.cells[ib.block].conn.iter().any(|&n| comp[n] == c))
+        };
+        if model.physics.mechanics && dofs.has(Field::U) && !has_mass() {
             let held: Vec<(usize, usize)> = nodes
                 .iter()
                 .flat_map(|&n| (0..d).map(move |i| (n, i)))

@@ -67,6 +67,19 @@ pub struct CapacityBlock {
     pub layout: Layout,
 }
 
+/// The cells of a region with a mass density, for the inertia term ρ ü, with the u-only
+/// local layout of that term.
+#[derive(Clone, Debug)]
+pub struct InertiaBlock {
+    /// Index into `mesh.cells`.
+    pub block: usize,
+    /// Index into the case's regions.
+    pub region: usize,
+    /// Mass per reference volume.
+    pub rho: f64,
+    pub layout: Layout,
+}
+
 /// The cells of a medium region with friction, for the slip term and its heat, with the
 /// region's layout without p (the friction term does not touch the regularization).
 #[derive(Clone, Debug)]
@@ -130,6 +143,9 @@ pub enum Term {
     /// Coulomb friction in a medium's slip planes, with the slip per point as history
     /// (`friction_blocks`).
     Friction(usize),
+    /// Inertia, ρ ü by backward Euler, with the displacement and velocity per point as history
+    /// (`inertia_blocks`).
+    Inertia(usize),
 }
 
 impl Term {
@@ -142,6 +158,7 @@ impl Term {
             Term::Flux(f) => (&m.facets[i], model.facet_blocks[f].layout),
             Term::Capacity(c) => (&m.cells[i], model.capacity_blocks[c].layout),
             Term::Friction(f) => (&m.cells[i], model.friction_blocks[f].layout),
+            Term::Inertia(b) => (&m.cells[i], model.inertia_blocks[b].layout),
         }
     }
 
@@ -152,12 +169,16 @@ impl Term {
             Term::Flux(f) => model.facet_blocks[f].block,
             Term::Capacity(c) => model.capacity_blocks[c].block,
             Term::Friction(f) => model.friction_blocks[f].block,
+            Term::Inertia(b) => model.inertia_blocks[b].block,
         }
     }
 
     /// Whether the term keeps values per quadrature point between steps.
     pub fn has_history(&self) -> bool {
-        matches!(self, Term::Capacity(_) | Term::Friction(_))
+        matches!(
+            self,
+            Term::Capacity(_) | Term::Friction(_) | Term::Inertia(_)
+        )
     }
 }
 
@@ -178,6 +199,8 @@ pub struct Model {
     pub capacity_blocks: Vec<CapacityBlock>,
     /// Medium cells with friction ([`Term::Friction`]).
     pub friction_blocks: Vec<FrictionBlock>,
+    /// Cells with a mass density ([`Term::Inertia`]).
+    pub inertia_blocks: Vec<InertiaBlock>,
     /// Region names and kinds, in case order.
     pub regions: Vec<(String, RegionKind)>,
     /// The load factor and the groups' own amplitudes over pseudo-time.
@@ -198,13 +221,14 @@ pub struct Model {
 
 impl Model {
     /// Every term, in the order the assembler runs them: the regions' cells, the boundary
-    /// fluxes, heat storage, friction.
+    /// fluxes, heat storage, friction, inertia.
     pub fn terms(&self) -> Vec<Term> {
         (0..self.blocks.len())
             .map(Term::Bulk)
             .chain((0..self.facet_blocks.len()).map(Term::Flux))
             .chain((0..self.capacity_blocks.len()).map(Term::Capacity))
             .chain((0..self.friction_blocks.len()).map(Term::Friction))
+            .chain((0..self.inertia_blocks.len()).map(Term::Inertia))
             .collect()
     }
 
@@ -271,9 +295,9 @@ mod tests {
         build::build(&case, mesh).unwrap()
     }
 
-    /// (bulk, flux, capacity, friction) terms of a model.
-    fn kinds(model: &Model) -> [usize; 4] {
-        let mut n = [0; 4];
+    /// (bulk, flux, capacity, friction, inertia) terms of a model.
+    fn kinds(model: &Model) -> [usize; 5] {
+        let mut n = [0; 5];
         for t in model.terms() {
             n[kinds_rank(&t) as usize] += 1;
         }
@@ -301,6 +325,7 @@ mod tests {
                 "{name}: a bulk term per cell block"
             );
             assert_eq!([n[1] > 0, n[2] > 0, n[3] > 0], has, "{name}: {n:?}");
+            assert_eq!(n[4], 0, "{name}: no mass density, no inertia");
             // in the assembler's order: bulk, flux, capacity, friction
             let ordered = terms
                 .windows(2)
@@ -314,6 +339,7 @@ mod tests {
                     Term::Flux(_) => assert!(layout.has_theta && block.kind.dim() < model.mesh.dim),
                     Term::Capacity(_) => assert!(layout.has_theta),
                     Term::Friction(_) => assert!(layout.has_u),
+                    Term::Inertia(_) => assert!(layout.has_u && !layout.has_theta),
                     Term::Bulk(_) => assert_eq!(block.kind.dim(), model.mesh.dim),
                 }
             }
@@ -327,6 +353,7 @@ mod tests {
             Term::Flux(_) => 1,
             Term::Capacity(_) => 2,
             Term::Friction(_) => 3,
+            Term::Inertia(_) => 4,
         }
     }
 }

@@ -21,6 +21,9 @@ pub struct Physics {
     pub regularization: bool,
     /// Heat is stored (ρc θ̇): the case has `[time]`, conducts, and some region has `rho_c`.
     pub transient: bool,
+    /// Some region has a mass density `rho` and the scene deforms: ρ ü, with the
+    /// displacement and velocity per point as history.
+    pub inertia: bool,
     /// Some medium region has `friction` and the scene deforms: slip history per point.
     pub friction: bool,
     /// Friction makes heat: the scene has friction, conducts, has `[time]` (slip has a rate),
@@ -75,6 +78,7 @@ pub fn decide_physics(case: &Case) -> Physics {
         // every medium element is linear so far, and p only regularizes a deforming medium
         regularization: medium && mechanics,
         transient: f.time.is_some() && conduction && f.region.iter().any(|r| r.rho_c.is_some()),
+        inertia: mechanics && f.region.iter().any(|r| r.rho.is_some()),
         friction: mechanics && with_friction().next().is_some(),
         frictional_heating: mechanics && heating,
     }

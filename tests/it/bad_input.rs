@@ -954,6 +954,12 @@ fn bad_time_keys_are_named_by_file_line_and_key() {
             "rho_c = -400.0",
             &["region[0] (\"solid\"): `rho_c` must be positive and finite, got -400"],
         ),
+        (
+            "density-zero",
+            "rho_c = 400.0",
+            "rho_c = 400.0\nrho = 0.0",
+            &["region[0] (\"solid\"): `rho` must be positive and finite, got 0"],
+        ),
         ("time-typo", "dt = 0.1", "dt = 0.1\ndtt = 0.2", &["dtt"]),
     ];
     for (name, old, new, words) in cases {
@@ -1026,6 +1032,22 @@ fn what_was_accepted_without_a_word_is_refused() {
     assert!(
         report.contains(&format!(
             "note: line {rho}: region[0] (\"solid\"): `rho_c` has no effect: without [time]"
+        )),
+        "{report}"
+    );
+    // a mass density in a scene that does not deform: solved, with a note naming its line
+    let conduction = std::fs::read_to_string(root().join("cases/slab-conduction.toml"))
+        .unwrap()
+        .replace("\"../geo/", &format!("\"{}/geo/", root().display()))
+        .replace("k = 5.0\n", "k = 5.0\nrho = 7.8\n");
+    let case = write("density-without-mechanics", &conduction);
+    let o = tmc(&["check", case.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", err(&o));
+    let report = String::from_utf8_lossy(&o.stdout).to_string() + &err(&o);
+    let rho = line_of(&conduction, "rho = 7.8");
+    assert!(
+        report.contains(&format!(
+            "note: line {rho}: region[0] (\"solid\"): `rho` has no effect: the scene does not deform"
         )),
         "{report}"
     );

@@ -50,6 +50,7 @@ fn a_scene_assembles_only_the_terms_it_calls_for() {
                 Term::Flux(_) => "flux",
                 Term::Capacity(_) => "capacity",
                 Term::Friction(_) => "friction",
+                Term::Inertia(_) => "inertia",
             })
             .collect();
         k.dedup();
@@ -80,6 +81,24 @@ fn a_scene_assembles_only_the_terms_it_calls_for() {
     let with_history = m.terms().iter().filter(|t| t.has_history()).count();
     assert_eq!(asm.history.slabs.len(), with_history);
     assert!(with_history >= 2);
+    // a mass density: the displacement and velocity per point, after every other term
+    let text = case_body("friction-heating").replacen(
+        "kind = \"solid\"\n",
+        "kind = \"solid\"\nrho = 1e-3\n",
+        1,
+    );
+    let (_, m) = model_with(&text, "block.geo", &small, "terms-inertia");
+    assert!(m.physics.inertia);
+    assert_eq!(kinds(&m), ["bulk", "capacity", "friction", "inertia"]);
+    let asm = tmc::assembly::Assembler::new(&m);
+    assert_eq!(asm.history.slabs.len(), 3);
+    // its slab: u and v per quadrature point of the solid's cells (Q1: 4 points)
+    let solid = m.inertia_blocks[0].block;
+    assert_eq!(asm.history.slabs[2].width, 4 * 2 * 2);
+    assert_eq!(
+        asm.history.slabs[2].committed.len(),
+        m.mesh.cells[solid].n_cells() * 16
+    );
 }
 
 #[test]

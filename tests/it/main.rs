@@ -15,6 +15,7 @@ mod effects;
 mod fenicsx;
 mod first_hour;
 mod friction;
+mod inertia;
 mod medium;
 mod patch_and_tangent;
 mod robustness;

@@ -357,6 +357,44 @@ fn assembled_tangent_with_friction_and_its_heat_q1_t1_h1() {
     }
 }
 
+#[test]
+fn assembled_tangent_with_inertia_q1_t1_h1() {
+    // a mass density on every region (ρ/Δt² comparable to the solids' stiffness at Δt = 1):
+    // the inertia term's residual and tangent, and its history (u, then v = (u − uₙ)/Δt per
+    // point, from rest at uₙ = 0)
+    for (dim, geo, params) in [
+        (2, "block.geo", vec![("n", 4.0), ("m", 2.0), ("l", 2.0)]),
+        (
+            2,
+            "block.geo",
+            vec![("n", 4.0), ("m", 2.0), ("l", 2.0), ("tri", 1.0)],
+        ),
+        (
+            3,
+            "block-plate-3d.geo",
+            vec![("n", 2.0), ("nb", 1.0), ("nm", 1.0), ("nq", 1.0)],
+        ),
+    ] {
+        let text = medium_case(dim)
+            .replace("mu = 10.0\n", "mu = 10.0\nrho = 30.0\n")
+            .replace("gamma = 1e-2\n", "gamma = 1e-2\nrho = 3.0\n");
+        let (_, model) = model_with(&text, geo, &params, "tangent-inertia");
+        assert!(model.physics.inertia);
+        assert_eq!(model.inertia_blocks.len(), model.blocks.len());
+        let asm = tangent_check(&model);
+        let per_point = 2 * dim;
+        let slabs = &asm.history.slabs[model.capacity_blocks.len()..];
+        assert_eq!(slabs.len(), model.inertia_blocks.len());
+        for s in slabs {
+            for h in s.trial.chunks(per_point) {
+                let (u, v) = h.split_at(dim);
+                assert_eq!(u, v, "{dim}D: v = u/Δt from rest with Δt = 1");
+            }
+            assert!(s.trial.iter().any(|&x| x != 0.0));
+        }
+    }
+}
+
 /// Move every node that carries no Dirichlet condition by up to `a` × (smallest cell size) in
 /// pseudo-random directions: quadratic cells get curved edges, which isoparametric elements
 /// must still handle exactly for a linear field.

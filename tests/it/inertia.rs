@@ -1,0 +1,102 @@
+//! Inertia (`rho`, a mass per reference volume): ρ ü by backward Euler. A free body under a
+//! constant force moves as backward Euler's recurrence says, and loses to it exactly the
+//! energy that recurrence dissipates. (In friction's drags, inertia carries the quasi-static
+//! path through the slip events: friction.rs.)
+
+use crate::common;
+
+use common::{history, solve_text};
+
+/// The slab of `geo/slab.geo` (2 × 1, Q1), held only in y along its bottom, pushed along x by
+/// a body force `b` per reference volume from t = 0, with mass density `rho`, over `steps`
+/// steps of `[time]` to t = 1.
+fn pushed_slab(b: f64, rho: f64, steps: usize) -> String {
+    format!(
+        r#"
+[[region]]
+group = "solid"
+kind = "solid"
+K = 20.0
+mu = 10.0
+rho = {rho}
+body_force = [{b}, 0.0]
+
+[[bc]]
+group = "bottom"
+uy = 0.0
+
+[[probe]]
+name = "ux_corner"
+field = "ux"
+at = [2.0, 1.0]
+
+[time]
+end = 1.0
+dt = {dt}
+lambda = [[0.0, 1.0], [1.0, 1.0]]
+"#,
+        dt = 1.0 / steps as f64
+    )
+}
+
+#[test]
+fn a_free_body_under_a_constant_force_moves_as_backward_euler_says() {
+    // Nothing holds the slab along x, so only its mass resists: every point accelerates at
+    // a = b/ρ. Backward Euler from rest (v_k = v_{k-1} + Δt a, u_k = u_{k-1} + Δt v_k) gives
+    // u_N = a Δt² N (N + 1)/2 and v_N = N Δt a, and loses ½ m (Δt a)² of kinetic energy in
+    // every step: the work of the force is the kinetic energy plus N of those. Against the
+    // motion itself, u = a t²/2, its error is a factor 1/N: first order in the step.
+    let (b, rho) = (2.0, 4.0);
+    let (a, mass) = (b / rho, rho * 2.0);
+    let mut errors = Vec::new();
+    for steps in [10, 20] {
+        let (s, out) = solve_text(
+            &format!("inertia-free-{steps}"),
+            "slab.geo",
+            "n = 4, m = 2",
+            &pushed_slab(b, rho, steps),
+        );
+        assert!(s.converged, "{}", s.message);
+        assert_eq!(s.load_steps, steps);
+        let (n, dt) = (steps as f64, 1.0 / steps as f64);
+        let u = s.probes["ux_corner"];
+        let u_euler = a * dt * dt * n * (n + 1.0) / 2.0;
+        assert!((u / u_euler - 1.0).abs() < 1e-9, "u {u} against {u_euler}");
+        let v = n * dt * a;
+        let kinetic = s.kinetic_energy.expect("a scene with rho reports it");
+        assert!(
+            (kinetic / (0.5 * mass * v * v) - 1.0).abs() < 1e-9,
+            "{kinetic}"
+        );
+        let lost = n * 0.5 * mass * (dt * a).powi(2);
+        // `external_work` takes the force of each accepted state by the trapezoidal rule; the
+        // state at t = 0, at rest, carries none (its force goes into accelerating it): it
+        // misses half the first step's work, ½ f u₁
+        let (force, u1) = (b * 2.0, a * dt * dt);
+        let work = s.external_work + 0.5 * force * u1;
+        assert!(
+            (work - force * u).abs() < 1e-9 * work,
+            "{work} against f u = {}",
+            force * u
+        );
+        assert!(
+            (work - kinetic - lost).abs() < 1e-9 * work,
+            "{work} {kinetic} {lost}"
+        );
+        // no deformation: a uniform force on a free body only moves it
+        assert!(s.energy.abs() < 1e-12 * work, "stored {}", s.energy);
+        // the history's kinetic energy column follows v_k = k Δt a
+        let (cols, rows) = history(&out);
+        let k = cols.iter().position(|c| c == "kinetic_energy").unwrap();
+        for (step, row) in rows.iter().enumerate() {
+            let v = step as f64 * dt * a;
+            assert!(
+                (row[k] - 0.5 * mass * v * v).abs() < 1e-9 * kinetic,
+                "step {step}"
+            );
+        }
+        errors.push(u / (a / 2.0) - 1.0);
+    }
+    println!("relative error of u against a t²/2: {errors:?}");
+    assert!((errors[0] - 0.1).abs() < 1e-9 && (errors[1] - 0.05).abs() < 1e-9);
+}
