@@ -1297,3 +1297,30 @@ fn a_drag_with_inertia_continues_exactly_after_an_interruption() {
         assert_eq!(a[key], b[key], "{key}");
     }
 }
+
+#[test]
+fn with_inertia_two_full_loops_of_the_issues_block_dissipate_the_loops_work() {
+    // issue 36's block (four cells across, pressed 0.35) at μ = 0.3 stalls in its first drag
+    // at 0.167; with a mass density of 1e-4 it is dragged to +0.5, −0.5, +0.5, −0.5 and back
+    // to 0 (twice the medium's thickness each way), and the work of the tangential force over
+    // the loops is the work dissipated, plus what the block keeps and its kinetic energy, to
+    // 1 % (measured 0.03 %)
+    let path = [0.0, 0.0, 1.0, -1.0, 1.0, -1.0, 0.0];
+    let case = with_mass(
+        &drag_case(2, Some(0.3), 0.5, &format!("{path:?}"), 0.025),
+        1e-4,
+    )
+    .replace("uy = -0.3", "uy = -0.35");
+    let (s, out) = solve_text("inertia-two-loops", "block.geo", COARSE, &case);
+    assert!(s.converged, "{}", s.message);
+    let (work, dissipated, stored) = loop_balance(&out, 0.5, &path, &s);
+    let kinetic = s.kinetic_energy.unwrap();
+    assert!(
+        dissipated > 0.9 * work && kinetic < 1e-3 * work,
+        "{kinetic}"
+    );
+    assert!(
+        (work - dissipated - stored - kinetic).abs() < 0.01 * work,
+        "∮ F_t du {work} vs dissipated {dissipated} + stored {stored} + kinetic {kinetic}"
+    );
+}
