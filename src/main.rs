@@ -76,6 +76,11 @@ enum Command {
             value_parser = IdleThreads::parse
         )]
         idle_threads: IdleThreads,
+        /// The memory (MB) the linear algebra may take: with `[solver] engine = "auto"`, a
+        /// run whose faer factors would need more solves on PETSc's multigrid (default: what
+        /// the machine has available).
+        #[arg(long, value_name = "MB", env = "TMC_MEMORY_MB", value_parser = parse_memory)]
+        memory: Option<f64>,
     },
     /// Check a case as `solve` would up to its first assembly (mesh, groups, physics, strategy,
     /// unknowns, memory) and report; writes nothing where results go.
@@ -85,6 +90,9 @@ enum Command {
         /// Set a case key, as for `solve`.
         #[arg(long = "set", value_name = "KEY.PATH=VALUE", value_parser = parse_set)]
         set: Vec<(String, String)>,
+        /// The memory (MB) the linear algebra may take, as for `solve`.
+        #[arg(long, value_name = "MB", env = "TMC_MEMORY_MB", value_parser = parse_memory)]
+        memory: Option<f64>,
     },
     /// Solve a scene over a list of variants: study.csv, study.md, error-vs-time and history
     /// plots.
@@ -127,6 +135,14 @@ fn parse_param(s: &str) -> Result<(String, f64), String> {
         return Err(format!("{k} = {v} is not a finite number"));
     }
     Ok((k.trim().to_string(), v))
+}
+
+/// A memory budget in MB: a positive number.
+fn parse_memory(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v > 0.0 && v.is_finite() => Ok(v),
+        _ => Err(format!("expected a positive number of MB, got {s:?}")),
+    }
 }
 
 fn parse_set(s: &str) -> Result<(String, String), String> {
@@ -305,6 +321,7 @@ fn command(cli: Cli) -> ExitCode {
             set,
             restart,
             idle_threads,
+            memory,
         } => {
             tmc::driver::stop_on_signals();
             let opts = SolveOptions {
@@ -314,10 +331,11 @@ fn command(cli: Cli) -> ExitCode {
                 idle_threads,
                 sets: set,
                 restart,
+                memory_mb: memory,
             };
             solve_command(&case, &opts)
         }
-        Command::Check { case, set } => check_command(&case, set),
+        Command::Check { case, set, memory } => check_command(&case, set, memory),
     }
 }
 
@@ -347,9 +365,14 @@ fn print_mesh(mesh: &tmc::mesh::Mesh) {
 }
 
 /// `tmc check`: the report of everything before the first assembly.
-fn check_command(case: &std::path::Path, sets: Vec<(String, String)>) -> ExitCode {
+fn check_command(
+    case: &std::path::Path,
+    sets: Vec<(String, String)>,
+    memory_mb: Option<f64>,
+) -> ExitCode {
     let opts = SolveOptions {
         sets,
+        memory_mb,
         quiet: true,
         ..Default::default()
     };
@@ -372,6 +395,9 @@ fn check_command(case: &std::path::Path, sets: Vec<(String, String)>) -> ExitCod
                 r.unknowns.iter().map(|(f, n)| format!("{n} {f}")).collect();
             say!("unknowns: {} ({} free)", unknowns.join(", "), r.free);
             say!("linear solver: {}", r.linear.join("; "));
+            if let Some(why) = &r.engine_note {
+                say!("{why}");
+            }
             match r.factor_entries {
                 Some(n) => say!(
                     "tangent: {} entries; factor: {n} entries; about {:.0} MB for the linear algebra",

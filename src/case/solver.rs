@@ -14,8 +14,9 @@ pub struct Solver {
     pub linear: LinearChoice,
     /// "auto" (one-way coupled scenes solve mechanics, then heat, per step) or "monolithic".
     pub coupling: CouplingChoice,
-    /// "faer" (one process, the default) or "petsc" (the distributed engine; what `mpirun`
-    /// runs on whatever this says).
+    /// "auto" (the default: faer, unless its factors would not fit in the memory the run
+    /// has, then PETSc's multigrid where it is built), "faer" (one process) or "petsc" (the
+    /// distributed engine; what `mpirun` runs on whatever this says).
     pub engine: EngineChoice,
     /// `[solver.petsc]`: the PETSc engine's options.
     pub petsc: PetscOptions,
@@ -25,6 +26,7 @@ pub struct Solver {
 #[serde(rename_all = "lowercase")]
 pub enum EngineChoice {
     #[default]
+    Auto,
     Faer,
     Petsc,
 }

@@ -9,6 +9,7 @@ use crate::case::Case;
 use crate::dofs::Field;
 use crate::mesh::Mesh;
 use crate::output::werr;
+use crate::solver::engine::linear_algebra_mb;
 use std::path::Path;
 
 /// What `tmc check` found.
@@ -26,6 +27,8 @@ pub struct CheckReport {
     pub linear: Vec<String>,
     /// Entries of the direct factors (known before factorising for LDLᵀ), if known.
     pub factor_entries: Option<usize>,
+    /// Why the engine is not the usual one (`engine = "auto"` over the memory), if so.
+    pub engine_note: Option<String>,
     /// The probes' names.
     pub probes: Vec<String>,
     /// Regions with thermal expansion, with the temperature their strain is counted from.
@@ -39,9 +42,7 @@ impl CheckReport {
     /// in MB: what the run adds to the mesh and the state (the tangent alone where the factor
     /// is PETSc's).
     pub fn estimated_mb(&self) -> f64 {
-        let tangent = self.tangent_entries as f64 * 16.0;
-        let factor = self.factor_entries.unwrap_or(0) as f64 * 16.0;
-        (tangent + factor) / 1e6
+        linear_algebra_mb(self.tangent_entries, self.factor_entries)
     }
 }
 
@@ -100,6 +101,7 @@ pub fn check(case_path: &Path, opts: &SolveOptions) -> Result<CheckReport, Solve
         free: model.cons.n_eq,
         tangent_entries: plan.asm.pattern.row_idx.len(),
         factor_entries,
+        engine_note: plan.note,
         linear: (plan.solvers.iter())
             .map(|(part, s)| format!("{}: {}", part.name(), s.method()))
             .collect(),

@@ -116,6 +116,9 @@ pub struct SolveOptions {
     pub sets: Vec<(String, String)>,
     /// Continue the run in the output folder from its last converged step.
     pub restart: bool,
+    /// The memory (MB) the run's linear algebra may take, for `[solver] engine = "auto"`
+    /// (`None`: what the machine has available).
+    pub memory_mb: Option<f64>,
 }
 
 /// A mesh written for this run under a temporary name: moved to its final name once the run

@@ -66,6 +66,8 @@ pub(super) struct Plan {
     pub newton: Newton,
     /// One solver per part: the whole system, or mechanics and heat of a one-way scene.
     pub solvers: Vec<(Part, LinearSolver)>,
+    /// Why the engine is not the usual one (`engine = "auto"`), if so.
+    pub note: Option<String>,
 }
 
 impl Plan {
@@ -95,21 +97,27 @@ impl Plan {
             whole: kind,
             idle: opts.idle_threads,
             span: case.file.mesh.span(),
+            memory_mb: opts.memory_mb,
         };
-        let Planned { asm, solvers, idle } =
-            engine::plan(model, &request, &systems).map_err(|e| match e {
-                PlanError::Case { span, message } => {
-                    SolveError::from(case.error::<()>(span, message).unwrap_err())
-                }
-                PlanError::Setup(message) => SolveError::Setup(message),
-                PlanError::Linear(e) => SolveError::Linear(e),
-            })?;
+        let Planned {
+            asm,
+            solvers,
+            idle,
+            note,
+        } = engine::plan(model, &request, &systems).map_err(|e| match e {
+            PlanError::Case { span, message } => {
+                SolveError::from(case.error::<()>(span, message).unwrap_err())
+            }
+            PlanError::Setup(message) => SolveError::Setup(message),
+            PlanError::Linear(e) => SolveError::Linear(e),
+        })?;
         newton.idle = idle;
         Ok(Plan {
             strategy,
             asm,
             newton,
             solvers,
+            note,
         })
     }
 
@@ -145,9 +153,13 @@ impl<'a> Run<'a> {
             asm,
             newton,
             solvers,
+            note,
         } = Plan::new(case, model, opts)?;
         if !opts.quiet {
             crate::note!("{}", describe(&model.physics, strategy));
+            if let Some(note) = &note {
+                crate::note!("{note}");
+            }
         }
         let ctl = controller(case, model);
         let layout = HistoryLayout::new(model, probes, case.file.time.is_some());

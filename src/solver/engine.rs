@@ -10,7 +10,7 @@ use super::idle::IdleThreads;
 use super::linear::{LinearError, LinearKind, LinearSolver};
 use super::newton::Part;
 use crate::assembly::Assembler;
-use crate::case::{EngineChoice, Solver};
+use crate::case::{EngineChoice, PetscMethod, Solver};
 use crate::dofs::{Pattern, Structure, equation_structure};
 use crate::model::Model;
 use crate::parallel::Ranks;
@@ -115,6 +115,9 @@ pub struct Request<'a> {
     pub idle: IdleThreads,
     /// Where an error about the engine as a whole points in the case (a byte range).
     pub span: Range<usize>,
+    /// The memory (MB) the linear algebra may take (`None`: what the machine has available),
+    /// for `engine = "auto"`.
+    pub memory_mb: Option<f64>,
 }
 
 /// The assembler and the solvers a run uses, their symbolic analyses done, and what Newton's
@@ -124,6 +127,36 @@ pub struct Planned {
     /// One solver per system, in the order asked for.
     pub solvers: Vec<(Part, LinearSolver)>,
     pub idle: IdleThreads,
+    /// Why `engine = "auto"` chose what it did, where it did not choose faer as usual.
+    pub note: Option<String>,
+}
+
+/// Memory of the linear algebra in MB: the tangent's entries and the factors' (as the symbolic
+/// analysis laid them out), each a double-precision value and an index. An upper bound where
+/// a factor is held in single precision.
+pub fn linear_algebra_mb(tangent_entries: usize, factor_entries: Option<usize>) -> f64 {
+    (tangent_entries + factor_entries.unwrap_or(0)) as f64 * 16.0 / 1e6
+}
+
+/// The memory this machine has available now (`MemAvailable` of /proc/meminfo), MB.
+fn available_mb() -> Option<f64> {
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024.0 / 1e6)
+}
+
+/// With `engine = "auto"`: the memory faer's `solvers` would take on `pattern`, and the
+/// budget, where it does not fit (`None` where it does, or where nothing is known).
+fn over_budget(
+    request: &Request,
+    pattern: &Pattern,
+    solvers: &[(Part, LinearSolver)],
+) -> Option<(f64, f64)> {
+    let factors = solvers.iter().map(|(_, s)| s.factor_entries()).sum();
+    let need = linear_algebra_mb(pattern.nnz(), factors);
+    let budget = request.memory_mb.or_else(available_mb)?;
+    (need > budget).then_some((need, budget))
 }
 
 /// Why a run's linear algebra could not be set up.
@@ -140,11 +173,13 @@ pub enum PlanError {
 }
 
 /// Set up the engine `request` asks for (PETSc when the case says so or the run has several
-/// ranks, faer otherwise): its assembler (on several ranks, each rank's part of the mesh) and
-/// one solver for each of `systems`.
+/// ranks; with `engine = "auto"` and `linear = "auto"` also where faer's factors would not fit
+/// in the memory the run has, then with its multigrid; faer otherwise): its assembler (on
+/// several ranks, each rank's part of the mesh) and one solver for each of `systems`.
 pub fn plan(model: &Model, request: &Request, systems: &[System]) -> Result<Planned, PlanError> {
+    let method = request.solver.petsc.method;
     if request.solver.engine == EngineChoice::Petsc || !Ranks::world().is_serial() {
-        return on_ranks(model, request, systems);
+        return on_ranks(model, request, systems, method);
     }
     let asm = Assembler::new(model);
     let structure = equation_structure(&model.dofs, &model.cons);
@@ -152,17 +187,47 @@ pub fn plan(model: &Model, request: &Request, systems: &[System]) -> Result<Plan
         whole: request.whole,
     }
     .solvers(systems, &asm.pattern, &structure)?;
+    let auto = request.solver.engine == EngineChoice::Auto
+        && request.solver.linear == crate::case::LinearChoice::Auto;
+    let mut note = None;
+    if auto && let Some((need, budget)) = over_budget(request, &asm.pattern, &solvers) {
+        let why = format!(
+            "faer's factors would take about {need:.0} MB, more than the {budget:.0} MB the run \
+             has"
+        );
+        if cfg!(feature = "petsc") {
+            drop((solvers, asm));
+            let mut planned = on_ranks(model, request, systems, PetscMethod::Multigrid)?;
+            planned.note = Some(format!(
+                "engine \"auto\": PETSc's multigrid, since {why} (--memory or TMC_MEMORY_MB \
+                 sets the budget)"
+            ));
+            return Ok(planned);
+        }
+        note = Some(format!(
+            "warning: engine \"auto\": {why}, and this tmc has no PETSc engine to solve without \
+             them ({NOT_BUILT})",
+            NOT_BUILT = crate::parallel::NOT_BUILT
+        ));
+    }
     Ok(Planned {
         asm,
         solvers,
         idle: request.idle,
+        note,
     })
 }
 
 /// The PETSc engine: the mesh cut into one part per rank, each rank's assembler running its
-/// part, PETSc systems for the strategy's parts (symmetric ones marked so, for Cholesky or CG).
+/// part, PETSc systems for the strategy's parts (symmetric ones marked so, for Cholesky or CG),
+/// with tmc's defaults of `method` under the case's options.
 #[cfg(feature = "petsc")]
-fn on_ranks(model: &Model, request: &Request, systems: &[System]) -> Result<Planned, PlanError> {
+fn on_ranks(
+    model: &Model,
+    request: &Request,
+    systems: &[System],
+    method: PetscMethod,
+) -> Result<Planned, PlanError> {
     use super::petsc::{Hints, Ownership};
     use crate::case::LinearChoice;
     use crate::mesh::partition;
@@ -205,7 +270,7 @@ fn on_ranks(model: &Model, request: &Request, systems: &[System]) -> Result<Plan
             rigid: &rigid,
             medium: &medium,
         },
-        method: solver.petsc.method,
+        method,
     };
     let solvers = on_ranks.solvers(systems, &asm.pattern, &structure)?;
     Ok(Planned {
@@ -213,12 +278,18 @@ fn on_ranks(model: &Model, request: &Request, systems: &[System]) -> Result<Plan
         solvers,
         // PETSc's calls stay on this thread: no idle-thread runner around the solves
         idle: IdleThreads::Sleep,
+        note: None,
     })
 }
 
 /// Without the PETSc engine built in: what to do to have it.
 #[cfg(not(feature = "petsc"))]
-fn on_ranks(_model: &Model, request: &Request, _systems: &[System]) -> Result<Planned, PlanError> {
+fn on_ranks(
+    _model: &Model,
+    request: &Request,
+    _systems: &[System],
+    _method: PetscMethod,
+) -> Result<Planned, PlanError> {
     use crate::parallel::{NOT_BUILT, launched_size};
     if !Ranks::world().is_serial() || launched_size().unwrap_or(1) > 1 {
         return Err(PlanError::Setup(NOT_BUILT.into()));

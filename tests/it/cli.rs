@@ -947,4 +947,15 @@ fn without_petsc_the_engine_and_mpirun_say_how_to_build_it() {
         "{e}"
     );
     assert!(!e.contains("MPI_ERR"), "{e}");
+    // faer's factors over the memory budget, and no PETSc to take over: faer, with a warning
+    let o = tmc(&["check", case.to_str().unwrap(), "--memory", "1"]);
+    let report = String::from_utf8_lossy(&o.stdout).to_string() + &stderr(&o);
+    assert!(o.status.success(), "{report}");
+    assert!(
+        report.contains("warning: engine \"auto\": faer's factors would take about")
+            && report.contains("more than the 1 MB the run has")
+            && report.contains("--features petsc")
+            && report.contains("linear solver: mechanics: faer"),
+        "{report}"
+    );
 }

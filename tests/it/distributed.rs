@@ -6,7 +6,7 @@
 
 use crate::common;
 
-use common::{point_array, root, scratch, solve_cli, stderr, summary};
+use common::{point_array, root, scratch, solve_cli, stderr, summary, tmc};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -184,6 +184,55 @@ fn multigrid_gives_the_direct_answers_on_the_closing_block() {
         let gap = s["probes"]["gap"].as_f64().unwrap();
         assert!((gap - 2.9420e-4).abs() < 1e-8, "gap {gap}");
     }
+}
+
+#[test]
+fn auto_takes_petsc_s_multigrid_where_faer_s_factors_do_not_fit() {
+    // the block's faer factors take a few MB: with a budget of 1 MB, `engine = "auto"` (the
+    // default) solves on PETSc's multigrid, says why, and gets the direct solvers' gap; with
+    // the machine's memory, or with `engine = "faer"` asked for, faer
+    let case = root().join("cases/block.toml");
+    let report = |extra: &[&str]| {
+        let mut args = vec!["check", case.to_str().unwrap()];
+        args.extend_from_slice(extra);
+        let o = tmc(&args);
+        let r = String::from_utf8_lossy(&o.stdout).to_string() + &stderr(&o);
+        assert!(o.status.success(), "{r}");
+        r
+    };
+    let r = report(&["--memory", "1"]);
+    assert!(
+        r.contains("engine \"auto\": PETSc's multigrid, since faer's factors would take about")
+            && r.contains("more than the 1 MB the run has")
+            && r.contains("linear solver: mechanics: petsc"),
+        "{r}"
+    );
+    for faer in [
+        report(&[]),
+        report(&["--memory", "1", "--set", "solver.engine=\"faer\""]),
+    ] {
+        assert!(
+            faer.contains("linear solver: mechanics: faer") && !faer.contains("engine \"auto\""),
+            "{faer}"
+        );
+    }
+    let out = scratch("auto-memory");
+    let o = common::tmc_with(
+        &[
+            "solve",
+            case.to_str().unwrap(),
+            "-q",
+            "-o",
+            out.to_str().unwrap(),
+        ],
+        &[("TMC_MEMORY_MB", "1")],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = summary(&out);
+    assert_eq!(s["engine"], "petsc");
+    assert_eq!(s["petsc_solver"], "gmres/fieldsplit");
+    let gap = s["probes"]["gap"].as_f64().unwrap();
+    assert!((gap - 2.9420e-4).abs() < 1e-8, "gap {gap}");
 }
 
 #[test]
