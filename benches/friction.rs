@@ -11,7 +11,11 @@
 //! solid's leading bottom corner has slid by then, in cells of the layer (a drag that stops
 //! before that corner has slid a cell stops before any change of the medium's connectivity
 //! that follows the slide could act), each friction drag without and with a slip viscosity
-//! η_s = 1e-3. `TMC_BENCH_PART=cost` or `reach` runs one table.
+//! η_s = 1e-3, and with a mass density ρ = 1e-4 on every region (inertia).
+//!
+//! Third table: issue 36's drags with inertia, on n = 16 and 32, Q1 and T1, at μ = 0.1 to 1:
+//! how far each gets and its force ratio along the way. `TMC_BENCH_PART=cost`, `reach` or
+//! `slide` runs one table.
 
 mod common;
 use common::{case_text, root, solve};
@@ -25,11 +29,14 @@ fn median(mut v: Vec<f64>) -> f64 {
 
 fn main() {
     let part = std::env::var("TMC_BENCH_PART");
-    if part.as_deref() != Ok("reach") {
+    if part.is_err() || part.as_deref() == Ok("cost") {
         cost();
     }
-    if part.as_deref() != Ok("cost") {
+    if part.is_err() || part.as_deref() == Ok("reach") {
         reach();
+    }
+    if part.is_err() || part.as_deref() == Ok("slide") {
+        slide();
     }
 }
 
@@ -42,40 +49,72 @@ fn leading_corner(geo: &str) -> f64 {
     if geo == "pad.geo" { 3.0 } else { 2.0 }
 }
 
-/// The drag of the second table: press the top 0.3 down (pseudo-time 0 to 1), then drag it
-/// 1.0 along x (1 to 2), Δt at most 0.025; friction `mu` (none for 0) with slip viscosity
-/// `eta`. The probe `corner_x` is the x displacement of the solid's leading bottom corner.
-fn drag_text(geo: &str, l: usize, mu: f64, eta: f64) -> String {
-    let friction = if mu > 0.0 {
-        format!("friction = {{ mu = {mu}, normal = [0, 1], viscosity = {eta:e} }}")
-    } else {
-        String::new()
-    };
-    format!(
-        r#"mesh = "{}"
+/// A drag: the top of `geo` (n cells along, `l` across the medium, triangles if `tri`)
+/// pressed `press` down (pseudo-time 0 to 1), then dragged `amount` along x (1 to 2), Δt at
+/// most 0.025; friction `mu` (none for 0) with slip viscosity `eta`, every region with mass
+/// density `rho` (none for 0). The probe `corner_x` is the x displacement of the solid's
+/// leading bottom corner.
+#[derive(Clone, Copy)]
+struct Drag {
+    geo: &'static str,
+    n: usize,
+    l: usize,
+    tri: bool,
+    mu: f64,
+    eta: f64,
+    rho: f64,
+    press: f64,
+    amount: f64,
+}
+
+impl Drag {
+    fn text(&self) -> String {
+        let friction = if self.mu > 0.0 {
+            format!(
+                "friction = {{ mu = {}, normal = [0, 1], viscosity = {:e} }}",
+                self.mu, self.eta
+            )
+        } else {
+            String::new()
+        };
+        let rho = if self.rho > 0.0 {
+            format!("rho = {:e}", self.rho)
+        } else {
+            String::new()
+        };
+        // the pad's geometry has no `tri` switch: its cells are recombined by a line of its own
+        let (geo, tri) = match (self.tri, self.geo) {
+            (true, "pad.geo") => (self.pad_triangles(), String::new()),
+            (true, _) => (root().join("geo").join(self.geo), ", tri = 1".into()),
+            (false, _) => (root().join("geo").join(self.geo), String::new()),
+        };
+        format!(
+            r#"mesh = "{}"
 [mesh_options]
-params = {{ n = {CELLS}, m = {m}, l = {l} }}
+params = {{ n = {n}, m = {m}, l = {l}{tri} }}
 [[region]]
 group = "solid"
 kind = "solid"
 K = 20.0
 mu = 10.0
+{rho}
 [[region]]
 group = "medium"
 kind = "medium"
 gamma = 1e-4
 {friction}
+{rho}
 [[bc]]
 group = "bottom"
 ux = 0.0
 uy = 0.0
 [[bc]]
 group = "top"
-uy = -0.3
+uy = -{press}
 path = [0.0, 1.0, 1.0]
 [[bc]]
 group = "top"
-ux = 1.0
+ux = {amount}
 path = [0.0, 0.0, 1.0]
 [[probe]]
 name = "corner_x"
@@ -86,56 +125,182 @@ initial = 0.025
 max = 0.025
 path = [0.0, 1.0, 1.0]
 "#,
-        root().join("geo").join(geo).display(),
-        m = CELLS / 2,
-        corner = leading_corner(geo),
-    )
+            geo.display(),
+            n = self.n,
+            m = self.n / 2,
+            l = self.l,
+            press = self.press,
+            amount = self.amount,
+            corner = leading_corner(self.geo),
+        )
+    }
+
+    /// `geo/pad.geo` meshed in triangles (its `Recombine` line left out), written beside the
+    /// bench's runs.
+    fn pad_triangles(&self) -> std::path::PathBuf {
+        let text = std::fs::read_to_string(root().join("geo/pad.geo")).unwrap();
+        let dir = root().join("target/bench-friction");
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("pad-t1.geo");
+        std::fs::write(&path, text.replace("Recombine Surface{1, 2, 3, 4};", "")).unwrap();
+        path
+    }
+
+    /// Solve it in `target/bench-friction/TAG`: whether it completed, the drag reached, the
+    /// force ratio F_t/F_n of the top at each accepted step of the drag (drag, ratio), and the
+    /// summary.
+    fn run(&self, tag: &str) -> (bool, f64, Vec<(f64, f64)>, serde_json::Value) {
+        let dir = root().join("target/bench-friction").join(tag);
+        let (ok, s) = solve(&dir, &self.text());
+        let text = std::fs::read_to_string(dir.join("out/history.csv")).unwrap();
+        let mut lines = text.lines();
+        let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let col = |name: &str| head.iter().position(|c| *c == name).unwrap();
+        let (t, fx, fy) = (col("time"), col("R_top_x"), col("R_top_y"));
+        let ratios: Vec<(f64, f64)> = lines
+            .map(|row| {
+                let v: Vec<f64> = row.split(',').map(|x| x.parse().unwrap()).collect();
+                (self.amount * (v[t] - 1.0), -v[fx] / v[fy])
+            })
+            .filter(|(d, _)| *d > 0.0)
+            .collect();
+        let reached = ratios.last().map_or(0.0, |r| r.0);
+        (ok, reached, ratios, s)
+    }
+
+    /// How far the solid's leading bottom corner slid, in cells of the layer.
+    fn corner_cells(&self, s: &serde_json::Value) -> f64 {
+        let cell = 2.0 / self.n as f64;
+        s["probes"]["corner_x"].as_f64().unwrap_or(f64::NAN) / cell
+    }
 }
 
 /// How far each drag gets: the drag reached (1.0 if it completes), F_t / F_n of the top,
-/// largest and last, over the drag, and the solid's leading corner's slide then in cells.
+/// largest and last, over the drag, and the solid's leading corner's slide then in cells;
+/// each friction drag quasi-static, with a slip viscosity and with inertia.
 fn reach() {
     println!();
     println!(
-        "| scene | cells across the medium | μ | η_s | completes | drag reached | leading corner slid (cells) | load steps | Newton its | largest F_t/F_n | last F_t/F_n | wall s |"
+        "| scene | cells across the medium | μ | η_s | ρ | completes | drag reached | leading corner slid (cells) | load steps | Newton its | largest F_t/F_n | last F_t/F_n | wall s |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     let runs = [("block.geo", [1, 2, 4, 8].as_slice()), ("pad.geo", &[1, 4])];
     for (geo, layers) in runs {
         for &l in layers {
             let drags = [0.0, 0.1, 0.3, 0.5, 1.0].into_iter().flat_map(|mu| {
-                let etas: &[f64] = if mu > 0.0 { &[0.0, 1e-3] } else { &[0.0] };
-                etas.iter().map(move |&eta| (mu, eta))
+                let extra: &[(f64, f64)] = if mu > 0.0 {
+                    &[(0.0, 0.0), (1e-3, 0.0), (0.0, 1e-4)]
+                } else {
+                    &[(0.0, 0.0)]
+                };
+                extra.iter().map(move |&(eta, rho)| (mu, eta, rho))
             });
-            for (mu, eta) in drags {
-                let dir = root().join(format!("target/bench-friction/reach-{geo}-{l}-{mu}-{eta}"));
-                let (ok, s) = solve(&dir, &drag_text(geo, l, mu, eta));
-                let text = std::fs::read_to_string(dir.join("out/history.csv")).unwrap();
-                let mut lines = text.lines();
-                let head: Vec<&str> = lines.next().unwrap().split(',').collect();
-                let col = |name: &str| head.iter().position(|c| *c == name).unwrap();
-                let (t, fx, fy) = (col("time"), col("R_top_x"), col("R_top_y"));
-                let ratios: Vec<(f64, f64)> = lines
-                    .map(|row| {
-                        let v: Vec<f64> = row.split(',').map(|x| x.parse().unwrap()).collect();
-                        (v[t] - 1.0, -v[fx] / v[fy])
-                    })
-                    .filter(|(d, _)| *d > 0.0)
-                    .collect();
+            for (mu, eta, rho) in drags {
+                let d = Drag {
+                    geo,
+                    n: CELLS,
+                    l,
+                    tri: false,
+                    mu,
+                    eta,
+                    rho,
+                    press: 0.3,
+                    amount: 1.0,
+                };
+                let (ok, reached, ratios, s) = d.run(&format!("reach-{geo}-{l}-{mu}-{eta}-{rho}"));
                 let largest = ratios.iter().map(|r| r.1).fold(f64::NAN, f64::max);
-                let (reached, last) = ratios.last().copied().unwrap_or((0.0, f64::NAN));
-                let cell = 2.0 / CELLS as f64;
-                let slid = s["probes"]["corner_x"].as_f64().unwrap_or(f64::NAN) / cell;
+                let last = ratios.last().map_or(f64::NAN, |r| r.1);
                 println!(
-                    "| {} | {l} | {mu} | {eta} | {} | {reached:.3} | {slid:.2} | {} | {} | {largest:.4} | {last:.4} | {:.1} |",
+                    "| {} | {l} | {mu} | {eta} | {rho} | {} | {reached:.3} | {:.2} | {} | {} | {largest:.4} | {last:.4} | {:.1} |",
                     geo.trim_end_matches(".geo"),
                     if ok { "yes" } else { "no" },
+                    d.corner_cells(&s),
                     s["load_steps"],
                     s["newton_iterations"],
                     s["wall_seconds"].as_f64().unwrap_or(f64::NAN),
                 );
             }
         }
+    }
+}
+
+/// Issue 36's drags with inertia (every region ρ = 1e-4): the block (`l = n/4` cells across
+/// the medium, pressed 0.35, dragged 0.5, twice the medium's thickness) and the pad (pressed
+/// 0.3, dragged 2.0, its own width), Q1 and T1, on n = 16 and 32 (and the block on Q1 n = 64
+/// with `TMC_BENCH_FINE=1`, about an hour): whether each completes, and F_t/F_n at a quarter,
+/// a half and the whole of the drag.
+fn slide() {
+    println!();
+    println!(
+        "| scene | cells | l | μ | completes | drag reached | load steps | Newton its | largest F_t/F_n | at ¼ / ½ / all of the drag | leading corner slid (cells) | wall s |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
+    let mut drags = Vec::new();
+    let block = |n, tri, mu| Drag {
+        geo: "block.geo",
+        n,
+        l: n / 4,
+        tri,
+        mu,
+        eta: 0.0,
+        rho: 1e-4,
+        press: 0.35,
+        amount: 0.5,
+    };
+    for n in [16, 32] {
+        for tri in [false, true] {
+            for mu in [0.1, 0.3, 0.5, 1.0] {
+                drags.push(block(n, tri, mu));
+            }
+        }
+    }
+    for n in [16, 32] {
+        for l in [1, 4] {
+            for tri in [false, true] {
+                for mu in [0.3, 0.5, 1.0] {
+                    drags.push(Drag {
+                        geo: "pad.geo",
+                        l,
+                        press: 0.3,
+                        amount: 2.0,
+                        ..block(n, tri, mu)
+                    });
+                }
+            }
+        }
+    }
+    if std::env::var("TMC_BENCH_FINE").is_ok() {
+        drags.extend([0.1, 0.3, 0.5, 1.0].map(|mu| block(64, false, mu)));
+    }
+    for d in drags {
+        let cells = format!("{} n = {}", if d.tri { "T1" } else { "Q1" }, d.n);
+        let (ok, reached, r, s) = d.run(&format!(
+            "slide-{}-{}-{}-{}-{}",
+            d.geo, d.n, d.l, d.tri, d.mu
+        ));
+        let at = |f: f64| {
+            let x = f * d.amount;
+            r.iter()
+                .rev()
+                .find(|p| p.0 <= x + 1e-9)
+                .filter(|_| reached >= x - 1e-9)
+                .map_or("–".to_string(), |p| format!("{:.3}", p.1))
+        };
+        let largest = r.iter().map(|r| r.1).fold(f64::NAN, f64::max);
+        println!(
+            "| {} | {cells} | {} | {} | {} | {reached:.3} | {} | {} | {largest:.4} | {} / {} / {} | {:.2} | {:.1} |",
+            d.geo.trim_end_matches(".geo"),
+            d.l,
+            d.mu,
+            if ok { "yes" } else { "no" },
+            s["load_steps"],
+            s["newton_iterations"],
+            at(0.25),
+            at(0.5),
+            at(1.0),
+            d.corner_cells(&s),
+            s["wall_seconds"].as_f64().unwrap_or(f64::NAN),
+        );
     }
 }
 
