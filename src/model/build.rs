@@ -79,7 +79,31 @@ pub fn build(case: &Case, mesh: Mesh) -> Result<Model, CaseError> {
     }
     model.warnings = super::held::held_by_medium_alone(&model);
     model.warnings.extend(unused_keys(case, &model));
+    model.warnings.extend(massless_friction(case, &model));
     Ok(model)
+}
+
+/// A medium region with friction but no `rho` in a scene with inertia: the folds that turn a
+/// drag's path are inside the layer, so the solids' mass alone does not carry drags through
+/// (measured: THEORY.md, "Inertia through slip events"). A note naming the region.
+fn massless_friction(case: &Case, model: &Model) -> Vec<String> {
+    if !model.physics.inertia || !model.physics.friction {
+        return Vec::new();
+    }
+    let line = |span| case.line_of(span);
+    (case.file.region.iter().enumerate())
+        .filter(|(_, r)| r.rho.is_none())
+        .filter_map(|(i, r)| {
+            let fr = r.friction.as_ref()?;
+            Some(format!(
+                "note: line {}: region[{i}] (\"{}\") has friction but no `rho`: inertia carries \
+                 drags through their slip events only where the medium has mass too (give it \
+                 the solids' `rho`; THEORY.md, \"Inertia through slip events\")",
+                line(fr.span()),
+                r.group.get_ref()
+            ))
+        })
+        .collect()
 }
 
 /// Keys the case gives that this scene does not use, each as a note with its line: the

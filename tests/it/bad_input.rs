@@ -1051,6 +1051,26 @@ fn what_was_accepted_without_a_word_is_refused() {
         )),
         "{report}"
     );
+    // a mass density on the solid alone beside friction in the medium: solved, with a note
+    // naming the medium's friction line (the solids' mass alone does not pass slip events)
+    let friction = std::fs::read_to_string(root().join("cases/friction-heating.toml"))
+        .unwrap()
+        .replace("\"../geo/", &format!("\"{}/geo/", root().display()))
+        .replacen("kind = \"solid\"\n", "kind = \"solid\"\nrho = 1e-4\n", 1);
+    let case = write("inertia-without-medium-mass", &friction);
+    let o = tmc(&["check", case.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", err(&o));
+    let report = String::from_utf8_lossy(&o.stdout).to_string() + &err(&o);
+    let at = 1 + friction
+        .lines()
+        .position(|l| l.starts_with("friction = "))
+        .unwrap();
+    assert!(
+        report.contains(&format!(
+            "note: line {at}: region[1] (\"medium\") has friction but no `rho`"
+        )),
+        "{report}"
+    );
     // a PETSc option without its dash (PETSc skipped it)
     let block = root().join("cases/block.toml");
     for (options, word) in [("ksp_type cg", "ksp_type"), ("-ksp_type cg gmres", "gmres")] {
