@@ -718,7 +718,8 @@ impl<'a> Run<'a> {
                  small mass density `rho` on every region carries them through)"
             } else if self.model.physics.friction {
                 "; with friction, drags stall where the full slide begins (docs/CASE.md, \
-                 \"How far friction slides\", says how far they get and what to mesh)"
+                 \"How far friction slides\", says how far they get and what to mesh; a \
+                 larger mass density `rho` carries more of them through: finer cells need more)"
             } else {
                 ""
             };
