@@ -536,7 +536,7 @@ fn restart_continues_an_interrupted_run_exactly() {
     assert!(o.status.success(), "{}", stderr(&o));
     let o = common::solve_interrupted(&case, &stopped);
     assert!(!o.status.success(), "the run was interrupted");
-    let (cols, all_rows) = common::history(&full);
+    let all_rows = common::history(&full).1;
     let done = common::history(&stopped).1.len();
     assert!(
         done >= 3 && done < all_rows.len(),
@@ -568,19 +568,7 @@ fn restart_continues_an_interrupted_run_exactly() {
     let o = solve_cli(&case, &stopped, &["--restart", "--set", "steps.min=1e-6"]);
     assert!(o.status.success(), "{}", stderr(&o));
     // the same rows, every column but the wall time, to the last bit
-    let (cols2, rows) = common::history(&stopped);
-    assert_eq!(cols, cols2);
-    assert_eq!(rows.len(), all_rows.len());
-    let wall = cols.iter().position(|c| c == "wall_seconds").unwrap();
-    for (i, (a, b)) in all_rows.iter().zip(&rows).enumerate() {
-        for (j, (x, y)) in a.iter().zip(b).enumerate() {
-            assert!(
-                j == wall || x.to_bits() == y.to_bits() || (x.is_nan() && y.is_nan()),
-                "row {i}, {}: {x} vs {y}",
-                cols[j]
-            );
-        }
-    }
+    common::same_history_to_the_bit(&full, &stopped);
     let (a, b) = (common::summary(&full), common::summary(&stopped));
     for key in [
         "converged",

@@ -117,6 +117,24 @@ pub fn history(dir: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
     (h.columns, h.rows)
 }
 
+/// The histories of a run (`full`) and of the same run stopped and continued (`out`): the same
+/// columns and rows, every value but the wall time to the last bit.
+pub fn same_history_to_the_bit(full: &Path, out: &Path) {
+    let ((cols, expected), (cols2, rows)) = (history(full), history(out));
+    assert_eq!(cols, cols2);
+    assert_eq!(rows.len(), expected.len(), "rows");
+    let wall = cols.iter().position(|c| c == "wall_seconds").unwrap();
+    for (i, (a, b)) in expected.iter().zip(&rows).enumerate() {
+        for (j, (x, y)) in a.iter().zip(b).enumerate() {
+            assert!(
+                j == wall || x.to_bits() == y.to_bits() || (x.is_nan() && y.is_nan()),
+                "row {i}, {}: {x} vs {y}",
+                cols[j]
+            );
+        }
+    }
+}
+
 /// Solve a case given as text (its `mesh` key is prepended: `geo/GEO`, meshed with `params`)
 /// in a scratch folder.
 pub fn solve_text(tag: &str, geo: &str, params: &str, case_text: &str) -> (Summary, PathBuf) {
