@@ -282,6 +282,28 @@ impl Cells<'_> {
         Ok(finite)
     }
 
+    /// [`Cells::each_cell`] for a term with history per point: `kernel` also gets the cell's
+    /// committed history and its trial values to fill.
+    fn each_cell_with_history<const N: usize>(
+        self,
+        slab: &SlabView,
+        cells: &[u32],
+        mut kernel: impl FnMut(
+            usize,
+            &CellState<N>,
+            &[f64],
+            &mut [f64],
+            &mut [f64],
+            Option<&mut [f64]>,
+        ) -> Result<(), KernelError>,
+    ) -> Result<bool, (KernelError, usize)> {
+        self.each_cell::<N>(cells, |cell, s, r, k| {
+            // SAFETY: a cell runs once per assembly
+            let (committed, trial) = unsafe { slab.cell(cell) };
+            kernel(cell, s, committed, trial, r, k)
+        })
+    }
+
     /// Add the facets `cells` (global numbers, all of this block) with the boundary flux `law`.
     pub(super) fn run_facets<const N: usize, const D: usize, E: RefElement<N, D>>(
         self,
@@ -306,9 +328,7 @@ impl Cells<'_> {
         cells: &[u32],
     ) -> Result<bool, (KernelError, usize)> {
         let (lay, act) = (self.lay, self.act);
-        self.each_cell::<N>(cells, |cell, s, r, k| {
-            // SAFETY: a cell runs once per assembly
-            let (committed, trial) = unsafe { slab.cell(cell) };
+        self.each_cell_with_history::<N>(slab, cells, |cell, s, committed, trial, r, k| {
             kernel::friction::friction::<N, D, E>(
                 mat,
                 normals.of(cell),
@@ -335,9 +355,7 @@ impl Cells<'_> {
         cells: &[u32],
     ) -> Result<bool, (KernelError, usize)> {
         let (lay, act) = (self.lay, self.act);
-        self.each_cell::<N>(cells, |cell, s, r, k| {
-            // SAFETY: a cell runs once per assembly
-            let (hist_n, hist_now) = unsafe { slab.cell(cell) };
+        self.each_cell_with_history::<N>(slab, cells, |_, s, hist_n, hist_now, r, k| {
             inertia::inertia::<N, D, E>(rho, inv_dt, &lay, s, hist_n, hist_now, act, r, k)
         })
     }
@@ -351,9 +369,7 @@ impl Cells<'_> {
         cells: &[u32],
     ) -> Result<bool, (KernelError, usize)> {
         let (lay, act) = (self.lay, self.act);
-        self.each_cell::<N>(cells, |cell, s, r, k| {
-            // SAFETY: a cell runs once per assembly
-            let (theta_n, theta_now) = unsafe { slab.cell(cell) };
+        self.each_cell_with_history::<N>(slab, cells, |_, s, theta_n, theta_now, r, k| {
             capacity::capacity::<N, D, E>(c, &lay, s, theta_n, theta_now, act, r, k)
         })
     }

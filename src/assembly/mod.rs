@@ -569,6 +569,18 @@ fn run_block(
             Err(AssemblyError::NotFinite)
         }
     };
+    // the cells of a term whose kernel fails only on a cell's geometry (capacity, inertia)
+    let geometric = |region: usize,
+                     res: Result<bool, (KernelError, usize)>|
+     -> Result<AssemblyStats, AssemblyError> {
+        let ok = res.map_err(|(_, cell)| AssemblyError::BadMesh {
+            region: model.regions[region].0.clone(),
+            cell,
+            at: centroid(&model.mesh.coords, blk.cell(cell)),
+        })?;
+        finite(ok)?;
+        Ok(AssemblyStats::EMPTY)
+    };
     match (term, slab) {
         (Term::Friction(fi), Some(slab)) => {
             let fb = &model.friction_blocks[fi];
@@ -595,25 +607,13 @@ fn run_block(
                 slab,
                 these
             ));
-            let ok = res.map_err(|(_, cell)| AssemblyError::BadMesh {
-                region: model.regions[cb.region].0.clone(),
-                cell,
-                at: centroid(&model.mesh.coords, blk.cell(cell)),
-            })?;
-            finite(ok)?;
-            Ok(AssemblyStats::EMPTY)
+            geometric(cb.region, res)
         }
         (Term::Inertia(ii), Some(slab)) => {
             let ib = &model.inertia_blocks[ii];
             let res = crate::with_cell!(blk.kind, |N, D, E| job
                 .run_inertia::<N, D, E>(ib.rho, inv_dt, slab, these));
-            let ok = res.map_err(|(_, cell)| AssemblyError::BadMesh {
-                region: model.regions[ib.region].0.clone(),
-                cell,
-                at: centroid(&model.mesh.coords, blk.cell(cell)),
-            })?;
-            finite(ok)?;
-            Ok(AssemblyStats::EMPTY)
+            geometric(ib.region, res)
         }
         (Term::Flux(f), _) => {
             let fb = &model.facet_blocks[f];

@@ -378,12 +378,7 @@ impl<'a> Run<'a> {
         if model.physics.transient {
             self.account_heat(target, dt, convected.iter().sum())?;
         }
-        if model.physics.friction {
-            self.account_friction();
-        }
-        if model.physics.inertia {
-            self.summary.kinetic_energy = Some(kinetic_energy(model, &self.asm));
-        }
+        self.account_points();
         let f_now = self.forces(target);
         let tot = &mut self.totals;
         tot.work += self
@@ -525,13 +520,8 @@ impl<'a> Run<'a> {
         (self.asm.ranks).agree(files, SolveError::to_string, |text| {
             SolveError::Setup(text.into())
         })?;
-        if self.model.physics.friction {
-            // the dissipation so far is in the points' history, restored above
-            self.account_friction();
-        }
-        if self.model.physics.inertia {
-            self.summary.kinetic_energy = Some(kinetic_energy(self.model, &self.asm));
-        }
+        // the dissipation and the velocities so far are in the points' history, restored above
+        self.account_points();
         self.written = state.files.written;
         // wall seconds go on from where the run stopped
         self.start = Instant::now()
@@ -566,9 +556,16 @@ impl<'a> Run<'a> {
         Ok(())
     }
 
-    /// The work friction dissipated and the heat it made up to the step just committed.
-    fn account_friction(&mut self) {
+    /// What the points' committed history holds at the step just committed: with friction,
+    /// the work it dissipated and the heat it made so far; with inertia, the kinetic energy.
+    fn account_points(&mut self) {
         let model = self.model;
+        if model.physics.inertia {
+            self.summary.kinetic_energy = Some(kinetic_energy(model, &self.asm));
+        }
+        if !model.physics.friction {
+            return;
+        }
         let works = friction_work(model, &self.asm);
         let heat = works
             .iter()

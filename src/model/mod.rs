@@ -326,7 +326,7 @@ mod tests {
             );
             assert_eq!([n[1] > 0, n[2] > 0, n[3] > 0], has, "{name}: {n:?}");
             assert_eq!(n[4], 0, "{name}: no mass density, no inertia");
-            // in the assembler's order: bulk, flux, capacity, friction
+            // in the assembler's order: bulk, flux, capacity, friction, inertia
             let ordered = terms
                 .windows(2)
                 .all(|w| kinds_rank(&w[0]) <= kinds_rank(&w[1]));

@@ -177,9 +177,8 @@ pub enum PlanError {
 /// in the memory the run has, then with its multigrid; faer otherwise): its assembler (on
 /// several ranks, each rank's part of the mesh) and one solver for each of `systems`.
 pub fn plan(model: &Model, request: &Request, systems: &[System]) -> Result<Planned, PlanError> {
-    let method = request.solver.petsc.method;
     if request.solver.engine == EngineChoice::Petsc || !Ranks::world().is_serial() {
-        return on_ranks(model, request, systems, method);
+        return on_ranks(model, request, systems, request.solver.petsc.method);
     }
     let asm = Assembler::new(model);
     let structure = equation_structure(&model.dofs, &model.cons);
@@ -206,8 +205,8 @@ pub fn plan(model: &Model, request: &Request, systems: &[System]) -> Result<Plan
         }
         note = Some(format!(
             "warning: engine \"auto\": {why}, and this tmc has no PETSc engine to solve without \
-             them ({NOT_BUILT})",
-            NOT_BUILT = crate::parallel::NOT_BUILT
+             them ({})",
+            crate::parallel::NOT_BUILT
         ));
     }
     Ok(Planned {
