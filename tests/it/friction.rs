@@ -824,7 +824,7 @@ fn a_damaged_checkpoint_is_refused_with_what_is_wrong_in_it() {
 
 /// The drag of `drag_case` on the pad of `geo/pad.geo` (its group "top" is the pad's): the
 /// pad is pressed 0.3 into a medium that runs on beyond it on both sides.
-fn pad_case(mu: Option<f64>, drag: f64) -> String {
+pub(crate) fn pad_case(mu: Option<f64>, drag: f64) -> String {
     drag_case(2, mu, drag, DRAG, 0.025)
 }
 
@@ -1164,7 +1164,7 @@ fn on_a_sphere_the_auto_normals_are_radial() {
 }
 
 /// `case` with a mass density `rho` on the solid and the medium (inertia).
-fn with_mass(case: &str, rho: f64) -> String {
+pub(crate) fn with_mass(case: &str, rho: f64) -> String {
     let case = case
         .replacen("mu = 10.0\n", &format!("mu = 10.0\nrho = {rho}\n"), 1)
         .replacen("gamma = 1e-4\n", &format!("gamma = 1e-4\nrho = {rho}\n"), 1);
