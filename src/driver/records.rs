@@ -101,6 +101,8 @@ pub struct Summary {
     /// solid: a solid that passed through the medium between its quadrature points (0 if
     /// none did; linear triangles and tetrahedra cannot).
     pub corners_through_medium: usize,
+    /// The largest displacement of any node in any accepted step.
+    pub largest_displacement: f64,
 }
 
 impl Summary {
@@ -168,6 +170,7 @@ impl Summary {
             petsc_solver: None,
             peak_memory_mb_ranks: None,
             corners_through_medium: 0,
+            largest_displacement: 0.0,
             output: out_dir.display().to_string(),
             units: Quantity::ALL
                 .into_iter()

@@ -390,7 +390,61 @@ impl<'a> Run<'a> {
         tot.f_last = f_now;
         let through = corners_through_medium(model, &self.x);
         tot.corners_through = tot.corners_through.max(through);
+        self.watch_displacement(target);
         Ok(())
+    }
+
+    /// The largest nodal displacement of the accepted state, kept for the summary; the first
+    /// time it exceeds [`RUNAWAY`] times the mesh's extent, a warning: a node that barely
+    /// resists (a free corner of an open medium) has run away, and what depends on it (the
+    /// work, the kinetic energy, its cells' values) is no longer a solution.
+    fn watch_displacement(&mut self, target: f64) {
+        let model = self.model;
+        let dim = model.mesh.dim;
+        if model.dofs.u.is_empty() {
+            return;
+        }
+        let (node, largest) = (0..model.dofs.n_nodes)
+            .map(|n| {
+                let u = &model.dofs.u[n * dim..(n + 1) * dim];
+                let size = u.iter().map(|&d| self.x[d as usize].powi(2)).sum::<f64>();
+                (n, size.sqrt())
+            })
+            .fold((0, 0.0), |a, b| if b.1 > a.1 { b } else { a });
+        let tot = &mut self.totals;
+        tot.largest_displacement = tot.largest_displacement.max(largest);
+        if largest <= RUNAWAY * model.d || tot.runaway_told {
+            return;
+        }
+        tot.runaway_told = true;
+        if self.opts.quiet {
+            return;
+        }
+        let at = model.mesh.coords[node][..dim]
+            .iter()
+            .map(|c| format!("{c}"))
+            .collect::<Vec<_>>()
+            .join(", ");
+        let region = (model.blocks.iter())
+            .find(|b| model.mesh.cells[b.block].conn.contains(&node))
+            .map_or(String::new(), |b| {
+                format!(" of region \"{}\"", model.regions[b.region].0)
+            });
+        let when = if self.show_t() {
+            format!("t = {}", self.t_text(target))
+        } else {
+            format!("λ = {:.4}", model.path.lambda(target))
+        };
+        self.say(&format!(
+            "warning: step {} ({when}): node {}{region} (at ({at}) in the undeformed mesh) has \
+             moved {largest:.3e}, {:.0} times the mesh's extent: it barely resists (a free \
+             corner of an open medium, most likely) and runs away. The forces where the solids \
+             are held may still hold; the work, the kinetic energy and that node's cells are \
+             no solution. A [[bc]] on that boundary of the medium holds it.",
+            self.ctl.accepted,
+            node,
+            largest / model.d
+        ));
     }
 
     /// What an accepted step leaves: its `.vtu` (when `[output] every` asks), its history row,
@@ -836,6 +890,7 @@ impl<'a> Run<'a> {
         s.heat_stored = tot.heat_stored;
         s.heat_in = tot.heat_in;
         s.corners_through_medium = tot.corners_through;
+        s.largest_displacement = tot.largest_displacement;
         if let Some(folder) = &mut self.folder {
             let json = serde_json::to_string_pretty(&*s).expect("serialisable");
             write_atomic(&self.out_dir.join("summary.json"), json.as_bytes())?;
@@ -854,6 +909,9 @@ impl<'a> Run<'a> {
         }
     }
 }
+
+/// A node that has moved this many times the mesh's extent has run away.
+const RUNAWAY: f64 = 10.0;
 
 /// The step controller: over physical time with `[time]` (steps of at most `dt`, onto every
 /// listed time), else over pseudo-time as `[steps]` says.

@@ -50,6 +50,12 @@ pub struct Totals {
     /// (a checkpoint without it had none to count).
     #[serde(default)]
     pub corners_through: usize,
+    /// The largest nodal displacement of any accepted state, and whether a node has been told
+    /// to have run away (a checkpoint without them had none).
+    #[serde(default)]
+    pub largest_displacement: f64,
+    #[serde(default)]
+    pub runaway_told: bool,
 }
 
 impl Totals {

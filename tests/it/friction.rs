@@ -874,6 +874,14 @@ fn a_pad_on_a_long_plate_slides_its_own_width() {
             (ratios.last().unwrap().0 - 2.0).abs() < 1e-9,
             "the whole drag"
         );
+        // nothing moves much further than the pad's top, held to (2.0, −0.3) (measured:
+        // 2.0224 with friction, 2.038 without: the medium ahead pushed a little further)
+        let held = 2.0f64.hypot(0.3);
+        assert!(
+            s.largest_displacement >= held - 1e-9 && s.largest_displacement < 1.05 * held,
+            "largest displacement {}",
+            s.largest_displacement
+        );
         match mu {
             None => {
                 let ploughing = ratios.iter().map(|r| r.1.abs()).fold(0.0, f64::max);
@@ -890,6 +898,39 @@ fn a_pad_on_a_long_plate_slides_its_own_width() {
             }
         }
     }
+}
+
+#[test]
+fn a_node_of_the_open_medium_that_runs_away_is_told() {
+    // the pad with four cells across the medium at μ = 1, dragged 0.8 with a mass density of
+    // 1e-4: the open medium ahead is drawn under the leading corner, and its top, barely
+    // held, runs away (measured: node 139, at (3.375, 0.25), 43 at step 212, thousands by
+    // the end; the run then stops at t = 1.89). The run says so once, naming the node, and
+    // the summary keeps the largest displacement (the mesh spans 4)
+    let case = with_mass(
+        &drag_case(2, Some(1.0), 0.8, DRAG, 0.025),
+        1e-4,
+    );
+    let path = common::case_file(
+        "runaway",
+        "pad.geo",
+        "params = { n = 16, m = 8, l = 4 }",
+        &case,
+    );
+    let out = path.with_file_name("out");
+    let o = common::tmc(&["solve", path.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    let e = common::stderr(&o);
+    assert_eq!(e.matches("runs away").count(), 1, "{e}");
+    let line = e.lines().find(|l| l.contains("runs away")).unwrap();
+    assert!(
+        line.starts_with("warning: step ")
+            && line.contains("of region \"medium\" (at (")
+            && line.contains("times the mesh's extent"),
+        "{line}"
+    );
+    let s = common::summary(&out);
+    let largest = s["largest_displacement"].as_f64().unwrap();
+    assert!(largest > 10.0 * 4.0, "largest displacement {largest}");
 }
 
 #[test]
