@@ -80,7 +80,70 @@ pub fn build(case: &Case, mesh: Mesh) -> Result<Model, CaseError> {
     model.warnings = super::held::held_by_medium_alone(&model);
     model.warnings.extend(unused_keys(case, &model));
     model.warnings.extend(massless_friction(case, &model));
+    model.warnings.extend(heavy_solids(case, &model));
     Ok(model)
+}
+
+/// A solid region whose `rho` makes its cells' inertia over the largest step outweigh their
+/// stiffness, ρ h² / ((K + μ) Δt²) > 1 (h the cells' mean size): the region barely follows
+/// its loads within a step, a dynamic scene. Said, with the `rho` that keeps it at 1, since a
+/// `rho` raised to carry a drag through its slip events can overshoot (section "Time" of
+/// THEORY.md: inertia there is meant to be small).
+fn heavy_solids(case: &Case, model: &Model) -> Vec<String> {
+    if !model.physics.inertia {
+        return Vec::new();
+    }
+    let dt = match &case.file.time {
+        Some(time) => time.dt_max(),
+        None => case.file.steps.max,
+    };
+    let mut notes = Vec::new();
+    for (i, r) in case.file.region.iter().enumerate() {
+        let Some(rho) = &r.rho else { continue };
+        if model.regions[i].1 != RegionKind::Solid {
+            continue;
+        }
+        let sizes: Vec<f64> = (model.blocks.iter())
+            .filter(|b| b.region == i)
+            .flat_map(|b| {
+                let blk = &model.mesh.cells[b.block];
+                (0..blk.n_cells()).map(|c| cell_size(&model.mesh.coords, blk.cell(c)))
+            })
+            .collect();
+        if sizes.is_empty() {
+            continue;
+        }
+        let h = sizes.iter().sum::<f64>() / sizes.len() as f64;
+        let stiffness = case.materials[i].law().stiffness_scale();
+        let ratio = rho.get_ref() * h * h / (stiffness * dt * dt);
+        if ratio > 1.0 {
+            notes.push(format!(
+                "note: line {}: region[{i}] (\"{}\"): with `rho` = {:e} its cells' inertia over a \
+                 step of {dt} is {ratio:.1e} times their stiffness: the region barely follows its \
+                 loads within a step (a dynamic scene). For a load path meant to be \
+                 quasi-static, keep `rho` well below {:.1e} (THEORY.md, \"Time\")",
+                case.line_of(rho.span()),
+                r.group.get_ref(),
+                rho.get_ref(),
+                stiffness * dt * dt / (h * h)
+            ));
+        }
+    }
+    notes
+}
+
+/// The largest side of a cell's bounding box.
+fn cell_size(coords: &[[f64; 3]], nodes: &[usize]) -> f64 {
+    (0..3)
+        .map(|k| {
+            let (lo, hi) = nodes
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &n| {
+                    (a.min(coords[n][k]), b.max(coords[n][k]))
+                });
+            hi - lo
+        })
+        .fold(0.0, f64::max)
 }
 
 /// A medium region with friction but no `rho` in a scene with inertia: the folds that turn a

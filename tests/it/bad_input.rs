@@ -1071,6 +1071,22 @@ fn what_was_accepted_without_a_word_is_refused() {
         )),
         "{report}"
     );
+    // a mass density small against the solid's stiffness over a step says nothing more; one
+    // whose inertia outweighs it (a dynamic scene, where a quasi-static drag was meant) is a
+    // note naming its line and the `rho` below which it would not
+    assert!(!report.contains("inertia over a step"), "{report}");
+    let heavy = friction.replacen("rho = 1e-4\n", "rho = 1e4\n", 1);
+    let case = write("inertia-outweighs-stiffness", &heavy);
+    let o = tmc(&["check", case.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", err(&o));
+    let report = String::from_utf8_lossy(&o.stdout).to_string() + &err(&o);
+    let at = line_of(&heavy, "rho = 1e4");
+    assert!(
+        report.contains(&format!(
+            "note: line {at}: region[0] (\"solid\"): with `rho` = 1e4 its cells' inertia over a step"
+        )) && report.contains("keep `rho` well below"),
+        "{report}"
+    );
     // a PETSc option without its dash (PETSc skipped it)
     let block = root().join("cases/block.toml");
     for (options, word) in [("ksp_type cg", "ksp_type"), ("-ksp_type cg gmres", "gmres")] {

@@ -907,10 +907,7 @@ fn a_node_of_the_open_medium_that_runs_away_is_told() {
     // held, runs away (measured: node 139, at (3.375, 0.25), 43 at step 212, thousands by
     // the end; the run then stops at t = 1.89). The run says so once, naming the node, and
     // the summary keeps the largest displacement (the mesh spans 4)
-    let case = with_mass(
-        &drag_case(2, Some(1.0), 0.8, DRAG, 0.025),
-        1e-4,
-    );
+    let case = with_mass(&drag_case(2, Some(1.0), 0.8, DRAG, 0.025), 1e-4);
     let path = common::case_file(
         "runaway",
         "pad.geo",
