@@ -102,7 +102,8 @@ pub struct FrictionKey {
     /// Fraction of the dissipated work that becomes heat, in [0, 1] (default 1); heat is made
     /// only in scenes with `[time]` that conduct.
     pub heat_fraction: Option<Spanned<f64>>,
-    /// Stick stiffness factor c_f > 0 of the friction modulus c_f K (1 − ln J)/J² (default 1).
+    /// Stick stiffness factor c_f > 0 of the friction modulus (c_f K (1 − ln J)/J² where the
+    /// medium is compressed; default 1).
     pub c_f: Option<Spanned<f64>>,
     /// Slip viscosity η_s ≥ 0 (stress × time): slipping takes a traction μ p_n + η_s |ġ_p|,
     /// ġ_p the slip rate per reference thickness (default 0: rate-independent Coulomb).

@@ -11,7 +11,7 @@ use crate::assembly::{
     Assembler, AssemblyError, convection_heat, corners_through_medium, friction_cells,
     friction_work, heat_stored, kinetic_energy,
 };
-use crate::case::Case;
+use crate::case::{Case, RegionKind};
 use crate::dofs::Field;
 use crate::model::Model;
 use crate::output::probes::Probe;
@@ -395,9 +395,9 @@ impl<'a> Run<'a> {
     }
 
     /// The largest nodal displacement of the accepted state, kept for the summary; the first
-    /// time it exceeds [`RUNAWAY`] times the mesh's extent, a warning: a node that barely
-    /// resists (a free corner of an open medium) has run away, and what depends on it (the
-    /// work, the kinetic energy, its cells' values) is no longer a solution.
+    /// time it exceeds [`RUNAWAY`] times the mesh's extent, a warning naming the node: in a
+    /// medium, a node that barely resists (a free corner of an open medium) has run away and
+    /// its cells are no solution; in a solid, its body moves far (held by its mass alone).
     fn watch_displacement(&mut self, target: f64) {
         let model = self.model;
         let dim = model.mesh.dim;
@@ -425,24 +425,28 @@ impl<'a> Run<'a> {
             .map(|c| format!("{c}"))
             .collect::<Vec<_>>()
             .join(", ");
-        let region = (model.blocks.iter())
-            .find(|b| model.mesh.cells[b.block].conn.contains(&node))
-            .map_or(String::new(), |b| {
-                format!(" of region \"{}\"", model.regions[b.region].0)
-            });
+        let block = (model.blocks.iter()).find(|b| model.mesh.cells[b.block].conn.contains(&node));
+        let (name, medium) = block.map_or(("", false), |b| {
+            let (name, kind) = &model.regions[b.region];
+            (name.as_str(), *kind == RegionKind::Medium)
+        });
         let when = if self.show_t() {
             format!("t = {}", self.t_text(target))
         } else {
             format!("λ = {:.4}", model.path.lambda(target))
         };
+        let what = if medium {
+            "a node of the medium that barely resists (a free corner of an open medium, most \
+             likely) runs away. The forces where the solids are held may still hold; that \
+             node's cells are no solution. A [[bc]] on that boundary of the medium holds it."
+        } else {
+            "its body moves far, held by its mass or by little else. If it should stay in \
+             place, hold it (a [[bc]]) or check its loads."
+        };
         self.say(&format!(
-            "warning: step {} ({when}): node {}{region} (at ({at}) in the undeformed mesh) has \
-             moved {largest:.3e}, {:.0} times the mesh's extent: it barely resists (a free \
-             corner of an open medium, most likely) and runs away. The forces where the solids \
-             are held may still hold; the work, the kinetic energy and that node's cells are \
-             no solution. A [[bc]] on that boundary of the medium holds it.",
+            "warning: step {} ({when}): node {node} of region \"{name}\" (at ({at}) in the \
+             undeformed mesh) has moved {largest:.3e}, {:.0} times the mesh's extent: {what}",
             self.ctl.accepted,
-            node,
             largest / model.d
         ));
     }

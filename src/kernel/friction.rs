@@ -35,7 +35,7 @@ pub struct FrictionMaterial {
     /// The medium's own law: the normal traction across the plane is its stress, and the
     /// friction modulus scales with its bulk modulus.
     pub medium: SolidLaw,
-    /// c_f of the friction modulus G_f = c_f K (1 − ln J)/J².
+    /// c_f of the friction modulus G_f ([`shear_modulus`]).
     pub c_f: f64,
     /// η_s, the slip's viscosity (0: rate-independent).
     pub viscosity: f64,

@@ -82,9 +82,17 @@ pub struct FrictionResponse {
     pub ddissipated_dtheta: f64,
 }
 
-/// The friction modulus G_f = c_f K_m (1 − ln J) / J² and dG_f/dJ: the medium's own stiffness
-/// against closing (K_m its bulk modulus) times c_f, so stick stiffens as the contact does.
+/// The friction modulus G_f and dG_f/dJ: c_f K_m (1 − ln J) / J² where the medium is
+/// compressed (J ≤ 1), the medium's own stiffness against closing (K_m its bulk modulus) times
+/// c_f, so stick stiffens as the contact does; c_f K_m / J³ where it is stretched, which meets
+/// it at J = 1 with the same value and slope and stays positive. (The first form alone turns
+/// negative beyond J = e: a stretched cell that the plane still pressed then pushed its nodes
+/// away, and an open medium's corner ran away with the energy it made.)
 pub fn shear_modulus(c_f: f64, K_m: f64, J: f64) -> (f64, f64) {
+    if J > 1.0 {
+        let J3 = J * J * J;
+        return (c_f * K_m / J3, -3.0 * c_f * K_m / (J3 * J));
+    }
     let l = J.ln();
     (
         c_f * K_m * (1.0 - l) / (J * J),
@@ -432,6 +440,37 @@ mod tests {
                 assert_eq!(r.dissipated > 0.0, slips);
             }
         }
+    }
+
+    #[test]
+    fn the_friction_modulus_is_positive_smooth_and_its_slope_exact() {
+        // positive however far the medium is squeezed or stretched (the compressed form alone
+        // turns negative beyond J = e), with value and slope continuous at J = 1 where its two
+        // forms meet, and dG/dJ the central difference of G on either side
+        let (c_f, K) = (2.0, 0.3);
+        for J in [
+            1e-4,
+            1e-2,
+            0.5,
+            0.999,
+            1.001,
+            2.0,
+            std::f64::consts::E,
+            10.0,
+            1e3,
+        ] {
+            let (G, dG) = shear_modulus(c_f, K, J);
+            assert!(G > 0.0, "G_f({J}) = {G}");
+            let h = 1e-6 * J;
+            let fd = (shear_modulus(c_f, K, J + h).0 - shear_modulus(c_f, K, J - h).0) / (2.0 * h);
+            assert!((dG - fd).abs() <= 1e-6 * dG.abs(), "J = {J}: {dG} vs {fd}");
+        }
+        let (below, above) = (
+            shear_modulus(c_f, K, 1.0),
+            shear_modulus(c_f, K, 1.0 + 1e-12),
+        );
+        assert!((below.0 - c_f * K).abs() < 1e-12 && (above.0 - c_f * K).abs() < 1e-11);
+        assert!((below.1 - above.1).abs() < 1e-9, "{below:?} {above:?}");
     }
 
     #[test]

@@ -100,3 +100,52 @@ fn a_free_body_under_a_constant_force_moves_as_backward_euler_says() {
     println!("relative error of u against a t²/2: {errors:?}");
     assert!((errors[0] - 0.1).abs() < 1e-9 && (errors[1] - 0.05).abs() < 1e-9);
 }
+
+#[test]
+fn a_body_that_moves_ten_times_the_mesh_is_told_once() {
+    // the free slab with a light mass (a = b/ρ = 500) moves u_k = a Δt² k (k + 1)/2 along x:
+    // 30 after step 3 (t = 0.3), more than ten times the mesh's extent (2), and 275 after
+    // step 10. The run says so once, at step 3, naming a node of the solid; summary.json
+    // keeps the largest displacement, which is the recurrence's u_10
+    let (b, rho, steps) = (2.0, 4e-3, 10);
+    let case = common::case_file(
+        "inertia-far",
+        "slab.geo",
+        "params = { n = 4, m = 2 }",
+        &pushed_slab(b, rho, steps),
+    );
+    let out = case.with_file_name("out");
+    let o = common::tmc(&["solve", case.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    let e = common::stderr(&o);
+    assert!(o.status.success(), "{e}");
+    let told: Vec<&str> = e
+        .lines()
+        .filter(|l| l.contains("times the mesh's extent"))
+        .collect();
+    assert_eq!(told.len(), 1, "{e}");
+    assert!(
+        told[0].starts_with("warning: step 3 (t = 3.0000e-1): node ")
+            && told[0].contains("of region \"solid\"")
+            && told[0].contains("its body moves far"),
+        "{}",
+        told[0]
+    );
+    let (a, dt) = (b / rho, 1.0 / steps as f64);
+    let expected = a * dt * dt * (steps * (steps + 1)) as f64 / 2.0;
+    let largest = common::summary(&out)["largest_displacement"]
+        .as_f64()
+        .unwrap();
+    assert!(
+        (largest - expected).abs() <= 1e-9 * expected,
+        "largest displacement {largest} against {expected}"
+    );
+    // quiet, nothing is said; the summary is the same
+    let quiet = case.with_file_name("quiet");
+    let o = common::solve_cli(&case, &quiet, &[]);
+    assert!(
+        o.status.success() && common::stderr(&o).is_empty(),
+        "{}",
+        common::stderr(&o)
+    );
+    assert_eq!(common::summary(&quiet)["largest_displacement"], largest);
+}
