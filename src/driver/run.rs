@@ -13,6 +13,7 @@ use crate::assembly::{
 };
 use crate::case::{Case, RegionKind};
 use crate::dofs::Field;
+use crate::mesh::point_text;
 use crate::model::Model;
 use crate::output::probes::Probe;
 use crate::output::{History, OutputError, RunFolder, Series, write_atomic};
@@ -420,11 +421,7 @@ impl<'a> Run<'a> {
         if self.opts.quiet {
             return;
         }
-        let at = model.mesh.coords[node][..dim]
-            .iter()
-            .map(|c| format!("{c}"))
-            .collect::<Vec<_>>()
-            .join(", ");
+        let at = point_text(&model.mesh.coords[node], dim);
         let block = (model.blocks.iter()).find(|b| model.mesh.cells[b.block].conn.contains(&node));
         let (name, medium) = block.map_or(("", false), |b| {
             let (name, kind) = &model.regions[b.region];
@@ -444,7 +441,7 @@ impl<'a> Run<'a> {
              place, hold it (a [[bc]]) or check its loads."
         };
         self.say(&format!(
-            "warning: step {} ({when}): node {node} of region \"{name}\" (at ({at}) in the \
+            "warning: step {} ({when}): node {node} of region \"{name}\" (at {at} in the \
              undeformed mesh) has moved {largest:.3e}, {:.0} times the mesh's extent: {what}",
             self.ctl.accepted,
             largest / model.d

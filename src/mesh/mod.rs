@@ -264,15 +264,7 @@ impl Mesh {
 
     /// Largest extent of the undeformed mesh's bounding box (eq. 21).
     pub fn extent(&self) -> f64 {
-        let mut lo = [f64::INFINITY; 3];
-        let mut hi = [f64::NEG_INFINITY; 3];
-        for x in &self.coords {
-            for i in 0..3 {
-                lo[i] = lo[i].min(x[i]);
-                hi[i] = hi[i].max(x[i]);
-            }
-        }
-        (0..3).map(|i| hi[i] - lo[i]).fold(0.0, f64::max)
+        extent_of(&self.coords)
     }
 
     /// The connected sets of cells among the blocks (indices into [`Mesh::cells`]) `keep`
@@ -428,6 +420,19 @@ pub fn centroid(coords: &[[f64; 3]], nodes: &[usize]) -> [f64; 3] {
         }
     }
     m.map(|v| v / nodes.len() as f64)
+}
+
+/// The largest side of the bounding box of `points` (0 for none).
+pub fn extent_of<'a>(points: impl IntoIterator<Item = &'a [f64; 3]>) -> f64 {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for x in points {
+        for i in 0..3 {
+            lo[i] = lo[i].min(x[i]);
+            hi[i] = hi[i].max(x[i]);
+        }
+    }
+    (0..3).map(|i| hi[i] - lo[i]).fold(0.0, f64::max)
 }
 
 /// A point for a message: its `dim` coordinates to 4 decimals, "(x, y)" or "(x, y, z)".

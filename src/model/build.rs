@@ -11,8 +11,8 @@ use crate::dofs::{Constraints, DofMap, Field, Layout, NONE, Prescribed};
 use crate::kernel::CellMaterial;
 use crate::kernel::friction::FrictionMaterial;
 use crate::mesh::Mesh;
-use crate::mesh::centroid;
 use crate::mesh::faces::{Face, NearestFace, shared_faces};
+use crate::mesh::{centroid, extent_of};
 use nalgebra::Vector3;
 
 /// Build the model. The case must already be validated against the mesh.
@@ -107,7 +107,8 @@ fn heavy_solids(case: &Case, model: &Model) -> Vec<String> {
             .filter(|b| b.region == i)
             .flat_map(|b| {
                 let blk = &model.mesh.cells[b.block];
-                (0..blk.n_cells()).map(|c| cell_size(&model.mesh.coords, blk.cell(c)))
+                (0..blk.n_cells())
+                    .map(|c| extent_of(blk.cell(c).iter().map(|&n| &model.mesh.coords[n])))
             })
             .collect();
         if sizes.is_empty() {
@@ -130,20 +131,6 @@ fn heavy_solids(case: &Case, model: &Model) -> Vec<String> {
         }
     }
     notes
-}
-
-/// The largest side of a cell's bounding box.
-fn cell_size(coords: &[[f64; 3]], nodes: &[usize]) -> f64 {
-    (0..3)
-        .map(|k| {
-            let (lo, hi) = nodes
-                .iter()
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &n| {
-                    (a.min(coords[n][k]), b.max(coords[n][k]))
-                });
-            hi - lo
-        })
-        .fold(0.0, f64::max)
 }
 
 /// A medium region with friction but no `rho` in a scene with inertia: the folds that turn a
