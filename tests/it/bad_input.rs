@@ -990,6 +990,12 @@ fn what_was_accepted_without_a_word_is_refused() {
         std::fs::write(&p, text).unwrap();
         p
     };
+    // `tmc check` of a case that is accepted: what it prints, on stdout and stderr
+    let checked = |case: &std::path::Path| {
+        let o = tmc(&["check", case.to_str().unwrap()]);
+        assert!(o.status.success(), "{}", err(&o));
+        String::from_utf8_lossy(&o.stdout).to_string() + &err(&o)
+    };
     let line_of = |text: &str, l: &str| 1 + text.lines().position(|x| x == l).unwrap();
     // convection on a group whose θ another [[bc]] holds: the held θ won, and the convected
     // heat was in no balance
@@ -1025,9 +1031,7 @@ fn what_was_accepted_without_a_word_is_refused() {
     );
     let text = format!("{}{}", &transient[..a], &transient[b..]);
     let case = write("capacity-without-time", &text);
-    let o = tmc(&["check", case.to_str().unwrap()]);
-    assert!(o.status.success(), "{}", err(&o));
-    let report = String::from_utf8_lossy(&o.stdout).to_string() + &err(&o);
+    let report = checked(&case);
     let rho = line_of(&text, "rho_c = 400.0");
     assert!(
         report.contains(&format!(
@@ -1041,9 +1045,7 @@ fn what_was_accepted_without_a_word_is_refused() {
         .replace("\"../geo/", &format!("\"{}/geo/", root().display()))
         .replace("k = 5.0\n", "k = 5.0\nrho = 7.8\n");
     let case = write("density-without-mechanics", &conduction);
-    let o = tmc(&["check", case.to_str().unwrap()]);
-    assert!(o.status.success(), "{}", err(&o));
-    let report = String::from_utf8_lossy(&o.stdout).to_string() + &err(&o);
+    let report = checked(&case);
     let rho = line_of(&conduction, "rho = 7.8");
     assert!(
         report.contains(&format!(
@@ -1058,9 +1060,7 @@ fn what_was_accepted_without_a_word_is_refused() {
         .replace("\"../geo/", &format!("\"{}/geo/", root().display()))
         .replacen("kind = \"solid\"\n", "kind = \"solid\"\nrho = 1e-4\n", 1);
     let case = write("inertia-without-medium-mass", &friction);
-    let o = tmc(&["check", case.to_str().unwrap()]);
-    assert!(o.status.success(), "{}", err(&o));
-    let report = String::from_utf8_lossy(&o.stdout).to_string() + &err(&o);
+    let report = checked(&case);
     let at = 1 + friction
         .lines()
         .position(|l| l.starts_with("friction = "))
@@ -1077,9 +1077,7 @@ fn what_was_accepted_without_a_word_is_refused() {
     assert!(!report.contains("inertia over a step"), "{report}");
     let heavy = friction.replacen("rho = 1e-4\n", "rho = 1e4\n", 1);
     let case = write("inertia-outweighs-stiffness", &heavy);
-    let o = tmc(&["check", case.to_str().unwrap()]);
-    assert!(o.status.success(), "{}", err(&o));
-    let report = String::from_utf8_lossy(&o.stdout).to_string() + &err(&o);
+    let report = checked(&case);
     let at = line_of(&heavy, "rho = 1e4");
     assert!(
         report.contains(&format!(

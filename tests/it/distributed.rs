@@ -97,11 +97,7 @@ fn step_points(step: &Path, name: &str) -> Vec<f64> {
 fn same_field(serial: &Path, step: &Path, field: &str, label: &str) {
     let (x, y) = (point_array(serial, field), step_points(step, field));
     assert_eq!(x.len(), y.len(), "{label}: {field}");
-    let scale = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    let worst = x
-        .iter()
-        .zip(&y)
-        .fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
+    let (worst, scale) = common::largest_difference(&x, &y);
     assert!(
         worst <= 1e-8 * scale.max(f64::MIN_POSITIVE),
         "{label}: {field} differs by {worst:.2e} (largest {scale:.2e})"

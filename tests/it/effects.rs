@@ -159,11 +159,7 @@ fn one_way_path_matches_the_monolithic_one() {
     for field in ["u", "theta"] {
         let a = point_array(&last(&d1, one.load_steps), field);
         let b = point_array(&last(&d2, mono.load_steps), field);
-        let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let diff = a
-            .iter()
-            .zip(&b)
-            .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+        let (diff, scale) = common::largest_difference(&b, &a);
         assert!(
             diff <= 1e-8 * scale,
             "{field}: max difference {diff} of {scale}"

@@ -522,12 +522,8 @@ fn parallel_assembly_matches_one_thread() {
     let one = assemble(1);
     let eight = assemble(8);
     let close = |a: &[f64], b: &[f64]| {
-        let scale = a.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let (worst, scale) = common::largest_difference(a, b);
         assert!(scale > 0.0);
-        let worst = a
-            .iter()
-            .zip(b)
-            .fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
         assert!(worst <= 1e-13 * scale, "{worst:e} of {scale:e}");
     };
     close(&one.0, &eight.0);

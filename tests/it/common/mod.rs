@@ -226,6 +226,18 @@ pub fn cell_array(vtu: &Path, name: &str) -> Vec<f64> {
     vtu_array(vtu, name, false)
 }
 
+/// The largest difference between two arrays of the same length, and the largest size of
+/// the first: (max |a − b|, max |a|), what a comparison to a relative tolerance needs.
+pub fn largest_difference(a: &[f64], b: &[f64]) -> (f64, f64) {
+    assert_eq!(a.len(), b.len(), "arrays of different lengths");
+    let scale = a.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let worst = a
+        .iter()
+        .zip(b)
+        .fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
+    (worst, scale)
+}
+
 /// A point-data array of a written .vtu, flattened.
 pub fn point_array(vtu: &Path, name: &str) -> Vec<f64> {
     vtu_array(vtu, name, true)
