@@ -152,16 +152,11 @@ path = [0.0, 1.0, 1.0]
     fn run(&self, tag: &str) -> (bool, f64, Vec<(f64, f64)>, serde_json::Value) {
         let dir = root().join("target/bench-friction").join(tag);
         let (ok, s) = solve(&dir, &self.text());
-        let text = std::fs::read_to_string(dir.join("out/history.csv")).unwrap();
-        let mut lines = text.lines();
-        let head: Vec<&str> = lines.next().unwrap().split(',').collect();
-        let col = |name: &str| head.iter().position(|c| *c == name).unwrap();
+        let h = tmc::plot::History::read(&dir.join("out/history.csv")).unwrap();
+        let col = |name: &str| h.columns.iter().position(|c| c == name).unwrap();
         let (t, fx, fy) = (col("time"), col("R_top_x"), col("R_top_y"));
-        let ratios: Vec<(f64, f64)> = lines
-            .map(|row| {
-                let v: Vec<f64> = row.split(',').map(|x| x.parse().unwrap()).collect();
-                (self.amount * (v[t] - 1.0), -v[fx] / v[fy])
-            })
+        let ratios: Vec<(f64, f64)> = (h.rows.iter())
+            .map(|v| (self.amount * (v[t] - 1.0), -v[fx] / v[fy]))
             .filter(|(d, _)| *d > 0.0)
             .collect();
         let reached = ratios.last().map_or(0.0, |r| r.0);
