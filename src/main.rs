@@ -400,13 +400,13 @@ fn check_command(
             }
             match r.factor_entries {
                 Some(n) => say!(
-                    "tangent: {} entries; factor: {n} entries; about {:.0} MB for the linear algebra",
+                    "tangent: {} entries; factor: {n} entries; about {:.0} MB at the run's peak",
                     r.tangent_entries,
                     r.estimated_mb()
                 ),
                 // PETSc lays its factor out when it factorises: the tangent is all that is known
                 None => say!(
-                    "tangent: {} entries, about {:.0} MB; the factor is PETSc's, sized when it factorises",
+                    "tangent: {} entries, about {:.0} MB at the run's peak besides the factor; the factor is PETSc's, sized when it factorises",
                     r.tangent_entries,
                     r.estimated_mb()
                 ),

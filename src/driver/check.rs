@@ -9,7 +9,7 @@ use crate::case::Case;
 use crate::dofs::Field;
 use crate::mesh::Mesh;
 use crate::output::werr;
-use crate::solver::engine::linear_algebra_mb;
+use crate::solver::engine::run_memory_mb;
 use std::path::Path;
 
 /// What `tmc check` found.
@@ -27,6 +27,8 @@ pub struct CheckReport {
     pub linear: Vec<String>,
     /// Entries of the direct factors (known before factorising for LDLᵀ), if known.
     pub factor_entries: Option<usize>,
+    /// Bytes of their values, each factor in its precision.
+    pub factor_bytes: Option<usize>,
     /// Why the engine is not the usual one (`engine = "auto"` over the memory), if so.
     pub engine_note: Option<String>,
     /// The probes' names.
@@ -38,11 +40,10 @@ pub struct CheckReport {
 }
 
 impl CheckReport {
-    /// Memory of the tangent (values and row indices) and of the factors in double precision,
-    /// in MB: what the run adds to the mesh and the state (the tangent alone where the factor
-    /// is PETSc's).
+    /// The run's peak memory in MB: what its tangent brings with it and the factors in their
+    /// precision (without the factor where it is PETSc's, sized only when it factorises).
     pub fn estimated_mb(&self) -> f64 {
-        linear_algebra_mb(self.tangent_entries, self.factor_entries)
+        run_memory_mb(self.tangent_entries, self.factor_bytes)
     }
 }
 
@@ -91,6 +92,11 @@ pub fn check(case_path: &Path, opts: &SolveOptions) -> Result<CheckReport, Solve
         .iter()
         .map(|(_, s)| s.factor_entries())
         .sum::<Option<usize>>();
+    let factor_bytes = plan
+        .solvers
+        .iter()
+        .map(|(_, s)| s.factor_bytes())
+        .sum::<Option<usize>>();
     Ok(CheckReport {
         physics: describe(&model.physics, plan.strategy),
         unknowns: Field::ALL
@@ -101,6 +107,7 @@ pub fn check(case_path: &Path, opts: &SolveOptions) -> Result<CheckReport, Solve
         free: model.cons.n_eq,
         tangent_entries: plan.asm.pattern.row_idx.len(),
         factor_entries,
+        factor_bytes,
         engine_note: plan.note,
         linear: (plan.solvers.iter())
             .map(|(part, s)| format!("{}: {}", part.name(), s.method()))

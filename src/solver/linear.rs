@@ -86,6 +86,10 @@ pub trait Factorization: Send {
     fn entries(&self) -> Option<usize> {
         None
     }
+    /// Bytes of those entries' values, in the precision each factor is held in.
+    fn factor_bytes(&self) -> Option<usize> {
+        None
+    }
     /// The engine's own words for its solver and preconditioner, where it has them.
     fn describe(&self) -> Option<String> {
         None
@@ -442,6 +446,10 @@ impl<T: Real> Factorization for LaggedLu<T> {
     fn entries(&self) -> Option<usize> {
         Some(self.staticlu.entries())
     }
+
+    fn factor_bytes(&self) -> Option<usize> {
+        Some(self.staticlu.entries() * std::mem::size_of::<T>())
+    }
 }
 
 impl Factorization for SymFactor {
@@ -456,6 +464,10 @@ impl Factorization for SymFactor {
 
     fn entries(&self) -> Option<usize> {
         Some(self.symbolic.len_val())
+    }
+
+    fn factor_bytes(&self) -> Option<usize> {
+        Some(self.bytes())
     }
 }
 
@@ -488,6 +500,11 @@ impl Factorization for BlockTriangular {
         let mech = self.fm.as_ref().map_or(Some(0), MechanicsFactor::entries)?;
         Some(mech + self.ft.as_ref().map_or(0, |f| f.symbolic.len_val()))
     }
+
+    fn factor_bytes(&self) -> Option<usize> {
+        let mech = self.fm.as_ref().map_or(0, MechanicsFactor::bytes);
+        Some(mech + self.ft.as_ref().map_or(0, SymFactor::bytes))
+    }
 }
 
 impl LinearSolver {
@@ -496,6 +513,12 @@ impl LinearSolver {
     /// lays its factor out when it factorises.
     pub fn factor_entries(&self) -> Option<usize> {
         self.backend.entries()
+    }
+
+    /// Bytes of the factor(s)' values, each in its precision (single where
+    /// [`LinearSolver::factor_entries`] counts a single-precision factor); `None` on PETSc.
+    pub fn factor_bytes(&self) -> Option<usize> {
+        self.backend.factor_bytes()
     }
 
     /// Symbolic analysis of the pattern (once per mesh).
@@ -771,6 +794,15 @@ impl SymFactor {
         })
     }
 
+    /// Bytes of the factor's values, in its precision.
+    fn bytes(&self) -> usize {
+        self.symbolic.len_val()
+            * match self.precision {
+                Precision::Double => std::mem::size_of::<f64>(),
+                Precision::Single => std::mem::size_of::<f32>(),
+            }
+    }
+
     /// Numeric factorisation of the block of the whole system's `values`.
     fn factor(&mut self, values: &[f64]) -> Result<(), LinearError> {
         self.factored = false;
@@ -1011,6 +1043,13 @@ impl MechanicsFactor {
         match self {
             MechanicsFactor::Ldlt(f) => Some(f.symbolic.len_val()),
             MechanicsFactor::Lu(f) => Some(f.staticlu.entries()),
+        }
+    }
+
+    fn bytes(&self) -> usize {
+        match self {
+            MechanicsFactor::Ldlt(f) => f.bytes(),
+            MechanicsFactor::Lu(f) => f.staticlu.entries() * std::mem::size_of::<f32>(),
         }
     }
 }

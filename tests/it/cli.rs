@@ -952,8 +952,8 @@ fn without_petsc_the_engine_and_mpirun_say_how_to_build_it() {
     let report = String::from_utf8_lossy(&o.stdout).to_string() + &stderr(&o);
     assert!(o.status.success(), "{report}");
     assert!(
-        report.contains("warning: engine \"auto\": faer's factors would take about")
-            && report.contains("more than the 1 MB the run has")
+        report.contains("warning: engine \"auto\": a run on faer would take about")
+            && report.contains("more than the 1 MB it has")
             && report.contains("--features petsc")
             && report.contains("linear solver: mechanics: faer"),
         "{report}"

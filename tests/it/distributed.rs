@@ -204,8 +204,8 @@ fn auto_takes_petsc_s_multigrid_where_faer_s_factors_do_not_fit() {
     };
     let r = report(&["--memory", "1"]);
     assert!(
-        r.contains("engine \"auto\": PETSc's multigrid, since faer's factors would take about")
-            && r.contains("more than the 1 MB the run has")
+        r.contains("engine \"auto\": PETSc's multigrid, since a run on faer would take about")
+            && r.contains("more than the 1 MB it has")
             && r.contains("linear solver: mechanics: petsc"),
         "{r}"
     );
@@ -895,13 +895,13 @@ fn check_says_what_it_can_size_on_each_engine() {
     };
     let faer = run(&[]);
     assert!(
-        faer.contains("entries; factor: ") && faer.contains("MB for the linear algebra"),
+        faer.contains("entries; factor: ") && faer.contains("MB at the run's peak"),
         "{faer}"
     );
     let petsc = run(&["--set", "solver.engine=\"petsc\""]);
     assert!(
         petsc.contains("the factor is PETSc's, sized when it factorises")
-            && !petsc.contains("for the linear algebra"),
+            && petsc.contains("MB at the run's peak besides the factor"),
         "{petsc}"
     );
     // and which solver each engine will use: on PETSc, its own words for KSP and PC
