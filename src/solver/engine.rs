@@ -134,20 +134,20 @@ pub struct Planned {
 /// Bytes a run holds per entry of its tangent, besides the direct factors: the tangent's
 /// values and pattern, the blocks' copies of them, the assembler's maps, the Krylov vectors,
 /// the mesh and the state. Measured on block-plate-3d-tm1 (H1, faer, block-triangular GMRES),
-/// as (peak resident − factor bytes) / tangent entries: 76 at 147k unknowns (1 783 MB,
-/// 15.9 M entries), 70 at 1.1 M (18 120 MB, 120 M entries).
-const BYTES_PER_TANGENT_ENTRY: f64 = 80.0;
+/// as (peak resident − factor bytes) / tangent entries: 57.5 at 147k unknowns (1 483 MB,
+/// 15.9 M entries), 51.8 at 1.1 M (15 876 MB, 120 M entries).
+const BYTES_PER_TANGENT_ENTRY: f64 = 60.0;
 
 /// What a run holds whatever its size (the program and its libraries, the runtime), MB: the
-/// peak resident of block-plate-3d-tm1 at 8×8 less its tangent's share (27 MB): 79 MB
-/// without PETSc built in, 103 with it.
+/// peak resident of block-plate-3d-tm1 at 8×8 less its tangent's and factor's share (23 MB):
+/// 50 MB without PETSc built in, 73 with it.
 const BASE_MB: f64 = 80.0;
 
 /// The peak memory of a run in MB, from its tangent's entries ([`BYTES_PER_TANGENT_ENTRY`]
 /// each) and its factors' values in the precision each is held in (`factor_bytes`, as the
 /// symbolic analysis laid them out). Measured against it on block-plate-3d-tm1 (faer, the
-/// build without PETSc): 79 / 251 / 1 783 / 18 120 MB at 3k / 20.5k / 147k / 1.1M unknowns
-/// for an estimate of 110 / 292 / 1 921 / 19 346.
+/// build without PETSc): 73 / 210 / 1 483 / 15 876 MB at 3k / 20.5k / 147k / 1.1M unknowns
+/// for an estimate of 103 / 248 / 1 603 / 16 944.
 pub fn run_memory_mb(tangent_entries: usize, factor_bytes: Option<usize>) -> f64 {
     BASE_MB
         + (tangent_entries as f64 * BYTES_PER_TANGENT_ENTRY + factor_bytes.unwrap_or(0) as f64)

@@ -146,16 +146,23 @@ const FACTOR_SPEEDUP: f64 = 12.0;
 /// [`LAG_MAX_ITS`]: a lagged factor that needs more costs more than refactoring would have
 /// (0: a factor this cheap is never lagged).
 fn lag_budget<T: Real>(lu: &StaticLu<T>, sub: &SubMatrix) -> usize {
-    iterations_worth(lu.flops(), 2.0 * lu.entries() as f64, sub, 1.0)
+    let (n, nnz) = (sub.pattern.nrows(), sub.values.len());
+    iterations_worth(lu.flops(), 2.0 * lu.entries() as f64, n, nnz, 1.0)
 }
 
-/// The GMRES iterations on the matrix `a` worth a factorisation of `factor_flops` operations
-/// run on `cores`, when applying the factor takes `apply_flops`; at most [`LAG_MAX_ITS`].
-fn iterations_worth(factor_flops: f64, apply_flops: f64, a: &SubMatrix, cores: f64) -> usize {
-    let n = a.pattern.nrows() as f64;
+/// The GMRES iterations on a matrix of `n` rows and `nnz` entries worth a factorisation of
+/// `factor_flops` operations run on `cores`, when applying the factor takes `apply_flops`; at
+/// most [`LAG_MAX_ITS`].
+fn iterations_worth(
+    factor_flops: f64,
+    apply_flops: f64,
+    n: usize,
+    nnz: usize,
+    cores: f64,
+) -> usize {
     // the factor's solves, a product with A, and the orthogonalisation of a restart's dozen
     // vectors
-    let iteration = apply_flops + 2.0 * a.values.len() as f64 + 30.0 * n;
+    let iteration = apply_flops + 2.0 * nnz as f64 + 30.0 * n as f64;
     let price = factor_flops / iteration / FACTOR_SPEEDUP / cores;
     (price.floor() as usize).min(LAG_MAX_ITS)
 }
@@ -208,11 +215,7 @@ impl Lag {
 /// unknowns; measured at 20.5k and 147k, a factorisation costs 8 and 14.6 iterations.
 /// Friction's LU block (two-way scenes) is refactored at every factorisation, as before:
 /// its stick–slip switches move the tangent between any two iterations.
-fn block_lag_budget(
-    fm: Option<&MechanicsFactor>,
-    ft: Option<&SymFactor>,
-    whole: &SubMatrix,
-) -> usize {
+fn block_lag_budget(fm: Option<&MechanicsFactor>, ft: Option<&SymFactor>, p: &Pattern) -> usize {
     let Some(MechanicsFactor::Ldlt(m)) = fm else {
         return 0;
     };
@@ -223,7 +226,7 @@ fn block_lag_budget(
         rayon::current_num_threads() as f64
     };
     let flops = m.flops().max(ft.map_or(0.0, SymFactor::flops));
-    iterations_worth(flops, applied, whole, cores)
+    iterations_worth(flops, applied, p.n, p.nnz(), cores)
 }
 
 /// An LU factor (of a whole system or of a part, not of a preconditioner's block) with more
@@ -301,7 +304,7 @@ impl Lagged for BlockTriangular {
         &self.lag
     }
     fn mul(&self, x: &[f64], y: &mut [f64]) {
-        self.whole.mul(x, y)
+        BlockTriangular::mul(self, x, y)
     }
     fn precondition(&self, r: &[f64], z: &mut [f64]) {
         BlockTriangular::precondition(self, r, z)
@@ -476,8 +479,7 @@ impl Factorization for BlockTriangular {
     /// once the first time and wherever no lag is worth it, otherwise only when the last
     /// factors no longer precondition it within their budget.
     fn factor(&mut self, values: &[f64]) -> Result<(), LinearError> {
-        self.whole.update(values);
-        self.coupling.update(values);
+        self.update(values);
         if self.lag.next_tangent(self.near) {
             self.refactor()?;
         }
@@ -805,8 +807,13 @@ impl SymFactor {
 
     /// Numeric factorisation of the block of the whole system's `values`.
     fn factor(&mut self, values: &[f64]) -> Result<(), LinearError> {
-        self.factored = false;
         self.sub.update(values);
+        self.factor_current()
+    }
+
+    /// Numeric factorisation of the block's values as last taken.
+    fn factor_current(&mut self) -> Result<(), LinearError> {
+        self.factored = false;
         let pattern = &self.sub.pattern;
         let stack = MemStack::new(&mut self.factor_mem);
         match self.precision {
@@ -1022,13 +1029,19 @@ enum MechanicsFactor {
 }
 
 impl MechanicsFactor {
-    fn factor(&mut self, values: &[f64]) -> Result<(), LinearError> {
+    /// The block, with the values last taken.
+    fn matrix(&mut self) -> &mut SubMatrix {
         match self {
-            MechanicsFactor::Ldlt(f) => f.factor(values),
-            MechanicsFactor::Lu(f) => {
-                f.sub.update(values);
-                f.refactor()
-            }
+            MechanicsFactor::Ldlt(f) => &mut f.sub,
+            MechanicsFactor::Lu(f) => &mut f.sub,
+        }
+    }
+
+    /// Factorise the block's values as last taken.
+    fn factor_current(&mut self) -> Result<(), LinearError> {
+        match self {
+            MechanicsFactor::Ldlt(f) => f.factor_current(),
+            MechanicsFactor::Lu(f) => f.refactor(),
         }
     }
 
@@ -1063,8 +1076,9 @@ struct BlockTriangular {
     ft: Option<SymFactor>,
     /// K_θm: temperature rows, mechanics columns.
     coupling: SubMatrix,
-    /// Copy of the whole matrix for the products.
-    whole: SubMatrix,
+    /// K_mθ: mechanics rows, temperature columns. With the diagonal blocks (held by their
+    /// factors) and K_θm, the whole matrix for GMRES's products, without a copy of it.
+    coupling_mt: SubMatrix,
     /// Budget ([`block_lag_budget`]) and state of the factors held.
     lag: Lag,
     /// The tangent is near the last factorised one ([`Factorization::set_near`]).
@@ -1076,7 +1090,6 @@ impl BlockTriangular {
     fn new(p: &Pattern, s: &Structure, unsymmetric: bool) -> Result<BlockTriangular, LinearError> {
         let mech: Vec<usize> = (0..p.n).filter(|&e| !s.thermal[e]).collect();
         let heat: Vec<usize> = (0..p.n).filter(|&e| s.thermal[e]).collect();
-        let all: Vec<usize> = (0..p.n).collect();
         let block = |eqs: &[usize]| -> Result<Option<SymFactor>, LinearError> {
             if eqs.is_empty() {
                 return Ok(None);
@@ -1093,14 +1106,13 @@ impl BlockTriangular {
         } else {
             block(&mech)?.map(|f| MechanicsFactor::Ldlt(Box::new(f)))
         };
-        let whole = SubMatrix::new(p, &all, &all);
         let ft = block(&heat)?;
-        let lag = block_lag_budget(fm.as_ref(), ft.as_ref(), &whole);
+        let lag = block_lag_budget(fm.as_ref(), ft.as_ref(), p);
         Ok(BlockTriangular {
             fm,
             ft,
             coupling: SubMatrix::new(p, &heat, &mech),
-            whole,
+            coupling_mt: SubMatrix::new(p, &mech, &heat),
             mech,
             heat,
             lag: Lag::new(lag),
@@ -1112,14 +1124,50 @@ impl BlockTriangular {
     /// other core while the mechanics block factors).
     fn refactor(&mut self) -> Result<(), LinearError> {
         self.lag.factoring();
-        let values = &self.whole.values;
         let mech =
-            |f: &mut Option<MechanicsFactor>| f.as_mut().map_or(Ok(()), |f| f.factor(values));
-        let heat = |f: &mut Option<SymFactor>| f.as_mut().map_or(Ok(()), |f| f.factor(values));
+            |f: &mut Option<MechanicsFactor>| f.as_mut().map_or(Ok(()), |f| f.factor_current());
+        let heat = |f: &mut Option<SymFactor>| f.as_mut().map_or(Ok(()), |f| f.factor_current());
         let (m, t) = rayon::join(|| mech(&mut self.fm), || heat(&mut self.ft));
         m.and(t)?;
         self.lag.factored_now();
         Ok(())
+    }
+
+    /// Take the whole system's `values` into the blocks.
+    fn update(&mut self, values: &[f64]) {
+        if let Some(f) = &mut self.fm {
+            f.matrix().update(values);
+        }
+        if let Some(f) = &mut self.ft {
+            f.sub.update(values);
+        }
+        self.coupling.update(values);
+        self.coupling_mt.update(values);
+    }
+
+    /// y = K x by blocks: y_m = K_mm x_m + K_mθ x_θ, y_θ = K_θm x_m + K_θθ x_θ.
+    fn mul(&self, x: &[f64], y: &mut [f64]) {
+        let xm: Vec<f64> = self.mech.iter().map(|&e| x[e]).collect();
+        let xt: Vec<f64> = self.heat.iter().map(|&e| x[e]).collect();
+        let mut ym = vec![0.0; xm.len()];
+        let mut yt = vec![0.0; xt.len()];
+        if let Some(f) = &self.fm {
+            match f {
+                MechanicsFactor::Ldlt(f) => f.sub.mul_sub(&xm, &mut ym),
+                MechanicsFactor::Lu(f) => f.sub.mul_sub(&xm, &mut ym),
+            }
+        }
+        self.coupling_mt.mul_sub(&xt, &mut ym);
+        self.coupling.mul_sub(&xm, &mut yt);
+        if let Some(f) = &self.ft {
+            f.sub.mul_sub(&xt, &mut yt);
+        }
+        for (&e, v) in self.mech.iter().zip(&ym) {
+            y[e] = -*v;
+        }
+        for (&e, v) in self.heat.iter().zip(&yt) {
+            y[e] = -*v;
+        }
     }
 
     /// z = P⁻¹ r: z_m = K_mm⁻¹ r_m, z_θ = K_θθ⁻¹ (r_θ − K_θm z_m).
