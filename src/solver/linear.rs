@@ -352,6 +352,11 @@ enum Held {
 }
 
 impl<T: Real> LaggedLu<T> {
+    /// Bytes of the factor's values, in `T`.
+    fn bytes(&self) -> usize {
+        self.staticlu.entries() * std::mem::size_of::<T>()
+    }
+
     /// `node[i]`: mesh node of the block's equation i (the elimination order keeps a node's
     /// unknowns together).
     fn new(sub: SubMatrix, node: &[u32]) -> LaggedLu<T> {
@@ -451,7 +456,7 @@ impl<T: Real> Factorization for LaggedLu<T> {
     }
 
     fn factor_bytes(&self) -> Option<usize> {
-        Some(self.staticlu.entries() * std::mem::size_of::<T>())
+        Some(self.bytes())
     }
 }
 
@@ -1030,10 +1035,18 @@ enum MechanicsFactor {
 
 impl MechanicsFactor {
     /// The block, with the values last taken.
-    fn matrix(&mut self) -> &mut SubMatrix {
+    fn matrix(&self) -> &SubMatrix {
         match self {
-            MechanicsFactor::Ldlt(f) => &mut f.sub,
-            MechanicsFactor::Lu(f) => &mut f.sub,
+            MechanicsFactor::Ldlt(f) => &f.sub,
+            MechanicsFactor::Lu(f) => &f.sub,
+        }
+    }
+
+    /// Take the block's values from the whole system's `values`.
+    fn update(&mut self, values: &[f64]) {
+        match self {
+            MechanicsFactor::Ldlt(f) => f.sub.update(values),
+            MechanicsFactor::Lu(f) => f.sub.update(values),
         }
     }
 
@@ -1062,7 +1075,7 @@ impl MechanicsFactor {
     fn bytes(&self) -> usize {
         match self {
             MechanicsFactor::Ldlt(f) => f.bytes(),
-            MechanicsFactor::Lu(f) => f.staticlu.entries() * std::mem::size_of::<f32>(),
+            MechanicsFactor::Lu(f) => f.bytes(),
         }
     }
 }
@@ -1136,7 +1149,7 @@ impl BlockTriangular {
     /// Take the whole system's `values` into the blocks.
     fn update(&mut self, values: &[f64]) {
         if let Some(f) = &mut self.fm {
-            f.matrix().update(values);
+            f.update(values);
         }
         if let Some(f) = &mut self.ft {
             f.sub.update(values);
@@ -1152,10 +1165,7 @@ impl BlockTriangular {
         let mut ym = vec![0.0; xm.len()];
         let mut yt = vec![0.0; xt.len()];
         if let Some(f) = &self.fm {
-            match f {
-                MechanicsFactor::Ldlt(f) => f.sub.mul_sub(&xm, &mut ym),
-                MechanicsFactor::Lu(f) => f.sub.mul_sub(&xm, &mut ym),
-            }
+            f.matrix().mul_sub(&xm, &mut ym);
         }
         self.coupling_mt.mul_sub(&xt, &mut ym);
         self.coupling.mul_sub(&xm, &mut yt);
