@@ -116,9 +116,10 @@ pub trait Factorization: Send {
 const GMRES_TOL: f64 = 1e-10;
 /// Relative residual at which a solve with a factor kept through Newton's damped iterations
 /// stops (a [`Lag::dear`] factor, of a tangent that is not near it). Those updates are
-/// halved while their residual grows and corrected by the next iteration: three digits
-/// give the same iterations as ten on Table 2's 147k row, where a factorisation costs 24
-/// GMRES iterations (measured: 83 Newton iterations, the gap to 1e-15).
+/// halved while their residual grows and corrected by the next iteration: on Table 2's 147k
+/// row, where a factorisation costs 24 GMRES iterations, three digits take 83 Newton
+/// iterations where ten took 81, and 33 factorisations where they took 59 (the gap the same
+/// to 5.5e-13); two digits reject a step.
 const DAMPED_TOL: f64 = 1e-3;
 const GMRES_RESTART: usize = 60;
 const GMRES_MAX: usize = 300;
