@@ -17,7 +17,8 @@ pub struct Steps {
     pub max: f64,
     /// Relative tolerance of the per-field residual and update norms.
     pub tol: f64,
-    /// Newton iterations per step before the step is cut.
+    /// Newton iterations per step before the step is cut (a few more in Newton's quadratic
+    /// tail: `solver::newton`).
     pub max_iter: usize,
     /// Steps converging in at most this many iterations grow Δλ.
     pub easy_iter: usize,

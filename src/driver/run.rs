@@ -740,7 +740,8 @@ impl<'a> Run<'a> {
             return Err(self.fail(failure)?);
         }
         self.totals.last_failure = failure.to_string();
-        if self.opts.verbose {
+        // a cut step's attempt can be most of a large run's time: say so, log files too
+        if !self.opts.quiet {
             let lambda = self.model.path.lambda(target);
             let to = if self.show_t() {
                 format!("t {} (λ {lambda:.4})", self.t_text(target))

@@ -210,6 +210,41 @@ fn load_in_one_step_is_cut_by_the_controller() {
 }
 
 #[test]
+fn a_step_in_newton_s_quadratic_tail_at_max_iter_is_finished_not_cut() {
+    // block-plate-3d-tm1 (H1 8×8) takes 13 and 14 Newton iterations in two of its steps, the
+    // last two or three in the quadratic tail (1e-4 → 5e-7 → 9e-12). With max_iter = 12 (its
+    // steps of 9 or more iterations now count as hard, so the path differs) a step of 13
+    // still converges and none is cut; the gap is the default's. With max_iter = 9 the steps
+    // are still damped there (residual 3e-3) and are cut
+    let case = root().join("cases/block-plate-3d-tm1.toml");
+    let run = |tag: &str, max_iter: &str| {
+        let dir = common::scratch(tag);
+        let o = common::solve_cli(&case, &dir.join("out"), &["--set", max_iter]);
+        assert!(o.status.success(), "{}", common::stderr(&o));
+        let (names, rows) = history(&dir.join("out"));
+        let col = names.iter().position(|n| n == "newton_iterations").unwrap();
+        let most = rows.iter().map(|r| r[col] as usize).max().unwrap();
+        (common::summary(&dir.join("out")), most)
+    };
+    let gap = |s: &serde_json::Value| s["probes"]["gap"].as_f64().unwrap();
+    let rejected = |s: &serde_json::Value| s["rejected_steps"].as_u64().unwrap();
+    let (default, _) = run("tail-16", "steps.max_iter=16");
+    let (tail, most) = run("tail-12", "steps.max_iter=12");
+    assert_eq!(rejected(&tail), 0, "{tail}");
+    assert!(most > 12, "no step needed more than 12 iterations ({most})");
+    let (damped, _) = run("tail-9", "steps.max_iter=9");
+    assert!(rejected(&damped) >= 1, "{damped}");
+    for s in [&tail, &damped] {
+        assert!(
+            (gap(s) - gap(&default)).abs() <= 1e-10 * gap(&default),
+            "{} against {}",
+            gap(s),
+            gap(&default)
+        );
+    }
+}
+
+#[test]
 fn unloading_reopens_the_medium_and_the_heat_flow_drops() {
     let (_, rows) = solve_checked(&case("unloading"));
     let t = column(&rows, "time");
