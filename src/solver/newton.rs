@@ -59,10 +59,12 @@ pub struct StepReport {
 #[derive(Debug)]
 pub enum StepFailure {
     /// `met`: the last residual was below tolerance, but the updates did not shrink.
+    /// `largest`: where the last residual's worst field is largest (not for `met`).
     NotConverged {
         iterations: usize,
         last: FieldNorms,
         met: bool,
+        largest: Option<Largest>,
     },
     Assembly(AssemblyError),
     Linear(LinearError),
@@ -75,6 +77,7 @@ impl std::fmt::Display for StepFailure {
                 iterations,
                 last,
                 met,
+                largest,
             } => {
                 let fields = format!(
                     "u {:.1e}, theta {:.1e}, p {:.1e}",
@@ -91,12 +94,36 @@ impl std::fmt::Display for StepFailure {
                     write!(
                         f,
                         "no convergence in {iterations} iterations (relative residuals {fields})"
-                    )
+                    )?;
+                    match largest {
+                        Some(l) => write!(f, "; {l}"),
+                        None => Ok(()),
+                    }
                 }
             }
             StepFailure::Assembly(e) => write!(f, "{e}"),
             StepFailure::Linear(e) => write!(f, "{e}"),
         }
+    }
+}
+
+/// Where a residual is largest: the field, and the mesh node (reference coordinates) of the
+/// equation. A step that fails at one corner of a large mesh says which.
+#[derive(Debug)]
+pub struct Largest {
+    pub field: Field,
+    pub at: Vec<f64>,
+}
+
+impl std::fmt::Display for Largest {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let at: Vec<String> = self.at.iter().map(|x| format!("{x:.4}")).collect();
+        write!(
+            f,
+            "its {} residual is largest at the node at ({})",
+            self.field.name(),
+            at.join(", ")
+        )
     }
 }
 
@@ -337,6 +364,20 @@ impl Newton {
         }
     }
 
+    /// Where the residual `r` (free equations) of the field worst in `rel` is largest.
+    fn largest(&self, model: &Model, r: &[f64], rel: &FieldNorms) -> Option<Largest> {
+        let worst = (0..3).max_by(|&a, &b| rel[a].total_cmp(&rel[b]))?;
+        let e = (0..r.len())
+            .filter(|&e| idx(self.eq_field[e]) == worst)
+            .max_by(|&a, &b| r[a].abs().total_cmp(&r[b].abs()))?;
+        let d = model.cons.eq.iter().position(|&q| q as usize == e)?;
+        let node = model.dofs.node_of_dof()[d] as usize;
+        Some(Largest {
+            field: self.eq_field[e],
+            at: model.mesh.coords[node][..model.mesh.dim].to_vec(),
+        })
+    }
+
     /// Norms of the free part of the state per field.
     fn norms_of_state(&self, model: &Model, x: &[f64]) -> FieldNorms {
         let mut n = [0.0; 3];
@@ -392,6 +433,7 @@ impl Newton {
                     iterations: it,
                     last: r.rel,
                     met: false,
+                    largest: self.largest(model, &st.rhs, &r.rel),
                 });
             }
             // near: the tangent moved little since the last iteration's (a factor of a state
@@ -431,6 +473,7 @@ impl Newton {
                     iterations: it,
                     last: r.rel,
                     met: r.converged,
+                    largest: None,
                 });
             }
             it += 1;
@@ -656,6 +699,7 @@ impl Newton {
                 iterations: 1,
                 last: [0.0, rel, 0.0],
                 met: false,
+                largest: self.largest(model, &r, &[0.0, rel, 0.0]),
             });
         }
         st.history.push([0.0, rel, 0.0]);

@@ -966,6 +966,12 @@ fn a_pad_corner_that_passes_below_the_plate_between_the_mediums_points_is_counte
         e.contains("load step from t = 1.07") && e.contains("(λ = 1.000000) failed with Δt = "),
         "{e}"
     );
+    // where Newton stalls: at the pad's leading bottom corner, which holds while the rest
+    // slides (THEORY.md, "Where drags stall")
+    assert!(
+        e.contains("its u residual is largest at the node at (3.0000, 0.2500)"),
+        "{e}"
+    );
     // and that friction's drags stall where the full slide begins, with where to read more
     assert!(
         e.contains("with friction, drags stall where the full slide begins")
