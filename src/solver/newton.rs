@@ -15,7 +15,7 @@
 use super::idle::IdleThreads;
 use super::linear::{LinearError, LinearSolver};
 use crate::assembly::{Assembler, AssemblyError, AssemblyStats};
-use crate::dofs::{Field, NONE};
+use crate::dofs::{Field, NONE, equation_structure};
 use crate::model::Model;
 
 /// Norms per field, indexed by `Field as usize`.
@@ -370,8 +370,7 @@ impl Newton {
         let e = (0..r.len())
             .filter(|&e| idx(self.eq_field[e]) == worst)
             .max_by(|&a, &b| r[a].abs().total_cmp(&r[b].abs()))?;
-        let d = model.cons.eq.iter().position(|&q| q as usize == e)?;
-        let node = model.dofs.node_of_dof()[d] as usize;
+        let node = equation_structure(&model.dofs, &model.cons).node[e] as usize;
         Some(Largest {
             field: self.eq_field[e],
             at: model.mesh.coords[node][..model.mesh.dim].to_vec(),
