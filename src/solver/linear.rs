@@ -1675,17 +1675,21 @@ mod tests {
         assert!(err < 1e-11, "{err}");
     }
 
+    /// y = tridiag(−1, d, −1) x: with d = 2 a 1D Laplacian.
+    fn tridiagonal(d: f64, x: &[f64], y: &mut [f64]) {
+        let n = x.len();
+        for i in 0..n {
+            let left = if i > 0 { x[i - 1] } else { 0.0 };
+            let right = if i + 1 < n { x[i + 1] } else { 0.0 };
+            y[i] = d * x[i] - left - right;
+        }
+    }
+
     #[test]
     fn gmres_starts_from_the_iterate_given_and_gives_up_when_behind() {
         // a 1D Laplacian, unpreconditioned: slow to converge
         let n = 200;
-        let matvec = |x: &[f64], y: &mut [f64]| {
-            for i in 0..n {
-                let left = if i > 0 { x[i - 1] } else { 0.0 };
-                let right = if i + 1 < n { x[i + 1] } else { 0.0 };
-                y[i] = 2.0 * x[i] - left - right;
-            }
-        };
+        let matvec = |x: &[f64], y: &mut [f64]| tridiagonal(2.0, x, y);
         let id = |r: &[f64], z: &mut [f64]| z.copy_from_slice(r);
         let b: Vec<f64> = (0..n).map(|i| ((i * 7 % 11) as f64) - 5.0).collect();
         let mut x = vec![0.0; n];
@@ -1732,12 +1736,7 @@ mod tests {
             &self.lag
         }
         fn mul(&self, x: &[f64], y: &mut [f64]) {
-            let n = x.len();
-            for i in 0..n {
-                let left = if i > 0 { x[i - 1] } else { 0.0 };
-                let right = if i + 1 < n { x[i + 1] } else { 0.0 };
-                y[i] = (2.0 + self.shift) * x[i] - left - right;
-            }
+            tridiagonal(2.0 + self.shift, x, y)
         }
         fn precondition(&self, r: &[f64], z: &mut [f64]) {
             z.copy_from_slice(r)
