@@ -1,6 +1,6 @@
 //! What the thread pool's other threads do while a linear solve runs on one of them.
 
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
 /// What the pool's other threads do while a linear solve runs: most of a factorisation or
@@ -55,6 +55,11 @@ impl IdleThreads {
 
     /// Run `f` (a linear solve) with the pool's other threads doing what `self` says.
     pub fn run<R: Send>(self, f: impl FnOnce() -> R + Send) -> R {
+        self.run_counting(f, &AtomicUsize::new(0))
+    }
+
+    /// [`IdleThreads::run`], counting in `gave_up` the spinners that stopped for want of work.
+    fn run_counting<R: Send>(self, f: impl FnOnce() -> R + Send, gave_up: &AtomicUsize) -> R {
         let threads = rayon::current_num_threads();
         let bound = match self {
             IdleThreads::Sleep => return f(),
@@ -68,6 +73,7 @@ impl IdleThreads {
             for _ in 1..threads {
                 let idle = Idle {
                     done: &done,
+                    gave_up,
                     bound,
                     since: Instant::now(),
                 };
@@ -100,6 +106,8 @@ pub const DEFAULT_SPIN_MS: u64 = 50;
 #[derive(Clone, Copy)]
 struct Idle<'s> {
     done: &'s AtomicBool,
+    /// Spinners that stopped because no work came within the bound.
+    gave_up: &'s AtomicUsize,
     /// How long to spin without work; `None`: until `done`.
     bound: Option<Duration>,
     /// When this thread last ran work (or started spinning).
@@ -120,6 +128,7 @@ fn spin<'s>(s: &rayon::Scope<'s>, mut idle: Idle<'s>) {
     while !idle.done.load(Ordering::Acquire) {
         let now = Instant::now();
         if idle.bound.is_some_and(|b| now - idle.since > b) {
+            idle.gave_up.fetch_add(1, Ordering::Relaxed);
             return; // the thread goes back to the pool, which sleeps it until work comes
         }
         if now - start > SPIN_SLICE {
@@ -138,7 +147,8 @@ fn spin<'s>(s: &rayon::Scope<'s>, mut idle: Idle<'s>) {
 mod tests {
     use super::IdleThreads;
     use rayon::prelude::*;
-    use std::time::Duration;
+    use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+    use std::time::{Duration, Instant};
 
     /// CPU seconds this thread has used.
     fn thread_cpu() -> f64 {
@@ -152,9 +162,9 @@ mod tests {
         t.tv_sec as f64 + 1e-9 * t.tv_nsec as f64
     }
 
-    /// CPU seconds the pool's threads other than the caller use while `idle` runs a solve
-    /// that hands out no work for 200 ms.
-    fn idle_cpu(idle: IdleThreads) -> f64 {
+    /// A pool of two threads, and the CPU seconds its thread other than the caller uses while
+    /// `job` runs on the caller.
+    fn other_cpu(job: impl FnOnce() + Send) -> f64 {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(2)
             .build()
@@ -163,7 +173,7 @@ mod tests {
         pool.install(|| {
             let caller = rayon::current_thread_index().unwrap();
             let before = cpu();
-            idle.run(|| std::thread::sleep(Duration::from_millis(200)));
+            job();
             let after = cpu();
             (0..2)
                 .filter(|&i| i != caller)
@@ -172,16 +182,68 @@ mod tests {
         })
     }
 
+    /// A solve that hands out no work for 200 ms.
+    fn idle_solve() {
+        std::thread::sleep(Duration::from_millis(200));
+    }
+
     #[test]
     fn the_default_stops_spinning_when_a_solve_hands_out_no_work() {
-        let spin = idle_cpu(IdleThreads::Spin);
-        let default = idle_cpu(IdleThreads::default());
-        let sleep = idle_cpu(IdleThreads::Sleep);
-        // spinning through the solve keeps the other core busy for most of its 200 ms (less
-        // only if the machine takes the core away); the default gives it up after 50 ms
-        assert!(spin > 0.1, "spin: {spin} s of CPU");
+        // the measure itself: 60 ms of CPU burnt on the other thread (the caller sleeps
+        // outside rayon, so the job it spawned can only run there) read as at least that
+        let burnt = other_cpu(|| {
+            let done = AtomicBool::new(false);
+            rayon::scope(|s| {
+                s.spawn(|_| {
+                    let start = thread_cpu();
+                    while thread_cpu() - start < 0.06 {
+                        std::hint::spin_loop();
+                    }
+                    done.store(true, Ordering::Release);
+                });
+                while !done.load(Ordering::Acquire) {
+                    std::thread::sleep(Duration::from_millis(1));
+                }
+            });
+        });
+        let default = other_cpu(|| IdleThreads::default().run(idle_solve));
+        let sleep = other_cpu(|| IdleThreads::Sleep.run(idle_solve));
+        // upper bounds: a loaded machine can only take CPU away from the spinner
         assert!(default < 0.08, "default: {default} s of CPU");
         assert!(sleep < 0.01, "sleep: {sleep} s of CPU");
+        assert!(burnt >= 0.06, "burnt: {burnt} s of CPU");
+    }
+
+    #[test]
+    fn spinning_stops_after_the_bound_without_work_and_never_under_spin() {
+        // what the policies decide, counted rather than timed (a loaded machine changes how
+        // much CPU a spinner gets, not whether it stops)
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let gave_up = AtomicUsize::new(0);
+            IdleThreads::Spin.run_counting(idle_solve, &gave_up);
+            assert_eq!(gave_up.load(Ordering::Relaxed), 0, "spin gave up");
+            // the default's spinner gives up once 50 ms have passed without work: the solve
+            // waits for that (or 10 s), and must not have seen it sooner
+            let gave_up = AtomicUsize::new(0);
+            let start = Instant::now();
+            let waited = IdleThreads::default().run_counting(
+                || {
+                    while gave_up.load(Ordering::Relaxed) == 0
+                        && start.elapsed() < Duration::from_secs(10)
+                    {
+                        std::thread::sleep(Duration::from_millis(1));
+                    }
+                    start.elapsed()
+                },
+                &gave_up,
+            );
+            assert_eq!(gave_up.load(Ordering::Relaxed), 1, "after {waited:?}");
+            assert!(waited >= IdleThreads::DEFAULT_SPIN, "{waited:?}");
+        });
     }
 
     #[test]
