@@ -161,6 +161,34 @@ fn print_chain(e: &dyn std::error::Error) {
     }
 }
 
+/// A run's error, printed by rank 0. On several ranks, a rank whose run failed while another
+/// rank's goes on (a PETSc call that failed in its part alone, the others waiting for it in a
+/// collective call) says so itself and ends every rank: otherwise the run would hang, silent.
+fn report_failure(e: &dyn std::error::Error) {
+    #[cfg(feature = "petsc")]
+    let ranks = tmc::parallel::Ranks::world();
+    #[cfg(feature = "petsc")]
+    if !ranks.is_serial() && !tmc::parallel::petsc::all_failed(FAILURE_WAIT) {
+        note!(
+            "error on rank {} of {} alone, while the others wait for it:",
+            ranks.rank,
+            ranks.size
+        );
+        print_chain(e);
+        note!("(ending every rank)");
+        tmc::parallel::petsc::abort(1);
+    }
+    if !silent() {
+        print_chain(e);
+    }
+}
+
+/// How long a failed rank waits for the others to fail as well before it ends the run: ranks
+/// that fail together get here within the time rank 0 takes to write the failed run's
+/// summary, far less than this (and its files are written whole or not at all).
+#[cfg(feature = "petsc")]
+const FAILURE_WAIT: std::time::Duration = std::time::Duration::from_secs(60);
+
 /// `RAYON_NUM_THREADS`, if set, a thread count this machine can start (a huge one would hang
 /// while spawning).
 fn check_thread_count() -> Result<(), String> {
@@ -501,9 +529,7 @@ fn solve_command(case: &std::path::Path, opts: &SolveOptions) -> ExitCode {
             ExitCode::SUCCESS
         }
         Err(e) => {
-            if !silent() {
-                print_chain(&e);
-            }
+            report_failure(&e);
             ExitCode::FAILURE
         }
     }

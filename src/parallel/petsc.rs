@@ -14,6 +14,16 @@ use std::sync::Mutex;
 /// MPI's universe while the engine runs (dropping it ends MPI), and whether PETSc is up.
 static ENGINE: Mutex<Option<(mpi::environment::Universe, bool)>> = Mutex::new(None);
 
+/// A copy of the world's communicator for [`all_failed`] alone, so that its barrier can never
+/// be matched with another collective call of tmc's or PETSc's.
+static FAILURES: Mutex<Option<Failures>> = Mutex::new(None);
+
+struct Failures(SimpleCommunicator);
+
+// SAFETY: the communicator is made, used and freed on the thread that started MPI (tmc's
+// main thread, the only one that calls MPI); the lock only moves the handle's ownership.
+unsafe impl Send for Failures {}
+
 /// A PETSc call that failed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[error("PETSc: {call} failed: {message} (error {code})")]
@@ -110,6 +120,9 @@ pub fn start_mpi() -> Ranks {
     if engine.is_none() {
         let universe = mpi::initialize().expect("MPI starts once per process");
         *engine = Some((universe, false));
+        // (collective: every rank starts MPI here)
+        *FAILURES.lock().expect("failures lock") =
+            Some(Failures(SimpleCommunicator::world().duplicate()));
     }
     drop(engine);
     world().expect("MPI is running")
@@ -134,8 +147,41 @@ pub fn start() -> Result<Ranks, PetscError> {
     Ok(ranks)
 }
 
+/// Called by a rank whose run failed: whether every rank's run failed too, as far as can be
+/// told within `wait`. A failure the ranks share (a step they all cut to nothing, an option
+/// PETSc refused) brings them all here; one that struck a rank alone (a PETSc call that
+/// failed in its part) leaves the others waiting in a collective call for it, and they never
+/// come: that rank must then end the run ([`abort`]) or it would hang.
+pub fn all_failed(wait: std::time::Duration) -> bool {
+    let failures = FAILURES.lock().expect("failures lock");
+    let Some(Failures(comm)) = failures.as_ref() else {
+        return true;
+    };
+    let start = std::time::Instant::now();
+    let mut request = comm.immediate_barrier();
+    loop {
+        match request.test() {
+            Ok(_) => return true,
+            Err(pending) => request = pending,
+        }
+        if start.elapsed() > wait {
+            // never to complete; the process ends next (dropping it would abort at once)
+            std::mem::forget(request);
+            return false;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+}
+
+/// End every rank of the run at once, with exit status `code` (MPI_Abort): what a rank does
+/// when it failed alone and the others wait for it.
+pub fn abort(code: i32) -> ! {
+    SimpleCommunicator::world().abort(code)
+}
+
 /// End PETSc, then MPI, if they were started. PETSc's objects must be gone by then.
 pub fn finish() {
+    FAILURES.lock().expect("failures lock").take();
     let mut engine = ENGINE.lock().expect("engine lock");
     if let Some((universe, petsc)) = engine.take() {
         if petsc {
