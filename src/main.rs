@@ -166,17 +166,18 @@ fn print_chain(e: &dyn std::error::Error) {
 /// collective call) says so itself and ends every rank: otherwise the run would hang, silent.
 fn report_failure(e: &dyn std::error::Error) {
     #[cfg(feature = "petsc")]
-    let ranks = tmc::parallel::Ranks::world();
-    #[cfg(feature = "petsc")]
-    if !ranks.is_serial() && !tmc::parallel::petsc::all_failed(FAILURE_WAIT) {
-        note!(
-            "error on rank {} of {} alone, while the others wait for it:",
-            ranks.rank,
-            ranks.size
-        );
-        print_chain(e);
-        note!("(ending every rank)");
-        tmc::parallel::petsc::abort(1);
+    {
+        let ranks = tmc::parallel::Ranks::world();
+        if !ranks.is_serial() && !tmc::parallel::petsc::all_failed(FAILURE_WAIT) {
+            note!(
+                "error on rank {} of {} alone, while the others wait for it:",
+                ranks.rank,
+                ranks.size
+            );
+            print_chain(e);
+            note!("(ending every rank)");
+            tmc::parallel::petsc::abort(1);
+        }
     }
     if !silent() {
         print_chain(e);

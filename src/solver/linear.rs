@@ -1061,6 +1061,11 @@ fn nested_dissection_trying(
         let mut perm = vec![0i32; nv];
         let mut iperm = vec![0i32; nv];
         let mut options = [-1i32; metis_sys::METIS_NOPTIONS as usize];
+        let separators = tries.unwrap_or(if nv >= SEPARATOR_TRIES_FROM {
+            SEPARATOR_TRIES
+        } else {
+            1
+        });
         let _one_at_a_time = crate::mesh::partition::METIS
             .lock()
             .unwrap_or_else(|e| e.into_inner());
@@ -1069,12 +1074,7 @@ fn nested_dissection_trying(
         let status = unsafe {
             metis_sys::METIS_SetDefaultOptions(options.as_mut_ptr());
             options[metis_sys::moptions_et_METIS_OPTION_NUMBERING as usize] = 0;
-            options[metis_sys::moptions_et_METIS_OPTION_NSEPS as usize] =
-                tries.unwrap_or(if nv >= SEPARATOR_TRIES_FROM {
-                    SEPARATOR_TRIES
-                } else {
-                    1
-                });
+            options[metis_sys::moptions_et_METIS_OPTION_NSEPS as usize] = separators;
             metis_sys::METIS_NodeND(
                 &mut nvtxs,
                 xadj.as_mut_ptr(),
