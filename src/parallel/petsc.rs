@@ -11,18 +11,22 @@ use mpi::traits::AsRaw;
 use std::ffi::{CStr, CString};
 use std::sync::Mutex;
 
-/// MPI's universe while the engine runs (dropping it ends MPI), and whether PETSc is up.
-static ENGINE: Mutex<Option<(mpi::environment::Universe, bool)>> = Mutex::new(None);
+/// The engine while it runs: started by [`start_mpi`], ended by [`finish`].
+static ENGINE: Mutex<Option<Engine>> = Mutex::new(None);
 
-/// A copy of the world's communicator for [`all_failed`] alone, so that its barrier can never
-/// be matched with another collective call of tmc's or PETSc's.
-static FAILURES: Mutex<Option<Failures>> = Mutex::new(None);
-
-struct Failures(SimpleCommunicator);
+struct Engine {
+    /// MPI's universe (dropping it ends MPI).
+    universe: mpi::environment::Universe,
+    /// Whether PETSc is up.
+    petsc: bool,
+    /// A copy of the world's communicator for [`all_failed`] alone, so that its barrier can
+    /// never be matched with another collective call of tmc's or PETSc's.
+    failures: SimpleCommunicator,
+}
 
 // SAFETY: the communicator is made, used and freed on the thread that started MPI (tmc's
 // main thread, the only one that calls MPI); the lock only moves the handle's ownership.
-unsafe impl Send for Failures {}
+unsafe impl Send for Engine {}
 
 /// A PETSc call that failed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -119,10 +123,12 @@ pub fn start_mpi() -> Ranks {
     let mut engine = ENGINE.lock().expect("engine lock");
     if engine.is_none() {
         let universe = mpi::initialize().expect("MPI starts once per process");
-        *engine = Some((universe, false));
-        // (collective: every rank starts MPI here)
-        *FAILURES.lock().expect("failures lock") =
-            Some(Failures(SimpleCommunicator::world().duplicate()));
+        *engine = Some(Engine {
+            universe,
+            petsc: false,
+            // (collective: every rank starts MPI here)
+            failures: SimpleCommunicator::world().duplicate(),
+        });
     }
     drop(engine);
     world().expect("MPI is running")
@@ -133,7 +139,7 @@ pub fn start_mpi() -> Ranks {
 pub fn start() -> Result<Ranks, PetscError> {
     let ranks = start_mpi();
     let mut engine = ENGINE.lock().expect("engine lock");
-    let (_, petsc) = engine.as_mut().expect("MPI is running");
+    let Engine { petsc, .. } = engine.as_mut().expect("MPI is running");
     if !*petsc {
         unsafe {
             check("PetscInitialize", ffi::PetscInitializeNoArguments())?;
@@ -153,12 +159,12 @@ pub fn start() -> Result<Ranks, PetscError> {
 /// failed in its part) leaves the others waiting in a collective call for it, and they never
 /// come: that rank must then end the run ([`abort`]) or it would hang.
 pub fn all_failed(wait: std::time::Duration) -> bool {
-    let failures = FAILURES.lock().expect("failures lock");
-    let Some(Failures(comm)) = failures.as_ref() else {
+    let engine = ENGINE.lock().expect("engine lock");
+    let Some(Engine { failures, .. }) = engine.as_ref() else {
         return true;
     };
     let start = std::time::Instant::now();
-    let mut request = comm.immediate_barrier();
+    let mut request = failures.immediate_barrier();
     loop {
         match request.test() {
             Ok(_) => return true,
@@ -181,9 +187,14 @@ pub fn abort(code: i32) -> ! {
 
 /// End PETSc, then MPI, if they were started. PETSc's objects must be gone by then.
 pub fn finish() {
-    FAILURES.lock().expect("failures lock").take();
     let mut engine = ENGINE.lock().expect("engine lock");
-    if let Some((universe, petsc)) = engine.take() {
+    if let Some(Engine {
+        universe,
+        petsc,
+        failures,
+    }) = engine.take()
+    {
+        drop(failures);
         if petsc {
             unsafe { ffi::PetscFinalize() };
         }
