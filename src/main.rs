@@ -406,6 +406,8 @@ fn check_command(
         ..Default::default()
     };
     match tmc::driver::check(case, &opts) {
+        // rank 0 speaks for every rank (each rank's own figures on lines of their own)
+        Ok(_) if silent() => ExitCode::SUCCESS,
         Ok(r) => {
             say!("{}: ready to solve", case.display());
             say!("mesh {} ({}D)", r.mesh.source.display(), r.mesh.dim);
@@ -428,6 +430,19 @@ fn check_command(
                 say!("{why}");
             }
             match r.factor_entries {
+                _ if !r.per_rank.is_empty() => {
+                    let ranks = r.per_rank.len();
+                    let total: usize = r.per_rank.iter().map(|p| p.0).sum();
+                    let factor = if r.factor_entries.is_some() {
+                        ""
+                    } else {
+                        " besides the factor (PETSc's, sized when it factorises)"
+                    };
+                    say!("tangent: {total} entries over {ranks} ranks; at the run's peak{factor}:");
+                    for (rank, (entries, mb)) in r.per_rank.iter().enumerate() {
+                        say!("  rank {rank}: {entries} tangent entries, about {mb:.0} MB");
+                    }
+                }
                 Some(n) => say!(
                     "tangent: {} entries; factor: {n} entries; about {:.0} MB at the run's peak",
                     r.tangent_entries,

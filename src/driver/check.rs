@@ -37,6 +37,9 @@ pub struct CheckReport {
     pub expansion: Vec<String>,
     /// The model's warnings and notes (a body the medium alone holds in some direction).
     pub warnings: Vec<String>,
+    /// On several ranks, each rank's tangent entries and estimated peak memory in MB (its
+    /// own part), in rank order; empty on one process.
+    pub per_rank: Vec<(usize, f64)>,
 }
 
 impl CheckReport {
@@ -97,6 +100,18 @@ pub fn check(case_path: &Path, opts: &SolveOptions) -> Result<CheckReport, Solve
         .iter()
         .map(|(_, s)| s.factor_bytes())
         .sum::<Option<usize>>();
+    let tangent_entries = plan.asm.pattern.row_idx.len();
+    let ranks = plan.asm.ranks;
+    let per_rank = if ranks.is_serial() {
+        Vec::new()
+    } else {
+        // each rank its own slot, summed: every rank holds every rank's figures
+        let mut mine = vec![0.0; 2 * ranks.size];
+        mine[2 * ranks.rank] = tangent_entries as f64;
+        mine[2 * ranks.rank + 1] = run_memory_mb(tangent_entries, factor_bytes);
+        ranks.sum_into(&mut mine);
+        mine.chunks(2).map(|r| (r[0] as usize, r[1])).collect()
+    };
     Ok(CheckReport {
         physics: describe(&model.physics, plan.strategy),
         unknowns: Field::ALL
@@ -105,7 +120,7 @@ pub fn check(case_path: &Path, opts: &SolveOptions) -> Result<CheckReport, Solve
             .filter(|&(_, n)| n > 0)
             .collect(),
         free: model.cons.n_eq,
-        tangent_entries: plan.asm.pattern.row_idx.len(),
+        tangent_entries,
         factor_entries,
         factor_bytes,
         engine_note: plan.note,
@@ -115,6 +130,7 @@ pub fn check(case_path: &Path, opts: &SolveOptions) -> Result<CheckReport, Solve
         probes: probes.iter().map(|p| p.name.clone()).collect(),
         expansion: expansion(&case),
         warnings: model.warnings,
+        per_rank,
         mesh: model.mesh,
     })
 }

@@ -912,3 +912,37 @@ fn check_says_what_it_can_size_on_each_engine() {
         "{petsc}"
     );
 }
+
+#[test]
+fn check_under_mpirun_reports_once_with_each_rank_s_memory() {
+    // before, every rank printed the whole report, each with its own part's tangent and no
+    // rank named
+    let case = root().join("cases/block.toml");
+    let o = common::mpirun_tmc(2, &["check".as_ref(), case.as_os_str()]);
+    let said = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(said.matches("ready to solve").count(), 1, "{said}");
+    let ranks: Vec<(usize, f64)> = (0..2)
+        .map(|r| {
+            let line = said
+                .lines()
+                .find(|l| l.trim_start().starts_with(&format!("rank {r}: ")))
+                .unwrap_or_else(|| panic!("no line of rank {r} in {said}"));
+            let words: Vec<&str> = line.split_whitespace().collect();
+            // "rank R: E tangent entries, about M MB"
+            (words[2].parse().unwrap(), words[6].parse().unwrap())
+        })
+        .collect();
+    let total: usize = said
+        .lines()
+        .find_map(|l| l.strip_prefix("tangent: "))
+        .and_then(|l| l.split_whitespace().next())
+        .and_then(|w| w.parse().ok())
+        .unwrap_or_else(|| panic!("no tangent line in {said}"));
+    assert!(said.contains("entries over 2 ranks"), "{said}");
+    assert_eq!(ranks[0].0 + ranks[1].0, total, "{said}");
+    // each rank holds a part: more than none, less than the whole, and some memory for it
+    for (entries, mb) in ranks {
+        assert!(entries > 0 && entries < total && mb > 0.0, "{said}");
+    }
+}
