@@ -14,8 +14,13 @@
 //! η_s = 1e-3, and with a mass density ρ = 1e-4 on every region (inertia).
 //!
 //! Third table: issue 36's drags with inertia, on n = 16 and 32, Q1 and T1, at μ = 0.1 to 1:
-//! how far each gets and its force ratio along the way. `TMC_BENCH_PART=cost`, `reach` or
-//! `slide` runs one table.
+//! how far each gets and its force ratio along the way.
+//!
+//! Fourth table: the pad with one cell across on a plate running 3 beyond it, its layer
+//! joined again as it slides (`friction.reconnect`), dragged 2.0 with ρ = 1e-4 at μ = 0 to 1 on
+//! n = 16 and 32 (and 64 with `TMC_BENCH_FINE=1`): how far each gets, and its force ratio from
+//! a drag of 0.25 to the end. `TMC_BENCH_PART=cost`, `reach`, `slide` or `rejoined` runs one
+//! table.
 
 mod common;
 use common::{case_text, root, solve};
@@ -37,6 +42,58 @@ fn main() {
     }
     if part.is_err() || part.as_deref() == Ok("slide") {
         slide();
+    }
+    if part.is_err() || part.as_deref() == Ok("rejoined") {
+        rejoined();
+    }
+}
+
+/// The fourth table: the reconnected pad (see the module's words).
+fn rejoined() {
+    println!();
+    println!(
+        "| cells | μ | completes | drag reached | load steps | Newton its | F_t/F_n from 0.25 to the end | at the end | wall s |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|");
+    let mut sizes = vec![16, 32];
+    if std::env::var("TMC_BENCH_FINE").is_ok() {
+        sizes.push(64);
+    }
+    for n in sizes {
+        for mu in [0.0, 0.1, 0.3, 0.5, 1.0] {
+            let d = Drag {
+                geo: "pad.geo",
+                n,
+                l: 1,
+                tri: false,
+                mu,
+                eta: 0.0,
+                rho: 1e-4,
+                press: 0.3,
+                amount: 2.0,
+                reconnect: true,
+            };
+            let (ok, reached, ratios, s) = d.run(&format!("rejoined-{n}-{mu}"));
+            let slid: Vec<f64> = (ratios.iter().filter(|r| r.0 >= 0.25))
+                .map(|r| r.1)
+                .collect();
+            let range = match slid.is_empty() {
+                true => "–".to_string(),
+                false => format!(
+                    "{:.4} … {:.4}",
+                    slid.iter().copied().fold(f64::INFINITY, f64::min),
+                    slid.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+                ),
+            };
+            println!(
+                "| Q1 n = {n} | {mu} | {} | {reached:.3} | {} | {} | {range} | {:.4} | {:.1} |",
+                if ok { "yes" } else { "no" },
+                s["load_steps"],
+                s["newton_iterations"],
+                ratios.last().map_or(f64::NAN, |r| r.1),
+                s["wall_seconds"].as_f64().unwrap_or(f64::NAN),
+            );
+        }
     }
 }
 
@@ -65,18 +122,25 @@ struct Drag {
     rho: f64,
     press: f64,
     amount: f64,
+    /// The layer joined again as it slides (`friction.reconnect`), on a plate running 3
+    /// beyond the pad (`a = 3`).
+    reconnect: bool,
 }
 
 impl Drag {
     fn text(&self) -> String {
-        let friction = if self.mu > 0.0 {
-            format!(
+        let friction = match (self.reconnect, self.mu > 0.0) {
+            (true, _) => format!(
+                "friction = {{ mu = {}, normal = [0, 1], reconnect = true }}",
+                self.mu
+            ),
+            (false, true) => format!(
                 "friction = {{ mu = {}, normal = [0, 1], viscosity = {:e} }}",
                 self.mu, self.eta
-            )
-        } else {
-            String::new()
+            ),
+            (false, false) => String::new(),
         };
+        let plate = if self.reconnect { ", a = 3" } else { "" };
         let rho = if self.rho > 0.0 {
             format!("rho = {:e}", self.rho)
         } else {
@@ -91,7 +155,7 @@ impl Drag {
         format!(
             r#"mesh = "{}"
 [mesh_options]
-params = {{ n = {n}, m = {m}, l = {l}{tri} }}
+params = {{ n = {n}, m = {m}, l = {l}{tri}{plate} }}
 [[region]]
 group = "solid"
 kind = "solid"
@@ -201,6 +265,7 @@ fn reach() {
                     rho,
                     press: 0.3,
                     amount: 1.0,
+                    reconnect: false,
                 };
                 let (ok, reached, ratios, s) = d.run(&format!("reach-{geo}-{l}-{mu}-{eta}-{rho}"));
                 let largest = ratios.iter().map(|r| r.1).fold(f64::NAN, f64::max);
@@ -241,6 +306,7 @@ fn slide() {
         rho: 1e-4,
         press: 0.35,
         amount: 0.5,
+        reconnect: false,
     };
     for n in [16, 32] {
         for tri in [false, true] {

@@ -35,12 +35,15 @@ fn main() {
     println!("| encoding | size (MB) | write (ms, best of 5) |");
     println!("|---|---:|---:|");
     let mut series = Series::new(&dir, "bench", &model);
+    let references = tmc::assembly::References::new(&model);
     for (name, level) in [("uncompressed", 0), ("zlib 1 (tmc)", 1), ("zlib 6", 6)] {
         series.zlib_level = level;
         let mut best = f64::INFINITY;
         for step in 0..5 {
             let t = Instant::now();
-            series.write(&model, step, &x, step as f64, None).unwrap();
+            series
+                .write(&model, step, &references, &x, step as f64, None)
+                .unwrap();
             best = best.min(t.elapsed().as_secs_f64());
         }
         let size = std::fs::metadata(dir.join(series.file_name(4)))

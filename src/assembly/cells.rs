@@ -4,8 +4,8 @@
 #![allow(non_snake_case)]
 
 use super::scatter::{Shared, Slots, local_dofs};
-use super::{AssemblyError, MIN_PART_CELLS, cell_error};
-use crate::dofs::{CellState, Layout, NONE, gather};
+use super::{AssemblyError, MIN_PART_CELLS, References, cell_error};
+use crate::dofs::{CellState, Layout, NONE, gather, rebase};
 use crate::element::RefElement;
 use crate::kernel::friction::FrictionMaterial;
 use crate::kernel::{
@@ -20,7 +20,11 @@ use rayon::prelude::*;
 /// as the assembly would report it. Only the medium: it is where updates invert cells, and
 /// it is a small part of the mesh (a whole-mesh look costs a quarter of an assembly); an
 /// inverted solid cell is still found by the assembly.
-pub fn check_inversion(model: &Model, x: &[f64]) -> Result<(), AssemblyError> {
+pub fn check_inversion(
+    model: &Model,
+    references: &References,
+    x: &[f64],
+) -> Result<(), AssemblyError> {
     for (bi, info) in model.blocks.iter().enumerate() {
         if !info.layout.has_u || !info.mat.medium {
             continue;
@@ -31,7 +35,7 @@ pub fn check_inversion(model: &Model, x: &[f64]) -> Result<(), AssemblyError> {
                 .into_par_iter()
                 .with_min_len(MIN_PART_CELLS)
                 .map(|c| {
-                    let s = gather::<N>(&model.mesh.coords, &model.dofs, blk.cell(c), x);
+                    let s = references.state::<N>(model, info.block, c, x);
                     kernel::inversion::<N, D, E>(&s).map_err(|e| (e, c))
                 })
                 .find_first(Result::is_err)
@@ -48,7 +52,7 @@ pub fn check_inversion(model: &Model, x: &[f64]) -> Result<(), AssemblyError> {
 /// where the medium's stiffening does not act (a bilinear or higher cell's J varies over it
 /// and can change sign at a corner while it stays positive at every point; a linear
 /// triangle's or tetrahedron's is one number, so those are not looked at).
-pub fn corners_through_medium(model: &Model, x: &[f64]) -> usize {
+pub fn corners_through_medium(model: &Model, references: &References, x: &[f64]) -> usize {
     use crate::mesh::CellKind;
     let solid = model.nodes_of(crate::model::RegionKind::Solid);
     let mut cells = 0;
@@ -65,7 +69,7 @@ pub fn corners_through_medium(model: &Model, x: &[f64]) -> usize {
                 .with_min_len(MIN_PART_CELLS)
                 .filter(|&c| {
                     let nodes = blk.cell(c);
-                    let s = gather::<N>(&model.mesh.coords, &model.dofs, nodes, x);
+                    let s = references.state::<N>(model, info.block, c, x);
                     let deformed =
                         std::array::from_fn(|i| std::array::from_fn(|k| s.X[i][k] + s.u[i][k]));
                     let looked_at = |k: usize| solid[nodes[k]];
@@ -129,9 +133,23 @@ pub(super) struct Cells<'a> {
     pub(super) arrays: Arrays,
     /// Prefetch each cell's scatter targets before its kernel runs.
     pub(super) prefetch: bool,
+    /// The block's reference node coordinates per cell where its medium is reconnected
+    /// (`None`: the mesh's).
+    pub(super) reference: Option<&'a [[f64; 3]]>,
 }
 
 impl Cells<'_> {
+    /// Cell `c`'s nodal state, measured from its reference configuration.
+    #[inline]
+    fn state<const N: usize>(&self, c: usize) -> CellState<N> {
+        let (model, nodes) = (self.model, self.blk.cell(c));
+        let mut s = gather::<N>(&model.mesh.coords, &model.dofs, nodes, self.x);
+        if let Some(reference) = self.reference {
+            rebase(&mut s, &reference[c * N..(c + 1) * N]);
+        }
+        s
+    }
+
     /// Add cell `c`'s residual `r` and tangent `k` (row-major, nd × nd; ignored without
     /// `tangent`) at its global dofs `ld`, and the lifting of prescribed increments. Returns
     /// whether the tangent entries written are finite.
@@ -184,7 +202,7 @@ impl Cells<'_> {
         mat: &CellMaterial,
         cells: &[u32],
     ) -> Result<(f64, f64, bool), (KernelError, usize)> {
-        let (model, blk, lay, first, x) = (self.model, self.blk, self.lay, self.first, self.x);
+        let (model, blk, lay, first) = (self.model, self.blk, self.lay, self.first);
         let (tangent, values) = (self.tangent, self.arrays.values);
         let nd = lay.ndof();
         let mut ld = vec![0u32; nd];
@@ -202,9 +220,7 @@ impl Cells<'_> {
                         self.slots.prefetch(cell(l), values);
                     }
                 }
-                let s: [CellState<N>; W] = std::array::from_fn(|l| {
-                    gather::<N>(&model.mesh.coords, &model.dofs, blk.cell(cell(l)), x)
-                });
+                let s: [CellState<N>; W] = std::array::from_fn(|l| self.state::<N>(cell(l)));
                 let kl = if tangent { Some(&mut k[..]) } else { None };
                 let out = lanes::bulk_lanes::<N, D, E>(&lane_block, &s, &mut r, kl)
                     .map_err(|(e, l)| (e, cell(l)))?;
@@ -232,7 +248,7 @@ impl Cells<'_> {
             if self.prefetch {
                 self.slots.prefetch(c, values);
             }
-            let s = gather::<N>(&model.mesh.coords, &model.dofs, nodes, x);
+            let s = self.state::<N>(c);
             local_dofs(&model.dofs, &lay, nodes, &mut ld);
             let out = bulk::<N, D, E>(
                 mat,
@@ -272,7 +288,7 @@ impl Cells<'_> {
         for &g in cells {
             let c = (g - self.first) as usize;
             let nodes = self.blk.cell(c);
-            let s = gather::<N>(&self.model.mesh.coords, &self.model.dofs, nodes, self.x);
+            let s = self.state::<N>(c);
             local_dofs(&self.model.dofs, &self.lay, nodes, &mut ld);
             let kc = if self.tangent { Some(&mut k[..]) } else { None };
             kernel(c, &s, &mut r, kc).map_err(|e| (e, c))?;

@@ -17,10 +17,12 @@
 
 mod cells;
 pub mod history;
+mod reference;
 mod scatter;
 mod schedule;
 
 pub use cells::{check_inversion, corners_through_medium};
+pub use reference::References;
 
 use crate::dofs::{Pattern, build_pattern, build_pattern_of};
 use crate::element::RefElement;
@@ -264,6 +266,8 @@ pub struct Assembler {
     /// that every rank holds the whole residual; the tangent keeps this rank's cells' part.
     pub ranks: Ranks,
     distribution: Option<Distribution>,
+    /// The reference configurations of the friction blocks whose medium is reconnected.
+    pub reference: References,
 }
 
 /// Length of the pieces the whole-array passes below are cut into, one task each.
@@ -362,6 +366,7 @@ impl Assembler {
             prefetch: true,
             ranks,
             distribution,
+            reference: References::new(model),
         }
     }
 
@@ -393,6 +398,34 @@ impl Assembler {
     pub fn commit(&mut self, t: f64) {
         self.history.commit();
         self.t_committed = t;
+    }
+
+    /// Before the reconnected layers are joined again at the accepted state `x`: every
+    /// reconnected cell takes its slide into its reference ([`References::absorb`]).
+    pub fn absorb_slide(&mut self, model: &Model, x: &[f64]) {
+        for (t, slab) in self.terms.iter().zip(&self.slab_of) {
+            if let (Term::Friction(f), Some(i)) = (t, slab) {
+                let fb = &model.friction_blocks[*f];
+                self.reference
+                    .absorb(model, fb, &mut self.history.slabs[*i], x);
+            }
+        }
+    }
+
+    /// After the reconnected layers were joined again (on this assembler's model) at the
+    /// accepted state `x`: their cells' references start from it, and so does the inertia's
+    /// displacement per point.
+    pub fn rejoined(&mut self, model: &Model, x: &[f64]) {
+        self.reference.reset(model, x);
+        for (t, slab) in self.terms.iter().zip(&self.slab_of) {
+            if let (Term::Inertia(b), Some(i)) = (t, slab) {
+                let block = model.inertia_blocks[*b].block;
+                let slab = &mut self.history.slabs[*i];
+                crate::with_cell!(model.mesh.cells[block].kind, |N, D, E| {
+                    reference::inertia_at_state::<N, D, E>(model, &self.reference, block, x, slab)
+                });
+            }
+        }
     }
 
     /// Continue a run: the committed history of its last accepted step at time `t`, per slab.
@@ -456,7 +489,7 @@ impl Assembler {
     ) -> Result<AssemblyStats, AssemblyError> {
         if tangent {
             // an update that inverted a cell costs this pass, not a whole assembly
-            check_inversion(model, x)?;
+            check_inversion(model, &self.reference, x)?;
         }
         self.r_full.fill(0.0);
         if tangent {
@@ -482,6 +515,7 @@ impl Assembler {
             .collect();
         let history = &history;
         let (slots, terms, slab_of) = (&self.slots, &self.terms, &self.slab_of);
+        let reference = &self.reference;
         let arrays = Arrays {
             values: Shared(self.values.as_mut_ptr()),
             r_full: Shared(self.r_full.as_mut_ptr()),
@@ -509,6 +543,7 @@ impl Assembler {
                     act,
                     arrays,
                     prefetch,
+                    reference: reference.of(terms[bi].mesh_block(model)),
                 };
                 let slab = slab_of[bi].map(|i| &history[i]);
                 let part = run_block(job, terms[bi], slab, these, inv_dt)?;
@@ -718,14 +753,18 @@ fn initial_history(model: &Model, terms: &[Term]) -> (PointHistory, Vec<Option<u
 }
 
 /// Heat stored in the capacity blocks at the state `x`: Σ ∫ ρc (θ − θ0) dV.
-pub fn heat_stored(model: &Model, x: &[f64]) -> Result<f64, AssemblyError> {
+pub fn heat_stored(
+    model: &Model,
+    references: &References,
+    x: &[f64],
+) -> Result<f64, AssemblyError> {
     let mut e = 0.0;
     for cb in &model.capacity_blocks {
         let blk = &model.mesh.cells[cb.block];
         for c in 0..blk.n_cells() {
             let nodes = blk.cell(c);
             e += crate::with_cell!(blk.kind, |N, D, E| {
-                let s = crate::dofs::gather::<N>(&model.mesh.coords, &model.dofs, nodes, x);
+                let s = references.state::<N>(model, cb.block, c, x);
                 crate::kernel::capacity::stored_heat::<N, D, E>(cb.rho_c, cb.theta_ref, &s)
             })
             .map_err(|_| AssemblyError::BadMesh {
@@ -816,12 +855,9 @@ pub fn kinetic_energy(model: &Model, asm: &Assembler) -> f64 {
         let (ib, slab) = (&model.inertia_blocks[*i], &asm.history.slabs[*s]);
         let blk = &model.mesh.cells[ib.block];
         for c in (0..blk.n_cells()).filter(|&c| asm.owns_cell(ib.block, c)) {
-            let (nodes, h) = (
-                blk.cell(c),
-                &slab.committed[c * slab.width..(c + 1) * slab.width],
-            );
+            let h = &slab.committed[c * slab.width..(c + 1) * slab.width];
             e[0] += crate::with_cell!(blk.kind, |N, D, E| {
-                let X = std::array::from_fn(|i| model.mesh.coords[nodes[i]]);
+                let X = asm.reference.coords::<N>(model, ib.block, c);
                 crate::kernel::inertia::kinetic_energy::<N, D, E>(ib.rho, &X, h)
             })
             .unwrap_or(f64::NAN);
@@ -835,11 +871,11 @@ pub fn kinetic_energy(model: &Model, asm: &Assembler) -> f64 {
 /// `model.friction_blocks`), from the committed history: Σ ∫ w dV (of every rank's cells).
 pub fn friction_work(model: &Model, asm: &Assembler) -> Vec<f64> {
     let mut work = vec![0.0; model.friction_blocks.len()];
-    for (f, _, nodes, h) in committed_friction(model, asm) {
-        // per reference volume: the cell's undeformed coordinates are enough
-        let kind = model.mesh.cells[model.friction_blocks[f].block].kind;
-        work[f] += crate::with_cell!(kind, |N, D, E| {
-            let X = std::array::from_fn(|i| model.mesh.coords[nodes[i]]);
+    for (f, c, _, h) in committed_friction(model, asm) {
+        // per reference volume: the cell's reference coordinates are enough
+        let block = model.friction_blocks[f].block;
+        work[f] += crate::with_cell!(model.mesh.cells[block].kind, |N, D, E| {
+            let X = asm.reference.coords::<N>(model, block, c);
             crate::kernel::friction::dissipated_work::<N, D, E>(&X, h)
         })
         .unwrap_or(f64::NAN);
@@ -865,10 +901,10 @@ pub fn friction_cells(model: &Model, asm: &Assembler) -> Vec<Option<FrictionCell
         n += b.n_cells();
     }
     let mut out = vec![None; n];
-    for (f, c, nodes, h) in committed_friction(model, asm) {
+    for (f, c, _, h) in committed_friction(model, asm) {
         let fb = &model.friction_blocks[f];
         let state = crate::with_cell!(model.mesh.cells[fb.block].kind, |N, D, E| {
-            let X = std::array::from_fn(|i| model.mesh.coords[nodes[i]]);
+            let X = asm.reference.coords::<N>(model, fb.block, c);
             crate::kernel::friction::slip_fields::<N, D, E>(&X, h)
         })
         .unwrap_or(SlipFields {

@@ -111,6 +111,10 @@ pub struct FrictionKey {
     /// The normal traction Coulomb's limit takes: `"current"` (default) or `"lagged"`, the
     /// last accepted step's (the limit then stays put within a step).
     pub limit: Option<Spanned<String>>,
+    /// Join the layer's cells again as its faces slide past each other (default false): a 2D
+    /// layer of quadrilaterals one cell across, between a solid's face and the one it slides
+    /// on, with a given `normal`.
+    pub reconnect: Option<Spanned<bool>>,
 }
 
 /// `normal` of a `friction`: given, or `"auto"` (any other word is an error at validation).
@@ -138,6 +142,11 @@ impl FrictionKey {
     /// Whether the limit takes the last accepted step's normal traction.
     pub fn lagged_limit(&self) -> bool {
         self.limit.as_ref().is_some_and(|w| w.get_ref() == "lagged")
+    }
+
+    /// Whether the layer's cells are joined again as its faces slide.
+    pub fn reconnect(&self) -> bool {
+        self.reconnect.as_ref().is_some_and(|r| *r.get_ref())
     }
 }
 
@@ -604,6 +613,17 @@ impl RegionKeys<'_> {
             |v| v >= 0.0 && v.is_finite(),
             "finite and ≥ 0",
         )?;
+        if let Some(r) = &fr.reconnect
+            && *r.get_ref()
+            && matches!(fr.normal.get_ref(), SlipNormal::Word(_))
+        {
+            return self.fail(
+                r.span(),
+                "`friction.reconnect` joins a flat layer's cells again along one direction: \
+                 give the layer's `normal` (such as [0, 1]), not \"auto\""
+                    .to_string(),
+            );
+        }
         if let Some(w) = &fr.limit
             && !["current", "lagged"].contains(&w.get_ref().as_str())
         {

@@ -58,6 +58,18 @@ impl<const N: usize> CellState<N> {
     }
 }
 
+/// Measure the cell `s` from the reference node coordinates `X` instead of its own (a
+/// medium whose reference configuration has been remapped): the current positions X + u stay
+/// where they are.
+pub fn rebase<const N: usize>(s: &mut CellState<N>, X: &[[f64; 3]]) {
+    for (I, XI) in X.iter().enumerate().take(N) {
+        for i in 0..3 {
+            s.u[I][i] += s.X[I][i] - XI[i];
+        }
+        s.X[I] = *XI;
+    }
+}
+
 /// Gather the nodal state of cell `nodes` from the global vector.
 pub fn gather<const N: usize>(
     coords: &[[f64; 3]],
@@ -86,4 +98,44 @@ pub fn gather<const N: usize>(
         }
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rebase_keeps_every_node_where_it_is() {
+        let mut s = CellState::<4>::zero();
+        s.X = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+        ];
+        s.u = [
+            [0.1, 0.0, 0.0],
+            [0.2, -0.1, 0.0],
+            [0.7, -0.9, 0.0],
+            [0.5, -0.95, 0.0],
+        ];
+        s.theta = [1.0, 2.0, 3.0, 4.0];
+        let place: Vec<[f64; 3]> = (0..4)
+            .map(|i| std::array::from_fn(|k| s.X[i][k] + s.u[i][k]))
+            .collect();
+        let other = [
+            [0.5, 0.0, 0.0],
+            [1.5, 0.0, 0.0],
+            [1.5, 1.0, 0.0],
+            [0.5, 1.0, 0.0],
+        ];
+        rebase(&mut s, &other);
+        for i in 0..4 {
+            assert_eq!(s.X[i], other[i]);
+            for k in 0..3 {
+                assert!((s.X[i][k] + s.u[i][k] - place[i][k]).abs() < 1e-15);
+            }
+        }
+        assert_eq!(s.theta, [1.0, 2.0, 3.0, 4.0]);
+    }
 }

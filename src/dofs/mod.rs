@@ -5,7 +5,7 @@
 pub mod local;
 pub mod pattern;
 
-pub use local::{CellState, Layout, gather};
+pub use local::{CellState, Layout, gather, rebase};
 pub use pattern::{Pattern, Structure, build_pattern, build_pattern_of, equation_structure};
 
 use crate::mesh::Mesh;

@@ -2,6 +2,7 @@
 
 pub mod check;
 pub mod checkpoint;
+mod reconnect;
 pub mod records;
 mod run;
 pub mod state;
@@ -208,6 +209,16 @@ pub fn run(case_path: &Path, opts: &SolveOptions) -> Result<Summary, SolveError>
         .unwrap_or_else(|| PathBuf::from("results").join(case.name()));
     let mut folder = RunFolder::open(&out_dir)?;
     if opts.restart {
+        let reconnected = (case.file.region.iter())
+            .any(|r| r.friction.as_ref().is_some_and(|f| f.get_ref().reconnect()));
+        if reconnected {
+            return Err(SolveError::Setup(
+                "cannot restart a run whose friction layer is reconnected \
+                 (`friction.reconnect`): its mesh changed as it ran; run it again without \
+                 --restart"
+                    .into(),
+            ));
+        }
         return restart(&case, folder, opts, start);
     }
     let (mut model, probes, staged) = checked_model(&case, &out_dir, opts.quiet)?;
@@ -250,11 +261,23 @@ fn run_ranks(
     let root = if ranks.is_root() {
         let setup = (|| -> Result<_, SolveError> {
             let mut folder = RunFolder::open(&out_dir)?;
+            // before anything of the folder's is replaced
+            let serial_only =
+                |model: &Model| match model.friction_blocks.iter().any(|f| f.reconnect) {
+                    true => Err(SolveError::Setup(format!(
+                        "mpirun -n {}: a friction layer that is reconnected \
+                     (`friction.reconnect`) runs on one process; run it without mpirun",
+                        ranks.size
+                    ))),
+                    false => Ok(()),
+                };
             if opts.restart {
                 let (model, probes, cp) = restart_setup(case, &mut folder, opts)?;
+                serial_only(&model)?;
                 return Ok((model, probes, folder, Some(cp)));
             }
             let (mut model, probes, staged) = checked_model(case, &out_dir, opts.quiet)?;
+            serial_only(&model)?;
             folder.replace_previous()?;
             commit_mesh(&mut folder, &mut model, staged)?;
             Ok((model, probes, folder, None))
@@ -341,7 +364,9 @@ fn restart_setup(
     Ok((model, probes, cp))
 }
 
-/// Step the model from its initial state to the end of its load path.
+/// Step the model from its initial state to the end of its load path. Where a friction
+/// region's layer is reconnected, the run goes on on a mesh whose layer is joined again each
+/// time its faces have slid a cell past each other.
 fn solve_model(
     case: &Case,
     model: Model,
@@ -352,27 +377,84 @@ fn solve_model(
     from: Option<checkpoint::Checkpoint>,
 ) -> Result<Summary, SolveError> {
     let out_dir = folder.dir().to_owned();
-    let mut run = Run::new(case, &model, probes, Some(folder), out_dir, opts, start)?;
-    match from {
-        Some(cp) => run.resume(cp)?,
-        None => run.record_initial()?,
+    let mut layer = reconnect::Layer::find(&model)?;
+    let (mut model, mut folder, mut from) = (model, Some(folder), from);
+    loop {
+        let rejoined = from.is_some() && layer.is_some();
+        let mut run = Run::new(
+            case,
+            &model,
+            probes,
+            folder.take(),
+            out_dir.clone(),
+            opts,
+            start,
+        )?;
+        match from.take() {
+            Some(cp) => run.resume(cp)?,
+            None => run.record_initial()?,
+        }
+        let Some(layer) = layer.as_mut() else {
+            return step_to_end(run);
+        };
+        if rejoined {
+            run.rejoined();
+        }
+        let (run, shift) = match step_until(run, |run| layer.due(&model, run.state()))? {
+            Stepped::Ended(summary) => return Ok(summary),
+            Stepped::Rejoin(run, shift) => (run, shift),
+        };
+        let (mut cp, kept) = run.end_to_rejoin();
+        let mut mesh = model.mesh.clone();
+        layer.join(&model, &mut mesh, &mut cp.state.x, shift);
+        if opts.verbose {
+            crate::note!(
+                "friction layer joined again, shifted {shift} cells, at t = {}",
+                cp.state.clock.t
+            );
+        }
+        model = model_on(case, mesh, true)?.0;
+        folder = kept;
+        from = Some(cp);
     }
-    step_to_end(run)
 }
 
-/// Step until the end of the load path, or a stop.
-fn step_to_end(mut run: Run) -> Result<Summary, SolveError> {
+/// How stepping ended: at the end of the load path or at a stop (the run's summary), or where
+/// the friction layer is to be joined again (the run, and the layer's new shift).
+#[allow(clippy::large_enum_variant)] // made once per run or join, moved at once
+enum Stepped<'a> {
+    Ended(Summary),
+    Rejoin(Run<'a>, i64),
+}
+
+/// Step until the end of the load path, a stop, or an accepted step after which `rejoin` asks
+/// for the friction layer to be joined again.
+fn step_until<'a>(
+    mut run: Run<'a>,
+    mut rejoin: impl FnMut(&Run) -> Option<i64>,
+) -> Result<Stepped<'a>, SolveError> {
     while !run.ctl.done() {
         if run.ranks().max(f64::from(u8::from(interrupted()))) > 0.0 {
-            return run.interrupt();
+            return run.interrupt().map(Stepped::Ended);
         }
         let target = run.ctl.target();
         match run.attempt(target) {
             Ok((trial, rep)) => run.accept(target, trial, rep)?,
             Err(failure) => run.reject(target, failure)?,
         }
+        if let Some(shift) = (!run.ctl.done()).then(|| rejoin(&run)).flatten() {
+            return Ok(Stepped::Rejoin(run, shift));
+        }
     }
-    run.complete()
+    run.complete().map(Stepped::Ended)
+}
+
+/// Step until the end of the load path, or a stop.
+fn step_to_end(run: Run) -> Result<Summary, SolveError> {
+    match step_until(run, |_| None)? {
+        Stepped::Ended(summary) => Ok(summary),
+        Stepped::Rejoin(..) => unreachable!("nothing asked to join a layer again"),
+    }
 }
 
 #[cfg(test)]

@@ -389,7 +389,7 @@ impl<'a> Run<'a> {
             .map(|(&d, (a, b))| 0.5 * (a + b) * (self.x[d] - x_last[d]))
             .sum::<f64>();
         tot.f_last = f_now;
-        let through = corners_through_medium(model, &self.x);
+        let through = corners_through_medium(model, &self.asm.reference, &self.x);
         tot.corners_through = tot.corners_through.max(through);
         self.watch_displacement(target);
         Ok(())
@@ -493,24 +493,15 @@ impl<'a> Run<'a> {
     }
 
     /// `restart.json` of the last accepted state (after its `.vtu` and history row).
-    fn save_checkpoint(&mut self) -> Result<(), SolveError> {
-        // on several ranks each holds its own cells' history per point: gathered (by every
-        // rank) before the first rank writes it
-        let point_history = if self.folder.is_some() || !self.asm.ranks.is_serial() {
-            self.asm.whole_history(self.model)
-        } else {
-            Vec::new()
-        };
-        if self.folder.is_none() {
-            return Ok(());
-        }
-        let cp = Checkpoint {
+    /// The run's state as a checkpoint (on several ranks every rank takes part).
+    fn checkpoint(&self) -> Checkpoint {
+        Checkpoint {
             version: checkpoint::VERSION,
             case: self.fingerprint.0.clone(),
             mesh: self.fingerprint.1.clone(),
             state: RunState {
                 x: self.x.clone(),
-                point_history,
+                point_history: self.asm.whole_history(self.model),
                 clock: self.ctl.clock(),
                 newton: self.newton.tally(),
                 totals: self.totals.clone(),
@@ -521,12 +512,59 @@ impl<'a> Run<'a> {
                 },
                 wall: self.start.elapsed().as_secs_f64(),
             },
-        };
+        }
+    }
+
+    fn save_checkpoint(&mut self) -> Result<(), SolveError> {
+        if self.folder.is_none() {
+            // on several ranks each holds its own cells' history per point, gathered by
+            // every rank before the first rank writes it
+            if !self.asm.ranks.is_serial() {
+                self.asm.whole_history(self.model);
+            }
+            return Ok(());
+        }
+        let cp = self.checkpoint();
         if let Some(folder) = &mut self.folder {
             folder.record(checkpoint::FILE)?;
         }
         write_atomic(&Checkpoint::path(&self.out_dir), cp.to_json().as_bytes())?;
         Ok(())
+    }
+
+    /// End the run at its last accepted state to go on on a mesh whose reconnected layers are
+    /// joined again: their cells take the slide into their references first. Returns the
+    /// state as a checkpoint (the files written so far belong to it) and the output folder.
+    pub(super) fn end_to_rejoin(mut self) -> (Checkpoint, Option<RunFolder>) {
+        let model = self.model;
+        self.asm.absorb_slide(model, &self.x);
+        let cp = self.checkpoint();
+        (cp, self.folder.take())
+    }
+
+    /// A run resumed on a mesh whose reconnected layers were just joined again: their cells
+    /// start from the state as it is.
+    /// They are then settled at the same loads (a step of no length: no inertia), so that
+    /// the next step starts in equilibrium; if that does not converge, the next step starts
+    /// from the state as joined.
+    pub(super) fn rejoined(&mut self) {
+        self.asm.rejoined(self.model, &self.x);
+        let t = self.ctl.t;
+        if let Ok((x, rep)) = self.attempt(t) {
+            self.x = x;
+            self.asm.commit(t);
+            let tot = &mut self.totals;
+            tot.iterations += rep.iterations;
+            tot.krylov += rep.krylov;
+            tot.tangents_skipped += rep.tangents_skipped;
+        } else {
+            self.asm.restore();
+        }
+    }
+
+    /// The last accepted state.
+    pub(super) fn state(&self) -> &[f64] {
+        &self.x
     }
 
     /// Continue from a checkpoint instead of recording the initial state: the run goes on as
@@ -607,7 +645,7 @@ impl<'a> Run<'a> {
         rate += convected;
         let tot = &mut self.totals;
         tot.heat_in = Some(tot.heat_in.unwrap_or(0.0) + dt * rate);
-        tot.heat_stored = Some(heat_stored(model, &self.x).map_err(invalid)?);
+        tot.heat_stored = Some(heat_stored(model, &self.asm.reference, &self.x).map_err(invalid)?);
         Ok(())
     }
 
@@ -691,8 +729,14 @@ impl<'a> Run<'a> {
         }
         let friction = (self.model.physics.friction).then(|| friction_cells(self.model, &self.asm));
         let written = written.and_then(|_| {
-            self.series
-                .write(self.model, step, &self.x, self.ctl.t, friction.as_deref())
+            self.series.write(
+                self.model,
+                step,
+                &self.asm.reference,
+                &self.x,
+                self.ctl.t,
+                friction.as_deref(),
+            )
         });
         let ranks = self.asm.ranks;
         let agree = |r| {

@@ -45,6 +45,34 @@ pub struct FrictionMaterial {
     pub lagged: bool,
 }
 
+/// The plane's shear per reference thickness, γ = P C N, at each of the cell's quadrature
+/// points (`gamma`, 3 values per point), with slip-plane unit normal `normal`.
+pub fn plane_shear<const N: usize, const D: usize, E: RefElement<N, D>>(
+    normal: &Vector3<f64>,
+    lay: &Layout,
+    s: &CellState<N>,
+    gamma: &mut [f64],
+) -> Result<(), KernelError> {
+    let along = nalgebra::Matrix3::identity() - normal * normal.transpose();
+    for (q, (xi, w)) in E::quadrature().iter().enumerate() {
+        let F = point::<N, D, E>(xi, *w, lay, s, 0.0)?.F;
+        let shear = along * (F.transpose() * F) * normal;
+        gamma[3 * q..3 * q + 3].copy_from_slice(shear.as_slice());
+    }
+    Ok(())
+}
+
+/// Shift the slip of one cell's history (`HISTORY_PER_POINT` values per point) by `shift`
+/// (3 values per point): a cell whose reference configuration moves measures the plane's
+/// shear from elsewhere, and its elastic shear γ − g must stay what it was.
+pub fn shift_slip(history: &mut [f64], shift: &[f64]) {
+    for (h, d) in history.chunks_mut(HISTORY_PER_POINT).zip(shift.chunks(3)) {
+        for i in 0..3 {
+            h[i] += d[i];
+        }
+    }
+}
+
 /// Residual and (optionally) tangent of the friction term of one medium cell with slip-plane
 /// unit normal `normal`, from the history `committed` of the last accepted step; writes the
 /// trial history to `trial`. `heat_rate` is

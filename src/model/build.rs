@@ -646,6 +646,7 @@ fn friction_blocks(
                 lagged: fr.lagged_limit(),
             },
             normals,
+            reconnect: fr.reconnect(),
             heat_fraction: if physics.frictional_heating {
                 fr.heat_fraction()
             } else {

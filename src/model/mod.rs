@@ -91,6 +91,9 @@ pub struct FrictionBlock {
     pub mat: FrictionMaterial,
     /// The slip plane's unit normal in each cell.
     pub normals: SlipNormals,
+    /// Whether the layer's cells are joined again as its faces slide (`reconnect`), each cell
+    /// measured from a reference of its own ([`crate::assembly::References`]).
+    pub reconnect: bool,
     /// Fraction of the dissipated work that becomes heat (0 where no heat is made).
     pub heat_fraction: f64,
     pub layout: Layout,

@@ -2,20 +2,23 @@
 //! conductivity, cell by cell.
 #![allow(non_snake_case)]
 
-use crate::assembly::{AssemblyError, cell_error};
-use crate::dofs::gather;
+use crate::assembly::{AssemblyError, References, cell_error};
 use crate::element::RefElement;
 use crate::kernel::{CellFields, cell_fields};
 use crate::model::Model;
 use rayon::prelude::*;
 
-/// Cell fields for every cell, in mesh block order.
-/// A failing cell is named by region, index and position.
-pub fn all_cell_fields(model: &Model, x: &[f64]) -> Result<Vec<CellFields>, AssemblyError> {
+/// Cell fields for every cell, in mesh block order, each cell measured from its reference in
+/// `references`. A failing cell is named by region, index and position.
+pub fn all_cell_fields(
+    model: &Model,
+    references: &References,
+    x: &[f64],
+) -> Result<Vec<CellFields>, AssemblyError> {
     let mut out = Vec::with_capacity(model.mesh.n_cells());
     for (bi, info) in model.blocks.iter().enumerate() {
         let kind = model.mesh.cells[info.block].kind;
-        let v = crate::with_cell!(kind, |N, D, E| block::<N, D, E>(model, bi, x)?);
+        let v = crate::with_cell!(kind, |N, D, E| block::<N, D, E>(model, references, bi, x)?);
         out.extend(v);
     }
     Ok(out)
@@ -23,6 +26,7 @@ pub fn all_cell_fields(model: &Model, x: &[f64]) -> Result<Vec<CellFields>, Asse
 
 fn block<const N: usize, const D: usize, E: RefElement<N, D>>(
     model: &Model,
+    references: &References,
     bi: usize,
     x: &[f64],
 ) -> Result<Vec<CellFields>, AssemblyError> {
@@ -34,7 +38,7 @@ fn block<const N: usize, const D: usize, E: RefElement<N, D>>(
             cell_fields::<N, D, E>(
                 &info.mat,
                 &info.layout,
-                &gather::<N>(&model.mesh.coords, &model.dofs, blk.cell(c), x),
+                &references.state::<N>(model, info.block, c, x),
             )
             .map_err(|e| cell_error(model, bi, e, c))
         })

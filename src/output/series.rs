@@ -8,7 +8,7 @@ use super::fields::all_cell_fields;
 use super::nodal::nodal_fields;
 use super::vtu::{Piece, StepFields, ZLIB_LEVEL, pvtu_text, read_pvd, write_pvd, write_vtu};
 use super::{OutputError, write_atomic};
-use crate::assembly::FrictionCell;
+use crate::assembly::{FrictionCell, References};
 use crate::case::RegionKind;
 use crate::dofs::{Field, NONE};
 use crate::model::Model;
@@ -123,11 +123,12 @@ impl Series {
         &mut self,
         model: &Model,
         step: usize,
+        references: &References,
         x: &[f64],
         time: f64,
         friction: Option<&[Option<FrictionCell>]>,
     ) -> Result<(), OutputError> {
-        let cells = all_cell_fields(model, x).map_err(|e| OutputError::Fields {
+        let cells = all_cell_fields(model, references, x).map_err(|e| OutputError::Fields {
             step,
             msg: e.to_string(),
         })?;

@@ -946,3 +946,22 @@ fn check_under_mpirun_reports_once_with_each_rank_s_memory() {
         assert!(entries > 0 && entries < total && mb > 0.0, "{said}");
     }
 }
+
+#[test]
+fn a_reconnected_friction_layer_is_refused_on_several_ranks_with_the_folder_kept() {
+    let text = crate::friction::pad_case(Some(0.3), 0.5)
+        .replace("normal = [0, 1] }", "normal = [0, 1], reconnect = true }");
+    let options = "params = { n = 16, m = 8, l = 1 }";
+    let case = common::case_file("distributed-reconnect", "pad.geo", options, &text);
+    let out = case.with_file_name("out");
+    std::fs::create_dir_all(&out).unwrap();
+    std::fs::write(out.join("mine.txt"), "kept").unwrap();
+    let o = mpirun(2, &case, &out, &[]);
+    let e = stderr(&o);
+    assert!(!o.status.success(), "{e}");
+    assert_eq!(e.matches("runs on one process").count(), 1, "{e}");
+    assert_eq!(
+        std::fs::read_to_string(out.join("mine.txt")).unwrap(),
+        "kept"
+    );
+}

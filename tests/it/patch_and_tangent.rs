@@ -554,12 +554,19 @@ fn an_inverted_medium_cell_is_reported_with_and_without_the_tangent() {
     for &n in &cell {
         x[model.dofs.u[3 * n + 2] as usize] = -2.0 * (model.mesh.coords[n][2] - zc);
     }
-    let look = tmc::assembly::check_inversion(&model, &x);
+    let look = tmc::assembly::check_inversion(&model, &tmc::assembly::References::new(&model), &x);
     assert!(
         matches!(&look, Err(tmc::assembly::AssemblyError::Inverted { region, J, .. }) if region == "medium" && *J <= 0.0),
         "{look:?}"
     );
-    assert!(tmc::assembly::check_inversion(&model, &model.initial_state()).is_ok());
+    assert!(
+        tmc::assembly::check_inversion(
+            &model,
+            &tmc::assembly::References::new(&model),
+            &model.initial_state()
+        )
+        .is_ok()
+    );
     let mut asm = Assembler::new(&model);
     for tangent in [true, false] {
         match asm.assemble(&model, &x, 0.5, tangent, None) {

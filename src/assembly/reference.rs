@@ -1,0 +1,180 @@
+//! The reference configuration of a medium layer whose cells are joined again as its faces
+//! slide past each other (`reconnect` of a friction region): one copy of the reference node
+//! coordinates per cell. The medium is fictitious, so its reference is free; what it must
+//! remember is how far the layer has closed (across the slip plane) and the elastic shear of
+//! the points that stick. When the layer is joined again, every cell first takes the slide
+//! into its reference ([`References::absorb`]: each node at its current place along the
+//! plane, its reference place across it, and the slip shifted so that every point's elastic
+//! shear stays what it was), and the re-joined cells then start from the state as it is
+//! ([`References::reset`]). Cells need not agree on a shared node's reference, as with a
+//! plastic deformation per cell.
+#![allow(non_snake_case)]
+
+use super::history::Slab;
+use crate::dofs::{CellState, gather, rebase};
+use crate::element::RefElement;
+use crate::kernel::friction::{HISTORY_PER_POINT, plane_shear, shift_slip};
+use crate::mesh::Block;
+use crate::model::{FrictionBlock, Model};
+use nalgebra::{Matrix3, Vector3};
+
+/// The reference node coordinates per cell (N per cell, in cell order) of each mesh block
+/// whose medium is reconnected; `None` for a block measured from the mesh.
+#[derive(Clone, Debug, Default)]
+pub struct References {
+    blocks: Vec<Option<Vec<[f64; 3]>>>,
+}
+
+impl References {
+    /// The friction blocks with `reconnect`, starting from the mesh's coordinates.
+    pub fn new(model: &Model) -> References {
+        let mut blocks = vec![None; model.mesh.cells.len()];
+        for fb in model.friction_blocks.iter().filter(|fb| fb.reconnect) {
+            let blk = &model.mesh.cells[fb.block];
+            blocks[fb.block] = Some(blk.conn.iter().map(|&n| model.mesh.coords[n]).collect());
+        }
+        References { blocks }
+    }
+
+    /// Mesh block `block`'s reference node coordinates per cell, if it has its own.
+    pub fn of(&self, block: usize) -> Option<&[[f64; 3]]> {
+        self.blocks.get(block).and_then(|b| b.as_deref())
+    }
+
+    /// Cell `c` of mesh block `block` at the state `x`, measured from its reference.
+    pub fn state<const N: usize>(
+        &self,
+        model: &Model,
+        block: usize,
+        c: usize,
+        x: &[f64],
+    ) -> CellState<N> {
+        let nodes = model.mesh.cells[block].cell(c);
+        let mut s = gather::<N>(&model.mesh.coords, &model.dofs, nodes, x);
+        if let Some(r) = self.of(block) {
+            rebase(&mut s, &r[c * N..(c + 1) * N]);
+        }
+        s
+    }
+
+    /// Cell `c` of mesh block `block`'s reference node coordinates.
+    pub fn coords<const N: usize>(&self, model: &Model, block: usize, c: usize) -> [[f64; 3]; N] {
+        match self.of(block) {
+            Some(r) => std::array::from_fn(|I| r[c * N + I]),
+            None => {
+                let nodes = model.mesh.cells[block].cell(c);
+                std::array::from_fn(|I| model.mesh.coords[nodes[I]])
+            }
+        }
+    }
+
+    /// Friction block `fb`'s cells take the slide at the accepted state `x` into their
+    /// reference (each node at its place along the plane, X' = X + P u), and the slip in its
+    /// history `slab` (committed and trial) is shifted by what that takes off the plane's
+    /// shear, so that every point's elastic shear stays what it was.
+    pub fn absorb(&mut self, model: &Model, fb: &FrictionBlock, slab: &mut Slab, x: &[f64]) {
+        let Some(reference) = self.blocks[fb.block].as_mut() else {
+            return;
+        };
+        let blk = &model.mesh.cells[fb.block];
+        crate::with_cell!(blk.kind, |N, D, E| absorb_block::<N, D, E>(
+            model, fb, blk, reference, slab, x
+        ));
+    }
+
+    /// Every reconnected cell's reference at the state `x` along its plane (X' = X + P u from
+    /// the mesh's coordinates), at its mesh place across it; its history as it is (after
+    /// [`References::absorb`], the slip is the elastic shear's negative, and a cell whose
+    /// reference is the state has no shear).
+    pub fn reset(&mut self, model: &Model, x: &[f64]) {
+        for fb in model.friction_blocks.iter().filter(|fb| fb.reconnect) {
+            let blk = &model.mesh.cells[fb.block];
+            let reference = self.blocks[fb.block].as_mut().expect("a reconnected block");
+            for c in 0..blk.n_cells() {
+                let nodes = blk.cell(c);
+                let along = along_plane(fb, c);
+                for (I, &n) in nodes.iter().enumerate() {
+                    let u = Vector3::from_fn(|i, _| match i < model.dofs.dim {
+                        true => x[model.dofs.u[n * model.dofs.dim + i] as usize],
+                        false => 0.0,
+                    });
+                    let shift = along * u;
+                    let X = model.mesh.coords[n];
+                    reference[c * nodes.len() + I] = std::array::from_fn(|i| X[i] + shift[i]);
+                }
+            }
+        }
+    }
+}
+
+/// P = I − N⊗N of friction cell `c`'s slip plane.
+fn along_plane(fb: &FrictionBlock, c: usize) -> Matrix3<f64> {
+    let normal = fb.normals.of(c);
+    Matrix3::identity() - normal * normal.transpose()
+}
+
+fn absorb_block<const N: usize, const D: usize, E: RefElement<N, D>>(
+    model: &Model,
+    fb: &FrictionBlock,
+    blk: &Block,
+    reference: &mut [[f64; 3]],
+    slab: &mut Slab,
+    x: &[f64],
+) {
+    let points = E::quadrature().len();
+    let w = HISTORY_PER_POINT * points;
+    let (mut before, mut after) = (vec![0.0; 3 * points], vec![0.0; 3 * points]);
+    for c in 0..blk.n_cells() {
+        let X = &mut reference[c * N..(c + 1) * N];
+        let mut s = gather::<N>(&model.mesh.coords, &model.dofs, blk.cell(c), x);
+        rebase(&mut s, X);
+        let along = along_plane(fb, c);
+        let moved: [[f64; 3]; N] = std::array::from_fn(|I| {
+            let shift = along * Vector3::from(s.u[I]);
+            std::array::from_fn(|i| X[I][i] + shift[i])
+        });
+        let normal = fb.normals.of(c);
+        // an accepted state inverts no cell, and the move keeps each node's place across the
+        // plane, so neither measure fails; were one to, the cell would keep its reference
+        if plane_shear::<N, D, E>(normal, &fb.layout, &s, &mut before).is_err() {
+            continue;
+        }
+        rebase(&mut s, &moved);
+        if plane_shear::<N, D, E>(normal, &fb.layout, &s, &mut after).is_err() {
+            continue;
+        }
+        for (a, b) in after.iter_mut().zip(&before) {
+            *a -= b;
+        }
+        shift_slip(&mut slab.committed[c * w..(c + 1) * w], &after);
+        shift_slip(&mut slab.trial[c * w..(c + 1) * w], &after);
+        X.copy_from_slice(&moved);
+    }
+}
+
+/// The displacement at each quadrature point of an inertia block's history (the first D of
+/// each point's values, committed and trial) taken from the state `x`, each cell measured from
+/// its reference in `references`: after the layer is joined again, a point's neighbours are
+/// other nodes, and what they carry is where the point is, not a motion.
+pub fn inertia_at_state<const N: usize, const D: usize, E: RefElement<N, D>>(
+    model: &Model,
+    references: &References,
+    block: usize,
+    x: &[f64],
+    slab: &mut Slab,
+) {
+    let points = E::quadrature();
+    let per = slab.width / points.len();
+    for c in 0..model.mesh.cells[block].n_cells() {
+        let s = references.state::<N>(model, block, c, x);
+        for (q, (xi, _)) in points.iter().enumerate() {
+            let Nv = E::shape(xi);
+            for i in 0..D {
+                let u: f64 = (0..N).map(|I| Nv[I] * s.u[I][i]).sum();
+                let at = c * slab.width + q * per + i;
+                slab.committed[at] = u;
+                slab.trial[at] = u;
+            }
+        }
+    }
+}
