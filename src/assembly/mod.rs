@@ -418,12 +418,24 @@ impl Assembler {
     pub fn rejoined(&mut self, model: &Model, x: &[f64]) {
         self.reference.reset(model, x);
         for (t, slab) in self.terms.iter().zip(&self.slab_of) {
-            if let (Term::Inertia(b), Some(i)) = (t, slab) {
-                let block = model.inertia_blocks[*b].block;
-                let slab = &mut self.history.slabs[*i];
-                crate::with_cell!(model.mesh.cells[block].kind, |N, D, E| {
-                    reference::inertia_at_state::<N, D, E>(model, &self.reference, block, x, slab)
-                });
+            let Some(i) = slab else { continue };
+            let slab = &mut self.history.slabs[*i];
+            let refs = &self.reference;
+            match *t {
+                Term::Inertia(b) => {
+                    let block = model.inertia_blocks[b].block;
+                    crate::with_cell!(model.mesh.cells[block].kind, |N, D, E| {
+                        reference::inertia_at_state::<N, D, E>(model, refs, block, x, slab)
+                    });
+                }
+                // a medium's heat stored (where it has a ρc) from the state's temperature
+                Term::Capacity(c) if refs.of(model.capacity_blocks[c].block).is_some() => {
+                    let block = model.capacity_blocks[c].block;
+                    crate::with_cell!(model.mesh.cells[block].kind, |N, D, E| {
+                        reference::theta_at_state::<N, D, E>(model, refs, block, x, slab)
+                    });
+                }
+                _ => {}
             }
         }
     }

@@ -178,3 +178,24 @@ pub fn inertia_at_state<const N: usize, const D: usize, E: RefElement<N, D>>(
         }
     }
 }
+
+/// The temperature at each quadrature point of a capacity block's history (committed and
+/// trial) taken from the state `x`: after the layer is joined again, a point's neighbours are
+/// other nodes, and what they carry is the temperature there, not a change of it.
+pub fn theta_at_state<const N: usize, const D: usize, E: RefElement<N, D>>(
+    model: &Model,
+    references: &References,
+    block: usize,
+    x: &[f64],
+    slab: &mut Slab,
+) {
+    let w = slab.width;
+    for c in 0..model.mesh.cells[block].n_cells() {
+        let s = references.state::<N>(model, block, c, x);
+        crate::kernel::capacity::theta_at_points::<N, D, E>(
+            &s,
+            &mut slab.committed[c * w..(c + 1) * w],
+        );
+        slab.trial[c * w..(c + 1) * w].copy_from_slice(&slab.committed[c * w..(c + 1) * w]);
+    }
+}

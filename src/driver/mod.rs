@@ -379,8 +379,8 @@ fn solve_model(
     let out_dir = folder.dir().to_owned();
     let mut layer = reconnect::Layer::find(&model)?;
     let (mut model, mut folder, mut from) = (model, Some(folder), from);
+    let mut rejoined = false;
     loop {
-        let rejoined = from.is_some() && layer.is_some();
         let mut run = Run::new(
             case,
             &model,
@@ -416,6 +416,7 @@ fn solve_model(
         model = model_on(case, mesh, true)?.0;
         folder = kept;
         from = Some(cp);
+        rejoined = true;
     }
 }
 

@@ -544,22 +544,28 @@ impl<'a> Run<'a> {
 
     /// A run resumed on a mesh whose reconnected layers were just joined again: their cells
     /// start from the state as it is.
-    /// They are then settled at the same loads (a step of no length: no inertia), so that
-    /// the next step starts in equilibrium; if that does not converge, the next step starts
-    /// from the state as joined.
+    /// The next step starts from their mechanics settled at the same loads (a step of no
+    /// length: no inertia), or from the state as joined where that does not converge. The
+    /// points' history stays as joined: whatever the settling slipped is the next step's
+    /// slip, whose work that step makes heat over its length.
     pub(super) fn rejoined(&mut self) {
         self.asm.rejoined(self.model, &self.x);
         let t = self.ctl.t;
         if let Ok((x, rep)) = self.attempt(t) {
-            self.x = x;
-            self.asm.commit(t);
+            // the mechanics settled; the temperature stays (a step of no length has no
+            // capacity: what it solved for θ is a steady state, not the state)
+            let dofs = &self.model.dofs;
+            for (d, v) in x.into_iter().enumerate() {
+                if dofs.field[d] != Field::Theta {
+                    self.x[d] = v;
+                }
+            }
             let tot = &mut self.totals;
             tot.iterations += rep.iterations;
             tot.krylov += rep.krylov;
             tot.tangents_skipped += rep.tangents_skipped;
-        } else {
-            self.asm.restore();
         }
+        self.asm.restore();
     }
 
     /// The last accepted state.
