@@ -88,7 +88,11 @@ pub fn check(case_path: &Path, opts: &SolveOptions) -> Result<CheckReport, Solve
     // the mesh's warnings go to the report
     let checked = checked_model(&case, &scratch, true);
     let _ = std::fs::remove_dir_all(&scratch);
-    let (model, probes, _staged) = checked?;
+    let (mut model, probes, _staged) = checked?;
+    // a reconnected friction layer that cannot be joined again fails here as in a solve
+    if let Some(layer) = super::reconnect::Layer::find(&model)? {
+        model.warnings.push(layer.describe());
+    }
     let plan = Plan::new(&case, &model, opts)?;
     let factor_entries = plan
         .solvers

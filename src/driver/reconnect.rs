@@ -173,6 +173,17 @@ impl Layer {
         }))
     }
 
+    /// The layer in words, for `tmc check`.
+    pub fn describe(&self) -> String {
+        format!(
+            "friction layer joined again as it slides: {} cells between rows of {} nodes, \
+             {} of them on the solid",
+            self.cells.len(),
+            self.top.len(),
+            self.on_solid.iter().filter(|&&s| s).count()
+        )
+    }
+
     /// Node `n`'s place at the state `x`.
     fn place(model: &Model, x: &[f64], n: usize) -> Vector3<f64> {
         let d = model.dofs.dim;

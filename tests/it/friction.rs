@@ -1477,6 +1477,28 @@ fn a_layer_that_cannot_be_joined_again_is_refused_with_why() {
         "`friction.reconnect` joins a flat layer's cells again along one direction",
     );
     assert!(e.contains("case.toml:"), "the key's line: {e}");
+    // `tmc check` finds what a solve would, and says what it will join
+    let check = |name: &str, params: &str| {
+        let options = format!("params = {{ {params} }}");
+        let path = common::case_file(name, "pad.geo", &options, &reconnecting);
+        common::tmc(&["check", path.to_str().unwrap()])
+    };
+    let o = check("reconnect-check", "n = 16, m = 8, l = 2");
+    let e = common::stderr(&o);
+    assert!(
+        !o.status.success() && e.contains("joins a layer one cell across"),
+        "{e}"
+    );
+    let o = check("reconnect-check-ok", "n = 16, m = 8, l = 1, a = 3");
+    let said = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    assert!(
+        said.contains(
+            "friction layer joined again as it slides: 64 cells between rows of 65 nodes, \
+             17 of them on the solid"
+        ),
+        "{said}"
+    );
     // a restart: the mesh changed as it ran
     let path = common::case_file(
         "reconnect-restart",
