@@ -405,6 +405,7 @@ fn solve_model(
             Stepped::Rejoin(run, shift) => (run, shift),
         };
         let (mut cp, kept) = run.end_to_rejoin();
+        cp.state.totals.layer_joins += 1;
         let mut mesh = model.mesh.clone();
         layer.join(&model, &mut mesh, &mut cp.state.x, shift);
         if opts.verbose {

@@ -103,6 +103,8 @@ pub struct Summary {
     pub corners_through_medium: usize,
     /// The largest displacement of any node in any accepted step.
     pub largest_displacement: f64,
+    /// How many times a friction layer with `reconnect` was joined again (0 without one).
+    pub friction_layer_joins: usize,
 }
 
 impl Summary {
@@ -171,6 +173,7 @@ impl Summary {
             peak_memory_mb_ranks: None,
             corners_through_medium: 0,
             largest_displacement: 0.0,
+            friction_layer_joins: 0,
             output: out_dir.display().to_string(),
             units: Quantity::ALL
                 .into_iter()

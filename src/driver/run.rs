@@ -942,6 +942,7 @@ impl<'a> Run<'a> {
         s.heat_stored = tot.heat_stored;
         s.heat_in = tot.heat_in;
         s.corners_through_medium = tot.corners_through;
+        s.friction_layer_joins = tot.layer_joins;
         s.largest_displacement = tot.largest_displacement;
         if let Some(folder) = &mut self.folder {
             let json = serde_json::to_string_pretty(&*s).expect("serialisable");

@@ -56,6 +56,9 @@ pub struct Totals {
     pub largest_displacement: f64,
     #[serde(default)]
     pub runaway_told: bool,
+    /// How many times a reconnected friction layer was joined again.
+    #[serde(default)]
+    pub layer_joins: usize,
 }
 
 impl Totals {

@@ -1399,6 +1399,8 @@ fn a_pad_whose_layer_is_joined_again_slides_its_width_at_mu() {
     let mu = 0.3;
     let (s, out) = reconnected_pad("pad-reconnected", Some(mu));
     assert!(s.converged, "{}", s.message);
+    // the pad's mean slide over cells of 0.125, short of its corners' lag
+    assert_eq!(s.friction_layer_joins, 15);
     let ratios = drag_ratios(&out, 2.0);
     assert!(
         (ratios.last().unwrap().0 - 2.0).abs() < 1e-9,
