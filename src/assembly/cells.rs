@@ -3,9 +3,10 @@
 //! assembly.
 #![allow(non_snake_case)]
 
+use super::reference::cell_state;
 use super::scatter::{Shared, Slots, local_dofs};
 use super::{AssemblyError, MIN_PART_CELLS, References, cell_error};
-use crate::dofs::{CellState, Layout, NONE, gather, rebase};
+use crate::dofs::{CellState, Layout, NONE};
 use crate::element::RefElement;
 use crate::kernel::friction::FrictionMaterial;
 use crate::kernel::{
@@ -142,12 +143,7 @@ impl Cells<'_> {
     /// Cell `c`'s nodal state, measured from its reference configuration.
     #[inline]
     fn state<const N: usize>(&self, c: usize) -> CellState<N> {
-        let (model, nodes) = (self.model, self.blk.cell(c));
-        let mut s = gather::<N>(&model.mesh.coords, &model.dofs, nodes, self.x);
-        if let Some(reference) = self.reference {
-            rebase(&mut s, &reference[c * N..(c + 1) * N]);
-        }
-        s
+        cell_state(self.model, self.blk.cell(c), self.reference, c, self.x)
     }
 
     /// Add cell `c`'s residual `r` and tangent `k` (row-major, nd × nd; ignored without

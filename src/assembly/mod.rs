@@ -834,12 +834,12 @@ fn cell_error_in(region: &str, e: KernelError, cell: usize, at: [f64; 3]) -> Ass
     }
 }
 
-/// The committed history of every friction cell this rank owns: (friction block, cell, the
-/// cell's undeformed node coordinates, its history).
+/// The committed history of every friction cell this rank owns: (friction block, cell, its
+/// history).
 fn committed_friction<'a>(
     model: &'a Model,
     asm: &'a Assembler,
-) -> impl Iterator<Item = (usize, usize, &'a [usize], &'a [f64])> + 'a {
+) -> impl Iterator<Item = (usize, usize, &'a [f64])> + 'a {
     (asm.terms.iter().zip(&asm.slab_of))
         .filter_map(|(t, s)| match (t, s) {
             (Term::Friction(f), Some(s)) => Some((*f, &asm.history.slabs[*s])),
@@ -852,7 +852,7 @@ fn committed_friction<'a>(
                 .filter(move |&c| asm.owns_cell(fb.block, c))
                 .map(move |c| {
                     let h = &slab.committed[c * slab.width..(c + 1) * slab.width];
-                    (f, c, blk.cell(c), h)
+                    (f, c, h)
                 })
         })
 }
@@ -883,7 +883,7 @@ pub fn kinetic_energy(model: &Model, asm: &Assembler) -> f64 {
 /// `model.friction_blocks`), from the committed history: Σ ∫ w dV (of every rank's cells).
 pub fn friction_work(model: &Model, asm: &Assembler) -> Vec<f64> {
     let mut work = vec![0.0; model.friction_blocks.len()];
-    for (f, c, _, h) in committed_friction(model, asm) {
+    for (f, c, h) in committed_friction(model, asm) {
         // per reference volume: the cell's reference coordinates are enough
         let block = model.friction_blocks[f].block;
         work[f] += crate::with_cell!(model.mesh.cells[block].kind, |N, D, E| {
@@ -913,7 +913,7 @@ pub fn friction_cells(model: &Model, asm: &Assembler) -> Vec<Option<FrictionCell
         n += b.n_cells();
     }
     let mut out = vec![None; n];
-    for (f, c, _, h) in committed_friction(model, asm) {
+    for (f, c, h) in committed_friction(model, asm) {
         let fb = &model.friction_blocks[f];
         let state = crate::with_cell!(model.mesh.cells[fb.block].kind, |N, D, E| {
             let X = asm.reference.coords::<N>(model, fb.block, c);

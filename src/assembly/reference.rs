@@ -49,12 +49,7 @@ impl References {
         c: usize,
         x: &[f64],
     ) -> CellState<N> {
-        let nodes = model.mesh.cells[block].cell(c);
-        let mut s = gather::<N>(&model.mesh.coords, &model.dofs, nodes, x);
-        if let Some(r) = self.of(block) {
-            rebase(&mut s, &r[c * N..(c + 1) * N]);
-        }
-        s
+        cell_state(model, model.mesh.cells[block].cell(c), self.of(block), c, x)
     }
 
     /// Cell `c` of mesh block `block`'s reference node coordinates.
@@ -90,27 +85,56 @@ impl References {
         for fb in model.friction_blocks.iter().filter(|fb| fb.reconnect) {
             let blk = &model.mesh.cells[fb.block];
             let reference = self.blocks[fb.block].as_mut().expect("a reconnected block");
-            for c in 0..blk.n_cells() {
-                let nodes = blk.cell(c);
-                let along = along_plane(fb, c);
-                for (I, &n) in nodes.iter().enumerate() {
-                    let u = Vector3::from_fn(|i, _| match i < model.dofs.dim {
-                        true => x[model.dofs.u[n * model.dofs.dim + i] as usize],
-                        false => 0.0,
-                    });
-                    let shift = along * u;
-                    let X = model.mesh.coords[n];
-                    reference[c * nodes.len() + I] = std::array::from_fn(|i| X[i] + shift[i]);
-                }
-            }
+            crate::with_cell!(blk.kind, |N, _D, _E| reset_block::<N>(
+                model, fb, blk, reference, x
+            ));
         }
     }
+}
+
+/// The state of the cell `c` with nodes `nodes` at `x`, measured from `reference` (its
+/// block's reference coordinates per cell) where given, else from the mesh.
+pub(super) fn cell_state<const N: usize>(
+    model: &Model,
+    nodes: &[usize],
+    reference: Option<&[[f64; 3]]>,
+    c: usize,
+    x: &[f64],
+) -> CellState<N> {
+    let mut s = gather::<N>(&model.mesh.coords, &model.dofs, nodes, x);
+    if let Some(r) = reference {
+        rebase(&mut s, &r[c * N..(c + 1) * N]);
+    }
+    s
+}
+
+/// Friction cell `c`'s nodes in state `s`, each at its place along the cell's slip plane and
+/// at its reference place across it: X + P u.
+fn slid_along<const N: usize>(fb: &FrictionBlock, c: usize, s: &CellState<N>) -> [[f64; 3]; N] {
+    let along = along_plane(fb, c);
+    std::array::from_fn(|I| {
+        let shift = along * Vector3::from(s.u[I]);
+        std::array::from_fn(|i| s.X[I][i] + shift[i])
+    })
 }
 
 /// P = I − N⊗N of friction cell `c`'s slip plane.
 fn along_plane(fb: &FrictionBlock, c: usize) -> Matrix3<f64> {
     let normal = fb.normals.of(c);
     Matrix3::identity() - normal * normal.transpose()
+}
+
+fn reset_block<const N: usize>(
+    model: &Model,
+    fb: &FrictionBlock,
+    blk: &Block,
+    reference: &mut [[f64; 3]],
+    x: &[f64],
+) {
+    for c in 0..blk.n_cells() {
+        let s = cell_state::<N>(model, blk.cell(c), None, c, x);
+        reference[c * N..(c + 1) * N].copy_from_slice(&slid_along(fb, c, &s));
+    }
 }
 
 fn absorb_block<const N: usize, const D: usize, E: RefElement<N, D>>(
@@ -125,14 +149,8 @@ fn absorb_block<const N: usize, const D: usize, E: RefElement<N, D>>(
     let w = HISTORY_PER_POINT * points;
     let (mut before, mut after) = (vec![0.0; 3 * points], vec![0.0; 3 * points]);
     for c in 0..blk.n_cells() {
-        let X = &mut reference[c * N..(c + 1) * N];
-        let mut s = gather::<N>(&model.mesh.coords, &model.dofs, blk.cell(c), x);
-        rebase(&mut s, X);
-        let along = along_plane(fb, c);
-        let moved: [[f64; 3]; N] = std::array::from_fn(|I| {
-            let shift = along * Vector3::from(s.u[I]);
-            std::array::from_fn(|i| X[I][i] + shift[i])
-        });
+        let mut s = cell_state::<N>(model, blk.cell(c), Some(reference), c, x);
+        let moved = slid_along(fb, c, &s);
         let normal = fb.normals.of(c);
         // an accepted state inverts no cell, and the move keeps each node's place across the
         // plane, so neither measure fails; were one to, the cell would keep its reference
@@ -148,7 +166,7 @@ fn absorb_block<const N: usize, const D: usize, E: RefElement<N, D>>(
         }
         shift_slip(&mut slab.committed[c * w..(c + 1) * w], &after);
         shift_slip(&mut slab.trial[c * w..(c + 1) * w], &after);
-        X.copy_from_slice(&moved);
+        reference[c * N..(c + 1) * N].copy_from_slice(&moved);
     }
 }
 

@@ -14,7 +14,7 @@
 
 use super::SolveError;
 use crate::dofs::NONE;
-use crate::mesh::{CellKind, Mesh};
+use crate::mesh::{CellKind, Mesh, centroid, point_text};
 use crate::model::{Model, RegionKind, SlipNormals};
 use nalgebra::Vector3;
 
@@ -130,7 +130,7 @@ impl Layer {
                 };
                 let (Some(first), true, true) = (lowest, spans(false), spans(true)) else {
                     return refuse(format!(
-                        "joins a layer one cell across; its cell {c} (centre {:?}) does not \
+                        "joins a layer one cell across; its cell {c} (centre {}) does not \
                          span it from one row to the next",
                         centre(model, blk.cell(c))
                     ));
@@ -142,7 +142,7 @@ impl Layer {
                         None => {
                             return refuse(format!(
                                 "joins cells that stand upright between the rows; cell {c} \
-                                 (centre {:?}) leans over more than itself",
+                                 (centre {}) leans over more than itself",
                                 centre(model, blk.cell(c))
                             ));
                         }
@@ -221,27 +221,25 @@ impl Layer {
         (j as i64 + self.shift).rem_euclid(self.top.len() as i64) as usize
     }
 
+    /// The top row's index of the node that stands above bottom node `i` (of whose
+    /// [`Layer::partner`] is `i`).
+    fn above(&self, i: usize) -> usize {
+        (i as i64 - self.shift).rem_euclid(self.top.len() as i64) as usize
+    }
+
     /// Join the layer's cells with shift `k`: the mesh's connectivity, the free top nodes'
     /// coordinates, and their unknowns in `x` (the state of `model`, whose mesh `mesh` was).
     pub fn join(&mut self, model: &Model, mesh: &mut Mesh, x: &mut [f64], k: i64) {
         let m = self.top.len();
         let (d, dofs) = (model.dofs.dim, &model.dofs);
         // what the top row carries, by its place along the layer
-        let carried = |n: usize| -> Vec<f64> {
-            let theta = match dofs.theta.is_empty() {
-                true => NONE,
-                false => dofs.theta[n],
-            };
-            (0..dofs.np)
-                .map(|c| dofs.p[n * dofs.np + c])
-                .chain([theta])
-                .map(|dof| if dof == NONE { 0.0 } else { x[dof as usize] })
-                .collect()
-        };
         let mut row: Vec<(f64, Vector3<f64>, Vec<f64>)> = (self.top.iter())
             .map(|&n| {
                 let p = Self::place(model, x, n);
-                (self.along.dot(&p), p, carried(n))
+                let values = carried(model, n)
+                    .map(|dof| if dof == NONE { 0.0 } else { x[dof as usize] })
+                    .collect();
+                (self.along.dot(&p), p, values)
             })
             .collect();
         row.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -270,7 +268,7 @@ impl Layer {
         let gap = 0.1 * self.width;
         let mut behind = f64::NEG_INFINITY;
         for b in 0..m {
-            let j = (b as i64 - k).rem_euclid(m as i64) as usize;
+            let j = self.above(b);
             let n = self.top[j];
             if self.on_solid[j] {
                 behind = self.along.dot(&Self::place(model, x, n));
@@ -298,13 +296,7 @@ impl Layer {
             for i in 0..d {
                 x[dofs.u[n * d + i] as usize] = u[i];
             }
-            let targets = (0..dofs.np).map(|c| dofs.p[n * dofs.np + c]);
-            let theta = if dofs.theta.is_empty() {
-                NONE
-            } else {
-                dofs.theta[n]
-            };
-            for (dof, v) in targets.chain([theta]).zip(values) {
+            for (dof, v) in carried(model, n).zip(values) {
                 if dof != NONE {
                     x[dof as usize] = v;
                 }
@@ -315,7 +307,7 @@ impl Layer {
             for (corner, &(on_top, offset)) in conn.iter_mut().zip(&cell.corners) {
                 let i = cell.first + offset;
                 *corner = match on_top {
-                    true => self.top[(i as i64 - k).rem_euclid(m as i64) as usize],
+                    true => self.top[self.above(i)],
                     false => self.bottom[i],
                 };
             }
@@ -323,8 +315,17 @@ impl Layer {
     }
 }
 
-fn centre(model: &Model, nodes: &[usize]) -> [f64; 2] {
-    let n = nodes.len() as f64;
-    let c = |i: usize| nodes.iter().map(|&a| model.mesh.coords[a][i]).sum::<f64>() / n;
-    [c(0), c(1)]
+/// The unknowns node `n` carries besides its displacement (its p, then its θ), `NONE` where
+/// it has none.
+fn carried(model: &Model, n: usize) -> impl Iterator<Item = u32> + '_ {
+    let dofs = &model.dofs;
+    let theta = dofs.theta.get(n).copied().unwrap_or(NONE);
+    (0..dofs.np)
+        .map(move |c| dofs.p[n * dofs.np + c])
+        .chain([theta])
+}
+
+/// Cell `nodes`'s centre, in words.
+fn centre(model: &Model, nodes: &[usize]) -> String {
+    point_text(&centroid(&model.mesh.coords, nodes), model.mesh.dim)
 }
