@@ -883,14 +883,8 @@ pub fn kinetic_energy(model: &Model, asm: &Assembler) -> f64 {
 /// `model.friction_blocks`), from the committed history: Σ ∫ w dV (of every rank's cells).
 pub fn friction_work(model: &Model, asm: &Assembler) -> Vec<f64> {
     let mut work = vec![0.0; model.friction_blocks.len()];
-    for (f, c, h) in committed_friction(model, asm) {
-        // per reference volume: the cell's reference coordinates are enough
-        let block = model.friction_blocks[f].block;
-        work[f] += crate::with_cell!(model.mesh.cells[block].kind, |N, D, E| {
-            let X = asm.reference.coords::<N>(model, block, c);
-            crate::kernel::friction::dissipated_work::<N, D, E>(&X, h)
-        })
-        .unwrap_or(f64::NAN);
+    for (f, _, h) in committed_friction(model, asm) {
+        work[f] += crate::kernel::friction::dissipated_work(h);
     }
     asm.ranks.sum_into(&mut work);
     work

@@ -20,8 +20,10 @@ pub const FILE: &str = "restart.json";
 /// and the `.pvd` are counted, not copied (their cost per step no longer grows with the run);
 /// sealed; the point history whole on several ranks too. 5: the run state as one value
 /// (Newton's tally, the totals and the files each an object of their own). 6: friction keeps
-/// the normal traction per point too (8 history values).
-pub const VERSION: u32 = 6;
+/// the normal traction per point too (8 history values). 7: friction's work per point is the
+/// work itself, not per reference volume (a reconnected cell's reference changes as it is
+/// joined again).
+pub const VERSION: u32 = 7;
 
 /// How a sealed checkpoint begins: `{"seal":"` and 16 hex digits, then `",` and the rest.
 const SEAL: &str = "{\"seal\":\"";

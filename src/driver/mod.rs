@@ -262,15 +262,14 @@ fn run_ranks(
         let setup = (|| -> Result<_, SolveError> {
             let mut folder = RunFolder::open(&out_dir)?;
             // before anything of the folder's is replaced
-            let serial_only =
-                |model: &Model| match model.friction_blocks.iter().any(|f| f.reconnect) {
-                    true => Err(SolveError::Setup(format!(
-                        "mpirun -n {}: a friction layer that is reconnected \
+            let serial_only = |model: &Model| match model.reconnects() {
+                true => Err(SolveError::Setup(format!(
+                    "mpirun -n {}: a friction layer that is reconnected \
                      (`friction.reconnect`) runs on one process; run it without mpirun",
-                        ranks.size
-                    ))),
-                    false => Ok(()),
-                };
+                    ranks.size
+                ))),
+                false => Ok(()),
+            };
             if opts.restart {
                 let (model, probes, cp) = restart_setup(case, &mut folder, opts)?;
                 serial_only(&model)?;

@@ -105,6 +105,10 @@ pub struct Summary {
     pub largest_displacement: f64,
     /// How many times a friction layer with `reconnect` was joined again (0 without one).
     pub friction_layer_joins: usize,
+    /// Transient scenes with a friction layer with `reconnect`: what its joins changed the
+    /// heat stored by, so far; with it, `heat_stored` = `heat_in` + `friction_heat` +
+    /// `heat_joined` (`null` otherwise).
+    pub heat_joined: Option<f64>,
 }
 
 impl Summary {
@@ -174,6 +178,7 @@ impl Summary {
             corners_through_medium: 0,
             largest_displacement: 0.0,
             friction_layer_joins: 0,
+            heat_joined: None,
             output: out_dir.display().to_string(),
             units: Quantity::ALL
                 .into_iter()
@@ -297,6 +302,9 @@ pub struct StepRow {
     pub heat: Option<(f64, f64)>,
     /// Scenes with friction: (work dissipated by slip, heat it made, so far).
     pub friction: Option<(f64, f64)>,
+    /// Transient scenes with a reconnected friction layer: what its joins changed the heat
+    /// stored by, so far.
+    pub heat_joined: Option<f64>,
     /// Scenes with inertia: the kinetic energy.
     pub kinetic_energy: Option<f64>,
     /// Seconds since the run started, when the step was accepted.
@@ -306,7 +314,8 @@ pub struct StepRow {
 /// The columns of one model's `history.csv`: the step columns, `energy`, the probes, the
 /// reactions (`R_group_x`, `Q_group`), the solver columns and `work`; in transient scenes
 /// then `heat_stored` and `heat_in`; with friction `friction_work`, with frictional heating
-/// `friction_heat`; with inertia `kinetic_energy`; last `wall_seconds`.
+/// `friction_heat`; transient with a reconnected friction layer `heat_joined`; with inertia
+/// `kinetic_energy`; last `wall_seconds`.
 pub struct HistoryLayout {
     pub columns: Vec<String>,
     /// What each column measures (`None`: a count, a ratio or λ).
@@ -314,6 +323,7 @@ pub struct HistoryLayout {
     transient: bool,
     friction: bool,
     frictional_heating: bool,
+    joined: bool,
     inertia: bool,
     /// (group, component) of each reaction column.
     reactions: Vec<(String, String)>,
@@ -376,6 +386,10 @@ impl HistoryLayout {
         if frictional_heating {
             columns.push(("friction_heat".into(), Some(Energy)));
         }
+        let joined = transient && model.reconnects();
+        if joined {
+            columns.push(("heat_joined".into(), Some(Energy)));
+        }
         let inertia = model.physics.inertia;
         if inertia {
             columns.push(("kinetic_energy".into(), Some(Energy)));
@@ -389,6 +403,7 @@ impl HistoryLayout {
             transient,
             friction,
             frictional_heating,
+            joined,
             inertia,
             reactions,
         }
@@ -427,6 +442,9 @@ impl HistoryLayout {
         }
         if self.frictional_heating {
             row.push(heat);
+        }
+        if self.joined {
+            row.push(s.heat_joined.unwrap_or(0.0));
         }
         if self.inertia {
             row.push(s.kinetic_energy.unwrap_or(0.0));

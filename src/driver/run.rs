@@ -469,6 +469,7 @@ impl<'a> Run<'a> {
                 .summary
                 .friction_work
                 .map(|w| (w, self.summary.friction_heat.unwrap_or(0.0))),
+            heat_joined: self.totals.heat_joined,
             kinetic_energy: self.summary.kinetic_energy,
             wall: self.start.elapsed().as_secs_f64(),
         };
@@ -537,6 +538,10 @@ impl<'a> Run<'a> {
     /// state as a checkpoint (the files written so far belong to it) and the output folder.
     pub(super) fn end_to_rejoin(mut self) -> (Checkpoint, Option<RunFolder>) {
         let model = self.model;
+        // the heat stored as the cells were: `rejoined` adds what it is as they are joined
+        if let Some(stored) = self.joined_heat() {
+            *self.totals.heat_joined.get_or_insert(0.0) -= stored;
+        }
         self.asm.absorb_slide(model, &self.x);
         let cp = self.checkpoint();
         (cp, self.folder.take())
@@ -550,6 +555,10 @@ impl<'a> Run<'a> {
     /// slip, whose work that step makes heat over its length.
     pub(super) fn rejoined(&mut self) {
         self.asm.rejoined(self.model, &self.x);
+        // the settling below keeps the temperature: the heat stored changes at the join only
+        if let Some(stored) = self.joined_heat() {
+            *self.totals.heat_joined.get_or_insert(0.0) += stored;
+        }
         let t = self.ctl.t;
         if let Ok((x, rep)) = self.attempt(t) {
             // the mechanics settled; the temperature stays (a step of no length has no
@@ -566,6 +575,15 @@ impl<'a> Run<'a> {
             tot.tangents_skipped += rep.tangents_skipped;
         }
         self.asm.restore();
+    }
+
+    /// The heat stored at the last accepted state, in a transient scene (whose joins change
+    /// it: its cells' temperatures are other nodes' once joined); `None` in others.
+    fn joined_heat(&self) -> Option<f64> {
+        let model = self.model;
+        (model.physics.transient)
+            .then(|| heat_stored(model, &self.asm.reference, &self.x).ok())
+            .flatten()
     }
 
     /// The last accepted state.
@@ -943,6 +961,9 @@ impl<'a> Run<'a> {
         s.heat_in = tot.heat_in;
         s.corners_through_medium = tot.corners_through;
         s.friction_layer_joins = tot.layer_joins;
+        // 0 until the first join
+        s.heat_joined =
+            (model.physics.transient && model.reconnects()).then(|| tot.heat_joined.unwrap_or(0.0));
         s.largest_displacement = tot.largest_displacement;
         if let Some(folder) = &mut self.folder {
             let json = serde_json::to_string_pretty(&*s).expect("serialisable");

@@ -59,6 +59,10 @@ pub struct Totals {
     /// How many times a reconnected friction layer was joined again.
     #[serde(default)]
     pub layer_joins: usize,
+    /// Transient scenes with a reconnected friction layer: what its joins changed the heat
+    /// stored by (its cells re-paired with other nodes' temperatures).
+    #[serde(default)]
+    pub heat_joined: Option<f64>,
 }
 
 impl Totals {

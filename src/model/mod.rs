@@ -246,6 +246,12 @@ impl Model {
         x
     }
 
+    /// Whether a friction layer is joined again as it slides (`reconnect`): the run's mesh
+    /// changes as it goes.
+    pub fn reconnects(&self) -> bool {
+        self.friction_blocks.iter().any(|f| f.reconnect)
+    }
+
     /// Per mesh node: whether a cell of a region of `kind` has it. Of the medium: its own
     /// nodes and the solids' faces towards it (where the medium closes, its stiffness and
     /// conductivity across the gap grow without bound: a multigrid hands these rows to a
