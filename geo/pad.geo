@@ -3,8 +3,8 @@
 // along x meets open medium ahead of it (the medium is ploughed) and leaves it behind. The
 // layer's bottom is the plate's surface (group "bottom", held in the cases). Structured Q1
 // mesh: n cells across the pad, as many per length beyond it, m through the pad, l through
-// the medium.
-DefineConstant[ P = 2.0, H = 1.0, t = 0.25, a = 1.0, n = 16, m = 8, l = 4 ];
+// the medium; tri = 1 splits each cell into two triangles (T1).
+DefineConstant[ P = 2.0, H = 1.0, t = 0.25, a = 1.0, n = 16, m = 8, l = 4, tri = 0 ];
 na = Round(n * a / P);
 Point(1) = {0, 0, 0}; Point(2) = {a, 0, 0}; Point(3) = {a + P, 0, 0};
 Point(4) = {2 * a + P, 0, 0};
@@ -23,7 +23,9 @@ Transfinite Curve{2, 5, 12} = n + 1;
 Transfinite Curve{7, 8, 9, 10} = l + 1;
 Transfinite Curve{11, 13} = m + 1;
 Transfinite Surface{1, 2, 3, 4};
-Recombine Surface{1, 2, 3, 4};
+If (tri == 0)
+  Recombine Surface{1, 2, 3, 4};
+EndIf
 Physical Surface("medium") = {1, 2, 3};
 Physical Surface("solid") = {4};
 Physical Curve("bottom") = {1, 2, 3};

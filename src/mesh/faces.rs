@@ -199,15 +199,7 @@ mod tests {
     }
 
     fn mesh(dim: usize, coords: Vec<[f64; 3]>, cells: Vec<Block>) -> Mesh {
-        Mesh {
-            dim,
-            coords,
-            cells,
-            facets: Vec::new(),
-            groups: Vec::new(),
-            source: "test".into(),
-            warnings: Vec::new(),
-        }
+        Mesh::of_cells(dim, coords, cells)
     }
 
     #[test]

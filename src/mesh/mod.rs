@@ -240,6 +240,19 @@ pub struct Mesh {
 }
 
 impl Mesh {
+    /// A mesh of these cells alone: no facets, no physical groups, read from no file.
+    pub fn of_cells(dim: usize, coords: Vec<[f64; 3]>, cells: Vec<Block>) -> Mesh {
+        Mesh {
+            dim,
+            coords,
+            cells,
+            facets: Vec::new(),
+            groups: Vec::new(),
+            source: PathBuf::new(),
+            warnings: Vec::new(),
+        }
+    }
+
     pub fn group(&self, name: &str) -> Option<usize> {
         self.groups.iter().position(|g| g.name == name)
     }

@@ -129,19 +129,12 @@ mod tests {
         let conn = (0..n)
             .flat_map(|i| [2 * i, 2 * i + 2, 2 * i + 3, 2 * i + 1])
             .collect();
-        Mesh {
-            dim: 2,
-            coords,
-            cells: vec![Block {
-                kind: CellKind::Quad4,
-                groups: vec![],
-                conn,
-            }],
-            facets: vec![],
+        let cells = vec![Block {
+            kind: CellKind::Quad4,
             groups: vec![],
-            source: Default::default(),
-            warnings: vec![],
-        }
+            conn,
+        }];
+        Mesh::of_cells(2, coords, cells)
     }
 
     #[test]

@@ -1427,6 +1427,57 @@ fn a_pad_whose_layer_is_joined_again_slides_its_width_at_mu() {
 }
 
 #[test]
+fn a_pad_on_triangles_whose_layer_is_zipped_again_slides_its_width_at_mu() {
+    // the reconnected pad on linear triangles (T1): each triangle keeps its edge on one row
+    // and takes for its apex the node of the other that stands beside it, so the pad's face
+    // need not slide as one. Dragged its width at μ = 0.3 and 0.5 (n = 16), the whole drag
+    // completes; over full slip (drags 0.25–2.0) the ratio's mean is μ within 1.5 % (measured
+    // 0.2984, 0.4975), at μ = 0.3 every ratio within 6 % of μ (measured −4.7 … +1.0 %) and the
+    // normal force within 3 % (3.27–3.30); at μ = 0.5 the leading corner's slip event once per
+    // cell dips the ratio below μ (measured 0.4453, −11 %), and it stays below 1.06 μ
+    // (0.5217)
+    for mu in [0.3, 0.5] {
+        let case = with_mass(&pad_case(Some(mu), 2.0), 1e-4)
+            .replace("normal = [0, 1] }", "normal = [0, 1], reconnect = true }");
+        let (s, out) = solve_text(
+            &format!("pad-zipped-{mu}"),
+            "pad.geo",
+            "n = 16, m = 8, l = 1, a = 3, tri = 1",
+            &case,
+        );
+        assert!(s.converged, "μ = {mu}: {}", s.message);
+        assert!(s.friction_layer_joins >= 15, "{}", s.friction_layer_joins);
+        let ratios = drag_ratios(&out, 2.0);
+        assert!(
+            (ratios.last().unwrap().0 - 2.0).abs() < 1e-9,
+            "the whole drag"
+        );
+        let slip: Vec<f64> = (ratios.iter().filter(|r| r.0 >= 0.25))
+            .map(|r| r.1)
+            .collect();
+        let mean = slip.iter().sum::<f64>() / slip.len() as f64;
+        let (low, high) =
+            (slip.iter()).fold((f64::INFINITY, 0.0f64), |(a, b), &r| (a.min(r), b.max(r)));
+        println!("zipped pad, μ = {mu}: F_t/F_n {low}..{high}, mean {mean}");
+        assert!((mean - mu).abs() < 0.015 * mu, "mean {mean}");
+        if mu == 0.3 {
+            assert!(low > 0.94 * mu && high < 1.06 * mu, "{low}..{high}");
+            let normal: Vec<f64> = (top_forces(&out, 2).iter())
+                .filter(|f| f.0 >= 1.125)
+                .map(|f| f.2)
+                .collect();
+            let (n_low, n_high) =
+                (normal.iter()).fold((f64::INFINITY, 0.0f64), |(a, b), &f| (a.min(f), b.max(f)));
+            assert!(n_high < 1.03 * n_low, "normal force {n_low}..{n_high}");
+        } else {
+            assert!(low > 0.85 * mu && high < 1.06 * mu, "{low}..{high}");
+        }
+        let j = cell_array(&last_vtu(&out), "J");
+        assert!(j.iter().all(|&v| v > 0.0), "an inverted cell");
+    }
+}
+
+#[test]
 fn a_frictionless_pad_whose_layer_is_joined_again_ploughs_nothing() {
     // μ = 0 with the layer joined again: once the pad is under way (its first step of drag
     // accelerates its mass from rest: 0.93 % of the normal force), it slides its width with a
