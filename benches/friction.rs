@@ -18,8 +18,9 @@
 //!
 //! Fourth table: the pad with one cell across on a plate running 3 beyond it, its layer
 //! joined again as it slides (`friction.reconnect`), dragged 2.0 with ρ = 1e-4 at μ = 0 to 1 on
-//! n = 16 and 32 (and 64 with `TMC_BENCH_FINE=1`): how far each gets, and its force ratio from
-//! a drag of 0.25 to the end. `TMC_BENCH_PART=cost`, `reach`, `slide` or `rejoined` runs one
+//! n = 16 and 32 (and 64 with `TMC_BENCH_FINE=1`), quadrilaterals (Q1) and triangles (T1, the
+//! layer zipped node by node): how far each gets, and its force ratio from a drag of 0.25 to
+//! the end (range and mean). `TMC_BENCH_PART=cost`, `reach`, `slide` or `rejoined` runs one
 //! table.
 
 mod common;
@@ -52,20 +53,20 @@ fn main() {
 fn rejoined() {
     println!();
     println!(
-        "| cells | μ | completes | drag reached | load steps | Newton its | F_t/F_n from 0.25 to the end | at the end | wall s |"
+        "| cells | μ | completes | drag reached | load steps | Newton its | F_t/F_n from 0.25 to the end | its mean | at the end | wall s |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|");
     let mut sizes = vec![16, 32];
     if std::env::var("TMC_BENCH_FINE").is_ok() {
         sizes.push(64);
     }
-    for n in sizes {
+    for (n, tri) in sizes.into_iter().flat_map(|n| [(n, false), (n, true)]) {
         for mu in [0.0, 0.1, 0.3, 0.5, 1.0] {
             let d = Drag {
                 geo: "pad.geo",
                 n,
                 l: 1,
-                tri: false,
+                tri,
                 mu,
                 eta: 0.0,
                 rho: 1e-4,
@@ -73,7 +74,7 @@ fn rejoined() {
                 amount: 2.0,
                 reconnect: true,
             };
-            let (ok, reached, ratios, s) = d.run(&format!("rejoined-{n}-{mu}"));
+            let (ok, reached, ratios, s) = d.run(&format!("rejoined-{n}-{tri}-{mu}"));
             let slid: Vec<f64> = (ratios.iter().filter(|r| r.0 >= 0.25))
                 .map(|r| r.1)
                 .collect();
@@ -85,8 +86,10 @@ fn rejoined() {
                     slid.iter().copied().fold(f64::NEG_INFINITY, f64::max)
                 ),
             };
+            let mean = slid.iter().sum::<f64>() / slid.len() as f64;
             println!(
-                "| Q1 n = {n} | {mu} | {} | {reached:.3} | {} | {} | {range} | {:.4} | {:.1} |",
+                "| {} n = {n} | {mu} | {} | {reached:.3} | {} | {} | {range} | {mean:.4} | {:.4} | {:.1} |",
+                if tri { "T1" } else { "Q1" },
                 if ok { "yes" } else { "no" },
                 s["load_steps"],
                 s["newton_iterations"],
@@ -146,12 +149,8 @@ impl Drag {
         } else {
             String::new()
         };
-        // the pad's geometry has no `tri` switch: its cells are recombined by a line of its own
-        let (geo, tri) = match (self.tri, self.geo) {
-            (true, "pad.geo") => (self.pad_triangles(), String::new()),
-            (true, _) => (root().join("geo").join(self.geo), ", tri = 1".into()),
-            (false, _) => (root().join("geo").join(self.geo), String::new()),
-        };
+        let geo = root().join("geo").join(self.geo);
+        let tri = if self.tri { ", tri = 1" } else { "" };
         format!(
             r#"mesh = "{}"
 [mesh_options]
@@ -201,15 +200,6 @@ path = [0.0, 1.0, 1.0]
 
     /// `geo/pad.geo` meshed in triangles (its `Recombine` line left out), written beside the
     /// bench's runs.
-    fn pad_triangles(&self) -> std::path::PathBuf {
-        let text = std::fs::read_to_string(root().join("geo/pad.geo")).unwrap();
-        let dir = root().join("target/bench-friction");
-        std::fs::create_dir_all(&dir).unwrap();
-        let path = dir.join("pad-t1.geo");
-        std::fs::write(&path, text.replace("Recombine Surface{1, 2, 3, 4};", "")).unwrap();
-        path
-    }
-
     /// Solve it in `target/bench-friction/TAG`: whether it completed, the drag reached, the
     /// force ratio F_t/F_n of the top at each accepted step of the drag (drag, ratio), and the
     /// summary.

@@ -253,12 +253,19 @@ impl Layer {
         let slid = !self.triangles.is_empty()
             && (solid.iter().zip(&lean)).any(|(&j, l)| (l - self.leaned[j]).abs() >= self.width);
         let by = (mean / self.width).trunc() as i64;
-        // a solid's node never comes round: past the bottom face's end the layer stays as it is
+        // a solid's node never comes round, nor is a triangle zipped to a solid's node past the
+        // bottom face's end: there the layer stays as it is
         let within = (0..m).filter(|&j| self.on_solid[j]).all(|j| {
             let i = j as i64 + self.shift + by;
             (0..m as i64).contains(&i)
         });
-        ((by != 0 || slid) && within).then_some(self.shift + by)
+        let ends =
+            [self.bottom[0], self.bottom[m - 1]].map(|n| self.along.dot(&Self::place(model, x, n)));
+        let over = (solid.iter()).any(|&j| {
+            let s = self.along.dot(&Self::place(model, x, self.top[j]));
+            s < ends[0] || s > ends[1]
+        });
+        ((by != 0 || slid) && within && !over).then_some(self.shift + by)
     }
 
     /// Top node `j`'s place along the layer past its partner's at the state `x`.

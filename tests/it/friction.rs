@@ -1478,6 +1478,39 @@ fn a_pad_on_triangles_whose_layer_is_zipped_again_slides_its_width_at_mu() {
 }
 
 #[test]
+fn a_block_as_wide_as_its_base_is_not_zipped_past_the_base_s_end() {
+    // geo/block.geo on triangles, one cell across, its layer reconnected, pressed 0.35 and
+    // dragged 0.5 at μ = 0.3 with inertia: the block overhangs its base from the first step
+    // of the drag, and a zip there would join the overhang and the base left bare by fans of
+    // triangles that hold the block up (measured with them: the ratio falls to 0.222 at a
+    // drag of 0.287, and stays below 0.25 to 0.34). So no join is made, and the layer slides
+    // as a Lagrangian one does, the ratio at μ once the leading corner has let go (measured
+    // 0.3010–0.3014 from a drag of 0.3)
+    let case = with_mass(&drag_case(2, Some(0.3), 0.5, DRAG, 0.025), 1e-4)
+        .replace("uy = -0.3", "uy = -0.35")
+        .replace("normal = [0, 1] }", "normal = [0, 1], reconnect = true }");
+    let (s, out) = solve_text(
+        "block-zipped",
+        "block.geo",
+        "n = 16, m = 8, l = 1, tri = 1",
+        &case,
+    );
+    assert!(s.converged, "{}", s.message);
+    assert_eq!(s.friction_layer_joins, 0);
+    let ratios = drag_ratios(&out, 0.5);
+    assert!(
+        (ratios.last().unwrap().0 - 0.5).abs() < 1e-9,
+        "the whole drag"
+    );
+    for (drag, ratio) in ratios.iter().filter(|r| r.0 >= 0.3) {
+        assert!(
+            (ratio - 0.3).abs() < 0.006,
+            "F_t/F_n {ratio} at a drag of {drag}"
+        );
+    }
+}
+
+#[test]
 fn a_frictionless_pad_whose_layer_is_joined_again_ploughs_nothing() {
     // μ = 0 with the layer joined again: once the pad is under way (its first step of drag
     // accelerates its mass from rest: 0.93 % of the normal force), it slides its width with a
