@@ -80,6 +80,7 @@ pub fn build(case: &Case, mesh: Mesh) -> Result<Model, CaseError> {
     model.warnings = super::held::held_by_medium_alone(&model);
     model.warnings.extend(unused_keys(case, &model));
     model.warnings.extend(massless_friction(case, &model));
+    model.warnings.extend(layered_friction(case, &model));
     model.warnings.extend(heavy_solids(case, &model));
     Ok(model)
 }
@@ -154,6 +155,52 @@ fn massless_friction(case: &Case, model: &Model) -> Vec<String> {
             ))
         })
         .collect()
+}
+
+/// A friction region with a given normal whose layer is several cells across it (its extent
+/// along the normal over its cells' mean extent): over a long slide the slip spreads over the
+/// rows in series and the force ratio falls below μ, where one cell across holds it
+/// (measured: docs/THEORY.md, "The block with one cell across"). A note naming the region.
+fn layered_friction(case: &Case, model: &Model) -> Vec<String> {
+    let mut notes = Vec::new();
+    for (i, r) in case.file.region.iter().enumerate() {
+        let Some(fr) = &r.friction else { continue };
+        let blocks: Vec<_> = (model.friction_blocks.iter())
+            .filter(|f| f.region == i)
+            .collect();
+        let Some(SlipNormals::Given(normal)) = blocks.first().map(|f| &f.normals) else {
+            continue;
+        };
+        let across = |n: usize| normal.dot(&Vector3::from(model.mesh.coords[n]));
+        let (mut low, mut high, mut extents, mut cells) =
+            (f64::INFINITY, f64::NEG_INFINITY, 0.0, 0);
+        for f in &blocks {
+            let blk = &model.mesh.cells[f.block];
+            for c in 0..blk.n_cells() {
+                let (a, b) = (blk.cell(c).iter())
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &n| {
+                        (a.min(across(n)), b.max(across(n)))
+                    });
+                (low, high) = (low.min(a), high.max(b));
+                extents += b - a;
+                cells += 1;
+            }
+        }
+        let rows = (high - low) / (extents / cells as f64);
+        if cells > 0 && rows.round() >= 2.0 {
+            notes.push(format!(
+                "note: line {}: region[{i}] (\"{}\"): its friction layer is {} cells across its \
+                 slip plane: over a slide longer than its thickness ({:.3e}) the force ratio \
+                 falls below μ, the slip spread over its rows; one cell across holds \
+                 it (docs/CASE.md, \"How far friction slides\")",
+                case.line_of(fr.span()),
+                r.group.get_ref(),
+                rows.round(),
+                high - low
+            ));
+        }
+    }
+    notes
 }
 
 /// Keys the case gives that this scene does not use, each as a note with its line: the

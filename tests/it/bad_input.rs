@@ -1071,6 +1071,20 @@ fn what_was_accepted_without_a_word_is_refused() {
         )),
         "{report}"
     );
+    // the layer of friction-heating is four cells across its slip plane: a note, with the
+    // region's friction line, that long slides drift below μ there; one cell across, none
+    assert!(
+        report.contains(&format!(
+            "note: line {at}: region[1] (\"medium\"): its friction layer is 4 cells across its \
+             slip plane"
+        )),
+        "{report}"
+    );
+    let one_across = friction.replace("l = 4 }", "l = 1 }");
+    assert_ne!(one_across, friction);
+    let one = checked(&write("friction-one-cell-across", &one_across));
+    assert!(!one.contains("cells across its slip plane"), "{one}");
+    assert!(one.contains("has friction but no `rho`"), "{one}");
     // a mass density small against the solid's stiffness over a step says nothing more; one
     // whose inertia outweighs it (a dynamic scene, where a quasi-static drag was meant) is a
     // note naming its line and the `rho` below which it would not
