@@ -222,9 +222,13 @@ impl Layer {
 
     /// The layer in words, for `tmc check`.
     pub fn describe(&self) -> String {
+        let how = match self.triangles.is_empty() {
+            true => "",
+            false => " (triangles, zipped node by node)",
+        };
         format!(
             "friction layer joined again as it slides: {} cells between rows of {} nodes, \
-             {} of them on the solid",
+             {} of them on the solid{how}",
             self.cells.len() + self.triangles.len(),
             self.top.len(),
             self.on_solid.iter().filter(|&&s| s).count()

@@ -1689,7 +1689,21 @@ fn a_layer_that_cannot_be_joined_again_is_refused_with_why() {
     assert!(
         said.contains(
             "friction layer joined again as it slides: 64 cells between rows of 65 nodes, \
-             17 of them on the solid"
+             17 of them on the solid\n"
+        ),
+        "{said}"
+    );
+    // on triangles, twice the cells, zipped
+    let o = check(
+        "reconnect-check-tri",
+        "n = 16, m = 8, l = 1, a = 3, tri = 1",
+    );
+    let said = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    assert!(
+        said.contains(
+            "friction layer joined again as it slides: 128 cells between rows of 65 nodes, \
+             17 of them on the solid (triangles, zipped node by node)"
         ),
         "{said}"
     );
