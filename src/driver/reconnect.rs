@@ -244,9 +244,11 @@ impl Layer {
         })
     }
 
-    /// The shift the solid's slide at the state `x` calls for, if not the present one: the
-    /// top row moves on by a cell once the solid's nodes stand, on average, a whole cell past
-    /// their partners.
+    /// The shift the solid's slide at the state `x` calls for, when the layer is to be joined
+    /// again: the top row moves on by a cell once the solid's nodes stand, on average, a whole
+    /// cell past their partners; triangles are zipped again (at the same shift, if the mean
+    /// has not moved a cell) once any of the solid's nodes has slid a cell since the last
+    /// join. Never while a solid's node stands past the bottom face's end.
     pub fn due(&self, model: &Model, x: &[f64]) -> Option<i64> {
         let m = self.top.len();
         let solid: Vec<usize> = (0..m).filter(|&j| self.on_solid[j]).collect();
@@ -259,7 +261,7 @@ impl Layer {
         let by = (mean / self.width).trunc() as i64;
         // a solid's node never comes round, nor is a triangle zipped to a solid's node past the
         // bottom face's end: there the layer stays as it is
-        let within = (0..m).filter(|&j| self.on_solid[j]).all(|j| {
+        let within = (solid.iter()).all(|&j| {
             let i = j as i64 + self.shift + by;
             (0..m as i64).contains(&i)
         });
