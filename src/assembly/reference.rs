@@ -14,9 +14,10 @@ use super::history::Slab;
 use crate::dofs::{CellState, gather, rebase};
 use crate::element::RefElement;
 use crate::kernel::friction::{HISTORY_PER_POINT, plane_shear, shift_slip};
+use crate::material::friction::along_plane;
 use crate::mesh::Block;
 use crate::model::{FrictionBlock, Model};
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::Vector3;
 
 /// The reference node coordinates per cell (N per cell, in cell order) of each mesh block
 /// whose medium is reconnected; `None` for a block measured from the mesh.
@@ -111,17 +112,11 @@ pub(super) fn cell_state<const N: usize>(
 /// Friction cell `c`'s nodes in state `s`, each at its place along the cell's slip plane and
 /// at its reference place across it: X + P u.
 fn slid_along<const N: usize>(fb: &FrictionBlock, c: usize, s: &CellState<N>) -> [[f64; 3]; N] {
-    let along = along_plane(fb, c);
+    let along = along_plane(fb.normals.of(c));
     std::array::from_fn(|I| {
         let shift = along * Vector3::from(s.u[I]);
         std::array::from_fn(|i| s.X[I][i] + shift[i])
     })
-}
-
-/// P = I − N⊗N of friction cell `c`'s slip plane.
-fn along_plane(fb: &FrictionBlock, c: usize) -> Matrix3<f64> {
-    let normal = fb.normals.of(c);
-    Matrix3::identity() - normal * normal.transpose()
 }
 
 fn reset_block<const N: usize>(

@@ -55,10 +55,9 @@ pub fn plane_shear<const N: usize, const D: usize, E: RefElement<N, D>>(
     s: &CellState<N>,
     gamma: &mut [f64],
 ) -> Result<(), KernelError> {
-    let along = nalgebra::Matrix3::identity() - normal * normal.transpose();
     for (q, (xi, w)) in E::quadrature().iter().enumerate() {
         let F = point::<N, D, E>(xi, *w, lay, s, 0.0)?.F;
-        let shear = along * (F.transpose() * F) * normal;
+        let shear = crate::material::friction::plane_shear(&F, normal);
         gamma[3 * q..3 * q + 3].copy_from_slice(shear.as_slice());
     }
     Ok(())

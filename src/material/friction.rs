@@ -100,6 +100,17 @@ pub fn shear_modulus(c_f: f64, K_m: f64, J: f64) -> (f64, f64) {
     )
 }
 
+/// P = I − N⊗N: the projection onto the slip plane of unit normal `N`.
+pub fn along_plane(N: &Vector3<f64>) -> Matrix3<f64> {
+    Matrix3::identity() - N * N.transpose()
+}
+
+/// The plane's shear per reference thickness at `F`, γ = P C N (C = FᵀF), for the slip
+/// plane of unit normal `N`.
+pub fn plane_shear(F: &Matrix3<f64>, N: &Vector3<f64>) -> Vector3<f64> {
+    along_plane(N) * (F.transpose() * F) * N
+}
+
 impl Friction {
     /// The friction stress at `F`, from the previous accepted `slip`, with the friction modulus
     /// `modulus` = (G_f, dG_f/dJ) at this J and the medium's own stress, in `D` dimensions: in
@@ -115,7 +126,7 @@ impl Friction {
     ) -> Option<FrictionResponse> {
         let N = self.normal;
         let (G, dG) = modulus;
-        let Pn = Matrix3::identity() - N * N.transpose();
+        let Pn = along_plane(&N);
         let Finv = F.try_inverse()?;
         let J = F.determinant();
         let gamma = Pn * (F.transpose() * F) * N;
@@ -486,7 +497,7 @@ mod tests {
         let G = 3.0;
         let energy = |F: &Matrix3<f64>| {
             let N = law.normal;
-            let e = (Matrix3::identity() - N * N.transpose()) * (F.transpose() * F) * N - g;
+            let e = plane_shear(F, &N) - g;
             0.5 * G * e.norm_squared()
         };
         // a medium under a pressure of 1 (P = −J F⁻ᵀ): with μ this large, far inside the cone
