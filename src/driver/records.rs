@@ -323,7 +323,9 @@ pub struct HistoryLayout {
     transient: bool,
     friction: bool,
     frictional_heating: bool,
-    joined: bool,
+    /// Transient with a reconnected friction layer: its joins' change of the heat stored is
+    /// counted (`heat_joined`).
+    pub(super) joined: bool,
     inertia: bool,
     /// (group, component) of each reaction column.
     reactions: Vec<(String, String)>,

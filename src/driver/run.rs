@@ -538,8 +538,9 @@ impl<'a> Run<'a> {
     /// state as a checkpoint (the files written so far belong to it) and the output folder.
     pub(super) fn end_to_rejoin(mut self) -> (Checkpoint, Option<RunFolder>) {
         let model = self.model;
-        // the heat stored as the cells were: `rejoined` adds what it is as they are joined
-        if let Some(stored) = self.joined_heat() {
+        // the heat stored as the cells were (the accepted step counted it): `rejoined` adds
+        // what it is as they are joined
+        if let Some(stored) = self.totals.heat_stored {
             *self.totals.heat_joined.get_or_insert(0.0) -= stored;
         }
         self.asm.absorb_slide(model, &self.x);
@@ -962,8 +963,7 @@ impl<'a> Run<'a> {
         s.corners_through_medium = tot.corners_through;
         s.friction_layer_joins = tot.layer_joins;
         // 0 until the first join
-        s.heat_joined =
-            (model.physics.transient && model.reconnects()).then(|| tot.heat_joined.unwrap_or(0.0));
+        s.heat_joined = (self.layout.joined).then(|| tot.heat_joined.unwrap_or(0.0));
         s.largest_displacement = tot.largest_displacement;
         if let Some(folder) = &mut self.folder {
             let json = serde_json::to_string_pretty(&*s).expect("serialisable");
