@@ -112,8 +112,8 @@ pub struct FrictionKey {
     /// last accepted step's (the limit then stays put within a step).
     pub limit: Option<Spanned<String>>,
     /// Join the layer's cells again as its faces slide past each other (default false): a 2D
-    /// layer of quadrilaterals one cell across, between a solid's face and the one it slides
-    /// on, with a given `normal`.
+    /// layer of quadrilaterals or triangles one cell across, between a solid's face and the
+    /// one it slides on, with a given `normal`.
     pub reconnect: Option<Spanned<bool>>,
 }
 
