@@ -897,9 +897,9 @@ pub struct FrictionCell {
     pub normal: [f64; 3],
 }
 
-/// The slip state of every cell this rank owns at the last accepted step, in mesh block order
-/// (`None` for cells without friction, and for other ranks' cells).
-pub fn friction_cells(model: &Model, asm: &Assembler) -> Vec<Option<FrictionCell>> {
+/// The slip state of every cell this rank owns at the last accepted step, whose state is
+/// `x`, in mesh block order (`None` for cells without friction, and for other ranks' cells).
+pub fn friction_cells(model: &Model, asm: &Assembler, x: &[f64]) -> Vec<Option<FrictionCell>> {
     let mut first = Vec::with_capacity(model.mesh.cells.len());
     let mut n = 0;
     for b in &model.mesh.cells {
@@ -909,16 +909,17 @@ pub fn friction_cells(model: &Model, asm: &Assembler) -> Vec<Option<FrictionCell
     let mut out = vec![None; n];
     for (f, c, h) in committed_friction(model, asm) {
         let fb = &model.friction_blocks[f];
+        let normal = fb.normals.of(c);
         let state = crate::with_cell!(model.mesh.cells[fb.block].kind, |N, D, E| {
-            let X = asm.reference.coords::<N>(model, fb.block, c);
-            crate::kernel::friction::slip_fields::<N, D, E>(&X, h)
+            let s = asm.reference.state::<N>(model, fb.block, c, x);
+            crate::kernel::friction::slip_fields::<N, D, E>(&fb.mat, normal, &fb.layout, &s, h)
         })
         .unwrap_or(SlipFields {
             slip: [f64::NAN; 3],
             increment: [f64::NAN; 3],
             slipping: f64::NAN,
+            stress: [[f64::NAN; 3]; 3],
         });
-        let normal = fb.normals.of(c);
         out[first[fb.block] + c] = Some(FrictionCell {
             state,
             normal: [normal[0], normal[1], normal[2]],

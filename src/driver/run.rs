@@ -752,7 +752,8 @@ impl<'a> Run<'a> {
                 written = written.and(folder.record(&file));
             }
         }
-        let friction = (self.model.physics.friction).then(|| friction_cells(self.model, &self.asm));
+        let friction =
+            (self.model.physics.friction).then(|| friction_cells(self.model, &self.asm, &self.x));
         let written = written.and_then(|_| {
             self.series.write(
                 self.model,

@@ -14,10 +14,12 @@
 use super::point::{Point, point};
 use super::{Active, KernelError};
 use crate::dofs::{CellState, Layout};
-use crate::element::{RefElement, physical_gradients};
+use crate::element::RefElement;
 use crate::material::SolidLaw;
-use crate::material::friction::{Friction, MediumStress, shear_modulus};
-use nalgebra::Vector3;
+use crate::material::friction::{
+    Friction, MediumStress, plane_pair, plane_shear as shear_of, shear_modulus,
+};
+use nalgebra::{Matrix3, Vector3};
 
 /// History values per quadrature point: the slip (x, y, z), the work the point has dissipated
 /// so far (its dissipation per reference volume times its share of the cell's volume, as the
@@ -57,7 +59,7 @@ pub fn plane_shear<const N: usize, const D: usize, E: RefElement<N, D>>(
 ) -> Result<(), KernelError> {
     for (q, (xi, w)) in E::quadrature().iter().enumerate() {
         let F = point::<N, D, E>(xi, *w, lay, s, 0.0)?.F;
-        let shear = crate::material::friction::plane_shear(&F, normal);
+        let shear = shear_of(&F, normal);
         gamma[3 * q..3 * q + 3].copy_from_slice(shear.as_slice());
     }
     Ok(())
@@ -211,20 +213,35 @@ pub struct SlipFields {
     pub increment: [f64; 3],
     /// The share of the cell's volume that slipped in that step: 0 stick, 1 full slip.
     pub slipping: f64,
+    /// The Cauchy stress the slip plane adds to the medium's own, σ_f = F S_f Fᵀ / J.
+    pub stress: [[f64; 3]; 3],
 }
 
-/// The slip state of one cell of undeformed node coordinates `X` from its history.
+/// The state of one friction cell with slip-plane unit normal `normal` for output, at the
+/// accepted state `s` whose history is `history`. Its stress is the plane's at that state:
+/// τ = G_f(J) (γ − g), S_f = N⊗τ + τ⊗N, since the slip the return left makes τ the elastic
+/// shear the step ended with.
 pub fn slip_fields<const N: usize, const D: usize, E: RefElement<N, D>>(
-    X: &[[f64; 3]; N],
+    mat: &FrictionMaterial,
+    normal: &Vector3<f64>,
+    lay: &Layout,
+    s: &CellState<N>,
     history: &[f64],
 ) -> Result<SlipFields, KernelError> {
     let mut out = SlipFields::default();
     let mut volume = 0.0;
+    let mut stress = Matrix3::zeros();
     for (q, (xi, w)) in E::quadrature().iter().enumerate() {
-        let (_, detJ) =
-            physical_gradients::<N, D>(&E::grad(xi), X).ok_or(KernelError::BadGeometry)?;
-        let dV = w * detJ;
+        let Point { dV, F, .. } = point::<N, D, E>(xi, *w, lay, s, mat.medium.theta0())?;
+        let J = F.determinant();
+        if J <= 0.0 {
+            return Err(KernelError::Inverted { J });
+        }
         let h = &history[q * HISTORY_PER_POINT..(q + 1) * HISTORY_PER_POINT];
+        let slip = Vector3::new(h[0], h[1], h[2]);
+        let (G, _) = shear_modulus(mat.c_f, mat.medium.bulk_modulus(), J);
+        let tau = (shear_of(&F, normal) - slip) * G;
+        stress += F * plane_pair(normal, &tau) * F.transpose() / J * dV;
         for d in 0..3 {
             out.slip[d] += h[d] * dV;
             out.increment[d] += h[STEP + d] * dV;
@@ -237,6 +254,9 @@ pub fn slip_fields<const N: usize, const D: usize, E: RefElement<N, D>>(
     for d in 0..3 {
         out.slip[d] /= volume;
         out.increment[d] /= volume;
+        for e in 0..3 {
+            out.stress[d][e] = stress[(d, e)] / volume;
+        }
     }
     out.slipping /= volume;
     Ok(out)
@@ -332,8 +352,27 @@ mod tests {
             );
         }
         // the cell's output: every point slipped or none did, by g − gₙ
-        let cell = slip_fields::<N, D, E>(&s.X, &trial).unwrap();
+        let cell = slip_fields::<N, D, E>(mat, &NORMAL, &lay, &s, &trial).unwrap();
         assert_eq!(cell.slipping, if slips { 1.0 } else { 0.0 }, "{N} nodes");
+        // its stress is the one the residual carries: on a cell of one point (a linear
+        // simplex, F constant) P_f = J σ_f F⁻ᵀ gives the residual's u rows back
+        if E::quadrature().len() == 1 {
+            let (xi, w) = &E::quadrature()[0];
+            let Point { g, dV, F, .. } = point::<N, D, E>(xi, *w, &lay, &s, 0.0).unwrap();
+            let sigma = Matrix3::from_fn(|i, j| cell.stress[i][j]);
+            let P = sigma * F.transpose().try_inverse().unwrap() * F.determinant();
+            let size = r.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            for I in 0..N {
+                for i in 0..D {
+                    let v: f64 = (0..D).map(|J| P[(i, J)] * g[I][J]).sum::<f64>() * dV;
+                    assert!(
+                        (v - r[lay.u(I, i)]).abs() < 1e-12 * size,
+                        "{N} nodes: node {I}, {i}: {v} against {}",
+                        r[lay.u(I, i)]
+                    );
+                }
+            }
+        }
         for d in 0..3 {
             let before = if d == 0 { 0.01 } else { 0.0 };
             let step = cell.slip[d] - before;

@@ -105,6 +105,12 @@ pub fn along_plane(N: &Vector3<f64>) -> Matrix3<f64> {
     Matrix3::identity() - N * N.transpose()
 }
 
+/// S = N⊗τ + τ⊗N: the second Piola stress of a shear τ on the slip plane of unit normal `N`
+/// (the virtual work τ · δγ), or of its derivative in a scalar where τ is that derivative.
+pub fn plane_pair(N: &Vector3<f64>, tau: &Vector3<f64>) -> Matrix3<f64> {
+    N * tau.transpose() + tau * N.transpose()
+}
+
 /// The plane's shear per reference thickness at `F`, γ = P C N (C = FᵀF), for the slip
 /// plane of unit normal `N`.
 pub fn plane_shear(F: &Matrix3<f64>, N: &Vector3<f64>) -> Vector3<f64> {
@@ -201,7 +207,7 @@ impl Friction {
         } else {
             (Matrix3::zeros(), 0.0)
         };
-        let S = N * tau.transpose() + tau * N.transpose();
+        let S = plane_pair(&N, &tau);
         // A_iJkL = δ_ik S_LJ + (F N)_i dτ_J/dF_kL + (F dτ/dF)_i,kL N_J
         let Fdtau = F * dtau;
         let mut A = Tensor4::zeros();
@@ -212,7 +218,7 @@ impl Friction {
             A[(3 * i + Jc, 3 * k + L)] =
                 d + FN[i] * dtau[(Jc, 3 * k + L)] + Fdtau[(i, 3 * k + L)] * N[Jc];
         }
-        let S_theta = N * dtau_dtheta.transpose() + dtau_dtheta * N.transpose();
+        let S_theta = plane_pair(&N, &dtau_dtheta);
         Some(FrictionResponse {
             P: F * S,
             dP_dF: A,

@@ -128,10 +128,20 @@ impl Series {
         time: f64,
         friction: Option<&[Option<FrictionCell>]>,
     ) -> Result<(), OutputError> {
-        let cells = all_cell_fields(model, references, x).map_err(|e| OutputError::Fields {
+        let mut cells = all_cell_fields(model, references, x).map_err(|e| OutputError::Fields {
             step,
             msg: e.to_string(),
         })?;
+        // a friction cell's stress is the medium's own and its slip plane's
+        for (cell, f) in cells.iter_mut().zip(friction.unwrap_or_default()) {
+            if let Some(f) = f {
+                for (row, plane) in cell.sigma.iter_mut().zip(&f.state.stress) {
+                    for (s, p) in row.iter_mut().zip(plane) {
+                        *s += p;
+                    }
+                }
+            }
+        }
         let (d, dofs) = (model.mesh.dim, &model.dofs);
         let u: Vec<[f64; 3]> = (0..model.mesh.coords.len())
             .map(|n| {
