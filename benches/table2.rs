@@ -1,9 +1,10 @@
 //! `make bench` (second table): the paper's Table 2 — block-plate-3d with one medium layer,
 //! linear H1 (p-field regularization, eq. 20) against quadratic H2 / H2S (direct
-//! regularization, eq. 18) — dofs, load steps, Newton iterations, gap, linear-solver time and
-//! assembly time, beside the paper's H1 rows (Pardiso on a 12-core M4 Pro). H1 32×32 (147k
-//! unknowns) only with TMC_BENCH_LARGE=1. The paper's rows run three times (32×32 once),
-//! the others once; TMC_BENCH_REPEAT=n runs every row n times. The time columns give medians.
+//! regularization, eq. 18) — dofs, load steps, Newton iterations, GMRES iterations per
+//! linear solve, gap, linear-solver time and assembly time, beside the paper's H1 rows
+//! (Pardiso on a 12-core M4 Pro). H1 32×32 (147k unknowns) only with TMC_BENCH_LARGE=1. The
+//! paper's rows run three times (32×32 once), the others once; TMC_BENCH_REPEAT=n runs every
+//! row n times. The time columns give medians.
 
 mod common;
 use common::{case_text, root, solve};
@@ -71,9 +72,9 @@ fn main() {
         }
     };
     println!(
-        "| disc. | plan | cells | nodes / dofs (free) | load steps | iterations (+ rejected) | linear solves | factorisations | gap | runs | solver s | K & R s | wall s | K & R per solve and cell, µs: median (best) | paper: dofs, steps, its, solver, K & R |"
+        "| disc. | plan | cells | nodes / dofs (free) | load steps | iterations (+ rejected) | linear solves | factorisations | Krylov its per solve | gap | runs | solver s | K & R s | wall s | K & R per solve and cell, µs: median (best) | paper: dofs, steps, its, solver, K & R |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     for (disc, plan, options, paper) in variants {
         let dir = root()
             .join("target/bench/table2")
@@ -90,6 +91,7 @@ fn main() {
                 "rejected_iterations",
                 "linear_solves",
                 "factorisations",
+                "krylov_iterations",
             ]
             .map(|k| s[k].clone())
         };
@@ -127,13 +129,14 @@ fn main() {
         let kr = sorted("assembly_seconds");
         let per = |t: f64| t / solves.max(1) as f64 / cells as f64 * 1e6;
         println!(
-            "| {disc} | {plan} | {cells} | {} / {} ({}) | {}{} | {its} (+{rejected}) | {solves} | {} | {:.2e} | {runs} | {:.1} | {:.2} | {:.1} | {:.2} ({:.2}) | {paper} |",
+            "| {disc} | {plan} | {cells} | {} / {} ({}) | {}{} | {its} (+{rejected}) | {solves} | {} | {:.2} | {:.2e} | {runs} | {:.1} | {:.2} | {:.1} | {:.2} ({:.2}) | {paper} |",
             s["nodes"],
             s["dofs"]["total"],
             s["dofs"]["free"],
             s["load_steps"],
             if *ok { "" } else { " (failed)" },
             s["factorisations"],
+            s["krylov_iterations"].as_f64().unwrap_or(0.0) / solves.max(1) as f64,
             s["probes"]["gap"].as_f64().unwrap_or(f64::NAN),
             median(&sorted("solver_seconds")),
             median(&kr),
