@@ -135,7 +135,7 @@ impl Friction {
         let Pn = along_plane(&N);
         let Finv = F.try_inverse()?;
         let J = F.determinant();
-        let gamma = Pn * (F.transpose() * F) * N;
+        let gamma = plane_shear(F, &N);
         let elastic = gamma - slip;
         let trial = elastic * G;
         // dγ_I/dF_kL = P_IL (F N)_k + (F P)_kI N_L; dJ/dF = J F⁻ᵀ
