@@ -369,15 +369,28 @@ mod tests {
         respond_at(law, F, THETA, slip)
     }
 
+    /// The unit direction the layers of [`layer`] slide along: in the plane normal to N, and in
+    /// the xy plane.
+    fn along(N: Vector3<f64>) -> Vector3<f64> {
+        Vector3::new(-N[1], N[0], 0.0).normalize()
+    }
+
     /// A layer normal to N closed to thickness `closed` (of 1), slid `slide` along T, then
     /// turned by `turn` about z, and a small general `noise`.
     fn layer(N: Vector3<f64>, closed: f64, slide: f64, turn: f64, noise: f64) -> Matrix3<f64> {
-        let T = Vector3::new(-N[1], N[0], 0.0).normalize();
+        let T = along(N);
         let d = T * slide - N * (1.0 - closed);
         let (s, c) = turn.sin_cos();
         let R = Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0);
         let G = sample_F(N[2] == 0.0) - Matrix3::identity();
         R * (Matrix3::identity() + d * N.transpose() + G * noise)
+    }
+
+    /// A stretch by λ of the plane normal to N along the direction its layers slide in, to be
+    /// applied first: `layer(..) * stretched(N, λ)` maps T to λ T's image.
+    fn stretched(N: Vector3<f64>, lambda: f64) -> Matrix3<f64> {
+        let T = along(N);
+        Matrix3::identity() + T * T.transpose() * (lambda - 1.0)
     }
 
     #[test]
@@ -397,7 +410,8 @@ mod tests {
                 lagged,
                 ..plane(dim)
             };
-            let F = layer(law.normal, 0.05, 0.05, 0.3, 0.01);
+            // a plane shortened along the slide, as under a leading corner
+            let F = layer(law.normal, 0.05, 0.05, 0.3, 0.01) * stretched(law.normal, 0.85);
             // from no slip, the trial leaves the cone; from half the elastic shear of the
             // return, it stays inside
             let on_cone = respond(&law, &F, &Vector3::zeros());
@@ -530,20 +544,30 @@ mod tests {
 
     #[test]
     fn a_closed_layer_measures_its_slide_per_reference_thickness() {
-        let law = plane(2);
-        for closed in [0.5, 1e-2, 1e-3] {
-            for turn in [0.0, 0.7] {
-                let F = layer(law.normal, closed, 0.3, turn, 0.0);
-                // with no previous slip and a cone of zero width, all shear turns into slip
-                let free = Friction { mu: 0.0, ..law };
-                let r = respond(&free, &F, &Vector3::zeros());
-                let T = Vector3::new(-0.8, 0.6, 0.0);
-                assert!(
-                    (r.slip - T * 0.3).norm() < 1e-12,
-                    "closed to {closed}: {}",
-                    r.slip
-                );
-                assert!(r.tau.norm() == 0.0 && r.P.norm() == 0.0);
+        // however far it has closed and however it is turned; a plane stretched by λ along the
+        // slide counts the stretch as well, λ times the slide (docs/THEORY.md, "The block
+        // with one cell across": the measure of the slide between the points that face each
+        // other, 0.3 / λ here, was measured and not adopted)
+        for dim in [2, 3] {
+            let law = plane(dim);
+            for closed in [0.5, 1e-2, 1e-3] {
+                for turn in [0.0, 0.7] {
+                    for stretch in [1.0, 0.8, 1.25] {
+                        let F = layer(law.normal, closed, 0.3, turn, 0.0)
+                            * stretched(law.normal, stretch);
+                        // with no previous slip and a cone of zero width, all shear turns into
+                        // slip
+                        let free = Friction { mu: 0.0, ..law };
+                        let r = respond(&free, &F, &Vector3::zeros());
+                        let T = along(law.normal);
+                        assert!(
+                            (r.slip - T * (0.3 * stretch)).norm() < 1e-12,
+                            "{dim}D closed to {closed}, stretched {stretch}: {}",
+                            r.slip
+                        );
+                        assert!(r.tau.norm() == 0.0 && r.P.norm() == 0.0);
+                    }
+                }
             }
         }
     }
