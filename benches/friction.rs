@@ -20,8 +20,15 @@
 //! joined again as it slides (`friction.reconnect`), dragged 2.0 with ρ = 1e-4 at μ = 0 to 1 on
 //! n = 16 and 32 (and 64 with `TMC_BENCH_FINE=1`), quadrilaterals (Q1) and triangles (T1, the
 //! layer zipped node by node): how far each gets, and its force ratio from a drag of 0.25 to
-//! the end (range and mean). `TMC_BENCH_PART=cost`, `reach`, `slide` or `rejoined` runs one
-//! table.
+//! the end (range and mean).
+//!
+//! Fifth table: issue 36's block with one cell across the medium (docs/THEORY.md, "The block
+//! with one cell across"), ρ = 1e-4, pressed 0.35 and dragged 0.5, at μ = 0.1 to 1: T1 and Q1 on
+//! n = 16, 32 and 64, and the 3D block (H1, `geo/block3d.geo`, nb = n/4) on n = 8 and 16. Whether
+//! each completes, F_t/F_n from a drag of 0.3 to the end (least and greatest, against μ), at the
+//! end, and how far the middle of the block's bottom slid (x = 1; in 3D at mid-depth).
+//!
+//! `TMC_BENCH_PART=cost`, `reach`, `slide`, `rejoined` or `one-cell` runs one table.
 
 mod common;
 use common::{case_text, root, solve};
@@ -47,6 +54,142 @@ fn main() {
     if part.is_err() || part.as_deref() == Ok("rejoined") {
         rejoined();
     }
+    if part.is_err() || part.as_deref() == Ok("one-cell") {
+        one_cell();
+    }
+}
+
+/// The fifth table: the block with one cell across (see the module's words).
+fn one_cell() {
+    println!();
+    println!(
+        "| cells | n | μ | completes | F_t/F_n from 0.3: least…greatest | against μ | at the end | bottom's middle slid | load steps | Newton its | wall s |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|---|---|");
+    let mut runs = Vec::new();
+    for tri in [true, false] {
+        for n in [16, 32, 64] {
+            for mu in [0.1, 0.3, 0.5, 1.0] {
+                runs.push((if tri { "T1" } else { "Q1" }, n, mu));
+            }
+        }
+    }
+    for n in [8, 16] {
+        for mu in [0.1, 0.3, 0.5, 1.0] {
+            runs.push(("H1", n, mu));
+        }
+    }
+    for (cells, n, mu) in runs {
+        let dir = root()
+            .join("target/bench-friction")
+            .join(format!("one-cell-{cells}-{n}-{mu}"));
+        let (ok, s) = solve(&dir, &one_cell_text(cells, n, mu));
+        let vertical = if cells == "H1" { "R_top_z" } else { "R_top_y" };
+        let ratios = drag_ratios(&dir, 0.5, vertical);
+        let late: Vec<f64> = (ratios.iter())
+            .filter(|r| r.0 >= 0.3 - 1e-9)
+            .map(|r| r.1)
+            .collect();
+        let (least, greatest) =
+            (late.iter()).fold((f64::NAN, f64::NAN), |(a, b), &r| (a.min(r), b.max(r)));
+        let end = ratios.last().map_or(f64::NAN, |r| r.1);
+        println!(
+            "| {cells} | {n} | {mu} | {} | {least:.4}…{greatest:.4} | {:+.1}…{:+.1} % | {end:.4} | {:.5} | {} | {} | {:.1} |",
+            if ok {
+                "yes".to_string()
+            } else {
+                format!("no: {:.3}", ratios.last().map_or(0.0, |r| r.0))
+            },
+            (least / mu - 1.0) * 100.0,
+            (greatest / mu - 1.0) * 100.0,
+            s["probes"]["middle_x"].as_f64().unwrap_or(f64::NAN),
+            s["load_steps"],
+            s["newton_iterations"],
+            s["wall_seconds"].as_f64().unwrap_or(f64::NAN),
+        );
+    }
+}
+
+/// The case of [`one_cell`]: `cells` "T1", "Q1" (`geo/block.geo`) or "H1"
+/// (`geo/block3d.geo`, nb = n/4), n cells along the block, friction μ, every region ρ = 1e-4,
+/// pressed 0.35 (pseudo-time 0 to 1) and dragged 0.5 (1 to 2), Δt at most 0.025; the probe
+/// `middle_x` at the middle of the block's bottom.
+fn one_cell_text(cells: &str, n: usize, mu: f64) -> String {
+    let three = cells == "H1";
+    let geo = root()
+        .join("geo")
+        .join(if three { "block3d.geo" } else { "block.geo" });
+    let (params, normal, held, down, middle) = if three {
+        (
+            format!("n = {n}, nb = {}, m = {}, l = 1", n / 4, n / 2),
+            "[0, 0, 1]",
+            "ux = 0.0\nuy = 0.0\nuz = 0.0",
+            "uy = 0.0\nuz",
+            "[1.0, 0.5, 0.25]",
+        )
+    } else {
+        (
+            format!(
+                "n = {n}, m = {}, l = 1, tri = {}",
+                n / 2,
+                u8::from(cells == "T1")
+            ),
+            "[0, 1]",
+            "ux = 0.0\nuy = 0.0",
+            "uy",
+            "[1.0, 0.25]",
+        )
+    };
+    format!(
+        r#"mesh = "{}"
+[mesh_options]
+params = {{ {params} }}
+[[region]]
+group = "solid"
+kind = "solid"
+K = 20.0
+mu = 10.0
+rho = 1e-4
+[[region]]
+group = "medium"
+kind = "medium"
+gamma = 1e-4
+friction = {{ mu = {mu}, normal = {normal} }}
+rho = 1e-4
+[[bc]]
+group = "bottom"
+{held}
+[[bc]]
+group = "top"
+{down} = -0.35
+path = [0.0, 1.0, 1.0]
+[[bc]]
+group = "top"
+ux = 0.5
+path = [0.0, 0.0, 1.0]
+[[probe]]
+name = "middle_x"
+field = "ux"
+at = {middle}
+[steps]
+initial = 0.025
+max = 0.025
+path = [0.0, 1.0, 1.0]
+"#,
+        geo.display(),
+    )
+}
+
+/// The force ratio F_t/F_n of the top at each accepted step of a drag of `amount` (pseudo-time
+/// 1 to 2) solved in `dir`, F_n its reaction `vertical`: (drag, ratio).
+fn drag_ratios(dir: &std::path::Path, amount: f64, vertical: &str) -> Vec<(f64, f64)> {
+    let h = tmc::plot::History::read(&dir.join("out/history.csv")).unwrap();
+    let col = |name: &str| h.columns.iter().position(|c| c == name).unwrap();
+    let (t, fx, fy) = (col("time"), col("R_top_x"), col(vertical));
+    (h.rows.iter())
+        .map(|v| (amount * (v[t] - 1.0), -v[fx] / v[fy]))
+        .filter(|(d, _)| *d > 0.0)
+        .collect()
 }
 
 /// The fourth table: the reconnected pad (see the module's words).
@@ -206,13 +349,7 @@ path = [0.0, 1.0, 1.0]
     fn run(&self, tag: &str) -> (bool, f64, Vec<(f64, f64)>, serde_json::Value) {
         let dir = root().join("target/bench-friction").join(tag);
         let (ok, s) = solve(&dir, &self.text());
-        let h = tmc::plot::History::read(&dir.join("out/history.csv")).unwrap();
-        let col = |name: &str| h.columns.iter().position(|c| c == name).unwrap();
-        let (t, fx, fy) = (col("time"), col("R_top_x"), col("R_top_y"));
-        let ratios: Vec<(f64, f64)> = (h.rows.iter())
-            .map(|v| (self.amount * (v[t] - 1.0), -v[fx] / v[fy]))
-            .filter(|(d, _)| *d > 0.0)
-            .collect();
+        let ratios = drag_ratios(&dir, self.amount, "R_top_y");
         let reached = ratios.last().map_or(0.0, |r| r.0);
         (ok, reached, ratios, s)
     }
