@@ -24,7 +24,8 @@
 //!
 //! Fifth table: issue 36's block with one cell across the medium (docs/THEORY.md, "The block
 //! with one cell across"), ρ = 1e-4, pressed 0.35 and dragged 0.5, at μ = 0.1 to 1: T1 and Q1 on
-//! n = 16, 32 and 64, and the 3D block (H1, `geo/block3d.geo`, nb = n/4) on n = 8 and 16. Whether
+//! n = 16, 32 and 64, and the 3D block (`geo/block3d.geo`, nb = n/4) on n = 8 and 16 in hexahedra
+//! (H1) and tetrahedra (T4, `tet = 1`). Whether
 //! each completes, F_t/F_n from a drag of 0.3 to the end (least and greatest, against μ), at the
 //! end, and how far the middle of the block's bottom slid (x = 1; in 3D at mid-depth).
 //!
@@ -74,9 +75,11 @@ fn one_cell() {
             }
         }
     }
-    for n in [8, 16] {
-        for mu in [0.1, 0.3, 0.5, 1.0] {
-            runs.push(("H1", n, mu));
+    for cells in ["H1", "T4"] {
+        for n in [8, 16] {
+            for mu in [0.1, 0.3, 0.5, 1.0] {
+                runs.push((cells, n, mu));
+            }
         }
     }
     for (cells, n, mu) in runs {
@@ -84,7 +87,7 @@ fn one_cell() {
             .join("target/bench-friction")
             .join(format!("one-cell-{cells}-{n}-{mu}"));
         let (ok, s) = solve(&dir, &one_cell_text(cells, n, mu));
-        let vertical = if cells == "H1" { "R_top_z" } else { "R_top_y" };
+        let vertical = if in_3d(cells) { "R_top_z" } else { "R_top_y" };
         let ratios = drag_ratios(&dir, 0.5, vertical);
         let late: Vec<f64> = (ratios.iter())
             .filter(|r| r.0 >= 0.3 - 1e-9)
@@ -110,18 +113,28 @@ fn one_cell() {
     }
 }
 
-/// The case of [`one_cell`]: `cells` "T1", "Q1" (`geo/block.geo`) or "H1"
-/// (`geo/block3d.geo`, nb = n/4), n cells along the block, friction μ, every region ρ = 1e-4,
+/// Whether [`one_cell`]'s `cells` are those of the 3D block.
+fn in_3d(cells: &str) -> bool {
+    matches!(cells, "H1" | "T4")
+}
+
+/// The case of [`one_cell`]: `cells` "T1", "Q1" (`geo/block.geo`), "H1" or "T4"
+/// (`geo/block3d.geo`, nb = n/4, tetrahedra for T4), n cells along the block, friction μ, every region ρ = 1e-4,
 /// pressed 0.35 (pseudo-time 0 to 1) and dragged 0.5 (1 to 2), Δt at most 0.025; the probe
 /// `middle_x` at the middle of the block's bottom.
 fn one_cell_text(cells: &str, n: usize, mu: f64) -> String {
-    let three = cells == "H1";
+    let three = in_3d(cells);
     let geo = root()
         .join("geo")
         .join(if three { "block3d.geo" } else { "block.geo" });
     let (params, normal, held, down, middle) = if three {
         (
-            format!("n = {n}, nb = {}, m = {}, l = 1", n / 4, n / 2),
+            format!(
+                "n = {n}, nb = {}, m = {}, l = 1, tet = {}",
+                n / 4,
+                n / 2,
+                u8::from(cells == "T4")
+            ),
             "[0, 0, 1]",
             "ux = 0.0\nuy = 0.0\nuz = 0.0",
             "uy = 0.0\nuz",
