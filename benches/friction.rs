@@ -23,11 +23,12 @@
 //! the end (range and mean).
 //!
 //! Fifth table: issue 36's block with one cell across the medium (docs/THEORY.md, "The block
-//! with one cell across"), ρ = 1e-4, pressed 0.35 and dragged 0.5, at μ = 0.1 to 1: T1 and Q1 on
-//! n = 16, 32 and 64, and the 3D block (`geo/block3d.geo`, nb = n/4) on n = 8 and 16 in hexahedra
-//! (H1) and tetrahedra (T4, `tet = 1`). Whether
-//! each completes, F_t/F_n from a drag of 0.3 to the end (least and greatest, against μ), at the
-//! end, and how far the middle of the block's bottom slid (x = 1; in 3D at mid-depth).
+//! with one cell across"), ρ = 1e-4, pressed 0.35 and dragged 0.5, at μ = 0.1 to 1: T1 (each
+//! cell's diagonal the same way, and alternating) and Q1 on n = 16, 32 and 64, and the 3D block
+//! (`geo/block3d.geo`, nb = n/4) on n = 8 and 16 in hexahedra (H1) and tetrahedra (T4,
+//! `tet = 1`). Whether each completes, F_t/F_n from a drag of 0.3 to the end (least and
+//! greatest, against μ), at the end, and how far the middle of the block's bottom slid (x = 1;
+//! in 3D at mid-depth).
 //!
 //! `TMC_BENCH_PART=cost`, `reach`, `slide`, `rejoined` or `one-cell` runs one table.
 
@@ -68,10 +69,10 @@ fn one_cell() {
     );
     println!("|---|---|---|---|---|---|---|---|---|---|---|");
     let mut runs = Vec::new();
-    for tri in [true, false] {
+    for cells in ["T1", "T1 alternate", "Q1"] {
         for n in [16, 32, 64] {
             for mu in [0.1, 0.3, 0.5, 1.0] {
-                runs.push((if tri { "T1" } else { "Q1" }, n, mu));
+                runs.push((cells, n, mu));
             }
         }
     }
@@ -118,8 +119,9 @@ fn in_3d(cells: &str) -> bool {
     matches!(cells, "H1" | "T4")
 }
 
-/// The case of [`one_cell`]: `cells` "T1", "Q1" (`geo/block.geo`), "H1" or "T4"
-/// (`geo/block3d.geo`, nb = n/4, tetrahedra for T4), n cells along the block, friction μ, every region ρ = 1e-4,
+/// The case of [`one_cell`]: `cells` "T1", "T1 alternate" (diagonals alternating, `tri = 2`),
+/// "Q1" (`geo/block.geo`), "H1" or "T4" (`geo/block3d.geo`, nb = n/4, tetrahedra for T4), n
+/// cells along the block, friction μ, every region ρ = 1e-4,
 /// pressed 0.35 (pseudo-time 0 to 1) and dragged 0.5 (1 to 2), Δt at most 0.025; the probe
 /// `middle_x` at the middle of the block's bottom.
 fn one_cell_text(cells: &str, n: usize, mu: f64) -> String {
@@ -145,7 +147,11 @@ fn one_cell_text(cells: &str, n: usize, mu: f64) -> String {
             format!(
                 "n = {n}, m = {}, l = 1, tri = {}",
                 n / 2,
-                u8::from(cells == "T1")
+                match cells {
+                    "T1" => 1,
+                    "T1 alternate" => 2,
+                    _ => 0,
+                }
             ),
             "[0, 1]",
             "ux = 0.0\nuy = 0.0",

@@ -3,7 +3,10 @@
 // Parameters (tmc mesh --set name=value): n cells along x, m across the solid, l across
 // the medium. The paper's mesh is n = m = 32, l = 8. skew != 1 grades the cells along the
 // medium's bottom and top in opposite directions (ratio skew from cell to cell), which
-// distorts the medium's cells into slanted trapezoids (a test of distorted meshes).
+// distorts the medium's cells into slanted trapezoids (a test of distorted meshes). tri = 1
+// cuts each cell into two triangles along the same diagonal, tri = 2 alternates the diagonal
+// from cell to cell (a friction layer's leading corner then sits in either kind: THEORY.md,
+// "The block with one cell across").
 DefineConstant[ W = 2.0, H = 1.0, t = 0.25, n = 32, m = 32, l = 8, tri = 0, skew = 1 ];
 Point(1) = {0, 0, 0}; Point(2) = {W, 0, 0}; Point(3) = {W, t, 0}; Point(4) = {0, t, 0};
 Point(5) = {W, t + H, 0}; Point(6) = {0, t + H, 0};
@@ -15,7 +18,11 @@ Transfinite Curve{1, 3} = n + 1 Using Progression skew;
 Transfinite Curve{6} = n + 1;
 Transfinite Curve{2, 4} = l + 1;
 Transfinite Curve{5, 7} = m + 1;
-Transfinite Surface{1}; Transfinite Surface{2};
+If (tri == 2)
+  Transfinite Surface{1} Alternate; Transfinite Surface{2} Alternate;
+Else
+  Transfinite Surface{1}; Transfinite Surface{2};
+EndIf
 If (tri == 0)
   Recombine Surface{1, 2};
 EndIf
