@@ -462,7 +462,7 @@ fn heating_case(duration: f64) -> String {
 
 #[test]
 fn friction_heats_the_interface_more_the_faster_it_slides_and_the_heat_balances() {
-    let mut flash = Vec::new();
+    let (mut flash, mut works) = (Vec::new(), Vec::new());
     for duration in [2.0, 0.5, 0.1] {
         let (s, _) = solve_text(
             &format!("friction-heating-{duration}"),
@@ -489,6 +489,7 @@ fn friction_heats_the_interface_more_the_faster_it_slides_and_the_heat_balances(
         );
         // the work is μ F_n d whatever the speed: the same within the slip's build-up
         assert!((work / 0.13105 - 1.0).abs() < 0.01, "work {work}");
+        works.push(work);
         // the interface no hotter than on a semi-infinite body under the same flux,
         // 2 q √(t / π k ρc), q = μ F_n v / W (the cooled top and the mesh only lower it)
         let q = 0.3 * 3.26 / 2.0 * 0.2 / duration;
@@ -498,6 +499,12 @@ fn friction_heats_the_interface_more_the_faster_it_slides_and_the_heat_balances(
         flash.push(theta);
     }
     assert!(flash[0] < flash[1] && flash[1] < flash[2], "{flash:?}");
+    // and the same whatever the slip measure: the works of the three speeds agree (measured
+    // 0.13112, 0.13102, 0.13099; with the slide measured at its current length, THEORY.md,
+    // 0.13321, 0.13295, 0.13273, which the pin above does not admit)
+    let (low, high) =
+        (works.iter()).fold((f64::INFINITY, 0.0f64), |(a, b), &w| (a.min(w), b.max(w)));
+    assert!(high < 1.01 * low, "{works:?}");
 }
 
 #[test]
