@@ -107,6 +107,12 @@ fn slip_ratio(out: &Path, dim: usize) -> f64 {
 const DRAG: &str = "[0.0, 0.0, 1.0]";
 const COARSE: &str = "n = 16, m = 8, l = 4";
 
+/// The least and the greatest of `values`, positive quantities (ratios, forces, works): the
+/// greatest starts from 0.
+fn spread(values: impl IntoIterator<Item = f64>) -> (f64, f64) {
+    (values.into_iter()).fold((f64::INFINITY, 0.0f64), |(a, b), v| (a.min(v), b.max(v)))
+}
+
 #[test]
 fn in_full_slip_the_force_ratio_is_mu_q1() {
     // dragged until past the onset of full slip (on this coarse mesh, Newton loses its way
@@ -502,8 +508,7 @@ fn friction_heats_the_interface_more_the_faster_it_slides_and_the_heat_balances(
     // and the same whatever the slip measure: the works of the three speeds agree (measured
     // 0.13112, 0.13102, 0.13099; with the slide measured at its current length, THEORY.md,
     // 0.13321, 0.13295, 0.13273, which the pin above does not admit)
-    let (low, high) =
-        (works.iter()).fold((f64::INFINITY, 0.0f64), |(a, b), &w| (a.min(w), b.max(w)));
+    let (low, high) = spread(works.iter().copied());
     assert!(high < 1.01 * low, "{works:?}");
 }
 
@@ -1431,18 +1436,14 @@ fn a_pad_whose_layer_is_joined_again_slides_its_width_at_mu() {
         "the whole drag"
     );
     let slip: Vec<_> = ratios.iter().filter(|r| r.0 >= 0.25).collect();
-    let (low, high) = slip.iter().fold((f64::INFINITY, 0.0f64), |(a, b), r| {
-        (a.min(r.1), b.max(r.1))
-    });
+    let (low, high) = spread(slip.iter().map(|r| r.1));
     println!("reconnected pad, μ = {mu}: F_t/F_n from {low} to {high} over drags 0.25–2.0");
     assert!(low > 0.96 * mu && high < 1.04 * mu, "{low}..{high}");
     let normal: Vec<f64> = (top_forces(&out, 2).iter())
         .filter(|f| f.0 >= 1.125)
         .map(|f| f.2)
         .collect();
-    let (n_low, n_high) = normal
-        .iter()
-        .fold((f64::INFINITY, 0.0f64), |(a, b), &f| (a.min(f), b.max(f)));
+    let (n_low, n_high) = spread(normal.iter().copied());
     assert!(n_high < 1.03 * n_low, "normal force {n_low}..{n_high}");
     // the cells were joined again, measured from their own references: the output's J of
     // the medium stays positive and closed under the pad
@@ -1481,8 +1482,7 @@ fn a_pad_on_triangles_whose_layer_is_zipped_again_slides_its_width_at_mu() {
             .map(|r| r.1)
             .collect();
         let mean = slip.iter().sum::<f64>() / slip.len() as f64;
-        let (low, high) =
-            (slip.iter()).fold((f64::INFINITY, 0.0f64), |(a, b), &r| (a.min(r), b.max(r)));
+        let (low, high) = spread(slip.iter().copied());
         println!("zipped pad, μ = {mu}: F_t/F_n {low}..{high}, mean {mean}");
         assert!((mean - mu).abs() < 0.015 * mu, "mean {mean}");
         if mu == 0.3 {
@@ -1491,8 +1491,7 @@ fn a_pad_on_triangles_whose_layer_is_zipped_again_slides_its_width_at_mu() {
                 .filter(|f| f.0 >= 1.125)
                 .map(|f| f.2)
                 .collect();
-            let (n_low, n_high) =
-                (normal.iter()).fold((f64::INFINITY, 0.0f64), |(a, b), &f| (a.min(f), b.max(f)));
+            let (n_low, n_high) = spread(normal.iter().copied());
             assert!(n_high < 1.03 * n_low, "normal force {n_low}..{n_high}");
         } else {
             assert!(low > 0.85 * mu && high < 1.06 * mu, "{low}..{high}");
