@@ -178,24 +178,34 @@ rho = 1e-4
 [[bc]]
 group = "bottom"
 {held}
-[[bc]]
+{loads}"#,
+        geo.display(),
+        loads = press_then_drag(down, 0.35, 0.5, "middle_x", middle),
+    )
+}
+
+/// The loads of a drag case: the group "top" pressed `press` along `down` (its last line's key;
+/// earlier lines hold other components), pseudo-time 0 to 1, then dragged `amount` along x,
+/// 1 to 2, with Δt at most 0.025; and the probe `probe` of ux at `at`.
+fn press_then_drag(down: &str, press: f64, amount: f64, probe: &str, at: &str) -> String {
+    format!(
+        r#"[[bc]]
 group = "top"
-{down} = -0.35
+{down} = -{press}
 path = [0.0, 1.0, 1.0]
 [[bc]]
 group = "top"
-ux = 0.5
+ux = {amount}
 path = [0.0, 0.0, 1.0]
 [[probe]]
-name = "middle_x"
+name = "{probe}"
 field = "ux"
-at = {middle}
+at = {at}
 [steps]
 initial = 0.025
 max = 0.025
 path = [0.0, 1.0, 1.0]
-"#,
-        geo.display(),
+"#
     )
 }
 
@@ -333,30 +343,18 @@ gamma = 1e-4
 group = "bottom"
 ux = 0.0
 uy = 0.0
-[[bc]]
-group = "top"
-uy = -{press}
-path = [0.0, 1.0, 1.0]
-[[bc]]
-group = "top"
-ux = {amount}
-path = [0.0, 0.0, 1.0]
-[[probe]]
-name = "corner_x"
-field = "ux"
-at = [{corner}, 0.25]
-[steps]
-initial = 0.025
-max = 0.025
-path = [0.0, 1.0, 1.0]
-"#,
+{loads}"#,
             geo.display(),
             n = self.n,
             m = self.n / 2,
             l = self.l,
-            press = self.press,
-            amount = self.amount,
-            corner = leading_corner(self.geo),
+            loads = press_then_drag(
+                "uy",
+                self.press,
+                self.amount,
+                "corner_x",
+                &format!("[{}, 0.25]", leading_corner(self.geo)),
+            ),
         )
     }
 
