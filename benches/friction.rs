@@ -30,7 +30,15 @@
 //! greatest, against μ), at the end, and how far the middle of the block's bottom slid (x = 1;
 //! in 3D at mid-depth).
 //!
-//! `TMC_BENCH_PART=cost`, `reach`, `slide`, `rejoined` or `one-cell` runs one table.
+//! Sixth table: the same one-cell block pressed 0.27 (the medium's 0.25 closed and the block
+//! squeezed 2 %, where 0.35 squeezes it 10 % and pitches its leading end onto the base's corner:
+//! docs/THEORY.md, "The press decides"), T1 and Q1 on n = 16, 32, 64, H1 and T4 on n = 8, 16,
+//! at μ = 0 to 1: F_t/F_n from a drag of 0.3 (least and greatest, against μ), and the same net
+//! of the medium's own drag, (F_t − F_t at μ = 0)/F_n, the frictionless run's F_t taken at the
+//! same drag.
+//!
+//! `TMC_BENCH_PART=cost`, `reach`, `slide`, `rejoined`, `one-cell` or `one-cell-light` runs one
+//! table.
 
 mod common;
 use common::{case_text, root, solve};
@@ -58,6 +66,9 @@ fn main() {
     }
     if part.is_err() || part.as_deref() == Ok("one-cell") {
         one_cell();
+    }
+    if part.is_err() || part.as_deref() == Ok("one-cell-light") {
+        one_cell_light();
     }
 }
 
@@ -87,23 +98,18 @@ fn one_cell() {
         let dir = root()
             .join("target/bench-friction")
             .join(format!("one-cell-{cells}-{n}-{mu}"));
-        let (ok, s) = solve(&dir, &one_cell_text(cells, n, mu));
+        let (ok, s) = solve(&dir, &one_cell_text(cells, n, mu, 0.35));
         let vertical = if in_3d(cells) { "R_top_z" } else { "R_top_y" };
         let ratios = drag_ratios(&dir, 0.5, vertical);
         let late: Vec<f64> = (ratios.iter())
             .filter(|r| r.0 >= 0.3 - 1e-9)
             .map(|r| r.1)
             .collect();
-        let (least, greatest) =
-            (late.iter()).fold((f64::NAN, f64::NAN), |(a, b), &r| (a.min(r), b.max(r)));
+        let (least, greatest) = least_greatest(late);
         let end = ratios.last().map_or(f64::NAN, |r| r.1);
         println!(
             "| {cells} | {n} | {mu} | {} | {least:.4}…{greatest:.4} | {:+.1}…{:+.1} % | {end:.4} | {:.5} | {} | {} | {:.1} |",
-            if ok {
-                "yes".to_string()
-            } else {
-                format!("no: {:.3}", ratios.last().map_or(0.0, |r| r.0))
-            },
+            completes(ok, ratios.last().map_or(0.0, |r| r.0)),
             (least / mu - 1.0) * 100.0,
             (greatest / mu - 1.0) * 100.0,
             s["probes"]["middle_x"].as_f64().unwrap_or(f64::NAN),
@@ -111,6 +117,20 @@ fn one_cell() {
             s["newton_iterations"],
             s["wall_seconds"].as_f64().unwrap_or(f64::NAN),
         );
+    }
+}
+
+/// The least and the greatest of `values` (NaN for none).
+fn least_greatest(values: impl IntoIterator<Item = f64>) -> (f64, f64) {
+    (values.into_iter()).fold((f64::NAN, f64::NAN), |(a, b), r| (a.min(r), b.max(r)))
+}
+
+/// A table's "completes" cell: yes, or how far the drag got.
+fn completes(ok: bool, reached: f64) -> String {
+    if ok {
+        "yes".to_string()
+    } else {
+        format!("no: {reached:.3}")
     }
 }
 
@@ -122,9 +142,9 @@ fn in_3d(cells: &str) -> bool {
 /// The case of [`one_cell`]: `cells` "T1", "T1 alternate" (diagonals alternating, `tri = 2`),
 /// "Q1" (`geo/block.geo`), "H1" or "T4" (`geo/block3d.geo`, nb = n/4, tetrahedra for T4), n
 /// cells along the block, friction μ, every region ρ = 1e-4,
-/// pressed 0.35 (pseudo-time 0 to 1) and dragged 0.5 (1 to 2), Δt at most 0.025; the probe
+/// pressed `press` (pseudo-time 0 to 1) and dragged 0.5 (1 to 2), Δt at most 0.025; the probe
 /// `middle_x` at the middle of the block's bottom.
-fn one_cell_text(cells: &str, n: usize, mu: f64) -> String {
+fn one_cell_text(cells: &str, n: usize, mu: f64, press: f64) -> String {
     let three = in_3d(cells);
     let geo = root()
         .join("geo")
@@ -180,7 +200,7 @@ group = "bottom"
 {held}
 {loads}"#,
         geo.display(),
-        loads = press_then_drag(down, 0.35, 0.5, "middle_x", middle),
+        loads = press_then_drag(down, press, 0.5, "middle_x", middle),
     )
 }
 
@@ -209,16 +229,80 @@ path = [0.0, 1.0, 1.0]
     )
 }
 
-/// The force ratio F_t/F_n of the top at each accepted step of a drag of `amount` (pseudo-time
-/// 1 to 2) solved in `dir`, F_n its reaction `vertical`: (drag, ratio).
-fn drag_ratios(dir: &std::path::Path, amount: f64, vertical: &str) -> Vec<(f64, f64)> {
+/// The forces on the top at each accepted step of a drag of `amount` (pseudo-time 1 to 2)
+/// solved in `dir`: (drag, F_t, F_n), F_n its reaction `vertical`, both signed so that
+/// F_t/F_n is the force ratio.
+fn drag_forces(dir: &std::path::Path, amount: f64, vertical: &str) -> Vec<(f64, f64, f64)> {
     let h = tmc::plot::History::read(&dir.join("out/history.csv")).unwrap();
     let col = |name: &str| h.columns.iter().position(|c| c == name).unwrap();
     let (t, fx, fy) = (col("time"), col("R_top_x"), col(vertical));
     (h.rows.iter())
-        .map(|v| (amount * (v[t] - 1.0), -v[fx] / v[fy]))
-        .filter(|(d, _)| *d > 0.0)
+        .map(|v| (amount * (v[t] - 1.0), -v[fx], v[fy]))
+        .filter(|(d, _, _)| *d > 0.0)
         .collect()
+}
+
+/// The force ratio F_t/F_n of the top at each accepted step of a drag (see [`drag_forces`]):
+/// (drag, ratio).
+fn drag_ratios(dir: &std::path::Path, amount: f64, vertical: &str) -> Vec<(f64, f64)> {
+    (drag_forces(dir, amount, vertical).into_iter())
+        .map(|(d, t, n)| (d, t / n))
+        .collect()
+}
+
+/// The sixth table: the one-cell block pressed 0.27, its ratio also net of the medium's own
+/// drag (see the module's words).
+fn one_cell_light() {
+    println!();
+    println!(
+        "| cells | n | μ | completes | F_t/F_n from 0.3 against μ | net of the medium's drag | F_t/F_n at μ = 0, end | load steps | Newton its |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|");
+    let mut runs: Vec<(&str, usize)> = Vec::new();
+    for cells in ["T1", "Q1"] {
+        runs.extend([16, 32, 64].map(|n| (cells, n)));
+    }
+    for cells in ["H1", "T4"] {
+        runs.extend([8, 16].map(|n| (cells, n)));
+    }
+    for (cells, n) in runs {
+        let vertical = if in_3d(cells) { "R_top_z" } else { "R_top_y" };
+        let run = |mu: f64| {
+            let dir = root()
+                .join("target/bench-friction")
+                .join(format!("one-cell-0.27-{cells}-{n}-{mu}"));
+            let (ok, s) = solve(&dir, &one_cell_text(cells, n, mu, 0.27));
+            (ok, s, drag_forces(&dir, 0.5, vertical))
+        };
+        let (_, _, free) = run(0.0);
+        // the frictionless run's F_t at drag d, linear between its steps
+        let free_t = |d: f64| {
+            let i = free.partition_point(|f| f.0 < d).clamp(1, free.len() - 1);
+            let (a, b) = (free[i - 1], free[i]);
+            a.1 + (b.1 - a.1) * ((d - a.0) / (b.0 - a.0)).clamp(0.0, 1.0)
+        };
+        let drag_share = free.last().map_or(f64::NAN, |f| f.1 / f.2);
+        for mu in [0.1, 0.3, 0.5, 1.0] {
+            let (ok, s, forces) = run(mu);
+            let late = forces.iter().filter(|f| f.0 >= 0.3 - 1e-9);
+            let spread = |v: Vec<f64>| {
+                let (a, b) = least_greatest(v);
+                format!(
+                    "{:+.1}…{:+.1} %",
+                    (a / mu - 1.0) * 100.0,
+                    (b / mu - 1.0) * 100.0
+                )
+            };
+            let raw = spread(late.clone().map(|f| f.1 / f.2).collect());
+            let net = spread(late.map(|f| (f.1 - free_t(f.0)) / f.2).collect());
+            println!(
+                "| {cells} | {n} | {mu} | {} | {raw} | {net} | {drag_share:.4} | {} | {} |",
+                completes(ok, forces.last().map_or(0.0, |f| f.0)),
+                s["load_steps"],
+                s["newton_iterations"],
+            );
+        }
+    }
 }
 
 /// The fourth table: the reconnected pad (see the module's words).
