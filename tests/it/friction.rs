@@ -1599,25 +1599,38 @@ fn pressed_lightly_the_one_cell_block_holds_mu_net_of_the_medium_s_own_drag() {
     // 0.25 closed and the block squeezed 2 %, so that its leading end does not pitch onto the
     // base's corner as at 0.35 (THEORY.md, "The press decides"). The medium resists the slide
     // without friction too (its own shear stiffness γ): that drag, measured at μ = 0 at the
-    // same drag, is at most 1 % of the normal force (measured 0.0067 on T1, 0.0052 on Q1),
-    // and net of it F_t/F_n is μ within 3 % from a drag of 0.3 on: triangles at every μ
+    // same drag, is at most 1 % of the normal force (measured 0.0067 on T1, 0.0052 on Q1,
+    // 0.0065 on H1, 0.0071 on T4), and net of it F_t/F_n is μ within 3 % from a drag of 0.3
+    // on: triangles at every μ
     // (measured −0.2, −0.2, −0.3 and −1.5 … −0.8 % at μ = 0.1, 0.3, 0.5, 1), quadrilaterals
-    // at μ = 0.1 and 0.3 (−1.3 … −0.5, −2.4 … −0.9 %).
-    let light = |mu: f64| {
-        let case = with_mass(&drag_case(2, Some(mu), 0.5, DRAG, 0.025), 1e-4);
+    // at μ = 0.1 and 0.3 (−1.3 … −0.5, −2.4 … −0.9 %), the 3D block of n = 8 in hexahedra at
+    // μ = 0.1 to 0.5 (−0.4 … −0.3, −0.7 … −0.3, −1.6 … −0.5 %) and in tetrahedra at 0.5
+    // (−0.4 … −0.3 %).
+    let light = |dim: usize, mu: f64| {
+        let case = with_mass(&drag_case(dim, Some(mu), 0.5, DRAG, 0.025), 1e-4);
         assert_eq!(case.matches("= -0.3\n").count(), 1);
         case.replacen("= -0.3\n", "= -0.27\n", 1)
     };
-    for (cells, tri, mus) in [
-        ("T1", 1, &[0.1, 0.3, 0.5, 1.0][..]),
-        ("Q1", 0, &[0.1, 0.3][..]),
+    let flat = "n = 16, m = 8, l = 1";
+    let solid = "n = 8, nb = 2, m = 4, l = 1";
+    for (cells, dim, params, mus) in [
+        (
+            "T1",
+            2,
+            format!("{flat}, tri = 1"),
+            &[0.1, 0.3, 0.5, 1.0][..],
+        ),
+        ("Q1", 2, format!("{flat}, tri = 0"), &[0.1, 0.3][..]),
+        ("H1", 3, solid.to_string(), &[0.1, 0.3, 0.5][..]),
+        ("T4", 3, format!("{solid}, tet = 1"), &[0.5][..]),
     ] {
-        let params = format!("n = 16, m = 8, l = 1, tri = {tri}");
+        let geo = if dim == 2 { "block.geo" } else { "block3d.geo" };
         let drag = |mu: f64| {
             let name = format!("block-light-{cells}-{mu}");
-            let (s, out) = solve_text(&name, "block.geo", &params, &light(mu));
+            let (s, out) = solve_text(&name, geo, &params, &light(dim, mu));
             assert!(s.converged, "{cells} μ = {mu}: {}", s.message);
-            let forces: Vec<(f64, f64, f64)> = (top_forces(&out, 2).into_iter())
+            assert_eq!(s.cells.contains_key("tet4"), cells == "T4", "{params}");
+            let forces: Vec<(f64, f64, f64)> = (top_forces(&out, dim).into_iter())
                 .filter(|f| f.0 > 1.0)
                 .map(|(t, ft, fnormal)| (0.5 * (t - 1.0), ft, fnormal))
                 .collect();
