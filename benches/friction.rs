@@ -35,7 +35,7 @@
 //! docs/THEORY.md, "The press decides"), T1 and Q1 on n = 16, 32, 64, H1 and T4 on n = 8, 16,
 //! at μ = 0 to 1: F_t/F_n from a drag of 0.3 (least and greatest, against μ), and the same net
 //! of the medium's own drag, (F_t − F_t at μ = 0)/F_n, the frictionless run's F_t taken at the
-//! same drag.
+//! same drag; and how far the middle of the block's bottom slid.
 //!
 //! `TMC_BENCH_PART=cost`, `reach`, `slide`, `rejoined`, `one-cell` or `one-cell-light` runs one
 //! table.
@@ -255,9 +255,9 @@ fn drag_ratios(dir: &std::path::Path, amount: f64, vertical: &str) -> Vec<(f64, 
 fn one_cell_light() {
     println!();
     println!(
-        "| cells | n | μ | completes | F_t/F_n from 0.3 against μ | net of the medium's drag | F_t/F_n at μ = 0, end | load steps | Newton its |"
+        "| cells | n | μ | completes | F_t/F_n from 0.3 against μ | net of the medium's drag | F_t/F_n at μ = 0, end | bottom's middle slid | load steps | Newton its |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|");
     let mut runs: Vec<(&str, usize)> = Vec::new();
     for cells in ["T1", "Q1"] {
         runs.extend([16, 32, 64].map(|n| (cells, n)));
@@ -296,8 +296,9 @@ fn one_cell_light() {
             let raw = spread(late.clone().map(|f| f.1 / f.2).collect());
             let net = spread(late.map(|f| (f.1 - free_t(f.0)) / f.2).collect());
             println!(
-                "| {cells} | {n} | {mu} | {} | {raw} | {net} | {drag_share:.4} | {} | {} |",
+                "| {cells} | {n} | {mu} | {} | {raw} | {net} | {drag_share:.4} | {:.5} | {} | {} |",
                 completes(ok, forces.last().map_or(0.0, |f| f.0)),
+                s["probes"]["middle_x"].as_f64().unwrap_or(f64::NAN),
                 s["load_steps"],
                 s["newton_iterations"],
             );
