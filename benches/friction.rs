@@ -99,8 +99,7 @@ fn one_cell() {
             .join("target/bench-friction")
             .join(format!("one-cell-{cells}-{n}-{mu}"));
         let (ok, s) = solve(&dir, &one_cell_text(cells, n, mu, 0.35));
-        let vertical = if in_3d(cells) { "R_top_z" } else { "R_top_y" };
-        let ratios = drag_ratios(&dir, 0.5, vertical);
+        let ratios = drag_ratios(&dir, 0.5, vertical(cells));
         let late: Vec<f64> = (ratios.iter())
             .filter(|r| r.0 >= 0.3 - 1e-9)
             .map(|r| r.1)
@@ -137,6 +136,11 @@ fn completes(ok: bool, reached: f64) -> String {
 /// Whether [`one_cell`]'s `cells` are those of the 3D block.
 fn in_3d(cells: &str) -> bool {
     matches!(cells, "H1" | "T4")
+}
+
+/// The history column of the top's normal reaction on the block of `cells`.
+fn vertical(cells: &str) -> &'static str {
+    if in_3d(cells) { "R_top_z" } else { "R_top_y" }
 }
 
 /// The case of [`one_cell`]: `cells` "T1", "T1 alternate" (diagonals alternating, `tri = 2`),
@@ -266,13 +270,12 @@ fn one_cell_light() {
         runs.extend([8, 16].map(|n| (cells, n)));
     }
     for (cells, n) in runs {
-        let vertical = if in_3d(cells) { "R_top_z" } else { "R_top_y" };
         let run = |mu: f64| {
             let dir = root()
                 .join("target/bench-friction")
                 .join(format!("one-cell-0.27-{cells}-{n}-{mu}"));
             let (ok, s) = solve(&dir, &one_cell_text(cells, n, mu, 0.27));
-            (ok, s, drag_forces(&dir, 0.5, vertical))
+            (ok, s, drag_forces(&dir, 0.5, vertical(cells)))
         };
         let (_, _, free) = run(0.0);
         // the frictionless run's F_t at drag d, linear between its steps

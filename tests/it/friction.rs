@@ -66,13 +66,19 @@ path = [0.0{ones}]
     )
 }
 
-/// (drag, F_t/F_n) of the top over the drag that follows the press (t > 1), the drag being
+/// (drag, F_t, F_n) of the top over the drag that follows the press (t > 1), the drag being
 /// `amplitude` per unit of t.
-fn drag_ratios(out: &Path, amplitude: f64) -> Vec<(f64, f64)> {
-    top_forces(out, 2)
-        .iter()
+fn drag_forces(out: &Path, dim: usize, amplitude: f64) -> Vec<(f64, f64, f64)> {
+    (top_forces(out, dim).into_iter())
         .filter(|(t, _, _)| *t > 1.0)
-        .map(|(t, ft, fnormal)| (amplitude * (t - 1.0), ft / fnormal))
+        .map(|(t, ft, fnormal)| (amplitude * (t - 1.0), ft, fnormal))
+        .collect()
+}
+
+/// (drag, F_t/F_n) of the top of a 2D scene over the drag (see [`drag_forces`]).
+fn drag_ratios(out: &Path, amplitude: f64) -> Vec<(f64, f64)> {
+    (drag_forces(out, 2, amplitude).into_iter())
+        .map(|(d, ft, fnormal)| (d, ft / fnormal))
         .collect()
 }
 
@@ -1566,9 +1572,8 @@ fn the_block_with_one_cell_across_slides_twice_the_medium_s_thickness_with_inert
         let (s, out) = solve_text(&format!("block-one-across-{dim}-{mu}"), geo, params, &case);
         assert!(s.converged, "{dim}D μ = {mu}: {}", s.message);
         assert_eq!(s.cells.contains_key("tet4"), tetrahedra, "{params}");
-        let ratios: Vec<(f64, f64)> = (top_forces(&out, dim).iter())
-            .filter(|f| f.0 > 1.0)
-            .map(|f| (0.5 * (f.0 - 1.0), f.1 / f.2))
+        let ratios: Vec<(f64, f64)> = (drag_forces(&out, dim, 0.5).into_iter())
+            .map(|(d, ft, fnormal)| (d, ft / fnormal))
             .collect();
         assert!(
             (ratios.last().unwrap().0 - 0.5).abs() < 1e-9,
@@ -1601,8 +1606,8 @@ fn pressed_lightly_the_one_cell_block_holds_mu_net_of_the_medium_s_own_drag() {
     // without friction too (its own shear stiffness γ): that drag, measured at μ = 0 at the
     // same drag, is at most 1 % of the normal force (measured 0.0067 on T1, 0.0052 on Q1,
     // 0.0065 on H1, 0.0071 on T4), and net of it F_t/F_n is μ within 3 % from a drag of 0.3
-    // on: triangles at every μ
-    // (measured −0.2, −0.2, −0.3 and −1.5 … −0.8 % at μ = 0.1, 0.3, 0.5, 1), quadrilaterals
+    // on: triangles at every μ (measured −0.2, −0.2, −0.3 and −1.5 … −0.8 % at μ = 0.1, 0.3,
+    // 0.5, 1), quadrilaterals
     // at μ = 0.1 and 0.3 (−1.3 … −0.5, −2.4 … −0.9 %), the 3D block of n = 8 in hexahedra at
     // μ = 0.1 to 0.5 (−0.4 … −0.3, −0.7 … −0.3, −1.6 … −0.5 %) and in tetrahedra at 0.5
     // (−0.4 … −0.3 %).
@@ -1630,10 +1635,7 @@ fn pressed_lightly_the_one_cell_block_holds_mu_net_of_the_medium_s_own_drag() {
             let (s, out) = solve_text(&name, geo, &params, &light(dim, mu));
             assert!(s.converged, "{cells} μ = {mu}: {}", s.message);
             assert_eq!(s.cells.contains_key("tet4"), cells == "T4", "{params}");
-            let forces: Vec<(f64, f64, f64)> = (top_forces(&out, dim).into_iter())
-                .filter(|f| f.0 > 1.0)
-                .map(|(t, ft, fnormal)| (0.5 * (t - 1.0), ft, fnormal))
-                .collect();
+            let forces = drag_forces(&out, dim, 0.5);
             assert!(
                 (forces.last().unwrap().0 - 0.5).abs() < 1e-9,
                 "the whole drag"
