@@ -30,12 +30,14 @@
 //! greatest, against μ), at the end, and how far the middle of the block's bottom slid (x = 1;
 //! in 3D at mid-depth).
 //!
-//! Sixth table: the same one-cell block pressed 0.27 (the medium's 0.25 closed and the block
-//! squeezed 2 %, where 0.35 squeezes it 10 % and pitches its leading end onto the base's corner:
-//! docs/THEORY.md, "The press decides"), T1 and Q1 on n = 16, 32, 64, H1 and T4 on n = 8, 16,
-//! at μ = 0 to 1: F_t/F_n from a drag of 0.3 (least and greatest, against μ), and the same net
-//! of the medium's own drag, (F_t − F_t at μ = 0)/F_n, the frictionless run's F_t taken at the
-//! same drag; and how far the middle of the block's bottom slid.
+//! Sixth table: the same one-cell block pressed lightly (docs/THEORY.md, "The press decides"):
+//! 0.27 (the medium's 0.25 closed and the block squeezed 2 %, where 0.35 squeezes it 10 % and
+//! pitches its leading end onto the base's corner) and 0.25 (the block hardly squeezed), with
+//! the medium's γ = 1e-4 and, at 0.25, 1e-5; T1 and Q1 on n = 16, 32, 64, H1 and T4 on n = 8,
+//! 16, at μ = 0 to 1: F_t/F_n from a drag of 0.3 (least and greatest, against μ), and the same
+//! net of the medium's own drag, (F_t − F_t at μ = 0)/F_n, the frictionless run's F_t taken at
+//! the same drag; the normal force at the end, and how far the middle of the block's bottom
+//! slid.
 //!
 //! `TMC_BENCH_PART=cost`, `reach`, `slide`, `rejoined`, `one-cell` or `one-cell-light` runs one
 //! table.
@@ -98,7 +100,7 @@ fn one_cell() {
         let dir = root()
             .join("target/bench-friction")
             .join(format!("one-cell-{cells}-{n}-{mu}"));
-        let (ok, s) = solve(&dir, &one_cell_text(cells, n, mu, 0.35));
+        let (ok, s) = solve(&dir, &one_cell_text(cells, n, mu, 0.35, 1e-4));
         let ratios = drag_ratios(&dir, 0.5, vertical(cells));
         let late: Vec<f64> = (ratios.iter())
             .filter(|r| r.0 >= 0.3 - 1e-9)
@@ -146,9 +148,9 @@ fn vertical(cells: &str) -> &'static str {
 /// The case of [`one_cell`]: `cells` "T1", "T1 alternate" (diagonals alternating, `tri = 2`),
 /// "Q1" (`geo/block.geo`), "H1" or "T4" (`geo/block3d.geo`, nb = n/4, tetrahedra for T4), n
 /// cells along the block, friction μ, every region ρ = 1e-4,
-/// pressed `press` (pseudo-time 0 to 1) and dragged 0.5 (1 to 2), Δt at most 0.025; the probe
-/// `middle_x` at the middle of the block's bottom.
-fn one_cell_text(cells: &str, n: usize, mu: f64, press: f64) -> String {
+/// the medium's stiffness `gamma`, pressed `press` (pseudo-time 0 to 1) and dragged 0.5 (1 to
+/// 2), Δt at most 0.025; the probe `middle_x` at the middle of the block's bottom.
+fn one_cell_text(cells: &str, n: usize, mu: f64, press: f64, gamma: f64) -> String {
     let three = in_3d(cells);
     let geo = root()
         .join("geo")
@@ -196,7 +198,7 @@ rho = 1e-4
 [[region]]
 group = "medium"
 kind = "medium"
-gamma = 1e-4
+gamma = {gamma:e}
 friction = {{ mu = {mu}, normal = {normal} }}
 rho = 1e-4
 [[bc]]
@@ -254,14 +256,14 @@ fn drag_ratios(dir: &std::path::Path, amount: f64, vertical: &str) -> Vec<(f64, 
         .collect()
 }
 
-/// The sixth table: the one-cell block pressed 0.27, its ratio also net of the medium's own
+/// The sixth table: the one-cell block pressed lightly, its ratio also net of the medium's own
 /// drag (see the module's words).
 fn one_cell_light() {
     println!();
     println!(
-        "| cells | n | μ | completes | F_t/F_n from 0.3 against μ | net of the medium's drag | F_t/F_n at μ = 0, end | bottom's middle slid | load steps | Newton its |"
+        "| press | γ | cells | n | μ | completes | F_t/F_n from 0.3 against μ | net of the medium's drag | F_t/F_n at μ = 0, end | F_n at the end | bottom's middle slid | load steps | Newton its |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     let mut runs: Vec<(&str, usize)> = Vec::new();
     for cells in ["T1", "Q1"] {
         runs.extend([16, 32, 64].map(|n| (cells, n)));
@@ -269,43 +271,55 @@ fn one_cell_light() {
     for cells in ["H1", "T4"] {
         runs.extend([8, 16].map(|n| (cells, n)));
     }
-    for (cells, n) in runs {
-        let run = |mu: f64| {
-            let dir = root()
-                .join("target/bench-friction")
-                .join(format!("one-cell-0.27-{cells}-{n}-{mu}"));
-            let (ok, s) = solve(&dir, &one_cell_text(cells, n, mu, 0.27));
-            (ok, s, drag_forces(&dir, 0.5, vertical(cells)))
-        };
-        let (_, _, free) = run(0.0);
-        // the frictionless run's F_t at drag d, linear between its steps
-        let free_t = |d: f64| {
-            let i = free.partition_point(|f| f.0 < d).clamp(1, free.len() - 1);
-            let (a, b) = (free[i - 1], free[i]);
-            a.1 + (b.1 - a.1) * ((d - a.0) / (b.0 - a.0)).clamp(0.0, 1.0)
-        };
-        let drag_share = free.last().map_or(f64::NAN, |f| f.1 / f.2);
-        for mu in [0.1, 0.3, 0.5, 1.0] {
-            let (ok, s, forces) = run(mu);
-            let late = forces.iter().filter(|f| f.0 >= 0.3 - 1e-9);
-            let spread = |v: Vec<f64>| {
-                let (a, b) = least_greatest(v);
-                format!(
-                    "{:+.1}…{:+.1} %",
-                    (a / mu - 1.0) * 100.0,
-                    (b / mu - 1.0) * 100.0
-                )
-            };
-            let raw = spread(late.clone().map(|f| f.1 / f.2).collect());
-            let net = spread(late.map(|f| (f.1 - free_t(f.0)) / f.2).collect());
-            println!(
-                "| {cells} | {n} | {mu} | {} | {raw} | {net} | {drag_share:.4} | {:.5} | {} | {} |",
-                completes(ok, forces.last().map_or(0.0, |f| f.0)),
-                s["probes"]["middle_x"].as_f64().unwrap_or(f64::NAN),
-                s["load_steps"],
-                s["newton_iterations"],
-            );
+    for (press, gamma) in [(0.27, 1e-4), (0.25, 1e-4), (0.25, 1e-5)] {
+        for &(cells, n) in &runs {
+            one_cell_light_rows(press, gamma, cells, n);
         }
+    }
+}
+
+/// The sixth table's rows of one mesh: μ = 0.1 to 1, each net of the μ = 0 run's F_t.
+fn one_cell_light_rows(press: f64, gamma: f64, cells: &str, n: usize) {
+    let stiffness = match gamma == 1e-4 {
+        true => String::new(),
+        false => format!("-gamma{gamma:e}"),
+    };
+    let run = |mu: f64| {
+        let dir = root()
+            .join("target/bench-friction")
+            .join(format!("one-cell-{press}{stiffness}-{cells}-{n}-{mu}"));
+        let (ok, s) = solve(&dir, &one_cell_text(cells, n, mu, press, gamma));
+        (ok, s, drag_forces(&dir, 0.5, vertical(cells)))
+    };
+    let (_, _, free) = run(0.0);
+    // the frictionless run's F_t at drag d, linear between its steps
+    let free_t = |d: f64| {
+        let i = free.partition_point(|f| f.0 < d).clamp(1, free.len() - 1);
+        let (a, b) = (free[i - 1], free[i]);
+        a.1 + (b.1 - a.1) * ((d - a.0) / (b.0 - a.0)).clamp(0.0, 1.0)
+    };
+    let drag_share = free.last().map_or(f64::NAN, |f| f.1 / f.2);
+    for mu in [0.1, 0.3, 0.5, 1.0] {
+        let (ok, s, forces) = run(mu);
+        let late = forces.iter().filter(|f| f.0 >= 0.3 - 1e-9);
+        let spread = |v: Vec<f64>| {
+            let (a, b) = least_greatest(v);
+            format!(
+                "{:+.1}…{:+.1} %",
+                (a / mu - 1.0) * 100.0,
+                (b / mu - 1.0) * 100.0
+            )
+        };
+        let raw = spread(late.clone().map(|f| f.1 / f.2).collect());
+        let net = spread(late.map(|f| (f.1 - free_t(f.0)) / f.2).collect());
+        println!(
+            "| {press} | {gamma:e} | {cells} | {n} | {mu} | {} | {raw} | {net} | {drag_share:.4} | {:.3} | {:.5} | {} | {} |",
+            completes(ok, forces.last().map_or(0.0, |f| f.0)),
+            forces.last().map_or(f64::NAN, |f| f.2.abs()),
+            s["probes"]["middle_x"].as_f64().unwrap_or(f64::NAN),
+            s["load_steps"],
+            s["newton_iterations"],
+        );
     }
 }
 
