@@ -115,6 +115,10 @@ pub struct FrictionKey {
     /// layer of quadrilaterals or triangles one cell across, between a solid's face and the
     /// one it slides on, with a given `normal`.
     pub reconnect: Option<Spanned<bool>>,
+    /// The medium's own law at the elastic part of its deformation, F (I − g⊗N) with g the
+    /// slip accepted so far (default false): the medium neither resists the slide nor pushes
+    /// the faces apart as the slide shears it.
+    pub forget_slip: Option<Spanned<bool>>,
 }
 
 /// `normal` of a `friction`: given, or `"auto"` (any other word is an error at validation).
@@ -147,6 +151,11 @@ impl FrictionKey {
     /// Whether the layer's cells are joined again as its faces slide.
     pub fn reconnect(&self) -> bool {
         self.reconnect.as_ref().is_some_and(|r| *r.get_ref())
+    }
+
+    /// Whether the medium's own law takes the elastic part of its deformation.
+    pub fn forget_slip(&self) -> bool {
+        self.forget_slip.as_ref().is_some_and(|r| *r.get_ref())
     }
 }
 
@@ -621,6 +630,18 @@ impl RegionKeys<'_> {
                 r.span(),
                 "`friction.reconnect` joins a flat layer's cells again along one direction: \
                  give the layer's `normal` (such as [0, 1]), not \"auto\""
+                    .to_string(),
+            );
+        }
+        if let Some(f) = &fr.forget_slip
+            && *f.get_ref()
+            && fr.reconnect()
+        {
+            return self.fail(
+                f.span(),
+                "`friction.forget_slip` cannot go with `friction.reconnect`: a join rewrites \
+                 each point's slip as the negative of its elastic shear, which a forgotten slip \
+                 would then take for distortion; choose one"
                     .to_string(),
             );
         }

@@ -15,10 +15,10 @@ use super::point::{Point, point};
 use super::{Active, KernelError};
 use crate::dofs::{CellState, Layout};
 use crate::element::RefElement;
-use crate::material::SolidLaw;
 use crate::material::friction::{
     Friction, MediumStress, plane_pair, plane_shear as shear_of, shear_modulus,
 };
+use crate::material::{SolidLaw, Tensor4};
 use nalgebra::{Matrix3, Vector3};
 
 /// History values per quadrature point: the slip (x, y, z), the work the point has dissipated
@@ -47,6 +47,38 @@ pub struct FrictionMaterial {
     /// where that pressed the plane; from the current one where it did not (at the start, and
     /// where the medium was open), so that nothing slips freely while the plane first closes.
     pub lagged: bool,
+    /// The medium's own law taken at the elastic part of its deformation, F_e = F A with
+    /// A = I − gₙ⊗N (gₙ the last accepted step's slip), instead of at F: the slip the plane has
+    /// accepted is no longer the medium's distortion, so the medium neither resists the slide
+    /// nor pushes the faces apart as it is sheared. The bulk kernel assembles the law at F;
+    /// this kernel adds the difference (P(F A) Aᵀ − P(F), and its exact derivative in F), and
+    /// the plane's normal traction is taken from P(F A) Aᵀ.
+    pub forget_slip: bool,
+}
+
+/// The medium's own stress at the elastic part F A of the deformation F (A = I − slip⊗N),
+/// as a function of F: P(F A) Aᵀ, its derivative in F (9×9, (3i + J, 3k + L)) and in θ.
+fn at_elastic_part(
+    law: &SolidLaw,
+    F: &Matrix3<f64>,
+    theta: f64,
+    slip: &Vector3<f64>,
+    normal: &Vector3<f64>,
+) -> Option<(Matrix3<f64>, Tensor4, Matrix3<f64>)> {
+    let A = Matrix3::identity() - slip * normal.transpose();
+    let m = law.stress(&(F * A), theta)?;
+    // ∂(P(F A) Aᵀ)_iJ/∂F_kL = Σ_MN ∂P_iM/∂F_kN A_LN A_JM
+    let dP = Tensor4::from_fn(|row, col| {
+        let (i, J, k, L) = (row / 3, row % 3, col / 3, col % 3);
+        let mut v = 0.0;
+        for M in 0..3 {
+            for Nn in 0..3 {
+                v += m.dP_dF[(3 * i + M, 3 * k + Nn)] * A[(L, Nn)] * A[(J, M)];
+            }
+        }
+        v
+    });
+    Some((m.P * A.transpose(), dP, m.dP_dtheta * A.transpose()))
 }
 
 /// The plane's shear per reference thickness, γ = P C N, at each of the cell's quadrature
@@ -112,6 +144,12 @@ pub fn friction<const N: usize, const D: usize, E: RefElement<N, D>>(
         let m = mat.medium.stress(&F, theta).ok_or(inverted)?;
         let h = &committed[q * HISTORY_PER_POINT..(q + 1) * HISTORY_PER_POINT];
         let slip = Vector3::new(h[0], h[1], h[2]);
+        // the law's stress at F_e where the slip is forgotten, and what it adds to the bulk's
+        let elastic = match mat.forget_slip {
+            true => Some(at_elastic_part(&mat.medium, &F, theta, &slip, normal).ok_or(inverted)?),
+            false => None,
+        };
+        let (mP, mdP, mdT) = elastic.unwrap_or((m.P, m.dP_dF, m.dP_dtheta));
         let law = Friction {
             mu: mat.mu,
             normal: *normal,
@@ -119,9 +157,9 @@ pub fn friction<const N: usize, const D: usize, E: RefElement<N, D>>(
             lagged: mat.lagged.then_some(h[P_N]).filter(|&p| p > 0.0),
         };
         let medium = MediumStress {
-            P: &m.P,
-            dP_dF: &m.dP_dF,
-            dP_dtheta: &m.dP_dtheta,
+            P: &mP,
+            dP_dF: &mdP,
+            dP_dtheta: &mdT,
         };
         let f = law
             .respond::<D>(
@@ -138,10 +176,19 @@ pub fn friction<const N: usize, const D: usize, E: RefElement<N, D>>(
             *d = g1 - g0;
         }
         now[P_N] = f.p_n;
+        // the stress this kernel assembles: the plane's, and the law's at F_e less at F
+        let (P, dP_dF, dP_dtheta) = match elastic {
+            Some(_) => (
+                f.P + mP - m.P,
+                f.dP_dF + mdP - m.dP_dF,
+                f.dP_dtheta + mdT - m.dP_dtheta,
+            ),
+            None => (f.P, f.dP_dF, f.dP_dtheta),
+        };
         if mechanics {
             for I in 0..N {
                 for i in 0..D {
-                    let v: f64 = (0..D).map(|J| f.P[(i, J)] * g[I][J]).sum();
+                    let v: f64 = (0..D).map(|J| P[(i, J)] * g[I][J]).sum();
                     r[lay.u(I, i)] += v * dV;
                 }
             }
@@ -164,14 +211,14 @@ pub fn friction<const N: usize, const D: usize, E: RefElement<N, D>>(
                             let mut v = 0.0;
                             for J in 0..D {
                                 for L in 0..D {
-                                    v += g[I][J] * f.dP_dF[(3 * i + J, 3 * kk + L)] * g[K][L];
+                                    v += g[I][J] * dP_dF[(3 * i + J, 3 * kk + L)] * g[K][L];
                                 }
                             }
                             k[row + lay.u(K, kk)] += v * dV;
                         }
                     }
                     if lay.has_theta {
-                        let v: f64 = (0..D).map(|J| f.dP_dtheta[(i, J)] * g[I][J]).sum();
+                        let v: f64 = (0..D).map(|J| dP_dtheta[(i, J)] * g[I][J]).sum();
                         for K in 0..N {
                             k[row + lay.theta(K)] += v * Nv[K] * dV;
                         }
@@ -232,7 +279,7 @@ pub fn slip_fields<const N: usize, const D: usize, E: RefElement<N, D>>(
     let mut volume = 0.0;
     let mut stress = Matrix3::zeros();
     for (q, (xi, w)) in E::quadrature().iter().enumerate() {
-        let Point { dV, F, .. } = point::<N, D, E>(xi, *w, lay, s, mat.medium.theta0())?;
+        let Point { dV, F, theta, .. } = point::<N, D, E>(xi, *w, lay, s, mat.medium.theta0())?;
         let J = F.determinant();
         if J <= 0.0 {
             return Err(KernelError::Inverted { J });
@@ -242,6 +289,16 @@ pub fn slip_fields<const N: usize, const D: usize, E: RefElement<N, D>>(
         let (G, _) = shear_modulus(mat.c_f, mat.medium.bulk_modulus(), J);
         let tau = (shear_of(&F, normal) - slip) * G;
         stress += F * plane_pair(normal, &tau) * F.transpose() / J * dV;
+        if mat.forget_slip {
+            // the accepted state's slip is this history's: the law's stress at that F_e, less
+            // the bulk's at F, as a Cauchy stress
+            let inverted = KernelError::Inverted { J };
+            let prior = slip - Vector3::new(h[STEP], h[STEP + 1], h[STEP + 2]);
+            let (Pe, _, _) =
+                at_elastic_part(&mat.medium, &F, theta, &prior, normal).ok_or(inverted)?;
+            let P = mat.medium.stress(&F, theta).ok_or(inverted)?.P;
+            stress += (Pe - P) * F.transpose() / J * dV;
+        }
         for d in 0..3 {
             out.slip[d] += h[d] * dV;
             out.increment[d] += h[STEP + d] * dV;
@@ -279,6 +336,7 @@ mod tests {
         c_f: 1.0,
         viscosity: 0.0,
         lagged: false,
+        forget_slip: false,
     };
 
     /// 1/Δt of the checks' step (the slip viscosity acts over it).
@@ -514,5 +572,89 @@ mod tests {
         check::<3, 2, Tri3>(&stuck, false);
         check::<4, 2, Quad4>(&stuck, false);
         check::<8, 3, Hex8>(&stuck, false);
+        // the medium's law at the elastic part F (I − gₙ⊗N), in slip and in stick
+        for mat in [MATERIAL, stuck, viscous] {
+            let forgetting = FrictionMaterial {
+                forget_slip: true,
+                ..mat
+            };
+            let slips = mat.mu < 1.0;
+            check::<3, 2, Tri3>(&forgetting, slips);
+            check::<4, 2, Quad4>(&forgetting, slips);
+            check::<4, 3, Tet4>(&forgetting, slips);
+            check::<8, 3, Hex8>(&forgetting, slips);
+        }
+    }
+
+    #[test]
+    fn a_forgotten_slip_is_the_medium_s_law_at_its_elastic_part() {
+        // with the slip forgotten the kernel adds P(F A) Aᵀ − P(F) to the plane's stress,
+        // A = I − gₙ⊗N: with no accepted slip (gₙ = 0) that is nothing, and with one it is the
+        // law's difference, read on a one-point cell at μ = 0 (where the plane carries nothing)
+        let lay = Layout {
+            n: 3,
+            dim: 2,
+            has_u: true,
+            has_theta: true,
+            np: 0,
+        };
+        let nd = lay.ndof();
+        let (s, committed) = state::<3, 2, Tri3>();
+        let residual = |mat: &FrictionMaterial, committed: &[f64]| {
+            let mut trial = committed.to_vec();
+            let mut r = vec![0.0; nd];
+            friction::<3, 2, Tri3>(
+                mat,
+                &NORMAL,
+                0.0,
+                INV_DT,
+                &lay,
+                &s,
+                committed,
+                &mut trial,
+                Active::ALL,
+                &mut r,
+                None,
+            )
+            .unwrap();
+            r
+        };
+        let free = FrictionMaterial {
+            mu: 0.0,
+            ..MATERIAL
+        };
+        let forgetting = FrictionMaterial {
+            forget_slip: true,
+            ..free
+        };
+        let mut none = committed.clone();
+        none.iter_mut()
+            .step_by(HISTORY_PER_POINT)
+            .for_each(|g| *g = 0.0);
+        assert_eq!(residual(&forgetting, &none), residual(&free, &none));
+        let (xi, w) = &Tri3::quadrature()[0];
+        let Point {
+            g, dV, F, theta, ..
+        } = point::<3, 2, Tri3>(xi, *w, &lay, &s, MATERIAL.medium.theta0()).unwrap();
+        let slip = Vector3::new(0.01, 0.0, 0.0);
+        let A = Matrix3::identity() - slip * NORMAL.transpose();
+        let law = |F: &Matrix3<f64>| MATERIAL.medium.stress(F, theta).unwrap().P;
+        let difference = law(&(F * A)) * A.transpose() - law(&F);
+        let (with, without) = (
+            residual(&forgetting, &committed),
+            residual(&free, &committed),
+        );
+        let size = difference.iter().fold(0.0f64, |a, v| a.max(v.abs())) * dV;
+        assert!(size > 0.0, "the accepted slip changes the law's stress");
+        for I in 0..3 {
+            for i in 0..2 {
+                let v: f64 = (0..2).map(|J| difference[(i, J)] * g[I][J]).sum::<f64>() * dV;
+                let seen = with[lay.u(I, i)] - without[lay.u(I, i)];
+                assert!(
+                    (seen - v).abs() < 1e-12 * size,
+                    "node {I}, {i}: {seen} against the law's {v}"
+                );
+            }
+        }
     }
 }

@@ -691,6 +691,7 @@ fn friction_blocks(
                 c_f: fr.c_f.as_ref().map_or(1.0, |v| *v.get_ref()),
                 viscosity: fr.viscosity(),
                 lagged: fr.lagged_limit(),
+                forget_slip: fr.forget_slip(),
             },
             normals,
             reconnect: fr.reconnect(),

@@ -834,6 +834,15 @@ fn bad_friction_is_named_by_file_line_and_key() {
             vec!["typo.toml", "muu"],
         ),
         (
+            "forget-and-rejoin",
+            "friction = { mu = 0.3, normal = [0, 1], reconnect = true, forget_slip = true }",
+            "",
+            vec![
+                "forget-and-rejoin.toml:14",
+                "`friction.forget_slip` cannot go with `friction.reconnect`",
+            ],
+        ),
+        (
             "on-solid",
             "",
             "friction = { mu = 0.3, normal = [0, 1] }",
