@@ -33,11 +33,12 @@
 //! Sixth table: the same one-cell block pressed lightly (docs/THEORY.md, "The press decides"):
 //! 0.27 (the medium's 0.25 closed and the block squeezed 2 %, where 0.35 squeezes it 10 % and
 //! pitches its leading end onto the base's corner) and 0.25 (the block hardly squeezed), with
-//! the medium's γ = 1e-4 and, at 0.25, 1e-5; T1 and Q1 on n = 16, 32, 64, H1 and T4 on n = 8,
-//! 16, at μ = 0 to 1: F_t/F_n from a drag of 0.3 (least and greatest, against μ), and the same
-//! net of the medium's own drag, (F_t − F_t at μ = 0)/F_n, the frictionless run's F_t taken at
-//! the same drag; the normal force at the end, and how far the middle of the block's bottom
-//! slid.
+//! the medium's γ = 1e-4 and, at 0.25, 1e-5, the last also with `friction.forget_slip` (the
+//! medium's law at F (I − gₙ⊗N): no drag of its own); T1 and Q1 on n = 16, 32, 64, H1 and T4
+//! on n = 8, 16, at μ = 0 to 1: F_t/F_n from a drag of 0.3 (least and greatest, against μ),
+//! and the same net of the medium's own drag, (F_t − F_t at μ = 0)/F_n, the frictionless
+//! run's F_t taken at the same drag; the normal force at the end, and how far the middle of
+//! the block's bottom slid.
 //!
 //! `TMC_BENCH_PART=cost`, `reach`, `slide`, `rejoined`, `one-cell` or `one-cell-light` runs one
 //! table.
@@ -100,7 +101,7 @@ fn one_cell() {
         let dir = root()
             .join("target/bench-friction")
             .join(format!("one-cell-{cells}-{n}-{mu}"));
-        let (ok, s) = solve(&dir, &one_cell_text(cells, n, mu, 0.35, 1e-4));
+        let (ok, s) = solve(&dir, &one_cell_text(cells, n, mu, 0.35, 1e-4, false));
         let ratios = drag_ratios(&dir, 0.5, vertical(cells));
         let late: Vec<f64> = (ratios.iter())
             .filter(|r| r.0 >= 0.3 - 1e-9)
@@ -150,7 +151,7 @@ fn vertical(cells: &str) -> &'static str {
 /// cells along the block, friction μ, every region ρ = 1e-4,
 /// the medium's stiffness `gamma`, pressed `press` (pseudo-time 0 to 1) and dragged 0.5 (1 to
 /// 2), Δt at most 0.025; the probe `middle_x` at the middle of the block's bottom.
-fn one_cell_text(cells: &str, n: usize, mu: f64, press: f64, gamma: f64) -> String {
+fn one_cell_text(cells: &str, n: usize, mu: f64, press: f64, gamma: f64, forget: bool) -> String {
     let three = in_3d(cells);
     let geo = root()
         .join("geo")
@@ -199,7 +200,7 @@ rho = 1e-4
 group = "medium"
 kind = "medium"
 gamma = {gamma:e}
-friction = {{ mu = {mu}, normal = {normal} }}
+friction = {{ mu = {mu}, normal = {normal}{forget} }}
 rho = 1e-4
 [[bc]]
 group = "bottom"
@@ -207,6 +208,7 @@ group = "bottom"
 {loads}"#,
         geo.display(),
         loads = press_then_drag(down, press, 0.5, "middle_x", middle),
+        forget = if forget { ", forget_slip = true" } else { "" },
     )
 }
 
@@ -271,24 +273,37 @@ fn one_cell_light() {
     for cells in ["H1", "T4"] {
         runs.extend([8, 16].map(|n| (cells, n)));
     }
-    for (press, gamma) in [(0.27, 1e-4), (0.25, 1e-4), (0.25, 1e-5)] {
+    let settings = [
+        (0.27, 1e-4, false),
+        (0.25, 1e-4, false),
+        (0.25, 1e-5, false),
+        (0.25, 1e-5, true),
+    ];
+    for (press, gamma, forget) in settings {
         for &(cells, n) in &runs {
-            one_cell_light_rows(press, gamma, cells, n);
+            one_cell_light_rows(press, gamma, forget, cells, n);
         }
     }
 }
 
 /// The sixth table's rows of one mesh: μ = 0.1 to 1, each net of the μ = 0 run's F_t.
-fn one_cell_light_rows(press: f64, gamma: f64, cells: &str, n: usize) {
+fn one_cell_light_rows(press: f64, gamma: f64, forget: bool, cells: &str, n: usize) {
     let stiffness = match gamma == 1e-4 {
         true => String::new(),
         false => format!("-gamma{gamma:e}"),
+    };
+    let (stiffness, medium) = match forget {
+        true => (
+            format!("{stiffness}-forget"),
+            format!("{gamma:e}, slip forgotten"),
+        ),
+        false => (stiffness, format!("{gamma:e}")),
     };
     let run = |mu: f64| {
         let dir = root()
             .join("target/bench-friction")
             .join(format!("one-cell-{press}{stiffness}-{cells}-{n}-{mu}"));
-        let (ok, s) = solve(&dir, &one_cell_text(cells, n, mu, press, gamma));
+        let (ok, s) = solve(&dir, &one_cell_text(cells, n, mu, press, gamma, forget));
         (ok, s, drag_forces(&dir, 0.5, vertical(cells)))
     };
     let (_, _, free) = run(0.0);
@@ -313,7 +328,7 @@ fn one_cell_light_rows(press: f64, gamma: f64, cells: &str, n: usize) {
         let raw = spread(late.clone().map(|f| f.1 / f.2).collect());
         let net = spread(late.map(|f| (f.1 - free_t(f.0)) / f.2).collect());
         println!(
-            "| {press} | {gamma:e} | {cells} | {n} | {mu} | {} | {raw} | {net} | {drag_share:.4} | {:.3} | {:.5} | {} | {} |",
+            "| {press} | {medium} | {cells} | {n} | {mu} | {} | {raw} | {net} | {drag_share:.4} | {:.3} | {:.5} | {} | {} |",
             completes(ok, forces.last().map_or(0.0, |f| f.0)),
             forces.last().map_or(f64::NAN, |f| f.2.abs()),
             s["probes"]["middle_x"].as_f64().unwrap_or(f64::NAN),
