@@ -149,7 +149,9 @@ pub fn friction<const N: usize, const D: usize, E: RefElement<N, D>>(
             true => Some(at_elastic_part(&mat.medium, &F, theta, &slip, normal).ok_or(inverted)?),
             false => None,
         };
-        let (mP, mdP, mdT) = elastic.unwrap_or((m.P, m.dP_dF, m.dP_dtheta));
+        let (mP, mdP, mdT) = elastic
+            .as_ref()
+            .map_or((&m.P, &m.dP_dF, &m.dP_dtheta), |(P, dP, dT)| (P, dP, dT));
         let law = Friction {
             mu: mat.mu,
             normal: *normal,
@@ -157,9 +159,9 @@ pub fn friction<const N: usize, const D: usize, E: RefElement<N, D>>(
             lagged: mat.lagged.then_some(h[P_N]).filter(|&p| p > 0.0),
         };
         let medium = MediumStress {
-            P: &mP,
-            dP_dF: &mdP,
-            dP_dtheta: &mdT,
+            P: mP,
+            dP_dF: mdP,
+            dP_dtheta: mdT,
         };
         let f = law
             .respond::<D>(
@@ -177,14 +179,16 @@ pub fn friction<const N: usize, const D: usize, E: RefElement<N, D>>(
         }
         now[P_N] = f.p_n;
         // the stress this kernel assembles: the plane's, and the law's at F_e less at F
-        let (P, dP_dF, dP_dtheta) = match elastic {
-            Some(_) => (
-                f.P + mP - m.P,
-                f.dP_dF + mdP - m.dP_dF,
-                f.dP_dtheta + mdT - m.dP_dtheta,
-            ),
-            None => (f.P, f.dP_dF, f.dP_dtheta),
-        };
+        let corrected = elastic.as_ref().map(|(P, dP, dT)| {
+            (
+                f.P + P - m.P,
+                f.dP_dF + dP - m.dP_dF,
+                f.dP_dtheta + dT - m.dP_dtheta,
+            )
+        });
+        let (P, dP_dF, dP_dtheta) = corrected
+            .as_ref()
+            .map_or((&f.P, &f.dP_dF, &f.dP_dtheta), |(P, dP, dT)| (P, dP, dT));
         if mechanics {
             for I in 0..N {
                 for i in 0..D {
@@ -366,6 +370,34 @@ mod tests {
         (s, h)
     }
 
+    /// The friction residual of the cell `s` under `mat` from the history `committed` (heat
+    /// made at `heat_rate`), without its tangent.
+    fn residual_of<const N: usize, const D: usize, E: RefElement<N, D>>(
+        mat: &FrictionMaterial,
+        heat_rate: f64,
+        lay: &Layout,
+        s: &CellState<N>,
+        committed: &[f64],
+    ) -> Vec<f64> {
+        let mut trial = committed.to_vec();
+        let mut r = vec![0.0; lay.ndof()];
+        friction::<N, D, E>(
+            mat,
+            &NORMAL,
+            heat_rate,
+            INV_DT,
+            lay,
+            s,
+            committed,
+            &mut trial,
+            Active::ALL,
+            &mut r,
+            None,
+        )
+        .unwrap();
+        r
+    }
+
     /// Central differences of the residual (u rows and the heat) against the tangent, for a
     /// material under which the cell `slips` or sticks.
     fn check<const N: usize, const D: usize, E: RefElement<N, D>>(
@@ -506,26 +538,9 @@ mod tests {
             has_theta: true,
             np: 0,
         };
-        let nd = lay.ndof();
         let (s, mut committed) = state::<4, 2, Quad4>();
         let residual = |mat: &FrictionMaterial, committed: &[f64]| {
-            let mut trial = committed.to_vec();
-            let mut r = vec![0.0; nd];
-            friction::<4, 2, Quad4>(
-                mat,
-                &NORMAL,
-                2.5,
-                INV_DT,
-                &lay,
-                &s,
-                committed,
-                &mut trial,
-                Active::ALL,
-                &mut r,
-                None,
-            )
-            .unwrap();
-            r
+            residual_of::<4, 2, Quad4>(mat, 2.5, &lay, &s, committed)
         };
         let lagged = FrictionMaterial {
             lagged: true,
@@ -598,26 +613,9 @@ mod tests {
             has_theta: true,
             np: 0,
         };
-        let nd = lay.ndof();
         let (s, committed) = state::<3, 2, Tri3>();
         let residual = |mat: &FrictionMaterial, committed: &[f64]| {
-            let mut trial = committed.to_vec();
-            let mut r = vec![0.0; nd];
-            friction::<3, 2, Tri3>(
-                mat,
-                &NORMAL,
-                0.0,
-                INV_DT,
-                &lay,
-                &s,
-                committed,
-                &mut trial,
-                Active::ALL,
-                &mut r,
-                None,
-            )
-            .unwrap();
-            r
+            residual_of::<3, 2, Tri3>(mat, 0.0, &lay, &s, committed)
         };
         let free = FrictionMaterial {
             mu: 0.0,
