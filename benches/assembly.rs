@@ -59,7 +59,8 @@ fn bench(plan: &str, params: &str, paper_s: f64, paper_its: usize) {
                     std::thread::sleep(std::time::Duration::from_millis(100));
                 }
                 let t0 = Instant::now();
-                asm.assemble(&model, &x, 0.5, tangent, None).unwrap();
+                asm.assemble(&model, &x, &model.path.step(0.0, 0.5), tangent, None)
+                    .unwrap();
                 t0.elapsed().as_secs_f64()
             })
             .collect();

@@ -5,9 +5,9 @@
 //!
 //! [`mesh`] (gmsh → .msh → mesh) → [`element`] (reference elements) → [`dofs`] (numbering,
 //! constraints, local layout, sparsity) → [`material`] (pure laws) → [`kernel`] (local residual
-//! and tangent) → [`case`] and [`model`] (the discrete problem) → [`assembly`] → [`solver`]
-//! (linear, Newton, stepping) → [`output`] (VTU, history, probes) → [`driver`] (`tmc solve`) →
-//! [`study`] and [`plot`]. Under them all, [`files`]: writing a file under a temporary name, and
+//! and tangent) → [`case`] and [`model`] (the discrete problem) → [`assembly`] → [`post`]
+//! (what an accepted state holds: heat, works, slips) → [`solver`] (linear, Newton, stepping) →
+//! [`output`] (VTU, history, probes) → [`driver`] (`tmc solve`) → [`study`] and [`plot`]. Under them all, [`files`]: writing a file under a temporary name, and
 //! [`console`]: lines on the terminal that a closed pipe silences.
 //! See docs/ARCHITECTURE.md.
 
@@ -30,5 +30,6 @@ pub mod model;
 pub mod output;
 pub mod parallel;
 pub mod plot;
+pub mod post;
 pub mod solver;
 pub mod study;

@@ -8,13 +8,9 @@ use super::scatter::{Shared, Slots, local_dofs};
 use super::{AssemblyError, MIN_PART_CELLS, References, cell_error};
 use crate::dofs::{CellState, Layout, NONE};
 use crate::element::RefElement;
-use crate::kernel::friction::FrictionMaterial;
-use crate::kernel::{
-    self, Active, CellMaterial, KernelError, bulk, capacity, facet, inertia, lanes,
-};
-use crate::material::BoundaryFlux;
+use crate::kernel::{self, Active, CellMaterial, KernelError, bulk, lanes};
 use crate::mesh::Block;
-use crate::model::{Model, SlipNormals};
+use crate::model::Model;
 use rayon::prelude::*;
 
 /// The first medium cell (in block and cell order, whatever the threads) that `x` inverts,
@@ -48,43 +44,6 @@ pub fn check_inversion(
     Ok(())
 }
 
-/// How many medium cells the state `x` inverts at a corner node that also belongs to a
-/// solid: there the solid has passed into the medium's cell between its quadrature points,
-/// where the medium's stiffening does not act (a bilinear or higher cell's J varies over it
-/// and can change sign at a corner while it stays positive at every point; a linear
-/// triangle's or tetrahedron's is one number, so those are not looked at).
-pub fn corners_through_medium(model: &Model, references: &References, x: &[f64]) -> usize {
-    use crate::mesh::CellKind;
-    let solid = model.nodes_of(crate::model::RegionKind::Solid);
-    let mut cells = 0;
-    for info in &model.blocks {
-        let blk = &model.mesh.cells[info.block];
-        let simplex = matches!(blk.kind, CellKind::Tri3 | CellKind::Tet4);
-        if !info.layout.has_u || !info.mat.medium || simplex {
-            continue;
-        }
-        let corners = blk.kind.corners();
-        cells += crate::with_cell!(blk.kind, |N, D, E| {
-            (0..blk.n_cells())
-                .into_par_iter()
-                .with_min_len(MIN_PART_CELLS)
-                .filter(|&c| {
-                    let nodes = blk.cell(c);
-                    let s = references.state::<N>(model, info.block, c, x);
-                    let deformed =
-                        std::array::from_fn(|i| std::array::from_fn(|k| s.X[i][k] + s.u[i][k]));
-                    let looked_at = |k: usize| solid[nodes[k]];
-                    let worst = crate::element::worst_corner::<N, D, E>(
-                        &s.X, &deformed, corners, looked_at,
-                    );
-                    worst.1 <= 0.0
-                })
-                .count()
-        });
-    }
-    cells
-}
-
 /// The global arrays the cells add into.
 #[derive(Clone, Copy)]
 pub(super) struct Arrays {
@@ -96,7 +55,7 @@ pub(super) struct Arrays {
 /// One block's history during an assembly: read the committed values, write the trial ones
 /// (each cell only its own `width` values).
 #[derive(Clone, Copy)]
-pub(super) struct SlabView<'a> {
+pub struct SlabView<'a> {
     pub(super) width: usize,
     pub(super) committed: &'a [f64],
     pub(super) trial: Shared,
@@ -119,7 +78,7 @@ impl SlabView<'_> {
 
 /// What the cells (or facets) of one assembler block need to add their part.
 #[derive(Clone, Copy)]
-pub(super) struct Cells<'a> {
+pub struct Cells<'a> {
     pub(super) model: &'a Model,
     /// The block's connectivity and local layout.
     pub(super) blk: &'a Block,
@@ -267,7 +226,7 @@ impl Cells<'_> {
     /// cell's number, its gathered state and the local r and k to fill (k only with
     /// `tangent`), and add the results. Returns whether the tangent entries written are
     /// finite, or the kernel's error with the block's cell number.
-    fn each_cell<const N: usize>(
+    pub(super) fn each_cell<const N: usize>(
         self,
         cells: &[u32],
         mut kernel: impl FnMut(
@@ -296,7 +255,7 @@ impl Cells<'_> {
 
     /// [`Cells::each_cell`] for a term with history per point: `kernel` also gets the cell's
     /// committed history and its trial values to fill.
-    fn each_cell_with_history<const N: usize>(
+    pub(super) fn each_cell_with_history<const N: usize>(
         self,
         slab: &SlabView,
         cells: &[u32],
@@ -313,76 +272,6 @@ impl Cells<'_> {
             // SAFETY: a cell runs once per assembly
             let (committed, trial) = unsafe { slab.cell(cell) };
             kernel(cell, s, committed, trial, r, k)
-        })
-    }
-
-    /// Add the facets `cells` (global numbers, all of this block) with the boundary flux `law`.
-    pub(super) fn run_facets<const N: usize, const D: usize, E: RefElement<N, D>>(
-        self,
-        law: &BoundaryFlux,
-        cells: &[u32],
-    ) -> Result<bool, (KernelError, usize)> {
-        let (lay, act) = (self.lay, self.act);
-        self.each_cell::<N>(cells, |_, s, r, k| {
-            facet::boundary_flux::<N, D, E>(law, &lay, s, act, r, k)
-        })
-    }
-
-    /// Add the friction term of the cells `cells` (global numbers, all of this block) with
-    /// `heat_rate` = η/Δt and the block's history.
-    pub(super) fn run_friction<const N: usize, const D: usize, E: RefElement<N, D>>(
-        self,
-        mat: &FrictionMaterial,
-        normals: &SlipNormals,
-        heat_rate: f64,
-        inv_dt: f64,
-        slab: &SlabView,
-        cells: &[u32],
-    ) -> Result<bool, (KernelError, usize)> {
-        let (lay, act) = (self.lay, self.act);
-        self.each_cell_with_history::<N>(slab, cells, |cell, s, committed, trial, r, k| {
-            kernel::friction::friction::<N, D, E>(
-                mat,
-                normals.of(cell),
-                heat_rate,
-                inv_dt,
-                &lay,
-                s,
-                committed,
-                trial,
-                act,
-                r,
-                k,
-            )
-        })
-    }
-
-    /// Add the inertia term of the cells `cells` (global numbers, all of this block) with the
-    /// mass density `rho`, 1/Δt and the block's history.
-    pub(super) fn run_inertia<const N: usize, const D: usize, E: RefElement<N, D>>(
-        self,
-        rho: f64,
-        inv_dt: f64,
-        slab: &SlabView,
-        cells: &[u32],
-    ) -> Result<bool, (KernelError, usize)> {
-        let (lay, act) = (self.lay, self.act);
-        self.each_cell_with_history::<N>(slab, cells, |_, s, hist_n, hist_now, r, k| {
-            inertia::inertia::<N, D, E>(rho, inv_dt, &lay, s, hist_n, hist_now, act, r, k)
-        })
-    }
-
-    /// Add the capacity term of the cells `cells` (global numbers, all of this block) with
-    /// `c = ρc/Δt` and the block's history.
-    pub(super) fn run_capacity<const N: usize, const D: usize, E: RefElement<N, D>>(
-        self,
-        c: f64,
-        slab: &SlabView,
-        cells: &[u32],
-    ) -> Result<bool, (KernelError, usize)> {
-        let (lay, act) = (self.lay, self.act);
-        self.each_cell_with_history::<N>(slab, cells, |_, s, theta_n, theta_now, r, k| {
-            capacity::capacity::<N, D, E>(c, &lay, s, theta_n, theta_now, act, r, k)
         })
     }
 }

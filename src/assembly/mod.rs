@@ -20,23 +20,24 @@ pub mod history;
 mod reference;
 mod scatter;
 mod schedule;
+mod terms;
 
-pub use cells::{check_inversion, corners_through_medium};
+pub use cells::{Cells, SlabView, check_inversion};
 pub use reference::References;
+pub use terms::{Integrand, integrand};
 
 use crate::dofs::{Pattern, build_pattern, build_pattern_of};
-use crate::element::RefElement;
-use crate::kernel::friction::{HISTORY_PER_POINT, SlipFields};
 use crate::kernel::{Active, KernelError};
-use crate::mesh::{Block, centroid};
-use crate::model::{FacetBlock, Model, Term};
+use crate::mesh::centroid;
+use crate::model::{FacetBlock, Model, StepContext, Term};
 use crate::parallel::Ranks;
 use crate::parallel::{Distribution, Partition};
-use cells::{Arrays, Cells, SlabView};
+use cells::Arrays;
 use history::{PointHistory, Slab};
 use rayon::prelude::*;
 use scatter::{FIRST, Shared, Slots};
 use schedule::Schedule;
+use terms::points_per_cell;
 
 /// A block is not split into parts of fewer cells than this (a part's scheduling costs more
 /// than its cells save).
@@ -259,8 +260,6 @@ pub struct Assembler {
     pub prefetch: bool,
     /// History per quadrature point, one slab per term that keeps one, in term order.
     pub history: PointHistory,
-    /// Time of the last accepted (committed) state: a step to t is Δt = t − this long.
-    t_committed: f64,
     /// This rank and the ranks of the cells (`None`: one rank, every cell): a rank runs its
     /// own cells, then the ranks sum their residuals and agree on errors and statistics, so
     /// that every rank holds the whole residual; the tangent keeps this rank's cells' part.
@@ -354,7 +353,6 @@ impl Assembler {
             terms,
             slab_of,
             history,
-            t_committed: 0.0,
             zero_first,
             values: vec![0.0; pattern.nnz()],
             r_full: vec![0.0; model.dofs.n_dofs],
@@ -388,16 +386,21 @@ impl Assembler {
         Some(build_pattern_of(nn, cells, owned, &model.dofs, &model.cons))
     }
 
+    /// Each term that keeps a history per point, with its slab, in term order.
+    pub fn slabs(&self) -> impl Iterator<Item = (Term, &Slab)> + '_ {
+        (self.terms.iter().zip(&self.slab_of))
+            .filter_map(|(t, s)| s.map(|s| (*t, &self.history.slabs[s])))
+    }
+
     /// The distribution of a distributed run.
     pub fn distribution(&self) -> Option<&Distribution> {
         self.distribution.as_ref()
     }
 
-    /// A step to time `t` was accepted at the state last assembled: its history becomes the
-    /// one the next step starts from.
-    pub fn commit(&mut self, t: f64) {
+    /// A step was accepted at the state last assembled: its history becomes the one the next
+    /// step starts from.
+    pub fn commit(&mut self) {
         self.history.commit();
-        self.t_committed = t;
     }
 
     /// Before the reconnected layers are joined again at the accepted state `x`: every
@@ -418,42 +421,28 @@ impl Assembler {
     pub fn rejoined(&mut self, model: &Model, x: &[f64]) {
         self.reference.reset(model, x);
         for (t, slab) in self.terms.iter().zip(&self.slab_of) {
-            let Some(i) = slab else { continue };
-            let slab = &mut self.history.slabs[*i];
-            let refs = &self.reference;
-            match *t {
-                Term::Inertia(b) => {
-                    let block = model.inertia_blocks[b].block;
-                    crate::with_cell!(model.mesh.cells[block].kind, |N, D, E| {
-                        reference::inertia_at_state::<N, D, E>(model, refs, block, x, slab)
-                    });
-                }
-                // a medium's heat stored (where it has a ρc) from the state's temperature
-                Term::Capacity(c) if refs.of(model.capacity_blocks[c].block).is_some() => {
-                    let block = model.capacity_blocks[c].block;
-                    crate::with_cell!(model.mesh.cells[block].kind, |N, D, E| {
-                        reference::theta_at_state::<N, D, E>(model, refs, block, x, slab)
-                    });
-                }
-                _ => {}
+            if let Some(i) = slab {
+                let slab = &mut self.history.slabs[*i];
+                integrand(model, *t).rejoined(model, &self.reference, x, slab);
             }
         }
     }
 
-    /// Continue a run: the committed history of its last accepted step at time `t`, per slab.
-    pub fn resume(&mut self, committed: &[Vec<f64>], t: f64) {
+    /// Continue a run: the committed history of its last accepted step, per slab.
+    pub fn resume(&mut self, committed: &[Vec<f64>]) {
         for (s, c) in self.history.slabs.iter_mut().zip(committed) {
             s.committed.copy_from_slice(c);
             s.trial.copy_from_slice(c);
         }
-        self.t_committed = t;
     }
 
     /// The committed history of every block with one, whole: on several ranks each cell's
     /// values from the rank that assembles it (every rank takes part). A checkpoint of this
     /// does not depend on how the cells were shared out, so a run can go on on other ranks.
     pub fn whole_history(&self, model: &Model) -> Vec<Vec<f64>> {
-        let blocks = (self.terms.iter().filter(|t| t.has_history())).map(|t| t.mesh_block(model));
+        let blocks = (self.terms.iter().zip(&self.slab_of))
+            .filter(|(_, s)| s.is_some())
+            .map(|(t, _)| t.mesh_block(model));
         (self.history.slabs.iter().zip(blocks))
             .map(|(slab, block)| {
                 let mut whole = slab.committed.clone();
@@ -475,17 +464,17 @@ impl Assembler {
         self.history.restore();
     }
 
-    /// Assemble at the state `x` (all dofs) and time `t` (see `LoadPath`). With `tangent`, fills
-    /// `values`; with `dx_prescribed`, also the lifting of those prescribed increments.
+    /// Assemble at the state `x` (all dofs) at the end of the step `step`. With `tangent`,
+    /// fills `values`; with `dx_prescribed`, also the lifting of those prescribed increments.
     pub fn assemble(
         &mut self,
         model: &Model,
         x: &[f64],
-        t: f64,
+        step: &StepContext,
         tangent: bool,
         dx_prescribed: Option<&[f64]>,
     ) -> Result<AssemblyStats, AssemblyError> {
-        self.assemble_part(model, x, t, tangent, dx_prescribed, Active::ALL)
+        self.assemble_part(model, x, step, tangent, dx_prescribed, Active::ALL)
     }
 
     /// As [`Assembler::assemble`], filling only the equations `act` names (the others' rows
@@ -494,7 +483,7 @@ impl Assembler {
         &mut self,
         model: &Model,
         x: &[f64],
-        t: f64,
+        step: &StepContext,
         tangent: bool,
         dx_prescribed: Option<&[f64]>,
         act: Active,
@@ -512,9 +501,6 @@ impl Assembler {
         self.lift.fill(0.0);
         let first_cell = &self.first_cell;
         let prefetch = tangent && self.prefetch;
-        // no time elapsed (the committed state itself): no heat stored over the step
-        let dt = t - self.t_committed;
-        let inv_dt = if dt > 0.0 { 1.0 / dt } else { 0.0 };
         let history: Vec<SlabView> = self
             .history
             .slabs
@@ -558,7 +544,7 @@ impl Assembler {
                     reference: reference.of(terms[bi].mesh_block(model)),
                 };
                 let slab = slab_of[bi].map(|i| &history[i]);
-                let part = run_block(job, terms[bi], slab, these, inv_dt)?;
+                let part = integrand(model, terms[bi]).add(job, slab, these, step)?;
                 stats = combine(stats, part);
             }
             Ok(stats)
@@ -581,7 +567,7 @@ impl Assembler {
             stats.energy = ranks.sum(stats.energy);
         }
         let mut fe = vec![0.0; model.dofs.n_dofs];
-        model.f_ext(t, &mut fe);
+        model.f_ext(step.lambda, &mut fe);
         for (r, f) in self.r_full.iter_mut().zip(&fe) {
             *r -= f;
         }
@@ -595,97 +581,6 @@ fn combine(a: AssemblyStats, b: AssemblyStats) -> AssemblyStats {
         min_J_solid: a.min_J_solid.min(b.min_J_solid),
         min_J_medium: a.min_J_medium.min(b.min_J_medium),
         energy: a.energy + b.energy,
-    }
-}
-
-/// Run the cells `these` of `term` through its kernel: the bulk for a region's cells, the
-/// boundary flux for a facet block, the capacity term (ρc/Δt = `rho_c` × `inv_dt`) or friction
-/// with the term's history `slab`.
-fn run_block(
-    job: Cells,
-    term: Term,
-    slab: Option<&SlabView>,
-    these: &[u32],
-    inv_dt: f64,
-) -> Result<AssemblyStats, AssemblyError> {
-    let (model, blk) = (job.model, job.blk);
-    let finite = |f: bool| {
-        if f {
-            Ok(())
-        } else {
-            Err(AssemblyError::NotFinite)
-        }
-    };
-    // the cells of a term whose kernel fails only on a cell's geometry (capacity, inertia)
-    let geometric = |region: usize,
-                     res: Result<bool, (KernelError, usize)>|
-     -> Result<AssemblyStats, AssemblyError> {
-        let ok = res.map_err(|(_, cell)| AssemblyError::BadMesh {
-            region: model.regions[region].0.clone(),
-            cell,
-            at: centroid(&model.mesh.coords, blk.cell(cell)),
-        })?;
-        finite(ok)?;
-        Ok(AssemblyStats::EMPTY)
-    };
-    match (term, slab) {
-        (Term::Friction(fi), Some(slab)) => {
-            let fb = &model.friction_blocks[fi];
-            let heat_rate = fb.heat_fraction * inv_dt;
-            let res = crate::with_cell!(blk.kind, |N, D, E| job.run_friction::<N, D, E>(
-                &fb.mat,
-                &fb.normals,
-                heat_rate,
-                inv_dt,
-                slab,
-                these
-            ));
-            let ok = res.map_err(|(e, cell)| {
-                let at = centroid(&model.mesh.coords, blk.cell(cell));
-                cell_error_in(&model.regions[fb.region].0, e, cell, at)
-            })?;
-            finite(ok)?;
-            Ok(AssemblyStats::EMPTY)
-        }
-        (Term::Capacity(ci), Some(slab)) => {
-            let cb = &model.capacity_blocks[ci];
-            let res = crate::with_cell!(blk.kind, |N, D, E| job.run_capacity::<N, D, E>(
-                cb.rho_c * inv_dt,
-                slab,
-                these
-            ));
-            geometric(cb.region, res)
-        }
-        (Term::Inertia(ii), Some(slab)) => {
-            let ib = &model.inertia_blocks[ii];
-            let res = crate::with_cell!(blk.kind, |N, D, E| job
-                .run_inertia::<N, D, E>(ib.rho, inv_dt, slab, these));
-            geometric(ib.region, res)
-        }
-        (Term::Flux(f), _) => {
-            let fb = &model.facet_blocks[f];
-            let res = crate::with_element!(blk.kind, |N, D, E| job
-                .run_facets::<N, D, E>(&fb.law, these));
-            finite(res.map_err(|(e, facet)| facet_error(model, fb, e, facet))?)?;
-            Ok(AssemblyStats::EMPTY)
-        }
-        (Term::Bulk(b), _) => {
-            let info = &model.blocks[b];
-            let res = crate::with_cell!(blk.kind, |N, D, E| job.run::<N, D, E>(&info.mat, these));
-            let (min_j, energy, ok) = res.map_err(|(e, cell)| cell_error(model, b, e, cell))?;
-            finite(ok)?;
-            let mut stats = AssemblyStats::EMPTY;
-            if info.mat.medium {
-                stats.min_J_medium = min_j;
-            } else {
-                stats.min_J_solid = min_j;
-            }
-            stats.energy = energy;
-            Ok(stats)
-        }
-        (Term::Capacity(_) | Term::Friction(_) | Term::Inertia(_), None) => {
-            unreachable!("initial_history gives every term with history its slab")
-        }
     }
 }
 
@@ -707,56 +602,27 @@ fn cells_of<'m>(
 /// The rank that assembles cell (or facet) `c` of `term`.
 fn term_rank(model: &Model, p: &Partition, term: Term, c: usize) -> usize {
     let b = term.mesh_block(model);
-    match term {
-        Term::Flux(_) => p.facet_rank[b][c] as usize,
-        _ => p.cell_rank[b][c] as usize,
+    match term.on_facets() {
+        true => p.facet_rank[b][c] as usize,
+        false => p.cell_rank[b][c] as usize,
     }
 }
 
-/// Quadrature points per cell of a block.
-fn points_per_cell(blk: &Block) -> usize {
-    crate::with_cell!(blk.kind, |N, D, E| <E as RefElement<N, D>>::quadrature()
-        .len())
-}
-
 /// The history at the initial state, one slab per term that keeps one (in term order), and
-/// each term's slab: of the capacity terms, θ0 at every point; of the friction terms, no slip
-/// and no work dissipated; of the inertia terms, at rest and undisplaced.
+/// each term's slab: as each term's [`Integrand::initial_history`] makes it.
 fn initial_history(model: &Model, terms: &[Term]) -> (PointHistory, Vec<Option<usize>>) {
     let x0 = model.initial_state();
     let mut slabs: Vec<Slab> = Vec::new();
     let slab_of = (terms.iter())
         .map(|&t| {
-            let (blk, _) = t.block(model);
-            let slab = match t {
-                Term::Capacity(_) => {
-                    let width = points_per_cell(blk);
-                    let mut slab = Slab::new(blk.n_cells(), width, 0.0);
-                    for c in 0..blk.n_cells() {
-                        let nodes = blk.cell(c);
-                        let out = &mut slab.committed[c * width..(c + 1) * width];
-                        crate::with_cell!(blk.kind, |N, D, E| {
-                            let s = crate::dofs::gather::<N>(
-                                &model.mesh.coords,
-                                &model.dofs,
-                                nodes,
-                                &x0,
-                            );
-                            crate::kernel::capacity::theta_at_points::<N, D, E>(&s, out);
-                        });
-                    }
-                    slab.trial.copy_from_slice(&slab.committed);
-                    slab
-                }
-                Term::Friction(_) => {
-                    Slab::new(blk.n_cells(), HISTORY_PER_POINT * points_per_cell(blk), 0.0)
-                }
-                Term::Inertia(_) => {
-                    let per_point = crate::kernel::inertia::history_per_point(model.mesh.dim);
-                    Slab::new(blk.n_cells(), per_point * points_per_cell(blk), 0.0)
-                }
-                Term::Bulk(_) | Term::Flux(_) => return None,
-            };
+            let term = integrand(model, t);
+            let per_point = term.history_per_point(model);
+            if per_point == 0 {
+                return None;
+            }
+            let blk = t.block(model).0;
+            let mut slab = Slab::new(blk.n_cells(), per_point * points_per_cell(blk), 0.0);
+            term.initial_history(model, &x0, &mut slab);
             slabs.push(slab);
             Some(slabs.len() - 1)
         })
@@ -764,33 +630,13 @@ fn initial_history(model: &Model, terms: &[Term]) -> (PointHistory, Vec<Option<u
     (PointHistory { slabs }, slab_of)
 }
 
-/// Heat stored in the capacity blocks at the state `x`: Σ ∫ ρc (θ − θ0) dV.
-pub fn heat_stored(
-    model: &Model,
-    references: &References,
-    x: &[f64],
-) -> Result<f64, AssemblyError> {
-    let mut e = 0.0;
-    for cb in &model.capacity_blocks {
-        let blk = &model.mesh.cells[cb.block];
-        for c in 0..blk.n_cells() {
-            let nodes = blk.cell(c);
-            e += crate::with_cell!(blk.kind, |N, D, E| {
-                let s = references.state::<N>(model, cb.block, c, x);
-                crate::kernel::capacity::stored_heat::<N, D, E>(cb.rho_c, cb.theta_ref, &s)
-            })
-            .map_err(|_| AssemblyError::BadMesh {
-                region: model.regions[cb.region].0.clone(),
-                cell: c,
-                at: centroid(&model.mesh.coords, nodes),
-            })?;
-        }
-    }
-    Ok(e)
-}
-
 /// The assembly error of a facet kernel's failure.
-fn facet_error(model: &Model, fb: &FacetBlock, e: KernelError, facet: usize) -> AssemblyError {
+pub(crate) fn facet_error(
+    model: &Model,
+    fb: &FacetBlock,
+    e: KernelError,
+    facet: usize,
+) -> AssemblyError {
     let group = model.flux_groups[fb.group].name.clone();
     match e {
         KernelError::BadGeometry => AssemblyError::BadFacet { group, facet },
@@ -814,7 +660,12 @@ pub(crate) fn cell_error(model: &Model, bi: usize, e: KernelError, cell: usize) 
 }
 
 /// The assembly error of a kernel's failure in cell `cell` (centre `at`) of `region`.
-fn cell_error_in(region: &str, e: KernelError, cell: usize, at: [f64; 3]) -> AssemblyError {
+pub(crate) fn cell_error_in(
+    region: &str,
+    e: KernelError,
+    cell: usize,
+    at: [f64; 3],
+) -> AssemblyError {
     let region = || region.to_string();
     match e {
         KernelError::Inverted { J } => AssemblyError::Inverted {
@@ -832,132 +683,4 @@ fn cell_error_in(region: &str, e: KernelError, cell: usize, at: [f64; 3]) -> Ass
         // only facet laws have absolute temperatures
         KernelError::NotAbsolute { .. } => AssemblyError::NotFinite,
     }
-}
-
-/// The committed history of every friction cell this rank owns: (friction block, cell, its
-/// history).
-fn committed_friction<'a>(
-    model: &'a Model,
-    asm: &'a Assembler,
-) -> impl Iterator<Item = (usize, usize, &'a [f64])> + 'a {
-    (asm.terms.iter().zip(&asm.slab_of))
-        .filter_map(|(t, s)| match (t, s) {
-            (Term::Friction(f), Some(s)) => Some((*f, &asm.history.slabs[*s])),
-            _ => None,
-        })
-        .flat_map(move |(f, slab)| {
-            let fb = &model.friction_blocks[f];
-            let blk = &model.mesh.cells[fb.block];
-            (0..blk.n_cells())
-                .filter(move |&c| asm.owns_cell(fb.block, c))
-                .map(move |c| {
-                    let h = &slab.committed[c * slab.width..(c + 1) * slab.width];
-                    (f, c, h)
-                })
-        })
-}
-
-/// The kinetic energy at the last accepted step, ½ Σ ∫ ρ |v|² dV (of every rank's cells).
-pub fn kinetic_energy(model: &Model, asm: &Assembler) -> f64 {
-    let mut e = [0.0];
-    for (t, s) in asm.terms.iter().zip(&asm.slab_of) {
-        let (Term::Inertia(i), Some(s)) = (t, s) else {
-            continue;
-        };
-        let (ib, slab) = (&model.inertia_blocks[*i], &asm.history.slabs[*s]);
-        let blk = &model.mesh.cells[ib.block];
-        for c in (0..blk.n_cells()).filter(|&c| asm.owns_cell(ib.block, c)) {
-            let h = &slab.committed[c * slab.width..(c + 1) * slab.width];
-            e[0] += crate::with_cell!(blk.kind, |N, D, E| {
-                let X = asm.reference.coords::<N>(model, ib.block, c);
-                crate::kernel::inertia::kinetic_energy::<N, D, E>(ib.rho, &X, h)
-            })
-            .unwrap_or(f64::NAN);
-        }
-    }
-    asm.ranks.sum_into(&mut e);
-    e[0]
-}
-
-/// The work dissipated by friction so far, per friction block (indexed like
-/// `model.friction_blocks`), from the committed history: Σ ∫ w dV (of every rank's cells).
-pub fn friction_work(model: &Model, asm: &Assembler) -> Vec<f64> {
-    let mut work = vec![0.0; model.friction_blocks.len()];
-    for (f, _, h) in committed_friction(model, asm) {
-        work[f] += crate::kernel::friction::dissipated_work(h);
-    }
-    asm.ranks.sum_into(&mut work);
-    work
-}
-
-/// A friction cell's slip state and its slip plane's unit normal, for output.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct FrictionCell {
-    pub state: SlipFields,
-    pub normal: [f64; 3],
-}
-
-/// The slip state of every cell this rank owns at the last accepted step, whose state is
-/// `x`, in mesh block order (`None` for cells without friction, and for other ranks' cells).
-pub fn friction_cells(model: &Model, asm: &Assembler, x: &[f64]) -> Vec<Option<FrictionCell>> {
-    let mut first = Vec::with_capacity(model.mesh.cells.len());
-    let mut n = 0;
-    for b in &model.mesh.cells {
-        first.push(n);
-        n += b.n_cells();
-    }
-    let mut out = vec![None; n];
-    for (f, c, h) in committed_friction(model, asm) {
-        let fb = &model.friction_blocks[f];
-        let normal = fb.normals.of(c);
-        let state = crate::with_cell!(model.mesh.cells[fb.block].kind, |N, D, E| {
-            let s = asm.reference.state::<N>(model, fb.block, c, x);
-            crate::kernel::friction::slip_fields::<N, D, E>(&fb.mat, normal, &fb.layout, &s, h)
-        })
-        .unwrap_or(SlipFields {
-            slip: [f64::NAN; 3],
-            increment: [f64::NAN; 3],
-            slipping: f64::NAN,
-            stress: [[f64::NAN; 3]; 3],
-        });
-        out[first[fb.block] + c] = Some(FrictionCell {
-            state,
-            normal: [normal[0], normal[1], normal[2]],
-        });
-    }
-    out
-}
-
-/// Heat supplied to the body through each convecting group at the state `x`, indexed like
-/// `model.flux_groups`: −Σ of the convection residual over the group's free θ dofs (at a node
-/// shared with a prescribed θ, the heat is in that group's reaction).
-pub fn convection_heat(model: &Model, x: &[f64]) -> Result<Vec<f64>, AssemblyError> {
-    let mut heat = vec![0.0; model.flux_groups.len()];
-    for fb in &model.facet_blocks {
-        let blk = &model.mesh.facets[fb.block];
-        let lay = fb.layout;
-        let mut r = vec![0.0; lay.ndof()];
-        for c in 0..blk.n_cells() {
-            let nodes = blk.cell(c);
-            crate::with_element!(blk.kind, |N, D, E| {
-                let s = crate::dofs::gather::<N>(&model.mesh.coords, &model.dofs, nodes, x);
-                crate::kernel::facet::boundary_flux::<N, D, E>(
-                    &fb.law,
-                    &lay,
-                    &s,
-                    Active::ALL,
-                    &mut r,
-                    None,
-                )
-                .map_err(|e| facet_error(model, fb, e, c))?;
-            });
-            for (I, &n) in nodes.iter().enumerate() {
-                let dof = model.dofs.theta[n] as usize;
-                if model.cons.prescribed[dof].is_none() {
-                    heat[fb.group] -= r[lay.theta(I)];
-                }
-            }
-        }
-    }
-    Ok(heat)
 }

@@ -2,7 +2,7 @@
 //! physics, strategy, unknowns, the symbolic analysis of the linear solvers), then a report;
 //! nothing is written where results go.
 
-use super::run::Plan;
+use super::stepper::Plan;
 use super::strategy::describe;
 use super::{SolveError, SolveOptions, checked_model};
 use crate::case::Case;
@@ -90,7 +90,7 @@ pub fn check(case_path: &Path, opts: &SolveOptions) -> Result<CheckReport, Solve
     let _ = std::fs::remove_dir_all(&scratch);
     let (mut model, probes, _staged) = checked?;
     // a reconnected friction layer that cannot be joined again fails here as in a solve
-    if let Some(layer) = super::reconnect::Layer::find(&model)? {
+    if let Some(layer) = crate::model::rejoin::Layer::find(&model)? {
         model.warnings.push(layer.describe());
     }
     let plan = Plan::new(&case, &model, opts)?;

@@ -1,11 +1,13 @@
 //! `tmc solve`: case → mesh → model → load stepping with Newton → VTU series, history, summary.
 
+mod account;
 pub mod check;
 pub mod checkpoint;
-mod reconnect;
+mod recorder;
 pub mod records;
 mod run;
 pub mod state;
+mod stepper;
 pub mod strategy;
 
 pub use check::{CheckReport, check};
@@ -17,6 +19,7 @@ use crate::files::TempFile;
 use crate::mesh::Mesh;
 use crate::mesh::gmsh::{GmshError, MeshOptions, mesh_geo};
 use crate::mesh::msh::{MshError, read_msh};
+use crate::model::rejoin::{Layer, LayerError};
 use crate::model::{Model, build};
 use crate::output::probes::{self, Probe};
 use crate::output::{OutputError, RunFolder, werr};
@@ -66,6 +69,12 @@ pub enum SolveError {
         steps: usize,
         dir: PathBuf,
     },
+}
+
+impl From<LayerError> for SolveError {
+    fn from(e: LayerError) -> SolveError {
+        SolveError::Setup(e.to_string())
+    }
 }
 
 impl From<LinearError> for SolveError {
@@ -376,7 +385,7 @@ fn solve_model(
     from: Option<checkpoint::Checkpoint>,
 ) -> Result<Summary, SolveError> {
     let out_dir = folder.dir().to_owned();
-    let mut layer = reconnect::Layer::find(&model)?;
+    let mut layer = Layer::find(&model)?;
     let (mut model, mut folder, mut from) = (model, Some(folder), from);
     let mut rejoined = false;
     loop {
@@ -434,16 +443,12 @@ fn step_until<'a>(
     mut run: Run<'a>,
     mut rejoin: impl FnMut(&Run) -> Option<i64>,
 ) -> Result<Stepped<'a>, SolveError> {
-    while !run.ctl.done() {
+    while !run.done() {
         if run.ranks().max(f64::from(u8::from(interrupted()))) > 0.0 {
             return run.interrupt().map(Stepped::Ended);
         }
-        let target = run.ctl.target();
-        match run.attempt(target) {
-            Ok((trial, rep)) => run.accept(target, trial, rep)?,
-            Err(failure) => run.reject(target, failure)?,
-        }
-        if let Some(shift) = (!run.ctl.done()).then(|| rejoin(&run)).flatten() {
+        run.step()?;
+        if let Some(shift) = (!run.done()).then(|| rejoin(&run)).flatten() {
             return Ok(Stepped::Rejoin(run, shift));
         }
     }

@@ -214,7 +214,7 @@ pub const HISTORY_SOLVER_COLUMNS: [&str; 3] = ["krylov_iterations", "halvings", 
 /// Force and heat on the body through every group: the Dirichlet groups' reactions (from the
 /// residual `r_full`), plus the loads of the groups with flux conditions at (pseudo-)time `t`
 /// (traction, heat flux) and the heat they `convected` (per flux group, from
-/// `assembly::convection_heat`).
+/// `post::convection_heat`).
 pub fn group_flows(model: &Model, r_full: &[f64], convected: &[f64], t: f64) -> Reactions {
     let mut out = reactions(model, r_full);
     let lambda = model.path.lambda(t);

@@ -67,11 +67,39 @@ impl LoadPath {
         self.times == self.lambda
     }
 
+    /// The step from the accepted time `from` to `to` (`from == to`: the state at `from`
+    /// itself, over no time).
+    pub fn step(&self, from: f64, to: f64) -> StepContext {
+        StepContext {
+            t: to,
+            dt: to - from,
+            lambda: self.lambda(to),
+        }
+    }
+
     /// All amplitudes at t: [1, λ(t), own paths…], indexed by `Prescribed::amp`.
     pub fn amplitudes(&self, t: f64) -> Vec<f64> {
         let mut a = vec![1.0, self.lambda(t)];
         a.extend(self.own.iter().map(|v| self.interp(v, t)));
         a
+    }
+}
+
+/// Where a step goes, as every term of the assembly sees it: the time `t` it ends at, its
+/// length `dt` from the last accepted state, and the load factor λ(t). Made once per step by
+/// whoever steps ([`LoadPath::step`]) and passed down.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepContext {
+    pub t: f64,
+    pub dt: f64,
+    pub lambda: f64,
+}
+
+impl StepContext {
+    /// 1/Δt, or 0 over a step of no length (the accepted state itself: nothing stored or
+    /// dissipated over it).
+    pub fn inv_dt(&self) -> f64 {
+        if self.dt > 0.0 { 1.0 / self.dt } else { 0.0 }
     }
 }
 

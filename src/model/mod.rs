@@ -6,11 +6,12 @@ pub mod build;
 pub mod held;
 pub mod loads;
 pub mod physics;
+pub mod rejoin;
 pub mod rigid;
 pub mod validate;
 
 pub use build::build;
-pub use loads::{LoadPath, facet_weights};
+pub use loads::{LoadPath, StepContext, facet_weights};
 pub use physics::{Physics, decide_physics};
 
 pub use crate::case::RegionKind;
@@ -132,8 +133,9 @@ pub struct FluxGroup {
 
 /// One term of the discrete problem: an integrand over the cells (or facets) of one mesh
 /// block, by its index into the model's list of that kind. The assembler runs
-/// [`Model::terms`] in order; the terms with history ([`Term::has_history`]) own one slab of
-/// per-point values each, in that order too.
+/// [`Model::terms`] in order, each through its integrand (`assembly/terms/`), which owns its
+/// kernel and its history per point; the terms with history own one slab of per-point values
+/// each, in that order too.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Term {
     /// A region's cells: mechanics, conduction, the medium's regularization
@@ -176,12 +178,9 @@ impl Term {
         }
     }
 
-    /// Whether the term keeps values per quadrature point between steps.
-    pub fn has_history(&self) -> bool {
-        matches!(
-            self,
-            Term::Capacity(_) | Term::Friction(_) | Term::Inertia(_)
-        )
+    /// Whether the term integrates over facets (`mesh.facets`) rather than cells.
+    pub fn on_facets(&self) -> bool {
+        matches!(self, Term::Flux(_))
     }
 }
 
@@ -208,7 +207,7 @@ pub struct Model {
     pub regions: Vec<(String, RegionKind)>,
     /// The load factor and the groups' own amplitudes over pseudo-time.
     pub path: LoadPath,
-    /// External loads on all dofs: f_ext(t) = λ(t) f_ramp + f_full.
+    /// External loads on all dofs: f_ext = λ f_ramp + f_full.
     pub f_ramp: Vec<f64>,
     pub f_full: Vec<f64>,
     /// Dirichlet groups, indexed by `Prescribed::bc`.
@@ -268,9 +267,8 @@ impl Model {
         on
     }
 
-    /// External loads at pseudo-time `t`.
-    pub fn f_ext(&self, t: f64, out: &mut [f64]) {
-        let lambda = self.path.lambda(t);
+    /// External loads at the load factor `lambda`.
+    pub fn f_ext(&self, lambda: f64, out: &mut [f64]) {
         for ((o, r), f) in out.iter_mut().zip(&self.f_ramp).zip(&self.f_full) {
             *o = lambda * r + f;
         }

@@ -8,11 +8,12 @@ use super::fields::all_cell_fields;
 use super::nodal::nodal_fields;
 use super::vtu::{Piece, StepFields, ZLIB_LEVEL, pvtu_text, read_pvd, write_pvd, write_vtu};
 use super::{OutputError, write_atomic};
-use crate::assembly::{FrictionCell, References};
+use crate::assembly::References;
 use crate::case::RegionKind;
 use crate::dofs::{Field, NONE};
 use crate::model::Model;
 use crate::parallel::Distribution;
+use crate::post::FrictionCell;
 use std::path::{Path, PathBuf};
 
 pub struct Series {

@@ -9,9 +9,9 @@
 
 use super::nodal::{NodalFields, principal, von_mises};
 use super::{OutputError, write_atomic};
-use crate::assembly::FrictionCell;
 use crate::kernel::CellFields;
 use crate::mesh::Mesh;
+use crate::post::FrictionCell;
 use base64::Engine;
 use base64::engine::general_purpose::STANDARD as BASE64;
 use rayon::prelude::*;

@@ -16,7 +16,7 @@ use super::idle::IdleThreads;
 use super::linear::{LinearError, LinearSolver};
 use crate::assembly::{Assembler, AssemblyError, AssemblyStats};
 use crate::dofs::{Field, NONE, equation_structure};
-use crate::model::Model;
+use crate::model::{Model, StepContext};
 
 /// Norms per field, indexed by `Field as usize`.
 pub type FieldNorms = [f64; 3];
@@ -408,10 +408,10 @@ impl Newton {
         asm: &mut Assembler,
         solver: &mut LinearSolver,
         x: &mut [f64],
-        t: f64,
+        step: &StepContext,
         part: Part,
     ) -> Result<StepReport, StepFailure> {
-        let mut st = StepState::new(self, model, x.len(), t, part);
+        let mut st = StepState::new(self, model, x.len(), step.t, part);
         solver.take_krylov();
         let mut it = 0;
         // the last update was small: the step most likely ends at the next residual
@@ -419,7 +419,7 @@ impl Newton {
         let mut prev_rel = f64::INFINITY;
         loop {
             let first = it == 0;
-            let r = self.damped_residual(&mut st, model, asm, x, t, first, expect_converged)?;
+            let r = self.damped_residual(&mut st, model, asm, x, step, first, expect_converged)?;
             st.history.push(r.rel);
             let rel = worst(&r.rel);
             let limit = if rel <= NEAR_RESIDUAL && rel <= 0.1 * prev_rel {
@@ -450,7 +450,7 @@ impl Newton {
                 st.du_ref[f] = st.du_ref[f].max(last_update[f]);
             }
             let converged_after = if part == Part::Heat {
-                Some(self.heat_converged(&mut st, model, asm, x, t)?)
+                Some(self.heat_converged(&mut st, model, asm, x, step)?)
             } else {
                 let (done, expect) =
                     self.converged(&st, model, x, &last_update, r.converged, first);
@@ -495,7 +495,7 @@ impl Newton {
         model: &Model,
         asm: &mut Assembler,
         x: &mut [f64],
-        t: f64,
+        step: &StepContext,
         first: bool,
         expect_converged: bool,
     ) -> Result<Residual, StepFailure> {
@@ -504,7 +504,7 @@ impl Newton {
         let mut damped = 0;
         let out = loop {
             let (stats, pending) =
-                match self.assemble_admissible(st, model, asm, x, t, tangent, first) {
+                match self.assemble_admissible(st, model, asm, x, step, tangent, first) {
                     Ok(a) => a,
                     Err(e) => break Err(e),
                 };
@@ -548,7 +548,7 @@ impl Newton {
         model: &Model,
         asm: &mut Assembler,
         x: &mut [f64],
-        t: f64,
+        step: &StepContext,
         tangent: bool,
         first: bool,
     ) -> Result<(AssemblyStats, bool), StepFailure> {
@@ -565,7 +565,7 @@ impl Newton {
             match asm.assemble_part(
                 model,
                 x,
-                t,
+                step,
                 tangent,
                 pending.then_some(&st.dx_p[..]),
                 part.active(),
@@ -681,10 +681,10 @@ impl Newton {
         model: &Model,
         asm: &mut Assembler,
         x: &[f64],
-        t: f64,
+        step: &StepContext,
     ) -> Result<usize, StepFailure> {
         let t2 = std::time::Instant::now();
-        asm.assemble_part(model, x, t, false, None, st.part.active())
+        asm.assemble_part(model, x, step, false, None, st.part.active())
             .map_err(StepFailure::Assembly)?;
         self.spent.assembly += t2.elapsed().as_secs_f64();
         let mut r = vec![0.0; model.cons.n_eq];

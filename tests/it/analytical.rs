@@ -342,7 +342,14 @@ ux = 1.0
     let mut newton = Newton::new(&model, 1e-12, 20);
     let mut x = model.initial_state();
     let rep = newton
-        .step(&model, &mut asm, &mut solver, &mut x, 1.0, Part::All)
+        .step(
+            &model,
+            &mut asm,
+            &mut solver,
+            &mut x,
+            &model.path.step(0.0, 1.0),
+            Part::All,
+        )
         .unwrap();
     assert!(rep.iterations <= 6, "took {} iterations", rep.iterations);
     let r: Vec<f64> = rep.history.iter().map(|h| h[0]).collect();

@@ -75,7 +75,14 @@ fn patch(model: &mut Model) {
     let mut x = model.initial_state();
     for lambda in [0.25, 0.5, 0.75, 1.0] {
         newton
-            .step(model, &mut asm, &mut solver, &mut x, lambda, Part::All)
+            .step(
+                model,
+                &mut asm,
+                &mut solver,
+                &mut x,
+                &model.path.step(0.0, lambda),
+                Part::All,
+            )
             .unwrap();
     }
     let mut interior = 0;
@@ -149,7 +156,8 @@ fn tangent_check(model: &Model) -> Assembler {
             _ => 0.01 * span * noise(i),
         };
     }
-    asm.assemble(model, &x, 1.0, true, None).unwrap();
+    asm.assemble(model, &x, &model.path.step(0.0, 1.0), true, None)
+        .unwrap();
     let p = asm.pattern.clone();
     let k = asm.values.clone();
     for trial in 0..3 {
@@ -183,7 +191,8 @@ fn tangent_check(model: &Model) -> Assembler {
                 })
                 .collect();
             let mut a = Assembler::new(model);
-            a.assemble(model, &y, 1.0, false, None).unwrap();
+            a.assemble(model, &y, &model.path.step(0.0, 1.0), false, None)
+                .unwrap();
             a.r_full
         };
         let (rp, rm) = (shifted(h), shifted(-h));
@@ -510,7 +519,9 @@ fn parallel_assembly_matches_one_thread() {
             .unwrap();
         pool.install(|| {
             let mut asm = Assembler::new(&model);
-            let stats = asm.assemble(&model, &x, 0.5, true, Some(&dx)).unwrap();
+            let stats = asm
+                .assemble(&model, &x, &model.path.step(0.0, 0.5), true, Some(&dx))
+                .unwrap();
             (asm.values, asm.r_full, asm.lift, stats.energy)
         })
     };
@@ -569,7 +580,7 @@ fn an_inverted_medium_cell_is_reported_with_and_without_the_tangent() {
     );
     let mut asm = Assembler::new(&model);
     for tangent in [true, false] {
-        match asm.assemble(&model, &x, 0.5, tangent, None) {
+        match asm.assemble(&model, &x, &model.path.step(0.0, 0.5), tangent, None) {
             Err(tmc::assembly::AssemblyError::Inverted { region, J, .. }) => {
                 assert_eq!(region, "medium", "tangent {tangent}");
                 assert!(J <= 0.0, "tangent {tangent}: J = {J}");
@@ -578,8 +589,14 @@ fn an_inverted_medium_cell_is_reported_with_and_without_the_tangent() {
         }
     }
     assert!(
-        asm.assemble(&model, &model.initial_state(), 0.5, true, None)
-            .is_ok()
+        asm.assemble(
+            &model,
+            &model.initial_state(),
+            &model.path.step(0.0, 0.5),
+            true,
+            None
+        )
+        .is_ok()
     );
 }
 
@@ -603,10 +620,16 @@ fn reassembly_leaves_nothing_of_the_previous_tangent() {
     };
     let (x1, x2) = (state(2e-3), state(-1e-3));
     let mut reused = Assembler::new(&model);
-    reused.assemble(&model, &x1, 0.5, true, None).unwrap();
-    reused.assemble(&model, &x2, 0.5, true, None).unwrap();
+    reused
+        .assemble(&model, &x1, &model.path.step(0.0, 0.5), true, None)
+        .unwrap();
+    reused
+        .assemble(&model, &x2, &model.path.step(0.0, 0.5), true, None)
+        .unwrap();
     let mut fresh = Assembler::new(&model);
-    fresh.assemble(&model, &x2, 0.5, true, None).unwrap();
+    fresh
+        .assemble(&model, &x2, &model.path.step(0.0, 0.5), true, None)
+        .unwrap();
     assert!(fresh.values.iter().any(|&v| v != 0.0));
     assert_eq!(reused.values, fresh.values);
     // and an assembly cut short by an inverted solid cell (found by the kernels, after
@@ -620,10 +643,12 @@ fn reassembly_leaves_nothing_of_the_previous_tangent() {
         x3[model.dofs.u[3 * n + 2] as usize] = -2.0 * (model.mesh.coords[n][2] - zc);
     }
     assert!(matches!(
-        reused.assemble(&model, &x3, 0.5, true, None),
+        reused.assemble(&model, &x3, &model.path.step(0.0, 0.5), true, None),
         Err(tmc::assembly::AssemblyError::Inverted { .. })
     ));
-    reused.assemble(&model, &x2, 0.5, true, None).unwrap();
+    reused
+        .assemble(&model, &x2, &model.path.step(0.0, 0.5), true, None)
+        .unwrap();
     assert_eq!(reused.values, fresh.values);
 }
 
@@ -633,7 +658,8 @@ fn reassembly_leaves_nothing_of_the_previous_tangent() {
 fn rigid_motions_are_the_kernel(model: &Model) {
     let mut asm = Assembler::new(model);
     let x = model.initial_state();
-    asm.assemble(model, &x, 0.0, true, None).unwrap();
+    asm.assemble(model, &x, &model.path.step(0.0, 0.0), true, None)
+        .unwrap();
     let (p, k) = (&asm.pattern, &asm.values);
     let node_of_dof = model.dofs.node_of_dof();
     let mut held = vec![false; model.mesh.coords.len()];

@@ -219,24 +219,27 @@ fn the_history_is_committed_at_accepted_steps_and_restored_at_rejected_ones() {
     for &d in &model.dofs.theta {
         x1[d as usize] = 7.0;
     }
-    asm.assemble(&model, &x1, 0.5, true, None).unwrap();
+    asm.assemble(&model, &x1, &model.path.step(0.0, 0.5), true, None)
+        .unwrap();
     assert!(trial(&asm).iter().all(|&v| (v - 7.0).abs() < 1e-12));
     assert_eq!(committed(&asm), start);
     let r1 = asm.r_full.clone();
     // rejected: the trial history goes back; the same attempt gives the same residual
     asm.restore();
     assert_eq!(trial(&asm), start);
-    asm.assemble(&model, &x1, 0.5, false, None).unwrap();
+    asm.assemble(&model, &x1, &model.path.step(0.0, 0.5), false, None)
+        .unwrap();
     assert_eq!(asm.r_full, r1);
     // accepted: θ of that state becomes θₙ of the next step, whose capacity term then
     // vanishes at the same state
-    asm.commit(0.5);
+    asm.commit();
     assert!(committed(&asm).iter().all(|&v| (v - 7.0).abs() < 1e-12));
     let mut x2 = x1.clone();
     for &d in &model.dofs.theta {
         x2[d as usize] = 9.0;
     }
-    asm.assemble(&model, &x2, 1.0, false, None).unwrap();
+    asm.assemble(&model, &x2, &model.path.step(0.5, 1.0), false, None)
+        .unwrap();
     let heat: f64 = model
         .dofs
         .theta

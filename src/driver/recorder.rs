@@ -1,0 +1,422 @@
+//! The recorder: what each accepted step leaves behind, on the rank that writes (rank 0):
+//! its `.vtu` (when `[output] every` asks), its row of `history.csv`, the checkpoint, its line
+//! on the console and the progress bar; at the end, `summary.json`. It reads the stepper's
+//! state and the run's accounts, and changes neither.
+
+use super::SolveError;
+use super::SolveOptions;
+use super::account::Accounts;
+use super::checkpoint::{self, Checkpoint};
+use super::records::{HistoryLayout, Reactions, StepRow, Summary, peak_memory_mb};
+use super::state::{Files, RunState, Totals};
+use super::stepper::Stepper;
+use super::strategy::Strategy;
+use crate::case::Case;
+use crate::model::Model;
+use crate::output::probes::Probe;
+use crate::output::{History, OutputError, RunFolder, Series, write_atomic};
+use crate::post::friction_cells;
+use crate::solver::newton::StepReport;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+pub(super) struct Recorder<'a> {
+    probes: &'a [Probe],
+    opts: &'a SolveOptions,
+    /// The output folder, on the rank that writes (rank 0); `None` on the others.
+    folder: Option<RunFolder>,
+    out_dir: PathBuf,
+    /// When the run started (wall seconds count from it).
+    start: Instant,
+    series: Series,
+    layout: HistoryLayout,
+    history: History,
+    pub(super) summary: Summary,
+    pb: indicatif::ProgressBar,
+    /// `[output] every`, and the last step written.
+    every: usize,
+    written: Option<usize>,
+    /// What the results depend on (case, mesh), for the checkpoints.
+    fingerprint: (String, String),
+}
+
+impl<'a> Recorder<'a> {
+    /// The records of a run of `case` on `model` with the stepper `st` (its solvers named in
+    /// the summary), into `out_dir`; nothing is written yet.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn new(
+        case: &Case,
+        model: &Model,
+        st: &Stepper,
+        strategy: Strategy,
+        probes: &'a [Probe],
+        mut folder: Option<RunFolder>,
+        out_dir: PathBuf,
+        opts: &'a SolveOptions,
+        start: Instant,
+    ) -> Result<Recorder<'a>, SolveError> {
+        let layout = HistoryLayout::new(model, probes, case.file.time.is_some());
+        for name in [
+            "history.csv",
+            "summary.json",
+            &format!("{}.pvd", case.name()),
+        ] {
+            if let Some(folder) = &mut folder {
+                folder.record(name)?;
+            }
+        }
+        let history = History::new(&out_dir.join("history.csv"), &layout.columns);
+        let solver = st.solver();
+        let mut summary = Summary::start(case, model, solver.kind, strategy, &layout, &out_dir);
+        summary.ranks = st.asm.ranks.size;
+        summary.engine = solver.engine().into();
+        summary.petsc_solver = solver.engine_solver();
+        let mut series = Series::new(&out_dir, &case.name(), model);
+        if let Some(d) = st.asm.distribution().filter(|d| d.partition.parts > 1) {
+            series = series.in_parts(model, d);
+        }
+        Ok(Recorder {
+            probes,
+            opts,
+            folder,
+            out_dir,
+            start,
+            series,
+            layout,
+            history,
+            summary,
+            pb: progress_bar(opts.quiet),
+            every: *case.file.output.every.get_ref() as usize,
+            written: None,
+            fingerprint: (
+                checkpoint::case_fingerprint(case),
+                checkpoint::mesh_fingerprint(&model.mesh),
+            ),
+        })
+    }
+
+    /// The run's output folder.
+    pub(super) fn out_dir(&self) -> &Path {
+        &self.out_dir
+    }
+
+    /// Wall seconds since the run started.
+    pub(super) fn wall(&self) -> f64 {
+        self.start.elapsed().as_secs_f64()
+    }
+
+    /// The probes at the stepper's last accepted state.
+    fn probe_values(&self, st: &Stepper) -> Vec<f64> {
+        self.probes
+            .iter()
+            .map(|p| p.eval(&st.model.mesh, &st.model.dofs, &st.x))
+            .collect()
+    }
+
+    /// The row of `history.csv` of the initial state.
+    pub(super) fn initial_row(
+        &mut self,
+        st: &Stepper,
+        row: &StepRow,
+        reactions: &Reactions,
+    ) -> Result<(), SolveError> {
+        if self.folder.is_some() {
+            let values = self.layout.row(row, &self.probe_values(st), reactions);
+            self.history.row(&values)?;
+        }
+        Ok(())
+    }
+
+    /// What an accepted step leaves: its `.vtu` (when `[output] every` asks), its history row,
+    /// the checkpoint, and its progress line.
+    pub(super) fn step(
+        &mut self,
+        st: &Stepper,
+        accounts: &Accounts,
+        row: &StepRow,
+        rep: &StepReport,
+    ) -> Result<(), SolveError> {
+        let values = self
+            .layout
+            .row(row, &self.probe_values(st), &accounts.totals.reactions);
+        // the step's file first (when [output] every asks for it): a row never announces a
+        // file that is not there yet
+        if st.ctl.accepted.is_multiple_of(self.every) {
+            self.write_step(st)?;
+        }
+        if self.folder.is_some() {
+            self.history.row(&values)?;
+        }
+        self.save_checkpoint(st, &accounts.totals)?;
+        if let Some(folder) = &mut self.folder {
+            // a step taken: the previous run's files go for good
+            folder.settle()?;
+        }
+        self.report_step(st, accounts, row, rep);
+        Ok(())
+    }
+
+    /// The run's state as a checkpoint (on several ranks every rank takes part).
+    pub(super) fn checkpoint(&self, st: &Stepper, totals: &Totals) -> Checkpoint {
+        Checkpoint {
+            version: checkpoint::VERSION,
+            case: self.fingerprint.0.clone(),
+            mesh: self.fingerprint.1.clone(),
+            state: RunState {
+                x: st.x.clone(),
+                point_history: st.asm.whole_history(st.model),
+                clock: st.ctl.clock(),
+                newton: st.newton.tally(),
+                totals: totals.clone(),
+                files: Files {
+                    series: self.series.written().len(),
+                    written: self.written,
+                    history: self.history.mark(),
+                },
+                wall: self.wall(),
+            },
+        }
+    }
+
+    /// `restart.json` of the last accepted state (after its `.vtu` and history row).
+    pub(super) fn save_checkpoint(
+        &mut self,
+        st: &Stepper,
+        totals: &Totals,
+    ) -> Result<(), SolveError> {
+        if self.folder.is_none() {
+            // on several ranks each holds its own cells' history per point, gathered by
+            // every rank before the first rank writes it
+            if !st.asm.ranks.is_serial() {
+                st.asm.whole_history(st.model);
+            }
+            return Ok(());
+        }
+        let cp = self.checkpoint(st, totals);
+        if let Some(folder) = &mut self.folder {
+            folder.record(checkpoint::FILE)?;
+        }
+        write_atomic(&Checkpoint::path(&self.out_dir), cp.to_json().as_bytes())?;
+        Ok(())
+    }
+
+    /// The output folder, handed on (to the run that goes on on a mesh joined again).
+    pub(super) fn take_folder(&mut self) -> Option<RunFolder> {
+        self.folder.take()
+    }
+
+    /// Continue the records of a run resumed from a checkpoint: the files it had written
+    /// (checked against it: one verdict for every rank), and the wall seconds it had run.
+    pub(super) fn resume(
+        &mut self,
+        st: &Stepper,
+        files: Files,
+        wall: f64,
+    ) -> Result<(), SolveError> {
+        let checkpoint = Checkpoint::path(&self.out_dir);
+        let damaged = |file: &Path, what: String| {
+            SolveError::Setup(format!(
+                "cannot restart from {}: {} does not go with it: {what}; run without --restart \
+                 to start over",
+                checkpoint.display(),
+                file.display()
+            ))
+        };
+        let resumed = self
+            .series
+            .resume(files.series)
+            .map_err(|e| damaged(self.series.pvd(), e))
+            .and_then(|_| match self.folder.is_some() {
+                true => (self.history.resume(files.history))
+                    .map_err(|e| damaged(&self.out_dir.join("history.csv"), e)),
+                false => Ok(()),
+            });
+        (st.asm.ranks).agree(resumed, SolveError::to_string, |text| {
+            SolveError::Setup(text.into())
+        })?;
+        self.written = files.written;
+        // wall seconds go on from where the run stopped
+        self.start = Instant::now()
+            .checked_sub(std::time::Duration::from_secs_f64(wall))
+            .unwrap_or(self.start);
+        Ok(())
+    }
+
+    /// The step's line (with `--verbose`, the Newton table too) and the progress bar.
+    fn report_step(&self, st: &Stepper, accounts: &Accounts, row: &StepRow, rep: &StepReport) {
+        let fmt_j = |j: f64| {
+            if j.is_finite() {
+                format!("{j:.3e}")
+            } else {
+                "-".into()
+            }
+        };
+        if self.opts.verbose {
+            let line = format!(
+                "step {:3}  {}  Δλ {:.2e}  its {:2}  {:.2} s  min J solid {} medium {}",
+                row.step,
+                st.clock_text(row.time),
+                row.dlambda,
+                row.iterations,
+                row.wall,
+                fmt_j(row.min_J_solid),
+                fmt_j(row.min_J_medium)
+            );
+            // the Newton table: largest relative field residual per iteration
+            let table: Vec<String> = rep
+                .history
+                .iter()
+                .map(|h| format!("{:.0e}", h.iter().fold(0.0f64, |a, &b| a.max(b))))
+                .collect();
+            self.say(&format!("{line}  [{}]", table.join(" ")));
+        } else if !self.opts.quiet && self.pb.is_hidden() {
+            // no progress bar (not a terminal, e.g. a log file): one short line per step
+            self.say(&format!(
+                "step {:3}  {}  its {:2}  {:.2} s",
+                row.step,
+                st.clock_text(row.time),
+                row.iterations,
+                row.wall
+            ));
+        }
+        self.pb
+            .set_position((row.time / st.ctl.end * 1000.0) as u64);
+        self.pb.set_message(format!(
+            "step {} its {}",
+            st.ctl.accepted, accounts.totals.iterations
+        ));
+    }
+
+    /// The `.vtu` of the stepper's last accepted state, once: on several ranks each rank's
+    /// part, the first rank's `.pvtu` putting them together, and one error for all if any
+    /// rank's failed.
+    pub(super) fn write_step(&mut self, st: &Stepper) -> Result<(), SolveError> {
+        let step = st.ctl.accepted;
+        if self.written == Some(step) {
+            return Ok(());
+        }
+        let mut written = Ok(());
+        if let Some(folder) = &mut self.folder {
+            for file in self.series.files(step) {
+                written = written.and(folder.record(&file));
+            }
+        }
+        let model = st.model;
+        let friction = (model.physics.friction).then(|| friction_cells(model, &st.asm, &st.x));
+        let written = written.and_then(|_| {
+            self.series.write(
+                model,
+                step,
+                &st.asm.reference,
+                &st.x,
+                st.ctl.t,
+                friction.as_deref(),
+            )
+        });
+        let ranks = st.asm.ranks;
+        let agree = |r| {
+            ranks.agree(r, OutputError::to_string, |t| {
+                OutputError::OtherRank(t.into())
+            })
+        };
+        // every rank's part on disk before the first rank's .pvtu names them
+        agree(written)?;
+        agree(self.series.collect())?;
+        self.written = Some(step);
+        Ok(())
+    }
+
+    /// The progress bar cleared, before a run's last lines.
+    pub(super) fn clear_bar(&self) {
+        self.pb.finish_and_clear();
+    }
+
+    /// Fill the summary from the run's state and write `summary.json`.
+    pub(super) fn finish(
+        &mut self,
+        st: &Stepper,
+        totals: &Totals,
+        converged: bool,
+        message: String,
+    ) -> Result<(), SolveError> {
+        // the last state reached always has its file
+        self.write_step(st)?;
+        let (model, ctl, tot, spent) = (st.model, &st.ctl, totals, st.newton.spent);
+        let wall = self.wall();
+        let s = &mut self.summary;
+        s.converged = converged;
+        s.message = message;
+        s.lambda = model.path.lambda(ctl.t);
+        s.time = ctl.t;
+        s.load_steps = ctl.accepted;
+        s.rejected_steps = ctl.rejected;
+        s.newton_iterations = tot.iterations;
+        s.rejected_iterations = spent.iterations - tot.iterations;
+        s.linear_solves = spent.updates;
+        s.factorisations = spent.factorisations;
+        s.wall_seconds = wall;
+        s.assembly_seconds = spent.assembly + tot.t_reactions;
+        s.solver_seconds = spent.solve;
+        s.peak_memory_mb = peak_memory_mb();
+        let ranks = st.asm.ranks;
+        if !ranks.is_serial() {
+            let mut each = vec![0.0; ranks.size];
+            each[ranks.rank] = s.peak_memory_mb.unwrap_or(f64::NAN);
+            ranks.sum_into(&mut each);
+            s.peak_memory_mb_ranks = Some(each);
+        }
+        s.probes = self
+            .probes
+            .iter()
+            .map(|p| (p.name.clone(), p.eval(&model.mesh, &model.dofs, &st.x)))
+            .collect();
+        s.reactions = tot.reactions.clone();
+        (s.min_J_solid, s.min_J_medium) = tot.min_J;
+        s.min_J = match tot.min_J {
+            (Some(a), Some(b)) => a.min(b),
+            (a, b) => a.or(b).unwrap_or(1.0),
+        };
+        s.energy = tot.energy;
+        s.external_work = tot.work;
+        s.krylov_iterations = tot.krylov;
+        s.tangents_skipped = tot.tangents_skipped;
+        s.heat_stored = tot.heat_stored;
+        s.heat_in = tot.heat_in;
+        s.corners_through_medium = tot.corners_through;
+        s.friction_layer_joins = tot.layer_joins;
+        // 0 until the first join
+        s.heat_joined = (self.layout.joined).then(|| tot.heat_joined.unwrap_or(0.0));
+        s.largest_displacement = tot.largest_displacement;
+        if let Some(folder) = &mut self.folder {
+            let json = serde_json::to_string_pretty(&*s).expect("serialisable");
+            write_atomic(&self.out_dir.join("summary.json"), json.as_bytes())?;
+            // results of this run's own, even if it failed: they replace the previous run's
+            folder.settle()?;
+        }
+        Ok(())
+    }
+
+    /// A line above the progress bar, or on stderr when the bar is hidden (not a terminal).
+    pub(super) fn say(&self, line: &str) {
+        if self.pb.is_hidden() {
+            crate::note!("{line}");
+        } else {
+            self.pb.println(line);
+        }
+    }
+}
+
+/// The progress bar over the run's (pseudo-)time, hidden with `--quiet`.
+fn progress_bar(quiet: bool) -> indicatif::ProgressBar {
+    if quiet {
+        return indicatif::ProgressBar::hidden();
+    }
+    let pb = indicatif::ProgressBar::new(1000);
+    pb.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{spinner} λ {bar:30} {percent:>3}%  {msg}  [{elapsed_precise}]",
+        )
+        .expect("valid template"),
+    );
+    pb
+}

@@ -1,0 +1,261 @@
+//! The stepper: from the last accepted state to the next, one attempt at a time. It holds
+//! what a step is solved with (the plan: strategy, assembler, Newton and the linear solvers,
+//! set up before the first assembly), the step controller and the last accepted state; what an
+//! accepted step leaves behind is the recorder's (`recorder.rs`), what it did the accounts'
+//! (`account.rs`).
+
+use super::strategy::{Strategy, choose_linear, choose_strategy, symmetric_tangent};
+use super::{SolveError, SolveOptions};
+use crate::assembly::Assembler;
+use crate::case::Case;
+use crate::dofs::Field;
+use crate::model::{Model, StepContext};
+use crate::parallel::Ranks;
+use crate::solver::engine::{self, PlanError, Planned, Request, System};
+use crate::solver::linear::{LinearKind, LinearSolver};
+use crate::solver::newton::{Newton, Part, StepFailure, StepReport};
+use crate::solver::stepping::Controller;
+
+/// What a run solves with, decided and set up before the first assembly: strategy, the
+/// assembler's pattern and schedule, Newton, and the symbolic analysis of every linear solver.
+pub(super) struct Plan {
+    pub strategy: Strategy,
+    pub asm: Assembler,
+    pub newton: Newton,
+    /// One solver per part: the whole system, or mechanics and heat of a one-way scene.
+    pub solvers: Vec<(Part, LinearSolver)>,
+    /// Why the engine is not the usual one (`engine = "auto"`), if so.
+    pub note: Option<String>,
+}
+
+impl Plan {
+    pub(super) fn new(case: &Case, model: &Model, opts: &SolveOptions) -> Result<Plan, SolveError> {
+        let kind = choose_linear(case.file.solver.linear, &model.physics);
+        if kind == LinearKind::Ldlt && !symmetric_tangent(&model.physics) {
+            let span = case.file.mesh.span();
+            let why = if model.physics.friction {
+                "this scene has friction"
+            } else {
+                "this scene couples mechanics and conduction"
+            };
+            return Err(case
+                .error::<()>(
+                    span,
+                    format!("[solver] linear = \"ldlt\" needs a symmetric tangent, but {why}"),
+                )
+                .unwrap_err()
+                .into());
+        }
+        let strategy = choose_strategy(&case.file.solver, &model.physics);
+        let steps = &case.file.steps;
+        let mut newton = Newton::new(model, steps.tol, steps.max_iter);
+        let systems = Self::systems(model, &newton, strategy);
+        let request = Request {
+            solver: &case.file.solver,
+            whole: kind,
+            idle: opts.idle_threads,
+            span: case.file.mesh.span(),
+            memory_mb: opts.memory_mb,
+        };
+        let Planned {
+            asm,
+            solvers,
+            idle,
+            note,
+        } = engine::plan(model, &request, &systems).map_err(|e| match e {
+            PlanError::Case { span, message } => {
+                SolveError::from(case.error::<()>(span, message).unwrap_err())
+            }
+            PlanError::Setup(message) => SolveError::Setup(message),
+            PlanError::Linear(e) => SolveError::Linear(e),
+        })?;
+        newton.idle = idle;
+        Ok(Plan {
+            strategy,
+            asm,
+            newton,
+            solvers,
+            note,
+        })
+    }
+
+    /// The systems `strategy` solves: the whole system, or mechanics and then heat.
+    fn systems(model: &Model, newton: &Newton, strategy: Strategy) -> Vec<System> {
+        let friction = model.physics.friction;
+        let system = |part: Part, symmetric: bool| System {
+            part,
+            eqs: newton.equations(part),
+            symmetric,
+            symmetric_mechanics: !friction,
+        };
+        match strategy {
+            Strategy::OneWay => vec![system(Part::Mechanics, !friction), system(Part::Heat, true)],
+            _ => vec![system(Part::All, symmetric_tangent(&model.physics))],
+        }
+    }
+}
+
+/// The run's solving state: the plan's assembler, Newton and solvers, the step controller, and
+/// the last accepted state.
+pub(super) struct Stepper<'a> {
+    pub(super) model: &'a Model,
+    pub(super) asm: Assembler,
+    pub(super) newton: Newton,
+    /// One solver per part: the whole system, or mechanics and heat of a one-way scene.
+    solvers: Vec<(Part, LinearSolver)>,
+    pub(super) ctl: Controller,
+    /// The last accepted state.
+    pub(super) x: Vec<f64>,
+    /// The case steps over physical time (`[time]`).
+    transient_clock: bool,
+}
+
+impl<'a> Stepper<'a> {
+    /// A stepper at the model's initial state, with the plan's solvers and the case's step
+    /// controller.
+    pub(super) fn new(case: &Case, model: &'a Model, plan: Plan) -> Stepper<'a> {
+        Stepper {
+            model,
+            asm: plan.asm,
+            newton: plan.newton,
+            solvers: plan.solvers,
+            ctl: controller(case, model),
+            x: model.initial_state(),
+            transient_clock: case.file.time.is_some(),
+        }
+    }
+
+    /// The run's ranks (their decisions to stop are taken together).
+    pub(super) fn ranks(&self) -> Ranks {
+        self.asm.ranks
+    }
+
+    /// The first part's linear solver (the one the summary names).
+    pub(super) fn solver(&self) -> &LinearSolver {
+        &self.solvers[0].1
+    }
+
+    /// Every solver replaced by what `wrap` makes of it (a test's scripted engine).
+    #[cfg(test)]
+    pub(super) fn wrap_solvers(&mut self, wrap: impl Fn(LinearSolver) -> LinearSolver) {
+        let solvers = std::mem::take(&mut self.solvers);
+        self.solvers = solvers.into_iter().map(|(p, s)| (p, wrap(s))).collect();
+    }
+
+    /// Solve the step to pseudo-time `target` from the last accepted state, part by part;
+    /// the trial state is returned with the report.
+    pub(super) fn attempt(&mut self, target: f64) -> Result<(Vec<f64>, StepReport), StepFailure> {
+        let step = self.model.path.step(self.ctl.t, target);
+        let mut trial = self.x.clone();
+        let mut report: Option<StepReport> = None;
+        for (part, solver) in self.solvers.iter_mut() {
+            let rep =
+                self.newton
+                    .step(self.model, &mut self.asm, solver, &mut trial, &step, *part)?;
+            report = Some(match report {
+                None => rep,
+                Some(a) => a.then(rep),
+            });
+        }
+        Ok((trial, report.expect("at least one part")))
+    }
+
+    /// Move to the converged `trial` at `target` in `iterations`: the controller accepts the
+    /// step. Returns the step taken and the state it started from.
+    pub(super) fn advance(
+        &mut self,
+        target: f64,
+        trial: Vec<f64>,
+        iterations: usize,
+    ) -> (StepContext, Vec<f64>) {
+        let x_last = std::mem::replace(&mut self.x, trial);
+        let step = self.model.path.step(self.ctl.t, target);
+        self.ctl.accept(target, iterations);
+        (step, x_last)
+    }
+
+    /// A failed attempt: whatever it wrote into the history goes, and the controller cuts the
+    /// step (`Err`: the step it would take, below the minimum).
+    pub(super) fn cut(&mut self) -> Result<(), f64> {
+        self.asm.restore();
+        self.ctl.reject()
+    }
+
+    /// The mechanics settled at the time reached, over a step of no length, the temperature
+    /// kept (a step of no length has no capacity: what it solved for θ is a steady state, not
+    /// the state); the history stays as it was. Returns the report, or `None` (and the state
+    /// unchanged) where it does not converge.
+    pub(super) fn settle_mechanics(&mut self) -> Option<StepReport> {
+        let settled = self.attempt(self.ctl.t).ok().map(|(x, rep)| {
+            let dofs = &self.model.dofs;
+            for (d, v) in x.into_iter().enumerate() {
+                if dofs.field[d] != Field::Theta {
+                    self.x[d] = v;
+                }
+            }
+            rep
+        });
+        self.asm.restore();
+        settled
+    }
+
+    /// Where the run stands: "λ = 0.500000", or with `[time]` "t = 1.2000e0 (λ = 1.000000)",
+    /// or on a path that λ does not follow "t = 1.077382 (λ = 1.000000)".
+    pub(super) fn position(&self) -> String {
+        let t = self.ctl.t;
+        let lambda = self.model.path.lambda(t);
+        if self.show_t() {
+            format!("t = {} (λ = {lambda:.6})", self.t_text(t))
+        } else {
+            format!("λ = {lambda:.6}")
+        }
+    }
+
+    /// Where a step to `t` ends, for a line: λ, and the physical time with `[time]`.
+    pub(super) fn clock_text(&self, t: f64) -> String {
+        let lambda = self.model.path.lambda(t);
+        if self.show_t() {
+            format!("t {}  λ {lambda:.4}", self.t_text(t))
+        } else {
+            format!("λ {lambda:.4}")
+        }
+    }
+
+    /// Whether where a run stands is said in t as well as λ: over physical time, or over a
+    /// pseudo-time that λ does not follow (a path such as `[0, 1, 1]`, whose second segment
+    /// drags at λ = 1).
+    pub(super) fn show_t(&self) -> bool {
+        self.transient_clock || !self.model.path.lambda_is_time()
+    }
+
+    /// A time for a message: physical time to five significant digits, pseudo-time to six
+    /// decimals (as λ).
+    pub(super) fn t_text(&self, t: f64) -> String {
+        if self.transient_clock {
+            format!("{t:.4e}")
+        } else {
+            format!("{t:.6}")
+        }
+    }
+}
+
+/// The step controller: over physical time with `[time]` (steps of at most `dt`, onto every
+/// listed time), else over pseudo-time as `[steps]` says.
+fn controller(case: &Case, model: &Model) -> Controller {
+    let steps = &case.file.steps;
+    match &case.file.time {
+        Some(time) => {
+            let dt = time.dt_max();
+            Controller::with_vertices(steps, time.vertices(), dt, dt * steps.min, dt)
+        }
+        None => {
+            let mut ctl = Controller::new(steps, model.path.end());
+            if !model.physics.mechanics {
+                // conduction on the undeformed body is linear: one step (per path segment), one
+                // solve
+                ctl.dt = 1.0;
+            }
+            ctl
+        }
+    }
+}
