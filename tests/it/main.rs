@@ -11,6 +11,7 @@ mod analytical;
 mod bad_input;
 mod cli;
 mod distributed;
+mod docs;
 mod effects;
 mod fenicsx;
 mod first_hour;
