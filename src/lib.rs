@@ -7,8 +7,9 @@
 //! constraints, local layout, sparsity) → [`material`] (pure laws) → [`kernel`] (local residual
 //! and tangent) → [`case`] and [`model`] (the discrete problem) → [`assembly`] → [`post`]
 //! (what an accepted state holds: heat, works, slips) → [`solver`] (linear, Newton, stepping) →
-//! [`output`] (VTU, history, probes) → [`driver`] (`tmc solve`) → [`study`] and [`plot`]. Under them all, [`files`]: writing a file under a temporary name, and
-//! [`console`]: lines on the terminal that a closed pipe silences.
+//! [`output`] (VTU, history, probes) → [`driver`] (`tmc solve`) → [`study`] and [`plot`]. Under
+//! them all, [`files`]: writing a file under a temporary name, [`console`]: lines on the
+//! terminal that a closed pipe silences, and [`threads`]: how many threads tmc computes with.
 //! See docs/ARCHITECTURE.md.
 
 #![allow(non_snake_case)]
@@ -33,3 +34,4 @@ pub mod plot;
 pub mod post;
 pub mod solver;
 pub mod study;
+pub mod threads;

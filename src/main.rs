@@ -190,26 +190,14 @@ fn report_failure(e: &dyn std::error::Error) {
 #[cfg(feature = "petsc")]
 const FAILURE_WAIT: std::time::Duration = std::time::Duration::from_secs(60);
 
-/// `RAYON_NUM_THREADS`, if set, a thread count this machine can start (a huge one would hang
-/// while spawning).
-fn check_thread_count() -> Result<(), String> {
-    let Ok(v) = std::env::var("RAYON_NUM_THREADS") else {
-        return Ok(());
-    };
-    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let limit = 16 * cores;
-    match v.trim().parse::<usize>() {
-        Ok(n) if n <= limit => Ok(()),
-        _ => Err(format!(
-            "RAYON_NUM_THREADS={v}: give a number of threads from 1 to {limit} (16 per core), \
-             or 0 for one per core"
-        )),
-    }
-}
-
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    if let Err(e) = check_thread_count() {
+    // the ranks share the CPUs; a thread count this machine cannot start (a huge one would
+    // hang while spawning) is refused before anything starts
+    let ranks = tmc::parallel::launched_size().unwrap_or(1).max(1);
+    let threads_env = std::env::var("RAYON_NUM_THREADS").ok();
+    if let Err(e) = tmc::threads::choose(threads_env.as_deref(), tmc::threads::usable_cpus(), ranks)
+    {
         note!("error: {e}");
         return ExitCode::FAILURE;
     }
@@ -224,7 +212,7 @@ fn main() -> ExitCode {
         }
         return ExitCode::FAILURE;
     }
-    if let Err(e) = start_ranks() {
+    if let Err(e) = start_ranks().and_then(|_| tmc::threads::start(ranks).map(|_| ())) {
         note!("error: {e}");
         return ExitCode::FAILURE;
     }
@@ -249,25 +237,17 @@ fn serial_only(command: &Command) -> Option<&'static str> {
     }
 }
 
-/// Under `mpirun -n N` (N > 1): MPI started, the cores shared among the ranks (unless
-/// `RAYON_NUM_THREADS` says otherwise), progress and errors from rank 0 only.
+/// Under `mpirun -n N` (N > 1): MPI started (the ranks share the CPUs: `tmc::threads`),
+/// progress and errors from rank 0 only.
 fn start_ranks() -> Result<(), String> {
-    let Some(n) = tmc::parallel::launched_size().filter(|&n| n > 1) else {
+    let Some(_n) = tmc::parallel::launched_size().filter(|&n| n > 1) else {
         return Ok(());
     };
     #[cfg(not(feature = "petsc"))]
-    return Err(format!("mpirun -n {n}: {}", tmc::parallel::NOT_BUILT));
+    return Err(format!("mpirun -n {_n}: {}", tmc::parallel::NOT_BUILT));
     #[cfg(feature = "petsc")]
     {
         let ranks = tmc::parallel::petsc::start_mpi();
-        if std::env::var_os("RAYON_NUM_THREADS").is_none() {
-            let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
-            let threads = (cores / n).max(1);
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build_global()
-                .map_err(|e| e.to_string())?;
-        }
         if !ranks.is_root() {
             SILENT.store(true, std::sync::atomic::Ordering::Relaxed);
         }
@@ -426,6 +406,10 @@ fn check_command(
                 r.unknowns.iter().map(|(f, n)| format!("{n} {f}")).collect();
             say!("unknowns: {} ({} free)", unknowns.join(", "), r.free);
             say!("linear solver: {}", r.linear.join("; "));
+            if let Some(t) = tmc::threads::chosen() {
+                let running = rayon::current_num_threads();
+                say!("threads: {running} per process ({})", t.why);
+            }
             if let Some(why) = &r.engine_note {
                 say!("{why}");
             }

@@ -959,3 +959,49 @@ fn without_petsc_the_engine_and_mpirun_say_how_to_build_it() {
         "{report}"
     );
 }
+
+/// `tmc check CASE` under `taskset -c CPUS` (on the first CPUs), with `vars` set; its output.
+fn check_on_cpus(cpus: &str, vars: &[(&str, &str)]) -> String {
+    let out = Command::new("taskset")
+        .args([
+            "-c",
+            cpus,
+            env!("CARGO_BIN_EXE_tmc"),
+            "check",
+            "cases/block.toml",
+        ])
+        .env_remove("RAYON_NUM_THREADS")
+        .envs(vars.iter().copied())
+        .current_dir(root())
+        .output()
+        .expect("taskset (util-linux) runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+#[test]
+fn the_thread_count_comes_from_the_cpus_a_process_may_use_and_is_passed_to_rayon_as_read() {
+    // one CPU allowed: one thread, whatever the machine has
+    let one = check_on_cpus("0", &[]);
+    assert!(
+        one.contains("threads: 1 per process (one per CPU this process may use"),
+        "{one}"
+    );
+    // a count with spaces around it is that count, and rayon runs it (rayon alone would fall
+    // back to every CPU)
+    let three = check_on_cpus("0", &[("RAYON_NUM_THREADS", " 3 ")]);
+    assert!(
+        three.contains("threads: 3 per process (RAYON_NUM_THREADS)"),
+        "{three}"
+    );
+    // 0: the default
+    let zero = check_on_cpus("0", &[("RAYON_NUM_THREADS", "0")]);
+    assert!(
+        zero.contains("threads: 1 per process (one per CPU"),
+        "{zero}"
+    );
+}
