@@ -82,8 +82,9 @@ enum Command {
         #[arg(long, value_name = "MB", env = "TMC_MEMORY_MB", value_parser = parse_memory)]
         memory: Option<f64>,
     },
-    /// Check a case as `solve` would up to its first assembly (mesh, groups, physics, strategy,
-    /// unknowns, memory) and report; writes nothing where results go.
+    /// Check a case as `solve` would up to its first step (mesh, groups, physics, strategy,
+    /// unknowns, memory, threads, the initial state) and report; writes nothing where results
+    /// go.
     Check {
         /// The case (.toml).
         case: PathBuf,
@@ -373,7 +374,7 @@ fn print_mesh(mesh: &tmc::mesh::Mesh) {
     }
 }
 
-/// `tmc check`: the report of everything before the first assembly.
+/// `tmc check`: the report of everything before the first step.
 fn check_command(
     case: &std::path::Path,
     sets: Vec<(String, String)>,

@@ -1,6 +1,7 @@
-//! `tmc check`: everything `tmc solve` does before its first assembly (case, mesh, groups,
-//! physics, strategy, unknowns, the symbolic analysis of the linear solvers), then a report;
-//! nothing is written where results go.
+//! `tmc check`: everything `tmc solve` does before its first step (case, mesh, groups,
+//! physics, what a run on several ranks refuses, strategy, unknowns, the symbolic analysis of
+//! the linear solvers, the initial state assembled), then a report; nothing is written where
+//! results go.
 
 use super::stepper::Plan;
 use super::strategy::describe;
@@ -9,6 +10,7 @@ use crate::case::Case;
 use crate::dofs::Field;
 use crate::mesh::Mesh;
 use crate::output::werr;
+use crate::parallel::Ranks;
 use crate::solver::engine::run_memory_mb;
 use std::path::Path;
 
@@ -93,7 +95,14 @@ pub fn check(case_path: &Path, opts: &SolveOptions) -> Result<CheckReport, Solve
     if let Some(layer) = crate::model::rejoin::Layer::find(&model)? {
         model.warnings.push(layer.describe());
     }
-    let plan = Plan::new(&case, &model, opts)?;
+    super::refuse_on_ranks(&model, Ranks::world())?;
+    let mut plan = Plan::new(&case, &model, opts)?;
+    // the state a solve starts from, assembled as its first step records it: what it refuses
+    // there (a radiating face at θ ≤ 0) is refused here
+    let x0 = model.initial_state();
+    (plan.asm)
+        .assemble(&model, &x0, &model.path.step(0.0, 0.0), false, None)
+        .map_err(|e| SolveError::Setup(format!("the initial state is invalid: {e}")))?;
     let factor_entries = plan
         .solvers
         .iter()

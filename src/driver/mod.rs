@@ -236,6 +236,19 @@ pub fn run(case_path: &Path, opts: &SolveOptions) -> Result<Summary, SolveError>
     solve_model(&case, model, &probes, folder, opts, start, None)
 }
 
+/// What a run on several ranks refuses before it starts (`tmc check` refuses it too): a
+/// friction layer that is reconnected runs on one process.
+pub(crate) fn refuse_on_ranks(model: &Model, ranks: Ranks) -> Result<(), SolveError> {
+    match model.reconnects() && !ranks.is_serial() {
+        true => Err(SolveError::Setup(format!(
+            "mpirun -n {}: a friction layer that is reconnected (`friction.reconnect`) runs \
+             on one process; run it without mpirun",
+            ranks.size
+        ))),
+        false => Ok(()),
+    }
+}
+
 /// The mesh meshed for this run, if any, moved to `mesh.msh` in the run's folder: errors so far
 /// named the .geo; from now on the mesh is the file written.
 fn commit_mesh(
@@ -271,14 +284,7 @@ fn run_ranks(
         let setup = (|| -> Result<_, SolveError> {
             let mut folder = RunFolder::open(&out_dir)?;
             // before anything of the folder's is replaced
-            let serial_only = |model: &Model| match model.reconnects() {
-                true => Err(SolveError::Setup(format!(
-                    "mpirun -n {}: a friction layer that is reconnected \
-                     (`friction.reconnect`) runs on one process; run it without mpirun",
-                    ranks.size
-                ))),
-                false => Ok(()),
-            };
+            let serial_only = |model: &Model| refuse_on_ranks(model, ranks);
             if opts.restart {
                 let (model, probes, cp) = restart_setup(case, &mut folder, opts)?;
                 serial_only(&model)?;

@@ -21,8 +21,11 @@ fn fails_with(o: &Output, words: &[&str]) -> String {
 }
 
 /// `case` solved into `out` is refused with `words` in the message, none of serde's own words
-/// for a shape (its type names), and nothing written.
+/// for a shape (its type names), and nothing written; `tmc check` refuses it with the same
+/// words (check is the promise that a solve starts).
 fn refused(case: &Path, out: &Path, tag: &str, words: &[&str]) {
+    let checked = tmc(&["check", case.to_str().unwrap()]);
+    fails_with(&checked, words);
     let e = fails_with(&solve(case, out), words);
     assert!(
         !e.contains("untagged") && !e.contains("struct"),

@@ -964,4 +964,9 @@ fn a_reconnected_friction_layer_is_refused_on_several_ranks_with_the_folder_kept
         std::fs::read_to_string(out.join("mine.txt")).unwrap(),
         "kept"
     );
+    // and `tmc check` under mpirun refuses it as the solve does
+    let c = common::mpirun_tmc(2, &["check".as_ref(), case.as_os_str()]);
+    let e = stderr(&c);
+    assert!(!c.status.success(), "{e}");
+    assert_eq!(e.matches("runs on one process").count(), 1, "{e}");
 }
