@@ -99,71 +99,7 @@ impl Strip {
                 top.len()
             ));
         }
-        let centre = |nodes: &[usize]| point_text(&centroid(coords, nodes), mesh.dim);
-        let index = |row: &[usize], n: usize| row.iter().position(|&m| m == n);
-        let mut quads = Vec::new();
-        let (mut triangles, mut counter_clockwise) = (Vec::new(), true);
-        for &b in blocks {
-            let blk = &mesh.cells[b];
-            for c in (0..blk.n_cells()).filter(|_| blk.kind == CellKind::Tri3) {
-                let nodes = blk.cell(c);
-                let Some(edge) = triangle_edge(&bottom, &top, nodes) else {
-                    return Err(format!(
-                        "joins a layer one cell across; its triangle {c} (centre {}) does \
-                         not have an edge on one row and its third corner on the other",
-                        centre(nodes)
-                    ));
-                };
-                counter_clockwise = signed_area(coords, nodes) > 0.0;
-                triangles.push(Triangle {
-                    block: b,
-                    cell: c,
-                    edge,
-                });
-            }
-            for c in (0..blk.n_cells()).filter(|_| blk.kind == CellKind::Quad4) {
-                let rows: Vec<(bool, usize)> = (blk.cell(c).iter())
-                    .map(|&n| match index(&bottom, n) {
-                        Some(i) => (false, i),
-                        None => (true, index(&top, n).expect("a node of the layer")),
-                    })
-                    .collect();
-                let lowest = rows.iter().filter(|r| !r.0).map(|r| r.1).min();
-                let spans = |on_top: bool| {
-                    let mut at: Vec<usize> = (rows.iter().filter(|r| r.0 == on_top))
-                        .map(|r| r.1)
-                        .collect();
-                    at.sort_unstable();
-                    at.len() == 2 && at[1] == at[0] + 1
-                };
-                let (Some(first), true, true) = (lowest, spans(false), spans(true)) else {
-                    return Err(format!(
-                        "joins a layer one cell across; its cell {c} (centre {}) does not \
-                         span it from one row to the next",
-                        centre(blk.cell(c))
-                    ));
-                };
-                let mut corners = [(false, 0); 4];
-                for (k, &(on_top, i)) in rows.iter().enumerate() {
-                    match i.checked_sub(first).filter(|&o| o <= 1) {
-                        Some(o) => corners[k] = (on_top, o),
-                        None => {
-                            return Err(format!(
-                                "joins cells that stand upright between the rows; cell {c} \
-                                 (centre {}) leans over more than itself",
-                                centre(blk.cell(c))
-                            ));
-                        }
-                    }
-                }
-                quads.push(Quad {
-                    block: b,
-                    cell: c,
-                    first,
-                    corners,
-                });
-            }
-        }
+        let (quads, triangles, counter_clockwise) = cells_of(mesh, blocks, &bottom, &top)?;
         let width = (at(bottom[bottom.len() - 1]) - at(bottom[0])) / (bottom.len() - 1) as f64;
         Ok(Strip {
             bottom,
@@ -289,6 +225,85 @@ impl Strip {
             });
         }
     }
+}
+
+/// The strip's cells in the mesh's cell blocks `blocks`, between the rows `bottom` and `top`:
+/// its quadrilaterals, its triangles and whether they turn counter-clockwise; the reason in
+/// words where a cell does not span the strip from one row to the next.
+#[allow(clippy::type_complexity)]
+fn cells_of(
+    mesh: &Mesh,
+    blocks: &[usize],
+    bottom: &[usize],
+    top: &[usize],
+) -> Result<(Vec<Quad>, Vec<Triangle>, bool), String> {
+    let coords = &mesh.coords;
+    let centre = |nodes: &[usize]| point_text(&centroid(coords, nodes), mesh.dim);
+    let index = |row: &[usize], n: usize| row.iter().position(|&m| m == n);
+    let mut quads = Vec::new();
+    let (mut triangles, mut counter_clockwise) = (Vec::new(), true);
+    for &b in blocks {
+        let blk = &mesh.cells[b];
+        for c in (0..blk.n_cells()).filter(|_| blk.kind == CellKind::Tri3) {
+            let nodes = blk.cell(c);
+            let Some(edge) = triangle_edge(bottom, top, nodes) else {
+                return Err(format!(
+                    "joins a layer one cell across; its triangle {c} (centre {}) does \
+                         not have an edge on one row and its third corner on the other",
+                    centre(nodes)
+                ));
+            };
+            counter_clockwise = signed_area(coords, nodes) > 0.0;
+            triangles.push(Triangle {
+                block: b,
+                cell: c,
+                edge,
+            });
+        }
+        for c in (0..blk.n_cells()).filter(|_| blk.kind == CellKind::Quad4) {
+            let rows: Vec<(bool, usize)> = (blk.cell(c).iter())
+                .map(|&n| match index(bottom, n) {
+                    Some(i) => (false, i),
+                    None => (true, index(top, n).expect("a node of the layer")),
+                })
+                .collect();
+            let lowest = rows.iter().filter(|r| !r.0).map(|r| r.1).min();
+            let spans = |on_top: bool| {
+                let mut at: Vec<usize> = (rows.iter().filter(|r| r.0 == on_top))
+                    .map(|r| r.1)
+                    .collect();
+                at.sort_unstable();
+                at.len() == 2 && at[1] == at[0] + 1
+            };
+            let (Some(first), true, true) = (lowest, spans(false), spans(true)) else {
+                return Err(format!(
+                    "joins a layer one cell across; its cell {c} (centre {}) does not \
+                         span it from one row to the next",
+                    centre(blk.cell(c))
+                ));
+            };
+            let mut corners = [(false, 0); 4];
+            for (k, &(on_top, i)) in rows.iter().enumerate() {
+                match i.checked_sub(first).filter(|&o| o <= 1) {
+                    Some(o) => corners[k] = (on_top, o),
+                    None => {
+                        return Err(format!(
+                            "joins cells that stand upright between the rows; cell {c} \
+                                 (centre {}) leans over more than itself",
+                            centre(blk.cell(c))
+                        ));
+                    }
+                }
+            }
+            quads.push(Quad {
+                block: b,
+                cell: c,
+                first,
+                corners,
+            });
+        }
+    }
+    Ok((quads, triangles, counter_clockwise))
 }
 
 /// The edge on a row of the triangle `nodes` whose third corner is on the other row, if it
