@@ -823,3 +823,113 @@ impl StepState {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    //! Newton on a small system of its own: the block scene on a coarse mesh (8 × 4 solid
+    //! cells over 2 of medium, mechanics, heat and p), one step from the undeformed state.
+
+    use super::*;
+    use crate::case::Case;
+    use crate::dofs::equation_structure;
+    use crate::mesh::gmsh::{MeshOptions, mesh_geo};
+    use crate::solver::linear::LinearKind;
+    use std::path::Path;
+
+    /// The coarse block's model, its `.geo` meshed into `target/unit-scratch/newton/NAME.msh`
+    /// (a file per test: they run at once).
+    fn block(name: &str) -> Model {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+        let case = Case::read(&root.join("cases/block.toml")).unwrap();
+        let out = root.join(format!("target/unit-scratch/newton/{name}.msh"));
+        std::fs::create_dir_all(out.parent().unwrap()).unwrap();
+        let opts = MeshOptions {
+            order: 1,
+            incomplete: false,
+            set_numbers: vec![("n".into(), 8.0), ("m".into(), 4.0), ("l".into(), 2.0)],
+            verbose: false,
+        };
+        let mesh = mesh_geo(&case.mesh_path(), &out, &opts).unwrap().mesh;
+        crate::model::validate::validate(&case, &mesh).unwrap();
+        crate::model::build(&case, mesh).unwrap()
+    }
+
+    /// One step from the initial state to pseudo-time `t` with `max_iter` iterations.
+    fn step(model: &Model, t: f64, max_iter: usize) -> Result<StepReport, StepFailure> {
+        let mut asm = Assembler::new(model);
+        let structure = equation_structure(&model.dofs, &model.cons);
+        let mut solver = LinearSolver::new(LinearKind::Lu, &asm.pattern, &structure).unwrap();
+        let mut newton = Newton::new(model, 1e-10, max_iter);
+        let mut x = model.initial_state();
+        let context = model.path.step(0.0, t);
+        newton.step(model, &mut asm, &mut solver, &mut x, &context, Part::All)
+    }
+
+    /// The worst field's relative residual at each iteration.
+    fn worst_history(rep: &StepReport) -> Vec<f64> {
+        rep.history.iter().map(worst).collect()
+    }
+
+    #[test]
+    fn newton_converges_quadratically_on_a_small_step() {
+        let model = block("quadratic");
+        let rep = step(&model, 0.05, 30).unwrap();
+        let r = worst_history(&rep);
+        assert!(r.last().unwrap() <= &1e-10, "{r:?}");
+        // in the asymptotic range each residual is about the square of the one before
+        let tail: Vec<(f64, f64)> = (r.windows(2))
+            .map(|w| (w[0], w[1]))
+            .filter(|&(a, b)| a < 1e-2 && b > 1e-15)
+            .collect();
+        assert!(
+            !tail.is_empty(),
+            "no iteration in the quadratic range: {r:?}"
+        );
+        for (a, b) in tail {
+            assert!(b <= 10.0 * a * a, "{b:.2e} after {a:.2e}: {r:?}");
+        }
+    }
+
+    #[test]
+    fn a_step_that_cannot_converge_in_its_iterations_says_where_its_residual_is_largest() {
+        let model = block("failure");
+        let Err(failure) = step(&model, 1.0, 1) else {
+            panic!("one iteration cannot close the medium");
+        };
+        let StepFailure::NotConverged {
+            iterations,
+            met,
+            largest,
+            ..
+        } = &failure
+        else {
+            panic!("{failure}");
+        };
+        assert_eq!((*iterations, *met), (1, false));
+        let largest = largest
+            .as_ref()
+            .expect("the node where the residual is largest");
+        assert_eq!(largest.at.len(), 2);
+        let text = failure.to_string();
+        assert!(text.starts_with("no convergence in 1 iterations"), "{text}");
+        // a failure a smaller step may mend
+        assert!(failure.recoverable());
+    }
+
+    #[test]
+    fn an_update_that_would_invert_the_medium_is_damped_and_the_step_still_converges() {
+        let model = block("damped");
+        // the whole press at once: full updates overshoot where the medium closes
+        match step(&model, 1.0, 60) {
+            Ok(rep) => {
+                assert!(
+                    rep.halvings > 0,
+                    "no update was cut: {:?}",
+                    worst_history(&rep)
+                );
+                assert!(worst_history(&rep).last().unwrap() <= &1e-10);
+            }
+            Err(failure) => panic!("{failure}"),
+        }
+    }
+}
