@@ -196,12 +196,13 @@ fn main() -> ExitCode {
     // the ranks share the CPUs; a thread count this machine cannot start (a huge one would
     // hang while spawning) is refused before anything starts
     let ranks = tmc::parallel::launched_size().unwrap_or(1).max(1);
-    let threads_env = std::env::var("RAYON_NUM_THREADS").ok();
-    if let Err(e) = tmc::threads::choose(threads_env.as_deref(), tmc::threads::usable_cpus(), ranks)
-    {
-        note!("error: {e}");
-        return ExitCode::FAILURE;
-    }
+    let threads = match tmc::threads::decide(ranks) {
+        Ok(threads) => threads,
+        Err(e) => {
+            note!("error: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
     if let Some(what) = serial_only(&cli.command) {
         // no MPI to start: every rank ends here, rank 0 says why
         if tmc::parallel::launched_rank().unwrap_or(0) == 0 {
@@ -213,7 +214,7 @@ fn main() -> ExitCode {
         }
         return ExitCode::FAILURE;
     }
-    if let Err(e) = start_ranks().and_then(|_| tmc::threads::start(ranks).map(|_| ())) {
+    if let Err(e) = start_ranks().and_then(|_| tmc::threads::start(threads).map(|_| ())) {
         note!("error: {e}");
         return ExitCode::FAILURE;
     }

@@ -49,11 +49,15 @@ pub fn choose(env: Option<&str>, cpus: usize, ranks: usize) -> Result<Threads, S
 
 static CHOSEN: OnceLock<Threads> = OnceLock::new();
 
-/// Decide the thread count for a run over `ranks` ranks and build rayon's global pool with
-/// it. Once per process.
-pub fn start(ranks: usize) -> Result<&'static Threads, String> {
+/// The thread count for a run over `ranks` ranks, from this process's `RAYON_NUM_THREADS`
+/// and usable CPUs.
+pub fn decide(ranks: usize) -> Result<Threads, String> {
     let env = std::env::var("RAYON_NUM_THREADS").ok();
-    let threads = choose(env.as_deref(), usable_cpus(), ranks)?;
+    choose(env.as_deref(), usable_cpus(), ranks)
+}
+
+/// Build rayon's global pool with the count `threads` ([`decide`]). Once per process.
+pub fn start(threads: Threads) -> Result<&'static Threads, String> {
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads.count)
         .build_global()

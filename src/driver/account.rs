@@ -62,11 +62,8 @@ impl Accounts {
     }
 
     /// The forces on the displacement dofs, f_int = r + f_ext, from the stepper's last
-    /// assembly at `t`.
-    pub(super) fn forces(&self, st: &Stepper, t: f64) -> Vec<f64> {
-        let model = st.model;
-        let mut fe = vec![0.0; model.dofs.n_dofs];
-        model.f_ext(model.path.lambda(t), &mut fe);
+    /// assembly, whose external loads were `fe`.
+    pub(super) fn forces(&self, st: &Stepper, fe: &[f64]) -> Vec<f64> {
         self.u_dofs
             .iter()
             .map(|&d| st.asm.r_full[d] + fe[d])
@@ -99,10 +96,12 @@ impl Accounts {
         self.totals.reactions = group_flows(model, &st.asm.r_full, &convected, step.t);
         // the history of the converged state (just assembled) is what the next step starts from
         st.asm.commit();
+        let mut fe = vec![0.0; model.dofs.n_dofs];
+        model.f_ext(step.lambda, &mut fe);
         if model.physics.transient {
-            self.heat(st, step, convected.iter().sum())?;
+            self.heat(st, step, &fe, convected.iter().sum())?;
         }
-        let f_now = self.forces(st, step.t);
+        let f_now = self.forces(st, &fe);
         let tot = &mut self.totals;
         tot.work += self
             .u_dofs
@@ -118,13 +117,17 @@ impl Accounts {
 
     /// Heat balance of a transient scene after the accepted `step` (of length Δt): the heat
     /// stored, and the heat supplied over the run, Σ Δt × (rate at the step's end) as backward
-    /// Euler takes it. The rate is Σ over θ dofs of the reactions and the external heat, plus
-    /// the heat `convected` in (negative: out): at convergence, exactly the rate of the stored
-    /// heat.
-    fn heat(&mut self, st: &Stepper, step: &StepContext, convected: f64) -> Result<(), SolveError> {
+    /// Euler takes it. The rate is Σ over θ dofs of the reactions and the external heat `fe`,
+    /// plus the heat `convected` in (negative: out): at convergence, exactly the rate of the
+    /// stored heat.
+    fn heat(
+        &mut self,
+        st: &Stepper,
+        step: &StepContext,
+        fe: &[f64],
+        convected: f64,
+    ) -> Result<(), SolveError> {
         let model = st.model;
-        let mut fe = vec![0.0; model.dofs.n_dofs];
-        model.f_ext(step.lambda, &mut fe);
         let mut rate = 0.0;
         for &d in &model.dofs.theta {
             let d = d as usize;

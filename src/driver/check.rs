@@ -3,7 +3,7 @@
 //! the linear solvers, the initial state assembled), then a report; nothing is written where
 //! results go.
 
-use super::stepper::Plan;
+use super::stepper::{Plan, assemble_initial};
 use super::strategy::describe;
 use super::{SolveError, SolveOptions, checked_model};
 use crate::case::Case;
@@ -97,12 +97,8 @@ pub fn check(case_path: &Path, opts: &SolveOptions) -> Result<CheckReport, Solve
     }
     super::refuse_on_ranks(&model, Ranks::world())?;
     let mut plan = Plan::new(&case, &model, opts)?;
-    // the state a solve starts from, assembled as its first step records it: what it refuses
-    // there (a radiating face at θ ≤ 0) is refused here
-    let x0 = model.initial_state();
-    (plan.asm)
-        .assemble(&model, &x0, &model.path.step(0.0, 0.0), false, None)
-        .map_err(|e| SolveError::Setup(format!("the initial state is invalid: {e}")))?;
+    // the state a solve starts from, assembled as its first step records it
+    assemble_initial(&mut plan.asm, &model, &model.initial_state())?;
     let factor_entries = plan
         .solvers
         .iter()

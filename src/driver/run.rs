@@ -8,7 +8,7 @@ use super::account::{Accounts, joined_heat, point_totals};
 use super::checkpoint::Checkpoint;
 use super::recorder::Recorder;
 use super::records::{StepRow, Summary, group_flows};
-use super::stepper::{Plan, Stepper};
+use super::stepper::{Plan, Stepper, assemble_initial};
 use super::strategy::describe;
 use super::{SolveError, SolveOptions};
 use crate::case::Case;
@@ -31,8 +31,6 @@ pub(super) struct Run<'a> {
     rec: Recorder<'a>,
     /// Non-zero values held at full value from the start, as `uy = -0.2 on "top"`.
     held_in_full: Vec<String>,
-    /// The case steps over physical time (`[time]`).
-    transient_clock: bool,
 }
 
 impl<'a> Run<'a> {
@@ -69,7 +67,6 @@ impl<'a> Run<'a> {
                 .iter()
                 .flat_map(|bc| bc.held_in_full())
                 .collect(),
-            transient_clock: case.file.time.is_some(),
         })
     }
 
@@ -80,9 +77,7 @@ impl<'a> Run<'a> {
         self.rec.write_step(&self.st)?;
         let st = &mut self.st;
         let model = st.model;
-        let stats0 = (st.asm)
-            .assemble(model, &st.x, &model.path.step(0.0, 0.0), false, None)
-            .map_err(|e| SolveError::Setup(format!("the initial state is invalid: {e}")))?;
+        let stats0 = assemble_initial(&mut st.asm, model, &st.x)?;
         // the state at λ = 0 (settled under what is held in full) is the first accepted one:
         // the points' history starts there (inertia: displaced, at rest)
         st.asm.commit();
@@ -100,7 +95,9 @@ impl<'a> Run<'a> {
         };
         self.rec.initial_row(&self.st, &row, &r0)?;
         self.accounts.totals.reactions = r0;
-        self.accounts.totals.f_last = self.accounts.forces(&self.st, 0.0);
+        let mut fe = vec![0.0; model.dofs.n_dofs];
+        model.f_ext(model.path.lambda(0.0), &mut fe);
+        self.accounts.totals.f_last = self.accounts.forces(&self.st, &fe);
         self.rec.save_checkpoint(&self.st, &self.accounts.totals)
     }
 
@@ -109,7 +106,7 @@ impl<'a> Run<'a> {
     /// that heat, not 0); a transient scene starts from its initial condition. Returns the
     /// Newton iterations spent (0 when there is nothing to settle).
     fn settle_initial(&mut self) -> Result<usize, SolveError> {
-        if self.transient_clock || self.held_in_full.is_empty() {
+        if self.st.transient_clock || self.held_in_full.is_empty() {
             return Ok(0);
         }
         match self.st.attempt(0.0) {

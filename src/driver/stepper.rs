@@ -6,7 +6,7 @@
 
 use super::strategy::{Strategy, choose_linear, choose_strategy, symmetric_tangent};
 use super::{SolveError, SolveOptions};
-use crate::assembly::Assembler;
+use crate::assembly::{Assembler, AssemblyStats};
 use crate::case::Case;
 use crate::dofs::Field;
 use crate::model::{Model, StepContext};
@@ -107,7 +107,7 @@ pub(super) struct Stepper<'a> {
     /// The last accepted state.
     pub(super) x: Vec<f64>,
     /// The case steps over physical time (`[time]`).
-    transient_clock: bool,
+    pub(super) transient_clock: bool,
 }
 
 impl<'a> Stepper<'a> {
@@ -237,6 +237,18 @@ impl<'a> Stepper<'a> {
             format!("{t:.6}")
         }
     }
+}
+
+/// The residual at the state `x` at λ = 0, as a run's first step records it (and `tmc check`
+/// assembles it): what makes it invalid (a radiating face at θ ≤ 0) ends the run before it
+/// starts.
+pub(super) fn assemble_initial(
+    asm: &mut Assembler,
+    model: &Model,
+    x: &[f64],
+) -> Result<AssemblyStats, SolveError> {
+    (asm.assemble(model, x, &model.path.step(0.0, 0.0), false, None))
+        .map_err(|e| SolveError::Setup(format!("the initial state is invalid: {e}")))
 }
 
 /// The step controller: over physical time with `[time]` (steps of at most `dt`, onto every
