@@ -58,9 +58,7 @@ impl Strip {
     /// its bottom row the nodes lowest along `normal`; the reason in words where they are not
     /// one ("joins a layer one cell across; …").
     pub fn find(mesh: &Mesh, blocks: &[usize], normal: Vector3<f64>) -> Result<Strip, String> {
-        if mesh.dim != 2 {
-            return Err("joins a 2D layer's cells again; this mesh is 3D".into());
-        }
+        Self::planar(mesh)?;
         if let Some(&b) = (blocks.iter())
             .find(|&&b| !matches!(mesh.cells[b].kind, CellKind::Quad4 | CellKind::Tri3))
         {
@@ -111,6 +109,14 @@ impl Strip {
             along,
             width,
         })
+    }
+
+    /// Whether `mesh` can hold a strip (2D); the reason in words where not.
+    pub fn planar(mesh: &Mesh) -> Result<(), String> {
+        match mesh.dim {
+            2 => Ok(()),
+            _ => Err("joins a 2D layer's cells again; this mesh is 3D".into()),
+        }
     }
 
     /// Nodes per row.

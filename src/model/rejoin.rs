@@ -64,8 +64,8 @@ impl Layer {
                 why,
             })
         };
-        if model.mesh.dim != 2 {
-            return refuse("joins a 2D layer's cells again; this mesh is 3D".into());
+        if let Err(why) = Strip::planar(&model.mesh) {
+            return refuse(why);
         }
         let SlipNormals::Given(normal) = first.normals else {
             return refuse("needs the layer's `normal` given".into());

@@ -1,27 +1,14 @@
 //! The maintainer's map against the tree: docs/ARCHITECTURE.md names every source file, in the
 //! row of its top folder under `src/` (a file at the top of `src/`, anywhere in the map).
 
-use std::path::{Path, PathBuf};
-
-/// Every `.rs` file under `dir`, as paths relative to `root`.
-fn sources(root: &Path, dir: &Path, out: &mut Vec<PathBuf>) {
-    for entry in std::fs::read_dir(dir).unwrap() {
-        let path = entry.unwrap().path();
-        if path.is_dir() {
-            sources(root, &path, out);
-        } else if path.extension().is_some_and(|e| e == "rs") {
-            out.push(path.strip_prefix(root).unwrap().to_owned());
-        }
-    }
-}
+use crate::common::source_files;
+use std::path::Path;
 
 #[test]
 fn the_architecture_names_every_source_file_in_its_folders_row() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let map = std::fs::read_to_string(root.join("docs/ARCHITECTURE.md")).unwrap();
-    let src = root.join("src");
-    let mut files = Vec::new();
-    sources(&src, &src, &mut files);
+    let files = source_files();
     assert!(files.len() > 50, "{} source files", files.len());
     let row = |folder: &str| {
         let head = format!("| `{folder}/` |");

@@ -475,18 +475,9 @@ fn the_architecture_recipes_name_what_exists() {
         .nth(1)
         .and_then(|r| r.split("\n## ").next())
         .expect("a Recipes section");
-    let mut sources = String::new();
-    let mut stack = vec![root().join("src")];
-    while let Some(dir) = stack.pop() {
-        for e in std::fs::read_dir(dir).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                stack.push(p);
-            } else if p.extension().is_some_and(|x| x == "rs") {
-                sources += &std::fs::read_to_string(&p).unwrap();
-            }
-        }
-    }
+    let sources: String = (common::source_files().iter())
+        .map(|f| std::fs::read_to_string(root().join("src").join(f)).unwrap())
+        .collect();
     let (mut files, mut names) = (0, 0);
     for token in recipes.split('`').skip(1).step_by(2) {
         if token.contains('<') || token.contains(' ') {

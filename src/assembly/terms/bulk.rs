@@ -1,9 +1,8 @@
 //! A region's cells: mechanics, conduction and the medium's regularization
 //! (`kernel/bulk.rs`, four cells at a time in `kernel/lanes.rs`).
 
-use super::{Cells, Integrand, SlabView, finite};
-use crate::assembly::{AssemblyError, AssemblyStats, cell_error_in};
-use crate::mesh::centroid;
+use super::{Cells, Integrand, SlabView, cell_failure, finite};
+use crate::assembly::{AssemblyError, AssemblyStats};
 use crate::model::{BlockInfo, StepContext};
 
 impl Integrand for BlockInfo {
@@ -14,12 +13,9 @@ impl Integrand for BlockInfo {
         these: &[u32],
         _step: &StepContext,
     ) -> Result<AssemblyStats, AssemblyError> {
-        let (model, blk) = (cells.model, cells.blk);
-        let res = crate::with_cell!(blk.kind, |N, D, E| cells.run::<N, D, E>(&self.mat, these));
-        let (min_j, energy, ok) = res.map_err(|(e, cell)| {
-            let at = centroid(&model.mesh.coords, blk.cell(cell));
-            cell_error_in(&model.regions[self.region].0, e, cell, at)
-        })?;
+        let res = crate::with_cell!(cells.blk.kind, |N, D, E| cells
+            .run::<N, D, E>(&self.mat, these));
+        let (min_j, energy, ok) = res.map_err(|f| cell_failure(&cells, self.region, f))?;
         finite(ok)?;
         let mut stats = AssemblyStats::EMPTY;
         if self.mat.medium {

@@ -1,6 +1,6 @@
 //! Heat stored, ρc (θ − θₙ)/Δt, with θₙ per point as history (`kernel/capacity.rs`).
 
-use super::{Cells, Integrand, Slab, SlabView, geometric, points_per_cell};
+use super::{Cells, Integrand, Slab, SlabView, geometric, kept, points_per_cell};
 use crate::assembly::{AssemblyError, AssemblyStats, References, reference};
 use crate::kernel::capacity;
 use crate::model::{CapacityBlock, Model, StepContext};
@@ -41,7 +41,7 @@ impl Integrand for CapacityBlock {
         these: &[u32],
         step: &StepContext,
     ) -> Result<AssemblyStats, AssemblyError> {
-        let slab = history.expect("a capacity term keeps its history");
+        let slab = kept(history);
         let (lay, act, c) = (cells.lay, cells.act, self.rho_c * step.inv_dt());
         let res = crate::with_cell!(cells.blk.kind, |N, D, E| cells.each_cell_with_history::<N>(
             slab,

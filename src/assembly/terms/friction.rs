@@ -1,10 +1,9 @@
 //! Coulomb friction in a medium's slip planes, with the slip per point as history
 //! (`kernel/friction.rs`), and the heat its work makes.
 
-use super::{Cells, Integrand, SlabView, finite};
-use crate::assembly::{AssemblyError, AssemblyStats, cell_error_in};
+use super::{Cells, Integrand, SlabView, cell_failure, finite, kept};
+use crate::assembly::{AssemblyError, AssemblyStats};
 use crate::kernel::friction::{self, HISTORY_PER_POINT};
-use crate::mesh::centroid;
 use crate::model::{FrictionBlock, Model, StepContext};
 
 impl Integrand for FrictionBlock {
@@ -20,8 +19,8 @@ impl Integrand for FrictionBlock {
         these: &[u32],
         step: &StepContext,
     ) -> Result<AssemblyStats, AssemblyError> {
-        let slab = history.expect("a friction term keeps its history");
-        let (lay, act, model, blk) = (cells.lay, cells.act, cells.model, cells.blk);
+        let slab = kept(history);
+        let (lay, act, blk) = (cells.lay, cells.act, cells.blk);
         let inv_dt = step.inv_dt();
         // η/Δt: the heat the dissipated work makes, per time
         let heat_rate = self.heat_fraction * inv_dt;
@@ -44,10 +43,6 @@ impl Integrand for FrictionBlock {
                 )
             }
         ));
-        let ok = res.map_err(|(e, cell)| {
-            let at = centroid(&model.mesh.coords, blk.cell(cell));
-            cell_error_in(&model.regions[self.region].0, e, cell, at)
-        })?;
-        finite(ok)
+        finite(res.map_err(|f| cell_failure(&cells, self.region, f))?)
     }
 }

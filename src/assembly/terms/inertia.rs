@@ -1,7 +1,7 @@
 //! Inertia, ρ ü by backward Euler, with the displacement and velocity per point as history
 //! (`kernel/inertia.rs`).
 
-use super::{Cells, Integrand, Slab, SlabView, geometric};
+use super::{Cells, Integrand, Slab, SlabView, geometric, kept};
 use crate::assembly::{AssemblyError, AssemblyStats, References, reference};
 use crate::kernel::inertia;
 use crate::model::{InertiaBlock, Model, StepContext};
@@ -26,7 +26,7 @@ impl Integrand for InertiaBlock {
         these: &[u32],
         step: &StepContext,
     ) -> Result<AssemblyStats, AssemblyError> {
-        let slab = history.expect("an inertia term keeps its history");
+        let slab = kept(history);
         let (lay, act, rho, inv_dt) = (cells.lay, cells.act, self.rho, step.inv_dt());
         let res = crate::with_cell!(cells.blk.kind, |N, D, E| cells.each_cell_with_history::<N>(
             slab,

@@ -11,7 +11,7 @@ mod inertia;
 
 use super::cells::{Cells, SlabView};
 use super::history::Slab;
-use super::{AssemblyError, AssemblyStats, References};
+use super::{AssemblyError, AssemblyStats, References, cell_error_in};
 use crate::element::RefElement;
 use crate::kernel::KernelError;
 use crate::mesh::{Block, centroid};
@@ -60,6 +60,18 @@ pub fn integrand(model: &Model, term: Term) -> &dyn Integrand {
 pub fn points_per_cell(blk: &Block) -> usize {
     crate::with_cell!(blk.kind, |N, D, E| <E as RefElement<N, D>>::quadrature()
         .len())
+}
+
+/// The slab of a term that keeps a history ([`Integrand::history_per_point`] > 0).
+fn kept<'h, 'a>(history: Option<&'h SlabView<'a>>) -> &'h SlabView<'a> {
+    history.expect("initial_history gives every term with history its slab")
+}
+
+/// The assembly error of a kernel's failure `(e, cell)` in a cell of `cells` of `region`.
+fn cell_failure(cells: &Cells, region: usize, (e, cell): (KernelError, usize)) -> AssemblyError {
+    let (model, blk) = (cells.model, cells.blk);
+    let at = centroid(&model.mesh.coords, blk.cell(cell));
+    cell_error_in(&model.regions[region].0, e, cell, at)
 }
 
 /// Nothing assembled but residuals and tangents, whose entries are finite (`ok`).

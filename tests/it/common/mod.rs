@@ -10,6 +10,24 @@ use tmc::mesh::gmsh::{MeshOptions, mesh_geo};
 use tmc::mesh::msh::read_msh;
 use tmc::model::{Model, build};
 
+/// Every `.rs` file under `src/`, as paths relative to it.
+pub fn source_files() -> Vec<PathBuf> {
+    fn walk(root: &Path, dir: &Path, out: &mut Vec<PathBuf>) {
+        for entry in std::fs::read_dir(dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                walk(root, &path, out);
+            } else if path.extension().is_some_and(|e| e == "rs") {
+                out.push(path.strip_prefix(root).unwrap().to_owned());
+            }
+        }
+    }
+    let src = root().join("src");
+    let mut files = Vec::new();
+    walk(&src, &src, &mut files);
+    files
+}
+
 /// `tmc args` in the project folder.
 pub fn tmc(args: &[&str]) -> std::process::Output {
     tmc_with(args, &[])
