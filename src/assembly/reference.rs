@@ -27,9 +27,10 @@ pub struct References {
 }
 
 impl References {
-    /// The friction blocks with `reconnect`, starting from the mesh's coordinates.
+    /// The model's own references per cell (a medium made again), and the friction blocks
+    /// with `reconnect`, starting from the mesh's coordinates.
     pub fn new(model: &Model) -> References {
-        let mut blocks = vec![None; model.mesh.cells.len()];
+        let mut blocks = model.cell_reference.clone();
         for fb in model.friction_blocks.iter().filter(|fb| fb.reconnect) {
             let blk = &model.mesh.cells[fb.block];
             blocks[fb.block] = Some(blk.conn.iter().map(|&n| model.mesh.coords[n]).collect());

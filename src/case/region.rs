@@ -69,6 +69,8 @@ pub struct Region {
     /// with `thickness`, the layer's undeformed thickness t0: k ≤ h_c t0 J.
     h_closed: Option<Spanned<f64>>,
     thickness: Option<Spanned<f64>>,
+    /// A medium made again between the bodies as they move (`model/remake.rs`).
+    remake: Option<Spanned<bool>>,
     /// Regularization weights β1, β2 (eq. 20) and α_r (eq. 18).
     beta1: Option<Spanned<f64>>,
     beta2: Option<Spanned<f64>>,
@@ -130,6 +132,13 @@ pub struct FrictionKey {
 pub enum SlipNormal {
     Given(Vec<f64>),
     Word(String),
+}
+
+impl Region {
+    /// Whether the region is a medium made again between the bodies as they move.
+    pub fn remakes(&self) -> bool {
+        self.remake.as_ref().is_some_and(|r| *r.get_ref())
+    }
 }
 
 impl FrictionKey {
@@ -347,6 +356,12 @@ impl RegionKeys<'_> {
             ],
             "is a medium key; this region is a solid",
         )?;
+        if let Some(remake) = &r.remake {
+            return self.fail(
+                remake.span(),
+                "`remake` is a medium key; this region is a solid".into(),
+            );
+        }
         Ok(Material::Solid(SolidMaterial {
             law,
             k: given(&r.k),

@@ -95,7 +95,11 @@ pub fn check(case_path: &Path, opts: &SolveOptions) -> Result<CheckReport, Solve
     if let Some(layer) = crate::model::rejoin::Layer::find(&model)? {
         model.warnings.push(layer.describe());
     }
-    super::refuse_on_ranks(&model, Ranks::world())?;
+    // so does a medium asked to be made again that cannot be
+    if let Some(medium) = crate::model::remake::Medium::find(&model, super::remaking(&case))? {
+        model.warnings.push(medium.describe(&model));
+    }
+    super::refuse_on_ranks(&case, &model, Ranks::world())?;
     let mut plan = Plan::new(&case, &model, opts)?;
     // the state a solve starts from, assembled as its first step records it
     assemble_initial(&mut plan.asm, &model, &model.initial_state())?;

@@ -15,12 +15,13 @@ pub use records::{HISTORY_SOLVER_COLUMNS, HISTORY_STEP_COLUMNS, Summary, group_f
 pub use strategy::{Strategy, choose_linear, choose_strategy, describe};
 
 use crate::case::{Case, CaseError};
+use crate::dofs::NONE;
 use crate::files::TempFile;
 use crate::mesh::Mesh;
 use crate::mesh::gmsh::{GmshError, MeshOptions, mesh_geo};
 use crate::mesh::msh::{MshError, read_msh};
 use crate::model::rejoin::{Layer, LayerError};
-use crate::model::{Model, build};
+use crate::model::{Model, remake};
 use crate::output::probes::{self, Probe};
 use crate::output::{OutputError, RunFolder, werr};
 use crate::parallel::Ranks;
@@ -69,6 +70,12 @@ pub enum SolveError {
         steps: usize,
         dir: PathBuf,
     },
+}
+
+impl From<remake::RemakeError> for SolveError {
+    fn from(e: remake::RemakeError) -> SolveError {
+        SolveError::Setup(e.to_string())
+    }
 }
 
 impl From<LayerError> for SolveError {
@@ -184,13 +191,24 @@ pub(crate) fn checked_model(
 
 /// The case's model and probes on `mesh`, everything checked.
 fn model_on(case: &Case, mesh: Mesh, quiet: bool) -> Result<(Model, Vec<Probe>), SolveError> {
+    let d = mesh.extent();
+    model_on_extent(case, mesh, d, quiet)
+}
+
+/// [`model_on`] with the extent d of eq. 21 given.
+fn model_on_extent(
+    case: &Case,
+    mesh: Mesh,
+    d: f64,
+    quiet: bool,
+) -> Result<(Model, Vec<Probe>), SolveError> {
     if !quiet {
         for w in &mesh.warnings {
             crate::note!("warning: {}: {w}", mesh.source.display());
         }
     }
     crate::model::validate::validate(case, &mesh)?;
-    let model = build(case, mesh)?;
+    let model = crate::model::build::build_with_extent(case, mesh, d)?;
     if !quiet {
         for w in &model.warnings {
             crate::note!("{}: {w}", case.path.display());
@@ -228,6 +246,12 @@ pub fn run(case_path: &Path, opts: &SolveOptions) -> Result<Summary, SolveError>
                     .into(),
             ));
         }
+        if let Some(region) = remaking(&case) {
+            return Err(SolveError::Setup(format!(
+                "cannot restart a run whose medium is made again (`remake` of region \
+                 \"{region}\"): its mesh changes as it runs; run it again without --restart"
+            )));
+        }
         return restart(&case, folder, opts, start);
     }
     let (mut model, probes, staged) = checked_model(&case, &out_dir, opts.quiet)?;
@@ -236,17 +260,28 @@ pub fn run(case_path: &Path, opts: &SolveOptions) -> Result<Summary, SolveError>
     solve_model(&case, model, &probes, folder, opts, start, None)
 }
 
+/// The medium region that asks to be made again as the bodies move (`remake`), if any.
+pub(crate) fn remaking(case: &Case) -> Option<&str> {
+    (case.file.region.iter())
+        .find(|r| r.remakes())
+        .map(|r| r.group.get_ref().as_str())
+}
+
 /// What a run on several ranks refuses before it starts (`tmc check` refuses it too): a
-/// friction layer that is reconnected runs on one process.
-pub(crate) fn refuse_on_ranks(model: &Model, ranks: Ranks) -> Result<(), SolveError> {
-    match model.reconnects() && !ranks.is_serial() {
-        true => Err(SolveError::Setup(format!(
-            "mpirun -n {}: a friction layer that is reconnected (`friction.reconnect`) runs \
-             on one process; run it without mpirun",
-            ranks.size
-        ))),
-        false => Ok(()),
+/// friction layer that is reconnected, and a medium made again, run on one process.
+pub(crate) fn refuse_on_ranks(case: &Case, model: &Model, ranks: Ranks) -> Result<(), SolveError> {
+    if ranks.is_serial() {
+        return Ok(());
     }
+    let what = match (model.reconnects(), remaking(case)) {
+        (true, _) => "a friction layer that is reconnected (`friction.reconnect`)",
+        (false, Some(_)) => "a medium made again as the bodies move (`remake`)",
+        (false, None) => return Ok(()),
+    };
+    Err(SolveError::Setup(format!(
+        "mpirun -n {}: {what} runs on one process; run it without mpirun",
+        ranks.size
+    )))
 }
 
 /// The mesh meshed for this run, if any, moved to `mesh.msh` in the run's folder: errors so far
@@ -284,7 +319,7 @@ fn run_ranks(
         let setup = (|| -> Result<_, SolveError> {
             let mut folder = RunFolder::open(&out_dir)?;
             // before anything of the folder's is replaced
-            let serial_only = |model: &Model| refuse_on_ranks(model, ranks);
+            let serial_only = |model: &Model| refuse_on_ranks(case, model, ranks);
             if opts.restart {
                 let (model, probes, cp) = restart_setup(case, &mut folder, opts)?;
                 serial_only(&model)?;
@@ -380,7 +415,8 @@ fn restart_setup(
 
 /// Step the model from its initial state to the end of its load path. Where a friction
 /// region's layer is reconnected, the run goes on on a mesh whose layer is joined again each
-/// time its faces have slid a cell past each other.
+/// time its faces have slid a cell past each other; elsewhere, on a mesh whose medium is made
+/// again each time its cells' faces have slid past each other by [`remake::SLID`] of a cell.
 fn solve_model(
     case: &Case,
     model: Model,
@@ -392,13 +428,22 @@ fn solve_model(
 ) -> Result<Summary, SolveError> {
     let out_dir = folder.dir().to_owned();
     let mut layer = Layer::find(&model)?;
+    let mut medium = remake::Medium::find(&model, remaking(case))?;
+    if let Some(m) = medium.as_mut() {
+        let (x, t) = match &from {
+            Some(cp) => (cp.state.x.clone(), cp.state.clock.t),
+            None => (model.initial_state(), 0.0),
+        };
+        m.start(&model, &x, t, 0.0);
+    }
     let (mut model, mut folder, mut from) = (model, Some(folder), from);
-    let mut rejoined = false;
+    let mut probes = probes.to_vec();
+    let mut changed = false;
     loop {
         let mut run = Run::new(
             case,
             &model,
-            probes,
+            &probes,
             folder.take(),
             out_dir.clone(),
             opts,
@@ -408,54 +453,150 @@ fn solve_model(
             Some(cp) => run.resume(cp)?,
             None => run.record_initial()?,
         }
-        let Some(layer) = layer.as_mut() else {
+        if layer.is_none() && medium.is_none() {
             return step_to_end(run);
-        };
-        if rejoined {
+        }
+        if changed {
             run.rejoined();
         }
-        let (run, shift) = match step_until(run, |run| layer.due(&model, run.state()))? {
+        let due = |run: &Run| match (&layer, medium.as_mut()) {
+            (Some(layer), _) => layer.due(&model, run.state()).map(Change::Join),
+            (None, Some(medium)) => {
+                let (t, target) = run.next_step();
+                medium
+                    .due(&model, run.state(), t, target)
+                    .then_some(Change::Remake)
+            }
+            (None, None) => None,
+        };
+        let (run, change) = match step_until(run, due)? {
             Stepped::Ended(summary) => return Ok(summary),
-            Stepped::Rejoin(run, shift) => (run, shift),
+            Stepped::Changed(run, change) => (run, change),
         };
         let (mut cp, kept) = run.end_to_rejoin();
-        cp.state.totals.layer_joins += 1;
-        let mut mesh = model.mesh.clone();
-        layer.join(&model, &mut mesh, &mut cp.state.x, shift);
-        if opts.verbose {
-            crate::note!(
-                "friction layer joined again, shifted {shift} cells, at t = {}",
-                cp.state.clock.t
-            );
+        let t = cp.state.clock.t;
+        model = match (change, layer.as_mut(), &medium) {
+            (Change::Join(shift), Some(layer), _) => {
+                cp.state.totals.layer_joins += 1;
+                let mut mesh = model.mesh.clone();
+                layer.join(&model, &mut mesh, &mut cp.state.x, shift);
+                if opts.verbose {
+                    crate::note!("friction layer joined again, shifted {shift} cells, at t = {t}");
+                }
+                model_on(case, mesh, true)?.0
+            }
+            (Change::Remake, _, Some(medium)) => {
+                cp.state.totals.medium_remakes += 1;
+                let new;
+                (new, probes) = remade(case, &model, medium, &mut cp, &out_dir)?;
+                if opts.verbose {
+                    crate::note!(
+                        "medium made again at t = {t}: {} nodes",
+                        new.mesh.coords.len()
+                    );
+                }
+                new
+            }
+            _ => unreachable!("a change comes from the layer or the medium there is"),
+        };
+        if let Some(rate) = medium.as_ref().map(|m| m.rate) {
+            // the new medium's blocks, and its slivers as made: the next step takes none of
+            // them past the end of its edge at the speed of the last (but is not cut to less
+            // than a tenth of the largest step)
+            medium = remake::Medium::find(&model, remaking(case))?;
+            if let Some(m) = medium.as_mut() {
+                let room = m.start(&model, &cp.state.x, t, rate);
+                let largest = match &case.file.time {
+                    Some(time) => time.dt_max(),
+                    None => case.file.steps.max,
+                };
+                let clock = &mut cp.state.clock;
+                clock.dt = clock.dt.min(room.max(0.1 * largest));
+            }
         }
-        model = model_on(case, mesh, true)?.0;
         folder = kept;
         from = Some(cp);
-        rejoined = true;
+        changed = true;
     }
 }
 
-/// How stepping ended: at the end of the load path or at a stop (the run's summary), or where
-/// the friction layer is to be joined again (the run, and the layer's new shift).
-#[allow(clippy::large_enum_variant)] // made once per run or join, moved at once
-enum Stepped<'a> {
-    Ended(Summary),
-    Rejoin(Run<'a>, i64),
+/// The model on which a run goes on once its medium is made again at the checkpoint `cp`'s
+/// state (which is laid out again for it): the new medium's cells measured from their own
+/// references, the regularization's extent d kept.
+fn remade(
+    case: &Case,
+    model: &Model,
+    medium: &remake::Medium,
+    cp: &mut checkpoint::Checkpoint,
+    out_dir: &Path,
+) -> Result<(Model, Vec<Probe>), SolveError> {
+    let scratch = std::env::temp_dir().join(format!("tmc-remake-{}", std::process::id()));
+    let made = medium.remake(model, &cp.state.x, &scratch);
+    let _ = std::fs::remove_dir_all(&scratch);
+    let made = made.map_err(|e| {
+        SolveError::Setup(format!(
+            "{}: the medium could not be made again at t = {}: {e}",
+            out_dir.display(),
+            cp.state.clock.t
+        ))
+    })?;
+    let mut mesh = made.mesh.clone();
+    mesh.warnings.clear();
+    let (mut new, probes) = model_on_extent(case, mesh, model.d, true)?;
+    new.cell_reference = made.reference.clone();
+    let from = made.old_dofs(model, &new);
+    cp.state.x = made.state(model, &cp.state.x, &new);
+    // the forces the work is counted from, per displacement dof in dof order: a new node's
+    // are nil (no load acts inside the medium)
+    let old_u: Vec<usize> = (0..model.dofs.n_dofs)
+        .filter(|&d| model.dofs.field[d] == crate::dofs::Field::U)
+        .collect();
+    let f_of: std::collections::HashMap<usize, f64> = old_u
+        .iter()
+        .copied()
+        .zip(cp.state.totals.f_last.iter().copied())
+        .collect();
+    cp.state.totals.f_last = (0..new.dofs.n_dofs)
+        .filter(|&d| new.dofs.field[d] == crate::dofs::Field::U)
+        .map(|d| match from[d] {
+            NONE => 0.0,
+            o => f_of.get(&(o as usize)).copied().unwrap_or(0.0),
+        })
+        .collect();
+    // the point history is the solids' alone (a medium with one is not made again), in the
+    // same order: their blocks keep theirs
+    Ok((new, probes))
 }
 
-/// Step until the end of the load path, a stop, or an accepted step after which `rejoin` asks
-/// for the friction layer to be joined again.
+/// What changes the mesh a run goes on with.
+enum Change {
+    /// The friction layer joined again with this shift.
+    Join(i64),
+    /// The medium made again.
+    Remake,
+}
+
+/// How stepping ended: at the end of the load path or at a stop (the run's summary), or where
+/// the mesh is to change (the run, and how).
+#[allow(clippy::large_enum_variant)] // made once per run or change, moved at once
+enum Stepped<'a> {
+    Ended(Summary),
+    Changed(Run<'a>, Change),
+}
+
+/// Step until the end of the load path, a stop, or an accepted step after which `change`
+/// asks for the mesh to change.
 fn step_until<'a>(
     mut run: Run<'a>,
-    mut rejoin: impl FnMut(&Run) -> Option<i64>,
+    mut change: impl FnMut(&Run) -> Option<Change>,
 ) -> Result<Stepped<'a>, SolveError> {
     while !run.done() {
         if run.ranks().max(f64::from(u8::from(interrupted()))) > 0.0 {
             return run.interrupt().map(Stepped::Ended);
         }
         run.step()?;
-        if let Some(shift) = (!run.done()).then(|| rejoin(&run)).flatten() {
-            return Ok(Stepped::Rejoin(run, shift));
+        if let Some(c) = (!run.done()).then(|| change(&run)).flatten() {
+            return Ok(Stepped::Changed(run, c));
         }
     }
     run.complete().map(Stepped::Ended)
@@ -465,7 +606,7 @@ fn step_until<'a>(
 fn step_to_end(run: Run) -> Result<Summary, SolveError> {
     match step_until(run, |_| None)? {
         Stepped::Ended(summary) => Ok(summary),
-        Stepped::Rejoin(..) => unreachable!("nothing asked to join a layer again"),
+        Stepped::Changed(..) => unreachable!("nothing asked for the mesh to change"),
     }
 }
 

@@ -384,6 +384,7 @@ impl<'a> Recorder<'a> {
         s.heat_in = tot.heat_in;
         s.corners_through_medium = tot.corners_through;
         s.friction_layer_joins = tot.layer_joins;
+        s.medium_remade = tot.medium_remakes;
         // 0 until the first join
         s.heat_joined = (self.layout.joined).then(|| tot.heat_joined.unwrap_or(0.0));
         s.largest_displacement = tot.largest_displacement;

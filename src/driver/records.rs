@@ -105,6 +105,8 @@ pub struct Summary {
     pub largest_displacement: f64,
     /// How many times a friction layer with `reconnect` was joined again (0 without one).
     pub friction_layer_joins: usize,
+    /// How many times the medium was made again as the bodies moved (0 if never).
+    pub medium_remade: usize,
     /// Transient scenes with a friction layer with `reconnect`: what its joins changed the
     /// heat stored by, so far; with it, `heat_stored` = `heat_in` + `friction_heat` +
     /// `heat_joined` (`null` otherwise).
@@ -178,6 +180,7 @@ impl Summary {
             corners_through_medium: 0,
             largest_displacement: 0.0,
             friction_layer_joins: 0,
+            medium_remade: 0,
             heat_joined: None,
             output: out_dir.display().to_string(),
             units: Quantity::ALL

@@ -143,6 +143,11 @@ impl<'a> Run<'a> {
         self.st.ranks()
     }
 
+    /// The pseudo-time of the last accepted state and of the next step's end.
+    pub(super) fn next_step(&self) -> (f64, f64) {
+        (self.st.ctl.t, self.st.ctl.target())
+    }
+
     /// Whether the run reached the end of its path.
     pub(super) fn done(&self) -> bool {
         self.st.ctl.done()

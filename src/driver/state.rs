@@ -59,6 +59,9 @@ pub struct Totals {
     /// How many times a reconnected friction layer was joined again.
     #[serde(default)]
     pub layer_joins: usize,
+    /// How many times the medium was made again as the bodies moved.
+    #[serde(default)]
+    pub medium_remakes: usize,
     /// Transient scenes with a reconnected friction layer: what its joins changed the heat
     /// stored by (its cells re-paired with other nodes' temperatures).
     #[serde(default)]

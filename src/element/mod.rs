@@ -80,6 +80,51 @@ pub trait RefElement<const N: usize, const D: usize>: Sync + Send + 'static {
     }
 }
 
+/// The reference coordinates ξ of the point `p` in the cell with nodes at `X`: the
+/// isoparametric map inverted by Newton from the element's centre. `None` where the map is
+/// singular; a ξ outside the reference domain (see [`RefElement::contains`]) where the point
+/// is outside the cell.
+#[allow(non_snake_case)]
+pub fn local_coords<const N: usize, const D: usize, E: RefElement<N, D>>(
+    X: &[[f64; 3]; N],
+    p: &[f64; 3],
+) -> Option<[f64; D]> {
+    let mut xi = [0.0; D];
+    for r in &E::nodes() {
+        for d in 0..D {
+            xi[d] += r[d] / N as f64;
+        }
+    }
+    for _ in 0..30 {
+        let n = E::shape(&xi);
+        let g = E::grad(&xi);
+        let mut res = [0.0; D];
+        let mut jac = [[0.0; D]; D];
+        for I in 0..N {
+            for i in 0..D {
+                res[i] += n[I] * X[I][i];
+                for j in 0..D {
+                    jac[i][j] += X[I][i] * g[I][j];
+                }
+            }
+        }
+        for i in 0..D {
+            res[i] -= p[i];
+        }
+        let (_, inv) = invert_small(&jac)?;
+        let mut step = 0.0f64;
+        for i in 0..D {
+            let dxi: f64 = (0..D).map(|j| inv[i][j] * res[j]).sum();
+            xi[i] -= dxi;
+            step = step.max(dxi.abs());
+        }
+        if step < 1e-14 {
+            break;
+        }
+    }
+    Some(xi)
+}
+
 /// 2-node line on [−1, 1] (boundary facet of T1/Q1).
 pub struct Line2;
 /// 3-node triangle on the unit simplex (T1).

@@ -7,6 +7,7 @@ pub mod geo_text;
 pub mod gmsh;
 pub mod msh;
 pub mod partition;
+pub mod remesh;
 pub mod strip;
 
 use std::path::PathBuf;

@@ -17,6 +17,13 @@ use nalgebra::Vector3;
 
 /// Build the model. The case must already be validated against the mesh.
 pub fn build(case: &Case, mesh: Mesh) -> Result<Model, CaseError> {
+    let d = mesh.extent();
+    build_with_extent(case, mesh, d)
+}
+
+/// [`build`] with the extent d of eq. 21 given: a mesh whose medium was made again keeps the
+/// d of the mesh the run started on.
+pub fn build_with_extent(case: &Case, mesh: Mesh, d: f64) -> Result<Model, CaseError> {
     let mut physics = decide_physics(case);
     if !physics.mechanics && !physics.conduction {
         return case.error(
@@ -26,7 +33,6 @@ pub fn build(case: &Case, mesh: Mesh) -> Result<Model, CaseError> {
         );
     }
     require_conductivities(case, &physics)?;
-    let d = mesh.extent();
     let materials = region_materials(case, d);
     check_one_order(case, &mesh)?;
     // regularization: p fields (f1 in 2D, f1..f3 in 3D per node) on linear medium cells, the
@@ -71,6 +77,7 @@ pub fn build(case: &Case, mesh: Mesh) -> Result<Model, CaseError> {
         bc_groups,
         d,
         theta_init,
+        cell_reference: vec![None; mesh.cells.len()],
         mesh,
         warnings: Vec::new(),
     };

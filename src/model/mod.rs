@@ -7,6 +7,7 @@ pub mod held;
 pub mod loads;
 pub mod physics;
 pub mod rejoin;
+pub mod remake;
 pub mod rigid;
 pub mod validate;
 
@@ -216,6 +217,9 @@ pub struct Model {
     pub d: f64,
     /// Initial temperature per node (θ0 of its region).
     pub theta_init: Vec<f64>,
+    /// Per mesh block, its cells' own reference node coordinates (N per cell, in cell order)
+    /// where the medium was made again (`remake.rs`), or `None`: measured from the mesh.
+    pub cell_reference: Vec<Option<Vec<[f64; 3]>>>,
     /// What the case sets up that is valid but worth saying, each starting "warning:" or
     /// "note:" (a body the medium alone holds in some direction), besides the mesh's warnings.
     pub warnings: Vec<String>,

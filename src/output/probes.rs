@@ -2,7 +2,7 @@
 
 use crate::case::{Case, CaseError, Measure};
 use crate::dofs::DofMap;
-use crate::element::{RefElement, invert_small};
+use crate::element::{RefElement, local_coords};
 use crate::mesh::Mesh;
 use crate::output::quantity::Quantity;
 
@@ -114,7 +114,7 @@ pub fn locate(mesh: &Mesh, X: &[f64]) -> Option<MaterialPoint> {
     None
 }
 
-/// Newton inversion of the isoparametric map; shape-function weights if the point is inside.
+/// The shape-function weights at `p` of the cell `nodes`, if the point is inside it.
 fn inverse_map<const N: usize, const D: usize, E: RefElement<N, D>>(
     mesh: &Mesh,
     nodes: &[usize],
@@ -122,45 +122,8 @@ fn inverse_map<const N: usize, const D: usize, E: RefElement<N, D>>(
     tol: f64,
 ) -> Option<Vec<f64>> {
     let X: [[f64; 3]; N] = std::array::from_fn(|i| mesh.coords[nodes[i]]);
-    let refn = E::nodes();
-    let mut xi = [0.0; D];
-    for r in &refn {
-        for d in 0..D {
-            xi[d] += r[d] / N as f64;
-        }
-    }
-    for _ in 0..30 {
-        let n = E::shape(&xi);
-        let g = E::grad(&xi);
-        let mut res = [0.0; D];
-        let mut jac = [[0.0; D]; D];
-        for I in 0..N {
-            for i in 0..D {
-                res[i] += n[I] * X[I][i];
-                for j in 0..D {
-                    jac[i][j] += X[I][i] * g[I][j];
-                }
-            }
-        }
-        for i in 0..D {
-            res[i] -= p[i];
-        }
-        let (_, inv) = invert_small(&jac)?;
-        let mut step = 0.0f64;
-        for i in 0..D {
-            let dxi: f64 = (0..D).map(|j| inv[i][j] * res[j]).sum();
-            xi[i] -= dxi;
-            step = step.max(dxi.abs());
-        }
-        if step < 1e-14 {
-            break;
-        }
-    }
-    if E::contains(&xi, tol) {
-        Some(E::shape(&xi).to_vec())
-    } else {
-        None
-    }
+    let xi = local_coords::<N, D, E>(&X, p)?;
+    E::contains(&xi, tol).then(|| E::shape(&xi).to_vec())
 }
 
 /// Build the case's probes, locating their points in the mesh.

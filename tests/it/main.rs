@@ -20,5 +20,6 @@ mod inertia;
 mod medium;
 mod patch_and_tangent;
 mod robustness;
+mod sliding;
 mod stability;
 mod transient;

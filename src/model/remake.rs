@@ -1,0 +1,701 @@
+//! The medium made again as the bodies move (`remake` of a medium region). A Lagrangian medium
+//! between bodies that slide past each other is sheared without end: ahead of a body it is
+//! ploughed, and a closed layer drags the faces it joins. The medium is fictitious, so nothing
+//! physical is lost when its cells and its reference are renewed. The medium's cells are made
+//! again by gmsh between the bodies as they are (`mesh/remesh.rs`) once any of its cells'
+//! faces have slid [`SLID`] of a cell past each other, or a sliver's node (a layer one cell
+//! across) would pass the end of the edge across from it in the next step. Each new cell
+//! starts from a reference of its own (as a reconnected layer's cells do,
+//! `assembly/reference.rs`):
+//!
+//! - the open medium from its current shape, stress-free: what removes the ploughing; a sliver
+//!   from its shape opened across its long edge to a slenderness of [`THINNEST`], so that it
+//!   is not a stiff cell;
+//! - a closed layer (J < [`CLOSED`] at the new cell's centre or half way to its nodes, the
+//!   smallest) from its current shape stretched back across the layer by 1/J, so that it
+//!   carries the same compression, hence the same contact pressure, without the shear it had
+//!   (F₀ = I + (J − 1) n⊗n, n the direction the old cell was squeezed most);
+//! - temperatures at the new nodes from the old cells where they stand; the regularization's
+//!   p fields at zero (a new cell's F₀ is symmetric: it has no rotation to measure).
+//!
+//! The solids' nodes, cells and histories stay as they are.
+#![allow(non_snake_case)]
+
+use super::{Model, RegionKind};
+use crate::dofs::{CellState, Field, NONE, gather, rebase};
+use crate::element::{RefElement, local_coords, physical_gradients};
+use crate::mesh::Mesh;
+use crate::mesh::remesh::{remesh, supported};
+use nalgebra::{Matrix2, SymmetricEigen, Vector2};
+use std::path::Path;
+
+/// How far (in cell sizes, see [`Medium::slid_cells`]) a medium cell's faces may slide past
+/// each other before the medium is made again.
+pub const SLID: f64 = 0.5;
+
+/// The J below which a medium cell is a closed layer, whose compression a new cell carries.
+pub const CLOSED: f64 = 0.5;
+
+/// A medium region whose `remake` cannot be done, and why.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RemakeError {
+    pub region: String,
+    pub why: String,
+}
+
+impl std::fmt::Display for RemakeError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "region \"{}\": `remake` {}", self.region, self.why)
+    }
+}
+
+impl std::error::Error for RemakeError {}
+
+/// The medium of a model whose cells are made again as the bodies move.
+#[derive(Clone, Debug)]
+pub struct Medium {
+    /// The medium's mesh blocks.
+    blocks: Vec<usize>,
+    /// The slivers among its triangles (slenderness below [`THINNEST`] where they were last
+    /// looked at): their block and cell, the nodes (local) of their longest edge and of the
+    /// node across it, and where along that edge the node stood at the last accepted state.
+    slivers: Vec<Sliver>,
+    /// The pseudo-time of the last accepted state, and how fast (length per unit of it) a
+    /// sliver's node moved along its edge at most over the last step.
+    t: f64,
+    pub rate: f64,
+}
+
+/// A thin triangle: a node across a long edge (a layer one cell across).
+#[derive(Clone, Debug)]
+struct Sliver {
+    block: usize,
+    cell: usize,
+    edge: [usize; 2],
+    across: usize,
+    at: f64,
+}
+
+/// A medium made again: the new mesh, the new medium cells' references, and what the new
+/// nodes carry.
+pub struct Remade {
+    pub mesh: Mesh,
+    /// Per block of the new mesh, its own reference node coordinates per cell (the new medium
+    /// blocks), or `None`.
+    pub reference: Vec<Option<Vec<[f64; 3]>>>,
+    /// Per node of the new mesh, the old node it is (`None`: new, inside the medium).
+    old_of: Vec<Option<usize>>,
+    /// Per node of the new mesh, its temperature where it is new.
+    theta: Vec<f64>,
+}
+
+/// The deformation gradient of the 2D cell `s` at ξ.
+fn cell_F<const N: usize, const D: usize, E: RefElement<N, D>>(
+    s: &CellState<N>,
+    xi: &[f64; D],
+) -> Option<Matrix2<f64>> {
+    let (g, _) = physical_gradients::<N, D>(&E::grad(xi), &s.X)?;
+    let mut F = Matrix2::identity();
+    for I in 0..N {
+        for i in 0..2 {
+            for j in 0..D.min(2) {
+                F[(i, j)] += s.u[I][i] * g[I][j];
+            }
+        }
+    }
+    Some(F)
+}
+
+/// A 2D cell's height over its length, (area / longest edge²), times 2 for a triangle: √3/2
+/// for an equilateral one, small for a sliver.
+fn slenderness(X: &[[f64; 3]], simplex: bool) -> f64 {
+    let k = if simplex { 3 } else { 4 };
+    let mut area = 0.0;
+    let mut longest = 0.0f64;
+    for i in 0..k {
+        let (p, q) = (X[i], X[(i + 1) % k]);
+        area += 0.5 * (p[0] * q[1] - q[0] * p[1]);
+        longest = longest.max((q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2));
+    }
+    let f = if simplex { 2.0 } else { 1.0 };
+    (f * area.abs() / longest.max(f64::MIN_POSITIVE)).min(1.0)
+}
+
+/// The element's centre in reference coordinates.
+fn centre<const N: usize, const D: usize, E: RefElement<N, D>>() -> [f64; D] {
+    let mut xi = [0.0; D];
+    for r in &E::nodes() {
+        for d in 0..D {
+            xi[d] += r[d] / N as f64;
+        }
+    }
+    xi
+}
+
+/// The shear of the deformation gradient `F`: sqrt((λ₂ − 1)(1 − λ₁)) with λ₁ ≤ λ₂ the
+/// eigenvalues of F Fᵀ, about γ for a simple shear γ of a layer however squeezed, and zero for
+/// a rotation and for a compression along one axis.
+pub fn shear(F: &Matrix2<f64>) -> f64 {
+    let e = SymmetricEigen::new(F * F.transpose()).eigenvalues;
+    let (l1, l2) = (e[0].min(e[1]), e[0].max(e[1]));
+    ((l2 - 1.0) * (1.0 - l1)).max(0.0).sqrt()
+}
+
+impl Model {
+    /// Cell `c` of mesh block `block` at the state `x`, measured from its own reference where
+    /// it has one.
+    pub fn cell_state<const N: usize>(&self, block: usize, c: usize, x: &[f64]) -> CellState<N> {
+        let nodes = self.mesh.cells[block].cell(c);
+        let mut s = gather::<N>(&self.mesh.coords, &self.dofs, nodes, x);
+        if let Some(r) = &self.cell_reference[block] {
+            rebase(&mut s, &r[c * N..(c + 1) * N]);
+        }
+        s
+    }
+
+    /// Node `n`'s place at the state `x`.
+    fn placed(&self, n: usize, x: &[f64]) -> [f64; 3] {
+        let d = self.dofs.dim;
+        let mut p = self.mesh.coords[n];
+        if !self.dofs.u.is_empty() {
+            for (i, pi) in p.iter_mut().enumerate().take(d) {
+                *pi += x[self.dofs.u[n * d + i] as usize];
+            }
+        }
+        p
+    }
+}
+
+/// The old medium's cells where they are, to find which one holds a point.
+struct Locator<'a> {
+    model: &'a Model,
+    x: &'a [f64],
+    /// (block, cell) of every medium cell, and its nodes' places.
+    cells: Vec<(usize, usize, Vec<[f64; 3]>)>,
+    lo: [f64; 2],
+    size: f64,
+    dims: [usize; 2],
+    buckets: Vec<Vec<usize>>,
+}
+
+impl<'a> Locator<'a> {
+    fn new(model: &'a Model, blocks: &[usize], x: &'a [f64]) -> Locator<'a> {
+        let mut cells = Vec::new();
+        for &b in blocks {
+            let blk = &model.mesh.cells[b];
+            for c in 0..blk.n_cells() {
+                let p: Vec<[f64; 3]> = blk.cell(c).iter().map(|&n| model.placed(n, x)).collect();
+                cells.push((b, c, p));
+            }
+        }
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        let mut diam = 0.0;
+        for (_, _, p) in &cells {
+            let (mut clo, mut chi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+            for q in p {
+                for i in 0..2 {
+                    clo[i] = clo[i].min(q[i]);
+                    chi[i] = chi[i].max(q[i]);
+                }
+            }
+            for i in 0..2 {
+                lo[i] = lo[i].min(clo[i]);
+                hi[i] = hi[i].max(chi[i]);
+            }
+            diam += (chi[0] - clo[0]).max(chi[1] - clo[1]);
+        }
+        let size = (diam / cells.len().max(1) as f64).max(1e-12 * (hi[0] - lo[0]).abs());
+        let dims = [0, 1].map(|i| (((hi[i] - lo[i]) / size).ceil() as usize).clamp(1, 4096));
+        let mut loc = Locator {
+            model,
+            x,
+            cells: Vec::new(),
+            lo,
+            size,
+            dims,
+            buckets: vec![Vec::new(); dims[0] * dims[1]],
+        };
+        for (k, (_, _, p)) in cells.iter().enumerate() {
+            let (mut a, mut z) = ([usize::MAX; 2], [0; 2]);
+            for q in p {
+                let ij = loc.bucket_of(q);
+                for i in 0..2 {
+                    a[i] = a[i].min(ij[i]);
+                    z[i] = z[i].max(ij[i]);
+                }
+            }
+            for i in a[0]..=z[0] {
+                for j in a[1]..=z[1] {
+                    loc.buckets[j * dims[0] + i].push(k);
+                }
+            }
+        }
+        loc.cells = cells;
+        loc
+    }
+
+    fn bucket_of(&self, p: &[f64; 3]) -> [usize; 2] {
+        [0, 1].map(|i| {
+            (((p[i] - self.lo[i]) / self.size).floor().max(0.0) as usize).min(self.dims[i] - 1)
+        })
+    }
+
+    /// The old cell that holds `p` (or, past the medium's edge by round-off, the nearest one
+    /// around it), and a value of its state there: what `at` computes from the cell's state
+    /// and the point's ξ.
+    fn value<T>(&self, p: &[f64; 3], at: impl Fn(&dyn CellAt) -> Option<T>) -> Option<T> {
+        let [i, j] = self.bucket_of(p);
+        let mut best: Option<(f64, usize)> = None;
+        for &k in &self.buckets[j * self.dims[0] + i] {
+            let kind = self.model.mesh.cells[self.cells[k].0].kind;
+            let out = crate::with_cell!(kind, |N, D, E| outside::<N, D, E>(&self.cells[k].2, p));
+            if best.is_none_or(|(o, _)| out < o) {
+                best = Some((out, k));
+            }
+            if out <= 1e-9 {
+                break;
+            }
+        }
+        let (_, k) = best?;
+        let (b, c, places) = &self.cells[k];
+        let kind = self.model.mesh.cells[*b].kind;
+        crate::with_cell!(kind, |N, D, E| {
+            let X: [[f64; 3]; N] = std::array::from_fn(|I| places[I]);
+            let xi = local_coords::<N, D, E>(&X, p)?;
+            let s = self.model.cell_state::<N>(*b, *c, self.x);
+            let nodes = self.model.mesh.cells[*b].cell(*c);
+            at(&At::<N, D, E> {
+                s,
+                xi,
+                nodes,
+                model: self.model,
+                x: self.x,
+                _e: std::marker::PhantomData,
+            })
+        })
+    }
+}
+
+/// How far the point `p` is outside the cell with nodes at `places` (in reference
+/// coordinates; 0 inside).
+fn outside<const N: usize, const D: usize, E: RefElement<N, D>>(
+    places: &[[f64; 3]],
+    p: &[f64; 3],
+) -> f64 {
+    let X: [[f64; 3]; N] = std::array::from_fn(|I| places[I]);
+    let Some(xi) = local_coords::<N, D, E>(&X, p) else {
+        return f64::INFINITY;
+    };
+    if E::SIMPLEX {
+        let last = 1.0 - xi.iter().sum::<f64>();
+        xi.iter()
+            .chain([&last])
+            .map(|&v| (-v).max(0.0))
+            .fold(0.0, f64::max)
+    } else {
+        xi.iter()
+            .map(|&v| (v.abs() - 1.0).max(0.0))
+            .fold(0.0, f64::max)
+    }
+}
+
+/// An old cell at a point: its deformation gradient and its interpolated temperature there.
+trait CellAt {
+    fn F(&self) -> Option<Matrix2<f64>>;
+    fn theta(&self) -> f64;
+}
+
+struct At<'a, const N: usize, const D: usize, E> {
+    s: CellState<N>,
+    xi: [f64; D],
+    nodes: &'a [usize],
+    model: &'a Model,
+    x: &'a [f64],
+    _e: std::marker::PhantomData<E>,
+}
+
+impl<const N: usize, const D: usize, E: RefElement<N, D>> CellAt for At<'_, N, D, E> {
+    fn F(&self) -> Option<Matrix2<f64>> {
+        cell_F::<N, D, E>(&self.s, &self.xi)
+    }
+    fn theta(&self) -> f64 {
+        let th = &self.model.dofs.theta;
+        if th.is_empty() {
+            return 0.0;
+        }
+        let w = E::shape(&self.xi);
+        (self.nodes.iter().zip(w))
+            .map(|(&n, w)| w * self.x[th[n] as usize])
+            .sum()
+    }
+}
+
+impl Medium {
+    /// The model's medium, where a medium region (`asked`, its name) asks to be made again
+    /// as the bodies move (`remake`); an error says why it cannot be.
+    pub fn find(model: &Model, asked: Option<&str>) -> Result<Option<Medium>, RemakeError> {
+        let Some(region) = asked else {
+            return Ok(None);
+        };
+        let refuse = |why: &str| {
+            Err(RemakeError {
+                region: region.to_owned(),
+                why: why.to_owned(),
+            })
+        };
+        if model.reconnects() {
+            return refuse(
+                "cannot be given with a friction layer's `reconnect`: they are two ways to \
+                 follow a slide; give one",
+            );
+        }
+        if !model.physics.mechanics {
+            return refuse("needs mechanics; this scene has none");
+        }
+        let blocks: Vec<usize> = (model.blocks.iter())
+            .filter(|b| model.regions[b.region].1 == RegionKind::Medium)
+            .map(|b| b.block)
+            .collect();
+        if !model.friction_blocks.is_empty() {
+            return refuse("does not carry friction's slip across yet; leave out `friction`");
+        }
+        let with_history = (model.capacity_blocks.iter().map(|b| b.block))
+            .chain(model.inertia_blocks.iter().map(|b| b.block))
+            .any(|b| blocks.contains(&b));
+        if with_history {
+            return refuse(
+                "does not carry a medium's stored heat or mass across yet; leave out the \
+                 medium's `rho_c` and `rho`",
+            );
+        }
+        if let Err(why) = supported(&model.mesh, &blocks) {
+            return refuse(&why);
+        }
+        Ok(Some(Medium {
+            blocks,
+            slivers: Vec::new(),
+            t: 0.0,
+            rate: 0.0,
+        }))
+    }
+
+    /// How far, in cell sizes, the medium's cells have slid at the state `x`: the largest
+    /// over its cells of the shear (see [`shear`]) times the cell's height over its length
+    /// in its reference (a layer of height H and length L sheared by γ has slid γ H, or
+    /// γ H / L cells).
+    pub fn slid_cells(&self, model: &Model, x: &[f64]) -> f64 {
+        let mut most = 0.0f64;
+        for &b in &self.blocks {
+            let blk = &model.mesh.cells[b];
+            crate::with_cell!(blk.kind, |N, D, E| {
+                let xi = centre::<N, D, E>();
+                for c in 0..blk.n_cells() {
+                    let s = model.cell_state::<N>(b, c, x);
+                    if let Some(F) = cell_F::<N, D, E>(&s, &xi) {
+                        most = most.max(shear(&F) * slenderness(&s.X, E::SIMPLEX));
+                    }
+                }
+            });
+        }
+        most
+    }
+
+    /// The medium in words, for `tmc check`.
+    pub fn describe(&self, model: &Model) -> String {
+        let cells: usize = self
+            .blocks
+            .iter()
+            .map(|&b| model.mesh.cells[b].n_cells())
+            .sum();
+        format!(
+            "medium made again as the bodies move: its {cells} cells replaced by gmsh's \
+             triangles once any cell's faces have slid {SLID} of a cell past each other"
+        )
+    }
+
+    /// Whether the medium is to be made again at the accepted state `x`.
+    ///
+    /// Also, before a sliver's node passes the end of the edge across from it: a node that
+    /// has passed it stands over the next face, and the sliver, squeezed to hold a contact,
+    /// opens (or inverts). Each sliver's node is followed from one accepted state (at `t`) to
+    /// the next; once the next step (to `target`), at the speed of the last, would take it
+    /// past an end, it is due.
+    pub fn due(&mut self, model: &Model, x: &[f64], t: f64, target: f64) -> bool {
+        let mut passing = false;
+        let dt = t - self.t;
+        let mut rate = 0.0f64;
+        for s in &mut self.slivers {
+            let (at, length) = along_edge(model, s, x);
+            let speed = if dt > 0.0 { (at - s.at) / dt } else { 0.0 };
+            let next = at + speed * (target - t);
+            passing |= !(0.0..=1.0).contains(&next) || !(0.0..=1.0).contains(&at);
+            rate = rate.max(speed.abs() * length);
+            s.at = at;
+        }
+        self.t = t;
+        self.rate = rate;
+        passing || self.slid_cells(model, x) >= SLID
+    }
+
+    /// Start following the medium's slivers at the state `x` at `t` (the initial state, or the
+    /// one the medium was just made again at), their nodes taken to move along their edges
+    /// at most at `rate`, the speed of the last step. Returns the longest step (in
+    /// pseudo-time) that takes none of them past an end at that speed.
+    pub fn start(&mut self, model: &Model, x: &[f64], t: f64, rate: f64) -> f64 {
+        self.slivers.clear();
+        self.t = t;
+        self.rate = rate;
+        let mut room = f64::INFINITY;
+        for &b in &self.blocks {
+            let blk = &model.mesh.cells[b];
+            if blk.kind != crate::mesh::CellKind::Tri3 {
+                continue;
+            }
+            for c in 0..blk.n_cells() {
+                let p: Vec<[f64; 3]> = blk.cell(c).iter().map(|&n| model.placed(n, x)).collect();
+                if slenderness(&p, true) >= THINNEST {
+                    continue;
+                }
+                let len = |i: usize| {
+                    let (a, b) = (p[i], p[(i + 1) % 3]);
+                    (b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)
+                };
+                let i = (0..3)
+                    .max_by(|&a, &b| len(a).total_cmp(&len(b)))
+                    .unwrap_or(0);
+                let mut s = Sliver {
+                    block: b,
+                    cell: c,
+                    edge: [i, (i + 1) % 3],
+                    across: (i + 2) % 3,
+                    at: 0.0,
+                };
+                let (at, length) = along_edge(model, &s, x);
+                s.at = at;
+                room = room.min(at.min(1.0 - at).max(0.0) * length);
+                self.slivers.push(s);
+            }
+        }
+        match rate > 0.0 {
+            true => room / rate,
+            false => f64::INFINITY,
+        }
+    }
+
+    /// The medium made again at the accepted state `x` of `model` (gmsh's files in the folder
+    /// `scratch`).
+    pub fn remake(&self, model: &Model, x: &[f64], scratch: &Path) -> Result<Remade, String> {
+        let placed: Vec<[f64; 3]> = (0..model.mesh.coords.len())
+            .map(|n| model.placed(n, x))
+            .collect();
+        let r = remesh(&model.mesh, &placed, &self.blocks, scratch)?;
+        let find = Locator::new(model, &self.blocks, x);
+        let here = |n: usize| match r.old_of[n] {
+            Some(o) => placed[o],
+            None => r.mesh.coords[n],
+        };
+        let mut reference = vec![None; r.mesh.cells.len()];
+        for &b in &r.medium {
+            let blk = &r.mesh.cells[b];
+            let mut refs = Vec::with_capacity(blk.conn.len());
+            for c in 0..blk.n_cells() {
+                let p: Vec<[f64; 3]> = blk.cell(c).iter().map(|&n| here(n)).collect();
+                let k = p.len() as f64;
+                let mid: [f64; 3] =
+                    std::array::from_fn(|i| p.iter().map(|q| q[i]).sum::<f64>() / k);
+                // the old medium's most squeezed state over the new cell (at its centre and
+                // half way to each node): a closed layer's cell that has just opened beside
+                // others still closed does not speak for the layer
+                let F = (std::iter::once(mid).chain(
+                    p.iter()
+                        .map(|q| std::array::from_fn(|i| 0.5 * (mid[i] + q[i]))),
+                ))
+                .filter_map(|at| find.value(&at, |cell| cell.F()))
+                .min_by(|a, b| a.determinant().total_cmp(&b.determinant()))
+                .unwrap_or_else(Matrix2::identity);
+                let stretch = match carried_stretch(&F) {
+                    Some(back) => back,
+                    None => opened(&p),
+                };
+                for q in &p {
+                    let d = Vector2::new(q[0] - mid[0], q[1] - mid[1]);
+                    let X = stretch * d;
+                    refs.push([mid[0] + X[0], mid[1] + X[1], 0.0]);
+                }
+            }
+            reference[b] = Some(refs);
+        }
+        let theta = (0..r.mesh.coords.len())
+            .map(|n| match r.old_of[n] {
+                Some(_) => 0.0,
+                None => find.value(&here(n), |at| Some(at.theta())).unwrap_or(0.0),
+            })
+            .collect();
+        Ok(Remade {
+            mesh: r.mesh,
+            reference,
+            old_of: r.old_of,
+            theta,
+        })
+    }
+}
+
+/// Where along its edge a sliver's node across it stands at the state `x` (0 and 1 at the
+/// edge's ends), and the edge's length.
+fn along_edge(model: &Model, s: &Sliver, x: &[f64]) -> (f64, f64) {
+    let nodes = model.mesh.cells[s.block].cell(s.cell);
+    let [a, b, k] = [s.edge[0], s.edge[1], s.across].map(|i| model.placed(nodes[i], x));
+    let e = [b[0] - a[0], b[1] - a[1]];
+    let l2 = (e[0] * e[0] + e[1] * e[1]).max(f64::MIN_POSITIVE);
+    (
+        ((k[0] - a[0]) * e[0] + (k[1] - a[1]) * e[1]) / l2,
+        l2.sqrt(),
+    )
+}
+
+/// F₀⁻¹ of a new cell whose centre stood where the old medium's deformation gradient was
+/// `F`: a closed layer (J < [`CLOSED`]) stretched back by 1/J along the direction F squeezed
+/// most; the identity elsewhere.
+fn carried_stretch(F: &Matrix2<f64>) -> Option<Matrix2<f64>> {
+    let J = F.determinant();
+    if !(J > 0.0 && J < CLOSED) {
+        return None;
+    }
+    let e = SymmetricEigen::new(F * F.transpose());
+    let i = if e.eigenvalues[0] <= e.eigenvalues[1] {
+        0
+    } else {
+        1
+    };
+    let n: Vector2<f64> = e.eigenvectors.column(i).into();
+    Some(Matrix2::identity() + (1.0 / J - 1.0) * n * n.transpose())
+}
+
+/// The slenderness (see [`slenderness`]) below which a new cell of the open medium starts
+/// from a reference opened across its thin direction.
+pub const THINNEST: f64 = 0.2;
+
+/// F₀⁻¹ of a new open cell with nodes at `p`: the identity, or for a sliver (slenderness
+/// s < [`THINNEST`]) a stretch by THINNEST / s across its longest edge, so that no reference is
+/// thinner than that: a sliver measured from itself would be a stiff cell, its faces unable
+/// to move along each other.
+fn opened(p: &[[f64; 3]]) -> Matrix2<f64> {
+    let k = p.len();
+    let s = slenderness(p, k == 3);
+    if s >= THINNEST || s <= 0.0 {
+        return Matrix2::identity();
+    }
+    let (mut longest, mut along) = (0.0, Vector2::new(1.0, 0.0));
+    for i in 0..k {
+        let e = Vector2::new(p[(i + 1) % k][0] - p[i][0], p[(i + 1) % k][1] - p[i][1]);
+        if e.norm() > longest {
+            longest = e.norm();
+            along = e / longest;
+        }
+    }
+    let n = Vector2::new(-along[1], along[0]);
+    Matrix2::identity() + (THINNEST / s - 1.0) * n * n.transpose()
+}
+
+impl Remade {
+    /// Per dof of `new` (the model built on the remade mesh), the dof of `old` it is, or
+    /// [`NONE`] (a new node's, or a p field, which starts again at zero).
+    pub fn old_dofs(&self, old: &Model, new: &Model) -> Vec<u32> {
+        let mut from = vec![NONE; new.dofs.n_dofs];
+        let d = new.dofs.dim;
+        for (n, o) in self.old_of.iter().enumerate() {
+            let Some(o) = *o else { continue };
+            if !new.dofs.u.is_empty() {
+                for i in 0..d {
+                    from[new.dofs.u[n * d + i] as usize] = old.dofs.u[o * d + i];
+                }
+            }
+            if !new.dofs.theta.is_empty() && new.dofs.theta[n] != NONE {
+                from[new.dofs.theta[n] as usize] = old.dofs.theta[o];
+            }
+        }
+        from
+    }
+
+    /// The state `x` of `old` on `new`: what kept nodes carry, new nodes at rest where they
+    /// stand with the temperature where they stand, the p fields at zero.
+    pub fn state(&self, old: &Model, x: &[f64], new: &Model) -> Vec<f64> {
+        let from = self.old_dofs(old, new);
+        let mut y: Vec<f64> = (from.iter())
+            .map(|&f| if f == NONE { 0.0 } else { x[f as usize] })
+            .collect();
+        if new.dofs.has(Field::Theta) {
+            for (n, o) in self.old_of.iter().enumerate() {
+                if o.is_none() && new.dofs.theta[n] != NONE {
+                    y[new.dofs.theta[n] as usize] = self.theta[n];
+                }
+            }
+        }
+        y
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_shear_measure_sees_shear_and_not_rotation_or_squeeze() {
+        let rot = |a: f64| Matrix2::new(a.cos(), -a.sin(), a.sin(), a.cos());
+        assert!(shear(&rot(0.7)) < 1e-7);
+        // a layer squeezed to a twentieth of its thickness, and turned
+        let squeezed = rot(0.3) * Matrix2::new(1.0, 0.0, 0.0, 0.05);
+        assert!(shear(&squeezed) < 1e-7);
+        // simple shear γ of a squeezed layer: about γ
+        for g in [0.5, 1.0, 3.0] {
+            let F = Matrix2::new(1.0, g, 0.0, 0.05);
+            let s = shear(&F);
+            assert!((s - g).abs() < 0.05 * g, "γ {g}: {s}");
+        }
+    }
+
+    #[test]
+    fn a_closed_layer_is_stretched_back_across_itself_and_keeps_no_shear() {
+        // a layer normal to y, squeezed to J = 0.05 and sheared by 2 along x
+        let F = Matrix2::new(1.0, 2.0 * 0.05, 0.0, 0.05);
+        let back = carried_stretch(&F).unwrap();
+        // the new cell's F₀ = back⁻¹: J as before, symmetric, no shear
+        let F0 = back.try_inverse().unwrap();
+        assert!((F0.determinant() - F.determinant()).abs() < 1e-12);
+        assert!((F0 - F0.transpose()).norm() < 1e-12);
+        assert!(shear(&F0) < 1e-7);
+        // squeezed along (about) the layer's normal
+        let n = Vector2::new(0.0, 1.0);
+        assert!(((F0 * n).norm() - 0.05).abs() < 0.01);
+        // an open cell starts stress-free
+        let open = Matrix2::new(1.0, 0.8, 0.0, 0.7);
+        assert_eq!(carried_stretch(&open), None);
+    }
+
+    #[test]
+    fn a_sliver_of_the_open_medium_starts_from_a_reference_no_thinner_than_the_thinnest() {
+        // a triangle 1 long and 0.01 high, its long edge tilted
+        let (c, s) = (0.6f64, 0.8f64);
+        let at = |x: f64, y: f64| [c * x - s * y, s * x + c * y, 0.0];
+        let p = [at(0.0, 0.0), at(1.0, 0.0), at(0.3, 0.01)];
+        assert!((slenderness(&p, true) - 0.01).abs() < 1e-12);
+        let back = opened(&p);
+        let mid: Vector2<f64> = p
+            .iter()
+            .map(|q| Vector2::new(q[0], q[1]))
+            .sum::<Vector2<f64>>()
+            / 3.0;
+        let r: Vec<[f64; 3]> = (p.iter())
+            .map(|q| {
+                let X = mid + back * (Vector2::new(q[0], q[1]) - mid);
+                [X[0], X[1], 0.0]
+            })
+            .collect();
+        assert!((slenderness(&r, true) - THINNEST).abs() < 1e-12);
+        // the long edge keeps its length; a well-shaped triangle keeps its shape
+        let len = |a: [f64; 3], b: [f64; 3]| ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt();
+        assert!((len(r[0], r[1]) - 1.0).abs() < 1e-12);
+        let fine = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.5, 0.8, 0.0]];
+        assert_eq!(opened(&fine), Matrix2::identity());
+    }
+}

@@ -1,0 +1,123 @@
+//! Bodies sliding through a medium made again as they move (`remake` of a medium region):
+//! the README's cylinder slid along its plate keeps the normal force of its press and meets
+//! no drag on average, where the Lagrangian medium ploughs; and what `remake` cannot do yet
+//! is refused by `tmc check` and `tmc solve` alike.
+
+use crate::common;
+use common::*;
+use std::path::Path;
+
+/// Over the slide (t > 1) of a run in `dir`: the normal force at the end of the press, the
+/// smallest and largest normal force, the time-weighted mean of F_t/F_n and its largest size,
+/// F_t and F_n being the reactions of the cylinder's rim.
+fn slide_forces(dir: &Path) -> (f64, f64, f64, f64, f64) {
+    let (cols, rows) = history(dir);
+    let col = |name: &str| cols.iter().position(|c| c == name).unwrap();
+    let (t, fx, fy) = (col("time"), col("R_rim_x"), col("R_rim_y"));
+    let press = rows.iter().find(|r| r[t] == 1.0).expect("the press's end");
+    let fn0 = -press[fy];
+    let slide: Vec<&Vec<f64>> = rows.iter().filter(|r| r[t] >= 1.0).collect();
+    let normal: Vec<f64> = slide.iter().map(|r| -r[fy]).collect();
+    let ratio: Vec<f64> = slide.iter().map(|r| r[fx] / -r[fy]).collect();
+    let span = slide.last().unwrap()[t] - 1.0;
+    let mean = (1..slide.len())
+        .map(|i| (slide[i][t] - slide[i - 1][t]) * ratio[i])
+        .sum::<f64>()
+        / span;
+    let lo = normal.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = normal.iter().copied().fold(0.0, f64::max);
+    let most = ratio.iter().fold(0.0f64, |m, r| m.max(r.abs()));
+    (fn0, lo, hi, mean, most)
+}
+
+#[test]
+fn the_cylinder_slides_on_a_medium_made_again_with_the_force_of_its_press_and_no_drag() {
+    let (made, out) = solve_case("cylinder-slide");
+    assert!(made.medium_remade > 0, "the medium was made again");
+    let (fn0, lo, hi, mean, most) = slide_forces(&out);
+    // measured: F_n 1.205 to 1.340 against 1.325 at the press's end; F_t/F_n 0.000 on
+    // average, 0.119 at most (it swings as the cylinder's facets pass the plate's nodes)
+    assert!(
+        lo > 0.88 * fn0 && hi < 1.12 * fn0,
+        "F_n {lo} to {hi}, {fn0} pressed"
+    );
+    assert!(mean.abs() < 0.02, "F_t/F_n {mean} on average");
+    assert!(most < 0.15, "F_t/F_n {most} at most");
+    // the Lagrangian medium on the same slide ploughs (measured: F_n to 1.79 times the
+    // press's, F_t/F_n 0.128 on average); with the weaker rotation penalty it stalls
+    let lagrangian = case_file(
+        "cylinder-slide-lagrangian",
+        "cylinder-plate.geo",
+        "params = { h = 0.1 }",
+        &case_body("cylinder-slide")
+            .replace("remake = true\n", "")
+            .replace("beta1 = 0.01\n", ""),
+    );
+    let out = lagrangian.with_file_name("out");
+    let o = solve_cli(&lagrangian, &out, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(summary(&out)["medium_remade"], 0);
+    let (fn0, _, hi, mean, _) = slide_forces(&out);
+    assert!(hi > 1.5 * fn0, "ploughed: F_n {hi}, {fn0} pressed");
+    assert!(mean > 0.1, "ploughed: F_t/F_n {mean} on average");
+}
+
+#[test]
+fn check_says_the_medium_will_be_made_again() {
+    let o = tmc(&[
+        "check",
+        root().join("cases/cylinder-slide.toml").to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout).to_string() + &stderr(&o);
+    assert!(
+        text.contains("medium made again as the bodies move"),
+        "{text}"
+    );
+}
+
+#[test]
+fn what_remake_cannot_do_yet_check_and_solve_refuse_alike() {
+    let body = case_body("cylinder-slide");
+    let cases = [
+        (
+            "on-a-solid",
+            "params = { h = 0.1 }",
+            body.replace("mu = 10.0\n", "mu = 10.0\nremake = true\n"),
+            "`remake` is a medium key; this region is a solid",
+        ),
+        (
+            "heavy-medium",
+            "params = { h = 0.1 }",
+            body.replace("remake = true\n", "remake = true\nrho = 1e-4\n"),
+            "does not carry a medium's stored heat or mass across yet",
+        ),
+        (
+            "quadratic",
+            "order = 2\nparams = { h = 0.1 }",
+            body.clone(),
+            "works with linear cells only so far",
+        ),
+    ];
+    for (tag, options, text, words) in cases {
+        let case = case_file(
+            &format!("remake-{tag}"),
+            "cylinder-plate.geo",
+            options,
+            &text,
+        );
+        let out = case.with_file_name("out");
+        for o in [
+            tmc(&["check", case.to_str().unwrap()]),
+            solve_cli(&case, &out, &[]),
+        ] {
+            let e = stderr(&o);
+            assert_eq!(o.status.code(), Some(1), "{tag}: {e}");
+            assert!(e.contains(words), "{tag}: \"{words}\" not in: {e}");
+        }
+        assert!(
+            !out.join("step_0000.vtu").exists(),
+            "{tag}: nothing written"
+        );
+    }
+}
