@@ -121,3 +121,25 @@ fn what_remake_cannot_do_yet_check_and_solve_refuse_alike() {
         );
     }
 }
+
+#[test]
+fn a_medium_made_again_is_refused_a_restart_and_several_ranks_by_name() {
+    let case = root().join("cases/cylinder-slide.toml");
+    let out = scratch("cylinder-slide-restart");
+    let o = solve_cli(&case, &out, &["--restart"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains(
+            "cannot restart a run whose medium is made again (`remake` of region \"medium\")"
+        ),
+        "{}",
+        stderr(&o)
+    );
+    let o = mpirun_tmc(2, &["check".as_ref(), case.as_os_str()]);
+    assert!(!o.status.success());
+    let text = String::from_utf8_lossy(&o.stdout).to_string() + &stderr(&o);
+    assert!(
+        text.contains("a medium made again as the bodies move (`remake`) runs on one process"),
+        "{text}"
+    );
+}
