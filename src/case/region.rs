@@ -356,10 +356,20 @@ impl RegionKeys<'_> {
             ],
             "is a medium key; this region is a solid",
         )?;
-        if let Some(remake) = &r.remake {
+        // the medium keys that are not numbers
+        let spans = [
+            (
+                "k_table",
+                r.k_table.as_ref().map(|v| v.span()),
+                " (its conductivity is `k`)",
+            ),
+            ("remake", r.remake.as_ref().map(|v| v.span()), ""),
+        ];
+        if let Some((key, span, hint)) = (spans.into_iter()).find_map(|(k, s, h)| Some((k, s?, h)))
+        {
             return self.fail(
-                remake.span(),
-                "`remake` is a medium key; this region is a solid".into(),
+                span,
+                format!("`{key}` is a medium key; this region is a solid{hint}"),
             );
         }
         Ok(Material::Solid(SolidMaterial {

@@ -616,6 +616,16 @@ fn a_medium_s_conductivity_keys_are_checked_by_file_line_and_key() {
             format!("{SOLID}h_closed = 5.0\n"),
             vec!["solid-c.toml:9", "`h_closed` is a medium key"],
         ),
+        (
+            "solid-table",
+            format!("{SOLID}k = 1.0\nk_table = [[0.1, 1.0], [1.0, 2.0]]\n"),
+            vec!["solid-table-c.toml:10", "`k_table` is a medium key"],
+        ),
+        (
+            "solid-table-alone",
+            format!("{SOLID}k_table = [[0.1, 1.0], [1.0, 2.0]]\n"),
+            vec!["solid-table-alone-c.toml:9", "`k_table` is a medium key"],
+        ),
     ];
     each_refused(&dir, with_held(cases));
 }
