@@ -225,6 +225,17 @@ pub fn plan(model: &Model, request: &Request, systems: &[System]) -> Result<Plan
             crate::parallel::NOT_BUILT
         ));
     }
+    if !auto && let Some((need, budget)) = over_budget(request, &asm.pattern, &solvers) {
+        let asked = match request.solver.engine {
+            EngineChoice::Faer => "engine \"faer\"",
+            _ => "a `linear` solver given",
+        };
+        note = Some(format!(
+            "warning: {asked}: a run on faer would take about {need:.0} MB at its peak, more \
+             than the {budget:.0} MB it has (--memory or TMC_MEMORY_MB sets the budget); it \
+             runs as asked"
+        ));
+    }
     Ok(Planned {
         asm,
         solvers,

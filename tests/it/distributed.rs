@@ -218,6 +218,22 @@ fn auto_takes_petsc_s_multigrid_where_faer_s_factors_do_not_fit() {
             "{faer}"
         );
     }
+    // faer asked for, or a linear solver: it runs as asked, and says it does not fit
+    let asked = report(&["--memory", "1", "--set", "solver.engine=\"faer\""]);
+    assert!(
+        asked.contains("warning: engine \"faer\": a run on faer would take about")
+            && asked.contains("more than the 1 MB it has"),
+        "{asked}"
+    );
+    let lu = report(&["--memory", "1", "--set", "solver.linear=\"lu\""]);
+    assert!(
+        lu.contains("warning: a `linear` solver given: a run on faer would take about"),
+        "{lu}"
+    );
+    assert!(
+        !report(&[]).contains("warning:"),
+        "the machine's memory is enough"
+    );
     let out = scratch("auto-memory");
     let o = common::tmc_with(
         &[
