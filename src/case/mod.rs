@@ -21,7 +21,7 @@ pub use region::{
     FrictionKey, Material, MediumConduction, MediumMaterial, Region, RegionKind, SlipNormal,
     SolidLawKey, SolidMaterial,
 };
-pub use sets::set_path;
+pub use sets::{set_path, set_path_making};
 pub use solver::{CouplingChoice, EngineChoice, LinearChoice, PetscMethod, PetscOptions, Solver};
 pub use steps::{Steps, Time};
 
@@ -191,15 +191,30 @@ impl Case {
             msg,
         };
         let mut doc: toml::Table = toml::from_str(&self.text).map_err(|e| err(e.to_string()))?;
+        let mut made = Vec::new();
         for (key, raw) in sets {
             let value = toml::from_str::<toml::Table>(&format!("v = {raw}"))
                 .ok()
                 .and_then(|mut t| t.remove("v"))
                 .unwrap_or_else(|| toml::Value::String(raw.clone()));
-            set_path(&mut doc, key, value, Some(&self.text)).map_err(&err)?;
+            if let Some(table) =
+                set_path_making(&mut doc, key, value, Some(&self.text)).map_err(&err)?
+            {
+                made.push((key, table));
+            }
         }
         let text = toml::to_string(&doc).map_err(|e| err(e.to_string()))?;
-        Case::parse(&self.path, text).map_err(|e| err(e.detail()))
+        Case::parse(&self.path, text).map_err(|e| {
+            let detail = e.detail();
+            // a table made by a --set holds that key alone: what it lacks is the --set's
+            match (detail.contains("missing field"), made.first()) {
+                (true, Some((key, table))) => err(format!(
+                    "{detail}: `{key}` makes `{table}`, which the case does not have, with that \
+                     key alone; give the whole table (--set '{table}={{ ... }}')"
+                )),
+                _ => err(detail),
+            }
+        })
     }
 
     pub fn read(path: &Path) -> Result<Case, CaseError> {
@@ -331,6 +346,18 @@ mod tests {
             .to_string();
         assert!(
             e.contains("with --set steps.max=2.0") && e.contains("min <= initial <= max <= 1"),
+            "{e}"
+        );
+        // a key set in a table the case does not have: the error names the table it made
+        let medium =
+            parsed("[[region]]\ngroup = \"gap\"\nkind = \"medium\"\ngamma = 1e-4\n").unwrap();
+        let e = medium
+            .with_sets(&set("region.gap.friction.forget_slip", "true"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("missing field `mu`")
+                && e.contains("makes `region.gap.friction`, which the case does not have"),
             "{e}"
         );
     }

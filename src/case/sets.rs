@@ -12,12 +12,45 @@ pub fn set_path(
     value: toml::Value,
     text: Option<&str>,
 ) -> Result<(), String> {
+    set_path_making(doc, path, value, text).map(|_| ())
+}
+
+/// [`set_path`], and the dotted path of the first table it had to make (one the case does
+/// not have), if any: a table made with one key alone may lack what it needs.
+pub fn set_path_making(
+    doc: &mut toml::Table,
+    path: &str,
+    value: toml::Value,
+    text: Option<&str>,
+) -> Result<Option<String>, String> {
+    let mut made = None;
+    set_in(doc, "", path, value, text, &mut made)?;
+    Ok(made)
+}
+
+/// [`set_path`] below the dotted path `above` (where `doc` stands), the first table made
+/// into `made`.
+fn set_in(
+    doc: &mut toml::Table,
+    above: &str,
+    path: &str,
+    value: toml::Value,
+    text: Option<&str>,
+    made: &mut Option<String>,
+) -> Result<(), String> {
     let segs: Vec<&str> = path.split('.').collect();
+    let under = |n: usize| match above {
+        "" => segs[..n].join("."),
+        _ => format!("{above}.{}", segs[..n].join(".")),
+    };
     let mut cur: &mut toml::Table = doc;
     for (i, seg) in segs.iter().enumerate() {
         if i + 1 == segs.len() {
             cur.insert(seg.to_string(), value);
             return Ok(());
+        }
+        if made.is_none() && !cur.contains_key(*seg) {
+            *made = Some(under(i + 1));
         }
         let entry = cur
             .entry(seg.to_string())
@@ -84,7 +117,7 @@ pub fn set_path(
                 if rest.is_empty() {
                     return Err(format!("\"{path}\": names an entry, not a key in it"));
                 }
-                return set_path(t, &rest.join("."), value, None);
+                return set_in(t, &under(i + 2), &rest.join("."), value, None, made);
             }
             _ => return Err(format!("\"{path}\": \"{seg}\" is not a table")),
         };
@@ -107,7 +140,7 @@ fn entry_lines(text: Option<&str>, seg: &str) -> Vec<usize> {
 
 #[cfg(test)]
 mod tests {
-    use super::set_path;
+    use super::{set_path, set_path_making};
 
     fn doc() -> toml::Table {
         toml::from_str(
@@ -138,5 +171,26 @@ mod tests {
         assert!(e.contains("no [[bc]] with group or name \"side\""), "{e}");
         let e = set_path(&mut d, "bc.bottom#0.uy", toml::Value::Float(1.0), None).unwrap_err();
         assert!(e.contains("is no entry number"), "{e}");
+    }
+
+    #[test]
+    fn a_dotted_path_says_which_table_it_had_to_make() {
+        let mut d = doc();
+        let v = || toml::Value::Boolean(true);
+        // a key of an entry, and a new key in a table that is there: nothing made
+        assert_eq!(set_path_making(&mut d, "bc.top.ux", v(), None), Ok(None));
+        // a table inside an entry, and one at the top
+        assert_eq!(
+            set_path_making(&mut d, "bc.hot.friction.forget_slip", v(), None),
+            Ok(Some("bc.hot.friction".into()))
+        );
+        assert_eq!(
+            set_path_making(&mut d, "solver.petsc.method", v(), None),
+            Ok(Some("solver".into()))
+        );
+        assert_eq!(
+            set_path_making(&mut d, "solver.petsc.options", v(), None),
+            Ok(None)
+        );
     }
 }
