@@ -80,6 +80,17 @@ pub trait RefElement<const N: usize, const D: usize>: Sync + Send + 'static {
     }
 }
 
+/// The element's centre in reference coordinates: the mean of its nodes'.
+pub fn centre<const N: usize, const D: usize, E: RefElement<N, D>>() -> [f64; D] {
+    let mut xi = [0.0; D];
+    for r in &E::nodes() {
+        for d in 0..D {
+            xi[d] += r[d] / N as f64;
+        }
+    }
+    xi
+}
+
 /// The reference coordinates ξ of the point `p` in the cell with nodes at `X`: the
 /// isoparametric map inverted by Newton from the element's centre. `None` where the map is
 /// singular; a ξ outside the reference domain (see [`RefElement::contains`]) where the point
@@ -89,12 +100,7 @@ pub fn local_coords<const N: usize, const D: usize, E: RefElement<N, D>>(
     X: &[[f64; 3]; N],
     p: &[f64; 3],
 ) -> Option<[f64; D]> {
-    let mut xi = [0.0; D];
-    for r in &E::nodes() {
-        for d in 0..D {
-            xi[d] += r[d] / N as f64;
-        }
-    }
+    let mut xi = centre::<N, D, E>();
     for _ in 0..30 {
         let n = E::shape(&xi);
         let g = E::grad(&xi);

@@ -111,11 +111,7 @@ impl Layer {
 
     /// Node `n`'s place at the state `x`.
     fn place(model: &Model, x: &[f64], n: usize) -> Vector3<f64> {
-        let d = model.dofs.dim;
-        Vector3::from_fn(|i, _| match i < d {
-            true => model.mesh.coords[n][i] + x[model.dofs.u[n * d + i] as usize],
-            false => 0.0,
-        })
+        Vector3::from(model.placed(n, x))
     }
 
     /// Node `n`'s place along the layer at the state `x`.

@@ -23,7 +23,7 @@
 
 use super::{Model, RegionKind};
 use crate::dofs::{CellState, Field, NONE, gather, rebase};
-use crate::element::{RefElement, local_coords, physical_gradients};
+use crate::element::{RefElement, centre, local_coords, physical_gradients};
 use crate::mesh::Mesh;
 use crate::mesh::remesh::{remesh, supported};
 use nalgebra::{Matrix2, SymmetricEigen, Vector2};
@@ -121,17 +121,6 @@ fn slenderness(X: &[[f64; 3]], simplex: bool) -> f64 {
     (f * area.abs() / longest.max(f64::MIN_POSITIVE)).min(1.0)
 }
 
-/// The element's centre in reference coordinates.
-fn centre<const N: usize, const D: usize, E: RefElement<N, D>>() -> [f64; D] {
-    let mut xi = [0.0; D];
-    for r in &E::nodes() {
-        for d in 0..D {
-            xi[d] += r[d] / N as f64;
-        }
-    }
-    xi
-}
-
 /// The shear of the deformation gradient `F`: sqrt((λ₂ − 1)(1 − λ₁)) with λ₁ ≤ λ₂ the
 /// eigenvalues of F Fᵀ, about γ for a simple shear γ of a layer however squeezed, and zero for
 /// a rotation and for a compression along one axis.
@@ -154,7 +143,7 @@ impl Model {
     }
 
     /// Node `n`'s place at the state `x`.
-    fn placed(&self, n: usize, x: &[f64]) -> [f64; 3] {
+    pub(crate) fn placed(&self, n: usize, x: &[f64]) -> [f64; 3] {
         let d = self.dofs.dim;
         let mut p = self.mesh.coords[n];
         if !self.dofs.u.is_empty() {
