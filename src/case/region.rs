@@ -263,12 +263,14 @@ impl Material {
 }
 
 impl MediumMaterial {
-    /// The regularization of eq. (20) over the mesh's extent `d` (eq. 21).
-    pub fn regularization(&self, d: f64) -> Regularization {
+    /// The regularization of eq. (20) over the mesh's extent `d` (eq. 21); `remade`: the
+    /// region is made again as the bodies move, and its penalty is taken per current volume.
+    pub fn regularization(&self, d: f64, remade: bool) -> Regularization {
         Regularization {
             beta1: self.beta1,
             beta2: self.beta2,
             d,
+            per_current_volume: remade,
         }
     }
 
@@ -730,14 +732,14 @@ mod tests {
         // eq. (13): Neo-Hooke with K = μ = γ
         assert_eq!((plain.law.K, plain.law.mu), (1e-4, 1e-4));
         assert!(matches!(material(MEDIUM).law(), SolidLaw::NeoHooke(l) if l == plain.law));
-        let reg = plain.regularization(2.0);
+        let reg = plain.regularization(2.0, false);
         assert_eq!((reg.beta1, reg.beta2, reg.d), (1.0, 1e-2, 2.0));
         // eq. (18) weighs like eq. (20) with p = d f: β2 d²
         assert_eq!(plain.direct_regularization(2.0), 1e-2 * 4.0);
         let given = medium(&format!(
             "{MEDIUM}beta1 = 0.5\nbeta2 = 0.1\nalpha_r = 3.0\n"
         ));
-        let reg = given.regularization(2.0);
+        let reg = given.regularization(2.0, false);
         assert_eq!((reg.beta1, reg.beta2), (0.5, 0.1));
         // α_r given: γ α_r
         assert_eq!(given.direct_regularization(2.0), 1e-4 * 3.0);

@@ -362,6 +362,7 @@ mod tests {
             beta1: 1.0,
             beta2: 0.3,
             d: 1.7,
+            per_current_volume: false,
         }),
         reg_direct: None,
     };
@@ -538,5 +539,55 @@ mod tests {
         check::<4, 2, Quad4>(&MEDIUM);
         check::<4, 3, Tet4>(&MEDIUM);
         check::<8, 3, Hex8>(&MEDIUM);
+    }
+
+    /// A remade medium's penalty per current volume: the exact tangent, and the energy the
+    /// reference-volume penalty's times J on a cell of uniform F.
+    #[test]
+    fn medium_with_regularization_per_current_volume_tangent_and_energy() {
+        let reg = MEDIUM.reg.unwrap();
+        let current = CellMaterial {
+            reg: Some(Regularization {
+                per_current_volume: true,
+                ..reg
+            }),
+            ..MEDIUM
+        };
+        check::<3, 2, Tri3>(&current);
+        check::<4, 2, Quad4>(&current);
+        check::<4, 3, Tet4>(&current);
+        check::<8, 3, Hex8>(&current);
+        // a triangle squeezed to J = 0.04 and sheared, its p fields off the rotation
+        let mut s = CellState::<3>::zero();
+        for (I, xi) in Tri3::nodes().iter().enumerate() {
+            s.X[I] = [xi[0], xi[1], 0.0];
+            s.u[I] = [0.3 * xi[1], -0.96 * xi[1], 0.0];
+            s.p[I][0] = 0.1 * I as f64;
+        }
+        let lay = |np| Layout {
+            n: 3,
+            dim: 2,
+            has_u: true,
+            has_theta: false,
+            np,
+        };
+        let energy = |mat: &CellMaterial, np| {
+            let mut r = vec![0.0; lay(np).ndof()];
+            bulk::<3, 2, Tri3>(mat, &lay(np), &s, Active::ALL, &mut r, None)
+                .unwrap()
+                .energy
+        };
+        let bare = CellMaterial {
+            reg: None,
+            ..MEDIUM
+        };
+        let (e0, e_ref, e_cur) = (energy(&bare, 0), energy(&MEDIUM, 1), energy(&current, 1));
+        let (psi_ref, psi_cur) = (e_ref - e0, e_cur - e0);
+        assert!(psi_ref > 1e-3, "the penalty is there: {psi_ref}");
+        assert!(
+            (psi_cur - 0.04 * psi_ref).abs() < 1e-12 * psi_ref,
+            "per current volume {psi_cur} against J × per reference volume {}",
+            0.04 * psi_ref
+        );
     }
 }

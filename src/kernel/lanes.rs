@@ -124,7 +124,8 @@ pub fn available() -> bool {
 }
 
 /// A block of cells the lane kernel can run, and the only way to call it: u (with θ or
-/// without, with the linear medium's p fields or without), no direct regularization, and
+/// without, with the linear medium's p fields or without, their penalty per reference
+/// volume), no direct regularization, and
 /// every equation of the cell wanted. The laws themselves are the one-cell kernel's
 /// (`material`, generic over the scalar), so any law a material holds is computed right.
 #[derive(Clone, Copy, Debug)]
@@ -137,7 +138,9 @@ impl LaneBlock {
     /// `Some` where the lanes can compute the block's cells with equations `act`.
     pub fn new(mat: &CellMaterial, lay: &Layout, act: Active) -> Option<LaneBlock> {
         let ok = lay.has_u
-            && (lay.np == 0 || (mat.reg.is_some() && lay.np == lay.dim * (lay.dim - 1) / 2))
+            && (lay.np == 0
+                || (mat.reg.is_some_and(|r| !r.per_current_volume)
+                    && lay.np == lay.dim * (lay.dim - 1) / 2))
             && mat.reg_direct.is_none()
             && act.mechanics
             && (!lay.has_theta || act.heat);
@@ -930,6 +933,7 @@ mod tests {
                 beta1: 0.7,
                 beta2: 0.3,
                 d: 1.7,
+                per_current_volume: false,
             }),
             medium: true,
             ..material(medium)

@@ -10,6 +10,7 @@ use nalgebra::Matrix3;
 
 /// Regularization of a linear medium cell at one quadrature point, eq. (20): adds
 /// ∂Ψ_Rf/∂(u, p) dV to `r` and its exact derivative (symmetric) to `k`; returns Ψ_Rf dV.
+/// Per current volume ([`Regularization::per_current_volume`]) the same with Ψ_Rf J dV.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(super) fn regularization<const N: usize, const D: usize, M: MulAdd>(
@@ -23,6 +24,25 @@ pub(super) fn regularization<const N: usize, const D: usize, M: MulAdd>(
     r: &mut [f64],
     tangent: Option<(&mut UuBlocks<N>, &mut PBlocks<N>)>,
 ) -> Result<f64, KernelError> {
+    // per current volume: J and h_I = F⁻ᵀ ∇_X N_I (∂J/∂u(I,a) = J h_Ia); the terms below are
+    // then weighed by J dV, and Ψ ∂J with its derivatives is added after them
+    let current = if reg.per_current_volume {
+        let inv = F
+            .try_inverse()
+            .ok_or(KernelError::Inverted { J: F.determinant() })?;
+        let h: [[f64; D]; N] = std::array::from_fn(|I| {
+            std::array::from_fn(|a| (0..D).map(|J| g[I][J] * inv[(J, a)]).sum())
+        });
+        Some((F.determinant(), h))
+    } else {
+        None
+    };
+    let dV = current.map_or(dV, |(J, _)| J * dV);
+    let mut parts = Parts::<N> {
+        psi: 0.0,
+        du: [[0.0; N]; 3],
+        dp: [[0.0; N]; 3],
+    };
     let mut energy = 0.0;
     let mut tangent = tangent;
     for c in 0..lay.np {
@@ -51,6 +71,16 @@ pub(super) fn regularization<const N: usize, const D: usize, M: MulAdd>(
             }
             let gg: f64 = (0..D).map(|J| gp[J] * g[I][J]).sum();
             r[lay.p(I, c)] += (d1[1] * Nv[I] + reg.beta2 * gg) * dV;
+        }
+        if current.is_some() {
+            parts.psi += psi + 0.5 * reg.beta2 * gp2;
+            for I in 0..N {
+                for a in 0..D {
+                    parts.du[a][I] += d1[0] * Bf[a][I];
+                }
+                let gg: f64 = (0..D).map(|J| gp[J] * g[I][J]).sum();
+                parts.dp[c][I] += d1[1] * Nv[I] + reg.beta2 * gg;
+            }
         }
         let Some((uu, pb)) = tangent.as_mut() else {
             continue;
@@ -96,7 +126,57 @@ pub(super) fn regularization<const N: usize, const D: usize, M: MulAdd>(
             }
         }
     }
+    if let Some((_, h)) = current {
+        add_volume_terms::<N, D>(lay, &h, &parts, dV, r, tangent);
+    }
     Ok(energy)
+}
+
+/// Ψ_Rf at a point and its derivatives by u (`du[a][I]`) and p (`dp[c][I]`), without dV.
+struct Parts<const N: usize> {
+    psi: f64,
+    du: [[f64; N]; 3],
+    dp: [[f64; N]; 3],
+}
+
+/// The terms of Ψ J beyond J times those of Ψ: Ψ ∂J in the residual, and the sum of
+/// ∂J ⊗ ∂Ψ, ∂Ψ ⊗ ∂J and Ψ ∂²J in the tangent, with ∂J/∂u(I,a) = J h_Ia and
+/// ∂²J/∂u(I,a)∂u(K,b) = J (h_Ia h_Kb − h_Ib h_Ka); `JdV` is J dV.
+fn add_volume_terms<const N: usize, const D: usize>(
+    lay: &Layout,
+    h: &[[f64; D]; N],
+    parts: &Parts<N>,
+    JdV: f64,
+    r: &mut [f64],
+    tangent: Option<(&mut UuBlocks<N>, &mut PBlocks<N>)>,
+) {
+    for I in 0..N {
+        for a in 0..D {
+            r[lay.u(I, a)] += parts.psi * h[I][a] * JdV;
+        }
+    }
+    let Some((uu, pb)) = tangent else {
+        return;
+    };
+    for a in 0..D {
+        for b in a..D {
+            for I in 0..N {
+                for K in 0..N {
+                    let v = h[I][a] * parts.du[b][K]
+                        + parts.du[a][I] * h[K][b]
+                        + parts.psi * (h[I][a] * h[K][b] - h[I][b] * h[K][a]);
+                    uu[a][b][I][K] += v * JdV;
+                }
+            }
+        }
+        for c in 0..lay.np {
+            for I in 0..N {
+                for K in 0..N {
+                    pb.up[a][c][I][K] += h[I][a] * parts.dp[c][K] * JdV;
+                }
+            }
+        }
+    }
 }
 
 /// Second derivatives ∂²N_I/∂X_J∂X_K at ξ, with the geometry-map term of curved cells:

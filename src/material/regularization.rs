@@ -98,6 +98,12 @@ pub struct Regularization {
     pub beta1: f64,
     pub beta2: f64,
     pub d: f64,
+    /// Ψ_Rf integrated over the current volume (∫ Ψ_Rf J dV) instead of the reference one: a
+    /// medium made again as the bodies move (`remake`), whose reference is renewed at every
+    /// remake, so that the penalty does not depend on which reference it was given, and a
+    /// layer closed between the bodies (J → 0) does not hold their slide through the
+    /// rotation its shear reads as.
+    pub per_current_volume: bool,
 }
 
 impl Regularization {
@@ -206,6 +212,7 @@ mod tests {
             beta1: 1.3,
             beta2: 1e-2,
             d: 2.5,
+            per_current_volume: false,
         };
         let (f, p) = (0.2, -0.4);
         let (_, g, hess) = reg.penalty(f, p);

@@ -309,14 +309,14 @@ fn region_materials(case: &Case, d: f64) -> Vec<CellMaterial> {
             Material::Medium(_) => None,
         })
         .fold(0.0f64, f64::max);
-    (case.materials.iter())
-        .map(|m| {
+    (case.materials.iter().zip(&case.file.region))
+        .map(|(m, r)| {
             let medium = m.medium();
             CellMaterial {
                 law: m.law(),
                 cond: m.conductivity(solids_k),
                 medium: medium.is_some(),
-                reg: medium.map(|md| md.regularization(d)),
+                reg: medium.map(|md| md.regularization(d, r.remakes())),
                 reg_direct: None,
             }
         })

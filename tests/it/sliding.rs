@@ -35,23 +35,22 @@ fn the_cylinder_slides_on_a_medium_made_again_with_the_force_of_its_press_and_no
     let (made, out) = solve_case("cylinder-slide");
     assert!(made.medium_remade > 0, "the medium was made again");
     let (fn0, lo, hi, mean, most) = slide_forces(&out);
-    // measured: F_n 1.205 to 1.340 against 1.325 at the press's end; F_t/F_n 0.000 on
-    // average, 0.119 at most (it swings as the cylinder's facets pass the plate's nodes)
+    // measured: F_n 1.207 to 1.327 against 1.326 at the press's end; F_t/F_n 0.008 on
+    // average, 0.100 at most (it swings as the cylinder's facets pass the plate's nodes).
+    // The penalty per reference volume held the slide: 0.45 on average, 1.2 at most
     assert!(
-        lo > 0.88 * fn0 && hi < 1.12 * fn0,
+        lo > 0.88 * fn0 && hi < 1.05 * fn0,
         "F_n {lo} to {hi}, {fn0} pressed"
     );
     assert!(mean.abs() < 0.02, "F_t/F_n {mean} on average");
     assert!(most < 0.15, "F_t/F_n {most} at most");
     // the Lagrangian medium on the same slide ploughs (measured: F_n to 1.79 times the
-    // press's, F_t/F_n 0.128 on average); with the weaker rotation penalty it stalls
+    // press's, F_t/F_n 0.128 on average)
     let lagrangian = case_file(
         "cylinder-slide-lagrangian",
         "cylinder-plate.geo",
         "params = { h = 0.1 }",
-        &case_body("cylinder-slide")
-            .replace("remake = true\n", "")
-            .replace("beta1 = 0.01\n", ""),
+        &case_body("cylinder-slide").replace("remake = true\n", ""),
     );
     let out = lagrangian.with_file_name("out");
     let o = solve_cli(&lagrangian, &out, &[]);
