@@ -107,15 +107,15 @@ enum Command {
         #[arg(short, long)]
         quiet: bool,
     },
-    /// Draw history.csv columns of a solved case against λ (or the physical time), one PNG per
-    /// column.
+    /// Draw history.csv columns of a solved case against λ (or the time), one PNG per column.
     Plot {
         /// The results folder of a solve (holds history.csv).
         results: PathBuf,
         /// Columns to draw (default: probes, reactions, energy, work).
         #[arg(short, long, value_delimiter = ',')]
         columns: Vec<String>,
-        /// The x column (default: `time` where the case has a [time] section, else `lambda`).
+        /// The x column (default: `time` where the case has a [time] section or λ holds while
+        /// the pseudo-time runs on, as in a press then a slide; else `lambda`).
         #[arg(short, long)]
         x: Option<String>,
         /// Output folder (default: the results folder).

@@ -349,7 +349,8 @@ pub fn default_columns(h: &History) -> Vec<String> {
 }
 
 /// `tmc plot`: one PNG per column of `results/NAME/history.csv` against `x` (default: the
-/// physical time where the run has one, else λ), written to `out` (default the results
+/// physical time where the run has one, the pseudo-time where λ holds during it, else λ),
+/// written to `out` (default the results
 /// folder). Returns the files written.
 pub fn plot_results(
     dir: &Path,
@@ -360,7 +361,7 @@ pub fn plot_results(
     let path = dir.join("history.csv");
     let h = History::read(&path)?;
     let labels = Labels::read(dir);
-    let x = x.unwrap_or(labels.default_x());
+    let x = x.unwrap_or(labels.default_x_of(&h));
     let bad = |msg: String| PlotError::Bad {
         path: path.clone(),
         msg,
@@ -495,6 +496,18 @@ impl Labels {
         } else {
             "lambda"
         }
+    }
+
+    /// [`Labels::default_x`] for the history `h`: the pseudo-time where λ holds while it runs
+    /// on (a `path` that presses and then slides at full load), where λ would draw the slide
+    /// as one vertical line.
+    pub fn default_x_of(&self, h: &History) -> &'static str {
+        let x = self.default_x();
+        let (Some(lambda), Some(time)) = (h.column("lambda"), h.column("time")) else {
+            return x;
+        };
+        let held = (1..lambda.len()).any(|i| lambda[i] <= lambda[i - 1] && time[i] > time[i - 1]);
+        if held { "time" } else { x }
     }
 
     /// The axis title of `column`: its name or the quantity in words, then the unit in

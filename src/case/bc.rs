@@ -70,6 +70,11 @@ pub enum Ramp {
 pub const RAMPED_VALUES: [&str; 6] = ["ux", "uy", "uz", "theta", "traction", "heat_flux"];
 
 impl Bc {
+    /// Whether the block prescribes a displacement component (so its group has a reaction).
+    pub fn displaces(&self) -> bool {
+        self.ux.is_some() || self.uy.is_some() || self.uz.is_some()
+    }
+
     /// Whether `value` (one of [`RAMPED_VALUES`]) grows with λ (else it is held at full value
     /// from the start).
     pub fn ramped(&self, value: &str) -> bool {

@@ -16,6 +16,10 @@ pub struct Probe {
     pub to: Option<Vec<f64>>,
     /// Axis of the distance: "x", "y" or "z".
     pub axis: Option<String>,
+    /// The group whose reaction a force ratio splits.
+    pub group: Option<String>,
+    /// The contact's normal a force ratio splits the reaction along.
+    pub normal: Option<Vec<f64>>,
 }
 
 /// What a probe measures, as its keys say.
@@ -27,6 +31,8 @@ pub enum Measure<'a> {
     Theta(&'a [f64]),
     /// The distance along an axis (0, 1, 2) between two material points.
     Distance(usize, &'a [f64], &'a [f64]),
+    /// F_t/F_n of a group's reaction split along a normal.
+    ForceRatio(&'a str, &'a [f64]),
 }
 
 impl Probe {
@@ -59,8 +65,23 @@ impl Probe {
                 };
                 Ok(Measure::Distance(axis, from, to))
             }
+            "force_ratio" => {
+                let (Some(group), Some(normal)) = (&self.group, &self.normal) else {
+                    return Err(format!(
+                        "probe \"{name}\": a force ratio needs `group` and `normal`"
+                    ));
+                };
+                let length = normal.iter().map(|v| v * v).sum::<f64>().sqrt();
+                if !(length > 0.0 && length.is_finite() && (2..=3).contains(&normal.len())) {
+                    return Err(format!(
+                        "probe \"{name}\": `normal` must be 2 or 3 finite numbers, not all 0"
+                    ));
+                }
+                Ok(Measure::ForceRatio(group, normal))
+            }
             other => Err(format!(
-                "probe \"{name}\": unknown field \"{other}\" (ux, uy, uz, theta, distance)"
+                "probe \"{name}\": unknown field \"{other}\" (ux, uy, uz, theta, distance, \
+                 force_ratio)"
             )),
         }
     }
@@ -103,8 +124,22 @@ impl Case {
     pub(super) fn check_probes(&self) -> Result<(), CaseError> {
         let f = &self.file;
         for p in &f.probe {
-            if let Err(msg) = p.measure() {
-                return self.error(p.field.span(), msg);
+            match p.measure() {
+                Err(msg) => return self.error(p.field.span(), msg),
+                Ok(Measure::ForceRatio(group, _)) => {
+                    let held = (f.bc.iter()).any(|b| b.group.get_ref() == group && b.displaces());
+                    if !held {
+                        return self.error(
+                            p.field.span(),
+                            format!(
+                                "probe \"{}\": no [[bc]] prescribes a displacement of group \
+                                 \"{group}\", so it has no reaction to split",
+                                p.name.get_ref()
+                            ),
+                        );
+                    }
+                }
+                Ok(_) => {}
             }
         }
         let mut names: Vec<&str> = f.probe.iter().map(|p| p.name.get_ref().as_str()).collect();
@@ -160,10 +195,31 @@ mod tests {
                 "field = \"pressure\"\nat = [0, 0]\n",
                 "unknown field \"pressure\"",
             ),
+            (
+                "field = \"force_ratio\"\ngroup = \"top\"\n",
+                "a force ratio needs `group` and `normal`",
+            ),
+            (
+                "field = \"force_ratio\"\ngroup = \"top\"\nnormal = [0, 0]\n",
+                "`normal` must be 2 or 3 finite numbers, not all 0",
+            ),
+            (
+                "field = \"force_ratio\"\ngroup = \"side\"\nnormal = [0, 1]\n",
+                "no [[bc]] prescribes a displacement of group \"side\"",
+            ),
         ] {
             let e = refused(&format!("{PROBE}{keys}"));
             assert!(e.contains(says), "{keys}: {e}");
         }
+        let ratio = parsed(&format!(
+            "{PROBE}field = \"force_ratio\"\ngroup = \"top\"\nnormal = [0, 2]\n\
+             [[bc]]\ngroup = \"top\"\nuy = -0.1\n"
+        ))
+        .unwrap();
+        assert_eq!(
+            ratio.file.probe[0].measure(),
+            Ok(Measure::ForceRatio("top", &[0.0, 2.0][..]))
+        );
         let twice =
             format!("{PROBE}field = \"ux\"\nat = [0, 0]\n{PROBE}field = \"uy\"\nat = [0, 0]\n");
         assert!(refused(&twice).contains("probe name \"gap\" is used twice"));

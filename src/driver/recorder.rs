@@ -7,7 +7,7 @@ use super::SolveError;
 use super::SolveOptions;
 use super::account::Accounts;
 use super::checkpoint::{self, Checkpoint};
-use super::records::{HistoryLayout, Reactions, StepRow, Summary, peak_memory_mb};
+use super::records::{HistoryLayout, Reactions, StepRow, Summary, peak_memory_mb, reaction};
 use super::state::{Files, RunState, Totals};
 use super::stepper::Stepper;
 use super::strategy::Strategy;
@@ -105,11 +105,11 @@ impl<'a> Recorder<'a> {
         self.start.elapsed().as_secs_f64()
     }
 
-    /// The probes at the stepper's last accepted state.
-    fn probe_values(&self, st: &Stepper) -> Vec<f64> {
-        self.probes
-            .iter()
-            .map(|p| p.eval(&st.model.mesh, &st.model.dofs, &st.x))
+    /// The probes at the stepper's last accepted state, whose reactions are `reactions`.
+    fn probe_values(&self, st: &Stepper, reactions: &Reactions) -> Vec<f64> {
+        let reaction = |g: &str, c: usize| reaction(reactions, g, c);
+        (self.probes.iter())
+            .map(|p| p.eval(&st.model.mesh, &st.model.dofs, &st.x, &reaction))
             .collect()
     }
 
@@ -121,7 +121,9 @@ impl<'a> Recorder<'a> {
         reactions: &Reactions,
     ) -> Result<(), SolveError> {
         if self.folder.is_some() {
-            let values = self.layout.row(row, &self.probe_values(st), reactions);
+            let values = self
+                .layout
+                .row(row, &self.probe_values(st, reactions), reactions);
             self.history.row(&values)?;
         }
         Ok(())
@@ -136,9 +138,11 @@ impl<'a> Recorder<'a> {
         row: &StepRow,
         rep: &StepReport,
     ) -> Result<(), SolveError> {
-        let values = self
-            .layout
-            .row(row, &self.probe_values(st), &accounts.totals.reactions);
+        let values = self.layout.row(
+            row,
+            &self.probe_values(st, &accounts.totals.reactions),
+            &accounts.totals.reactions,
+        );
         // the step's file first (when [output] every asks for it): a row never announces a
         // file that is not there yet
         if st.ctl.accepted.is_multiple_of(self.every) {
@@ -343,6 +347,7 @@ impl<'a> Recorder<'a> {
         self.write_step(st)?;
         let (model, ctl, tot, spent) = (st.model, &st.ctl, totals, st.newton.spent);
         let wall = self.wall();
+        let probes = self.probe_values(st, &tot.reactions);
         let s = &mut self.summary;
         s.converged = converged;
         s.message = message;
@@ -365,10 +370,8 @@ impl<'a> Recorder<'a> {
             ranks.sum_into(&mut each);
             s.peak_memory_mb_ranks = Some(each);
         }
-        s.probes = self
-            .probes
-            .iter()
-            .map(|p| (p.name.clone(), p.eval(&model.mesh, &model.dofs, &st.x)))
+        s.probes = (self.probes.iter().map(|p| p.name.clone()))
+            .zip(probes)
             .collect();
         s.reactions = tot.reactions.clone();
         (s.min_J_solid, s.min_J_medium) = tot.min_J;

@@ -275,6 +275,14 @@ pub(super) fn peak_memory_mb() -> Option<f64> {
 /// Reactions and heat flows per group: group name → component ("x", "y", "z", "heat") → value.
 pub type Reactions = BTreeMap<String, BTreeMap<String, f64>>;
 
+/// Component `c` (0, 1, 2: x, y, z) of `group`'s reaction in `reactions`; 0 where it has none.
+pub fn reaction(reactions: &Reactions, group: &str, c: usize) -> f64 {
+    let key = ["x", "y", "z"][c];
+    (reactions.get(group).and_then(|m| m.get(key)))
+        .copied()
+        .unwrap_or(0.0)
+}
+
 /// The name of a group's flow (component `key`: "x", "y", "z" or "heat") as a history column
 /// and a study measure: `R_<group>_<key>` for a force, `Q_<group>` for heat.
 pub fn flow_name(group: &str, key: &str) -> String {
@@ -368,7 +376,7 @@ impl HistoryLayout {
             .map(|c| (c.to_string(), None))
             .collect();
         columns.push(("energy".into(), Some(Energy)));
-        columns.extend(probes.iter().map(|p| (p.name.clone(), Some(p.quantity()))));
+        columns.extend(probes.iter().map(|p| (p.name.clone(), p.quantity())));
         columns.extend(reactions.iter().map(|(g, k)| {
             let q = if k == "heat" { Power } else { Force };
             (flow_name(g, k), Some(q))

@@ -1,4 +1,6 @@
-//! Probes: named scalar outputs evaluated at material points of the undeformed body.
+//! Probes: named scalar outputs evaluated at material points of the undeformed body, or
+//! from a group's reaction (a force ratio).
+#![allow(non_snake_case)]
 
 use crate::case::{Case, CaseError, Measure};
 use crate::dofs::DofMap;
@@ -32,6 +34,12 @@ pub enum ProbeKind {
     Theta(MaterialPoint),
     /// Current distance along axis `c` from `a` to `b`.
     Distance(usize, MaterialPoint, MaterialPoint),
+    /// F_t/F_n of the reaction of `group` split along the unit `normal`: F_n = |R·n|; F_t in 2D
+    /// R·t with t = (n_y, −n_x) (signed: positive along x for n = [0, 1]), in 3D |R − (R·n) n|.
+    ForceRatio {
+        group: String,
+        normal: [f64; 3],
+    },
 }
 
 #[derive(Clone, Debug)]
@@ -41,16 +49,25 @@ pub struct Probe {
 }
 
 impl Probe {
-    /// What the probe measures: a length or a temperature.
-    pub fn quantity(&self) -> Quantity {
+    /// What the probe measures: a length or a temperature (`None`: a ratio).
+    pub fn quantity(&self) -> Option<Quantity> {
         match self.kind {
-            ProbeKind::Theta(_) => Quantity::Temperature,
-            ProbeKind::U(..) | ProbeKind::Distance(..) => Quantity::Length,
+            ProbeKind::Theta(_) => Some(Quantity::Temperature),
+            ProbeKind::U(..) | ProbeKind::Distance(..) => Some(Quantity::Length),
+            ProbeKind::ForceRatio { .. } => None,
         }
     }
 
-    /// Evaluate on the solution `x`; `NaN` if the probe's field is not simulated.
-    pub fn eval(&self, mesh: &Mesh, dofs: &DofMap, x: &[f64]) -> f64 {
+    /// Evaluate on the solution `x`, with `reaction(group, c)` the component `c` of a group's
+    /// reaction there; `NaN` if the probe's field is not simulated (a force ratio with no
+    /// normal force and a tangential one; 0 with neither).
+    pub fn eval(
+        &self,
+        mesh: &Mesh,
+        dofs: &DofMap,
+        x: &[f64],
+        reaction: &dyn Fn(&str, usize) -> f64,
+    ) -> f64 {
         let d = mesh.dim;
         let u = |n: usize, c: usize| {
             if dofs.u.is_empty() || c >= d {
@@ -72,7 +89,30 @@ impl Probe {
                 b.eval(|n| mesh.coords[n][*c] + u(n, *c))
                     - a.eval(|n| mesh.coords[n][*c] + u(n, *c))
             }
+            ProbeKind::ForceRatio { group, normal } => {
+                let R: [f64; 3] = std::array::from_fn(|c| reaction(group, c));
+                force_ratio(R, *normal, d)
+            }
         }
+    }
+}
+
+/// F_t/F_n of the force `R` split along the unit normal `n` in `dim` dimensions (see
+/// [`ProbeKind::ForceRatio`]).
+pub fn force_ratio(R: [f64; 3], n: [f64; 3], dim: usize) -> f64 {
+    let Rn: f64 = (0..3).map(|i| R[i] * n[i]).sum();
+    let Ft = if dim == 2 {
+        R[0] * n[1] - R[1] * n[0]
+    } else {
+        (0..3)
+            .map(|i| (R[i] - Rn * n[i]).powi(2))
+            .sum::<f64>()
+            .sqrt()
+    };
+    match (Rn == 0.0, Ft == 0.0) {
+        (false, _) => Ft / Rn.abs(),
+        (true, true) => 0.0,
+        (true, false) => f64::NAN,
     }
 }
 
@@ -148,8 +188,47 @@ pub fn build(case: &Case, mesh: &Mesh) -> Result<Vec<Probe>, CaseError> {
             Measure::U(c, pt) => ProbeKind::U(c, at(pt)?),
             Measure::Theta(pt) => ProbeKind::Theta(at(pt)?),
             Measure::Distance(axis, a, b) => ProbeKind::Distance(axis, at(a)?, at(b)?),
+            Measure::ForceRatio(group, n) => {
+                if n.len() != mesh.dim {
+                    return case.error(
+                        p.field.span(),
+                        format!(
+                            "probe \"{name}\": `normal` has {} components; the mesh is {}D",
+                            n.len(),
+                            mesh.dim
+                        ),
+                    );
+                }
+                let length = n.iter().map(|v| v * v).sum::<f64>().sqrt();
+                ProbeKind::ForceRatio {
+                    group: group.to_string(),
+                    normal: std::array::from_fn(|i| n.get(i).map_or(0.0, |v| v / length)),
+                }
+            }
         };
         out.push(Probe { name, kind });
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::force_ratio;
+
+    #[test]
+    fn a_force_ratio_splits_the_reaction_along_the_normal() {
+        // pressed down (R_y < 0) and dragged along x: F_t/F_n signed in 2D
+        let down = [0.0, 1.0, 0.0];
+        assert!((force_ratio([0.3, -1.5, 0.0], down, 2) - 0.2).abs() < 1e-15);
+        assert!((force_ratio([-0.3, -1.5, 0.0], down, 2) + 0.2).abs() < 1e-15);
+        // a tilted normal: the reaction along it alone has no tangential part
+        let s = 0.5f64.sqrt();
+        assert!(force_ratio([2.0 * s, 2.0 * s, 0.0], [s, s, 0.0], 2).abs() < 1e-15);
+        // 3D: the size of the tangential part
+        let r = force_ratio([3.0, 4.0, -10.0], [0.0, 0.0, 1.0], 3);
+        assert!((r - 0.5).abs() < 1e-15, "{r}");
+        // no force at all; a tangential force with no normal one
+        assert_eq!(force_ratio([0.0; 3], [0.0, 1.0, 0.0], 2), 0.0);
+        assert!(force_ratio([1.0, 0.0, 0.0], [0.0, 1.0, 0.0], 2).is_nan());
+    }
 }

@@ -13,12 +13,16 @@ use std::path::Path;
 fn slide_forces(dir: &Path) -> (f64, f64, f64, f64, f64) {
     let (cols, rows) = history(dir);
     let col = |name: &str| cols.iter().position(|c| c == name).unwrap();
-    let (t, fx, fy) = (col("time"), col("R_rim_x"), col("R_rim_y"));
+    let (t, fx, fy, probe) = (col("time"), col("R_rim_x"), col("R_rim_y"), col("Ft_Fn"));
     let press = rows.iter().find(|r| r[t] == 1.0).expect("the press's end");
     let fn0 = -press[fy];
     let slide: Vec<&Vec<f64>> = rows.iter().filter(|r| r[t] >= 1.0).collect();
     let normal: Vec<f64> = slide.iter().map(|r| -r[fy]).collect();
     let ratio: Vec<f64> = slide.iter().map(|r| r[fx] / -r[fy]).collect();
+    // the case's force-ratio probe is that ratio
+    for (r, ratio) in slide.iter().zip(&ratio) {
+        assert!((r[probe] - ratio).abs() < 1e-12, "{} vs {ratio}", r[probe]);
+    }
     let span = slide.last().unwrap()[t] - 1.0;
     let mean = (1..slide.len())
         .map(|i| (slide[i][t] - slide[i - 1][t]) * ratio[i])
@@ -44,6 +48,13 @@ fn the_cylinder_slides_on_a_medium_made_again_with_the_force_of_its_press_and_no
     );
     assert!(mean.abs() < 0.02, "F_t/F_n {mean} on average");
     assert!(most < 0.15, "F_t/F_n {most} at most");
+    // drawn against the pseudo-time (λ holds at 1 through the slide), the ratio by its name
+    let h = tmc::plot::History::read(&out.join("history.csv")).unwrap();
+    assert_eq!(tmc::plot::Labels::read(&out).default_x_of(&h), "time");
+    let o = tmc(&["plot", out.to_str().unwrap(), "-c", "Ft_Fn"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(out.join("Ft_Fn.png").exists());
+    assert!(summary(&out)["probes"]["Ft_Fn"].as_f64().is_some());
     // the Lagrangian medium on the same slide ploughs (measured: F_n to 1.79 times the
     // press's, F_t/F_n 0.128 on average)
     let lagrangian = case_file(
