@@ -439,6 +439,8 @@ fn solve_model(
     let (mut model, mut folder, mut from) = (model, Some(folder), from);
     let mut probes = probes.to_vec();
     let mut changed = false;
+    // the groups' flows before a remake, to measure what it changed
+    let mut before_remake = None;
     loop {
         let mut run = Run::new(
             case,
@@ -459,6 +461,17 @@ fn solve_model(
         if changed {
             run.rejoined();
         }
+        if let Some(before) = before_remake.take() {
+            let (force, heat) = run.remade_from(&before)?;
+            if opts.verbose {
+                crate::note!(
+                    "  the groups' reactions changed by {:.2} % at most, their heat flows by \
+                     {:.2} %",
+                    100.0 * force,
+                    100.0 * heat
+                );
+            }
+        }
         let due = |run: &Run| match (&layer, medium.as_mut()) {
             (Some(layer), _) => layer.due(&model, run.state()).map(Change::Join),
             (None, Some(medium)) => {
@@ -469,10 +482,13 @@ fn solve_model(
             }
             (None, None) => None,
         };
-        let (run, change) = match step_until(run, due)? {
+        let (mut run, change) = match step_until(run, due)? {
             Stepped::Ended(summary) => return Ok(summary),
             Stepped::Changed(run, change) => (run, change),
         };
+        if matches!(change, Change::Remake) {
+            before_remake = Some(run.flows_at_rest()?);
+        }
         let (mut cp, kept) = run.end_to_rejoin();
         let t = cp.state.clock.t;
         model = match (change, layer.as_mut(), &medium) {

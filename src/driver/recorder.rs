@@ -388,6 +388,10 @@ impl<'a> Recorder<'a> {
         s.corners_through_medium = tot.corners_through;
         s.friction_layer_joins = tot.layer_joins;
         s.medium_remade = tot.medium_remakes;
+        if tot.medium_remakes > 0 {
+            s.medium_remade_force_change = Some(tot.remake_force_change);
+            s.medium_remade_heat_change = Some(tot.remake_heat_change);
+        }
         // 0 until the first join
         s.heat_joined = (self.layout.joined).then(|| tot.heat_joined.unwrap_or(0.0));
         s.largest_displacement = tot.largest_displacement;

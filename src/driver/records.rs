@@ -107,6 +107,11 @@ pub struct Summary {
     pub friction_layer_joins: usize,
     /// How many times the medium was made again as the bodies moved (0 if never).
     pub medium_remade: usize,
+    /// Across a remake of the medium, the largest relative change of a group's reaction
+    /// |ΔR|/|R| and of its heat flow |ΔQ|/|Q|, each at the state itself (`null` where the
+    /// medium was never made again).
+    pub medium_remade_force_change: Option<f64>,
+    pub medium_remade_heat_change: Option<f64>,
     /// Transient scenes with a friction layer with `reconnect`: what its joins changed the
     /// heat stored by, so far; with it, `heat_stored` = `heat_in` + `friction_heat` +
     /// `heat_joined` (`null` otherwise).
@@ -181,6 +186,8 @@ impl Summary {
             largest_displacement: 0.0,
             friction_layer_joins: 0,
             medium_remade: 0,
+            medium_remade_force_change: None,
+            medium_remade_heat_change: None,
             heat_joined: None,
             output: out_dir.display().to_string(),
             units: Quantity::ALL
@@ -274,6 +281,33 @@ pub(super) fn peak_memory_mb() -> Option<f64> {
 
 /// Reactions and heat flows per group: group name → component ("x", "y", "z", "heat") → value.
 pub type Reactions = BTreeMap<String, BTreeMap<String, f64>>;
+
+/// The largest relative change from `before` to `after` of a group's reaction, |ΔR|/|R| with
+/// R its force vector, and of its heat flow, |ΔQ|/|Q|, over the groups of `before` with a
+/// force (a heat flow) that is not zero.
+pub fn flow_change(before: &Reactions, after: &Reactions) -> (f64, f64) {
+    let (mut force, mut heat) = (0.0f64, 0.0f64);
+    for (group, b) in before {
+        let a = after.get(group);
+        let value = |m: Option<&BTreeMap<String, f64>>, k: &str| {
+            m.and_then(|m| m.get(k)).copied().unwrap_or(0.0)
+        };
+        let (mut size, mut change) = (0.0, 0.0);
+        for k in ["x", "y", "z"] {
+            let v = value(Some(b), k);
+            size += v * v;
+            change += (value(a, k) - v).powi(2);
+        }
+        if size > 0.0 {
+            force = force.max((change / size).sqrt());
+        }
+        let q = value(Some(b), "heat");
+        if q != 0.0 {
+            heat = heat.max((value(a, "heat") - q).abs() / q.abs());
+        }
+    }
+    (force, heat)
+}
 
 /// Component `c` (0, 1, 2: x, y, z) of `group`'s reaction in `reactions`; 0 where it has none.
 pub fn reaction(reactions: &Reactions, group: &str, c: usize) -> f64 {
@@ -464,5 +498,39 @@ impl HistoryLayout {
         }
         row.push(s.wall);
         row
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{Reactions, flow_change};
+
+    fn flows(rows: &[(&str, &[(&str, f64)])]) -> Reactions {
+        (rows.iter())
+            .map(|(g, kv)| {
+                let m = kv.iter().map(|(k, v)| (k.to_string(), *v)).collect();
+                (g.to_string(), m)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_flow_change_is_the_largest_relative_change_of_a_group_s_force_and_heat() {
+        let before = flows(&[
+            ("rim", &[("x", 0.0), ("y", -2.0), ("heat", 10.0)]),
+            ("bottom", &[("x", 0.0), ("y", 2.0), ("heat", -10.0)]),
+            ("free", &[("x", 0.0)]),
+        ]);
+        let after = flows(&[
+            ("rim", &[("x", 0.06), ("y", -2.08), ("heat", 10.1)]),
+            ("bottom", &[("x", 0.0), ("y", 2.02), ("heat", -9.7)]),
+            ("free", &[("x", 0.5)]),
+        ]);
+        let (force, heat) = flow_change(&before, &after);
+        // rim: |(0.06, -0.08)| / 2 = 0.05; bottom's heat: 0.3 / 10; a group with no force
+        // before is not measured
+        assert!((force - 0.05).abs() < 1e-12, "{force}");
+        assert!((heat - 0.03).abs() < 1e-12, "{heat}");
+        assert_eq!(flow_change(&before, &before), (0.0, 0.0));
     }
 }

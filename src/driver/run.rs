@@ -7,7 +7,7 @@
 use super::account::{Accounts, joined_heat, point_totals};
 use super::checkpoint::Checkpoint;
 use super::recorder::Recorder;
-use super::records::{StepRow, Summary, group_flows};
+use super::records::{Reactions, StepRow, Summary, flow_change, group_flows};
 use super::stepper::{Plan, Stepper, assemble_initial};
 use super::strategy::describe;
 use super::{SolveError, SolveOptions};
@@ -240,6 +240,35 @@ impl<'a> Run<'a> {
         if let Some(rep) = self.st.settle_mechanics() {
             self.accounts.count(&rep);
         }
+    }
+
+    /// Each group's reaction and heat flow at the last accepted state over a step of no
+    /// length (what the state itself transmits, nothing stored over a step), the history
+    /// left as it was.
+    pub(super) fn flows_at_rest(&mut self) -> Result<Reactions, SolveError> {
+        let st = &mut self.st;
+        let t = st.ctl.t;
+        let step = st.model.path.step(t, t);
+        let invalid = |e| SolveError::Setup(format!("the state at t = {t} is invalid: {e}"));
+        st.asm
+            .assemble(st.model, &st.x, &step, false, None)
+            .map_err(invalid)?;
+        let convected = convection_heat(st.model, &st.x).map_err(invalid)?;
+        let flows = group_flows(st.model, &st.asm.r_full, &convected, t);
+        st.asm.restore();
+        Ok(flows)
+    }
+
+    /// After the medium was made again (and [`Run::rejoined`]): how much each group's
+    /// reaction and heat flow changed from `before`, the largest kept in the totals; returns
+    /// this remake's (see [`flow_change`]).
+    pub(super) fn remade_from(&mut self, before: &Reactions) -> Result<(f64, f64), SolveError> {
+        let after = self.flows_at_rest()?;
+        let (force, heat) = flow_change(before, &after);
+        let tot = &mut self.accounts.totals;
+        tot.remake_force_change = tot.remake_force_change.max(force);
+        tot.remake_heat_change = tot.remake_heat_change.max(heat);
+        Ok((force, heat))
     }
 
     /// The last accepted state.

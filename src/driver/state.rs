@@ -62,6 +62,12 @@ pub struct Totals {
     /// How many times the medium was made again as the bodies moved.
     #[serde(default)]
     pub medium_remakes: usize,
+    /// The largest relative change of a group's reaction, and of its heat flow, across a
+    /// remake of the medium (0 without one).
+    #[serde(default)]
+    pub remake_force_change: f64,
+    #[serde(default)]
+    pub remake_heat_change: f64,
     /// Transient scenes with a reconnected friction layer: what its joins changed the heat
     /// stored by (its cells re-paired with other nodes' temperatures).
     #[serde(default)]

@@ -181,15 +181,17 @@ impl<'a> Stepper<'a> {
         self.ctl.reject()
     }
 
-    /// The mechanics settled at the time reached, over a step of no length, the temperature
-    /// kept (a step of no length has no capacity: what it solved for θ is a steady state, not
-    /// the state); the history stays as it was. Returns the report, or `None` (and the state
-    /// unchanged) where it does not converge.
+    /// The mechanics settled at the time reached, over a step of no length; in a transient
+    /// scene the temperature kept (a step of no length has no capacity: what it solved for θ
+    /// is a steady state, not the state), in a steady one settled too; the history stays as
+    /// it was. Returns the report, or `None` (and the state unchanged) where it does not
+    /// converge.
     pub(super) fn settle_mechanics(&mut self) -> Option<StepReport> {
+        let transient = self.model.physics.transient;
         let settled = self.attempt(self.ctl.t).ok().map(|(x, rep)| {
             let dofs = &self.model.dofs;
             for (d, v) in x.into_iter().enumerate() {
-                if dofs.field[d] != Field::Theta {
+                if !transient || dofs.field[d] != Field::Theta {
                     self.x[d] = v;
                 }
             }
