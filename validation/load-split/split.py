@@ -1,5 +1,5 @@
 """Where a dragged body's force goes: the medium's internal forces on it, by term and by
-where the cell lies in the undeformed mesh (THEORY.md, "Where the ratio goes" and "The
+where the cell lies in the undeformed mesh (docs/notes/2026-11-29-friction-measurements.md, "Where the ratio goes" and "The
 one-cell block's leading end").
 
 Needs a tmc built with split.patch applied (see README.md); prints one row per drag.
