@@ -236,6 +236,18 @@ pub fn plan(model: &Model, request: &Request, systems: &[System]) -> Result<Plan
              runs as asked"
         ));
     }
+    let petsc = &request.solver.petsc;
+    if request.solver.engine == EngineChoice::Faer
+        && (petsc.options.is_some() || petsc.method != PetscMethod::Direct)
+    {
+        let ignored = "warning: engine \"faer\": [solver.petsc] is for the PETSc engine, and \
+                       this run on one process ignores it (under mpirun, which runs on PETSc, \
+                       it applies)";
+        note = Some(match note {
+            Some(n) => format!("{n}\n{ignored}"),
+            None => ignored.to_string(),
+        });
+    }
     Ok(Planned {
         asm,
         solvers,

@@ -234,6 +234,20 @@ fn auto_takes_petsc_s_multigrid_where_faer_s_factors_do_not_fit() {
         !report(&[]).contains("warning:"),
         "the machine's memory is enough"
     );
+    // [solver.petsc] beside engine = "faer" on one process: said to be ignored
+    let ignored = report(&[
+        "--set",
+        "solver.engine=\"faer\"",
+        "--set",
+        "solver.petsc.method=\"multigrid\"",
+    ]);
+    assert!(
+        ignored.contains(
+            "warning: engine \"faer\": [solver.petsc] is for the PETSc engine, and this run on \
+             one process ignores it"
+        ),
+        "{ignored}"
+    );
     let out = scratch("auto-memory");
     let o = common::tmc_with(
         &[
