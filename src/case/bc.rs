@@ -170,12 +170,28 @@ impl Case {
                     .filter(|v| bc.has(v))
                     .collect();
                 if let Some(k) = m.keys().find(|k| !given.contains(&k.as_str())) {
+                    let g = bc.group.get_ref();
+                    let why = if ["h", "theta_inf", "radiation"].contains(&k.as_str()) {
+                        format!(
+                            "\"{k}\" is an exchange with the surroundings, which acts in full \
+                             from the start and is never ramped"
+                        )
+                    } else if !RAMPED_VALUES.contains(&k.as_str()) {
+                        format!("\"{k}\" is no value a block gives")
+                    } else if given.is_empty() {
+                        "this block gives no value that ramps".to_string()
+                    } else {
+                        format!(
+                            "this block does not give it (it gives {})",
+                            given.join(", ")
+                        )
+                    };
                     return self.error(
                         r.span(),
                         format!(
-                            "bc[{i}] (\"{}\"): `ramp` names \"{k}\", which this block does not give (it gives {})",
-                            bc.group.get_ref(),
-                            given.join(", ")
+                            "bc[{i}] (\"{g}\"): `ramp` names \"{k}\": {why}; `ramp` takes the \
+                             values the block gives of {}",
+                            RAMPED_VALUES.join(", ")
                         ),
                     );
                 }
@@ -320,6 +336,38 @@ mod tests {
             .file
             .bc
             .remove(0)
+    }
+
+    #[test]
+    fn a_ramp_that_names_what_the_block_cannot_ramp_says_why() {
+        for (keys, says) in [
+            (
+                "theta = 1.0\nramp = { ux = false }\n",
+                "`ramp` names \"ux\": this block does not give it (it gives theta)",
+            ),
+            (
+                "h = 5.0\ntheta_inf = 20.0\nramp = { h = false }\n",
+                "\"h\" is an exchange with the surroundings, which acts in full from the start",
+            ),
+            (
+                "radiation = { emissivity = 0.8, theta_inf = 300.0, sigma = 5.67e-8 }\n\
+                 ramp = { radiation = false }\n",
+                "`ramp` names \"radiation\": \"radiation\" is an exchange with the surroundings",
+            ),
+            (
+                "h = 5.0\ntheta_inf = 20.0\nramp = { theta = false }\n",
+                "`ramp` names \"theta\": this block gives no value that ramps",
+            ),
+            (
+                "theta = 1.0\nramp = { tehta = false }\n",
+                "\"tehta\" is no value a block gives; `ramp` takes the values the block gives \
+                 of ux, uy, uz, theta, traction, heat_flux",
+            ),
+        ] {
+            let e = refused(&format!("[[bc]]\ngroup = \"top\"\n{keys}"));
+            assert!(e.contains(says), "{keys}: {e}");
+            assert!(!e.contains("(it gives )"), "{e}");
+        }
     }
 
     #[test]
