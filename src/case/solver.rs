@@ -6,20 +6,31 @@ use serde::Deserialize;
 use toml::Spanned;
 
 /// `[solver]`: linear solver choice.
-#[derive(Clone, Debug, Deserialize, Default)]
+#[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Solver {
     /// "auto" (LDLᵀ when the tangent is symmetric, else block-preconditioned GMRES), "gmres",
-    /// "lu", "ldlt".
-    pub linear: LinearChoice,
+    /// "lu", "ldlt"; with where it is written, for the errors about it.
+    pub linear: Spanned<LinearChoice>,
     /// "auto" (one-way coupled scenes solve mechanics, then heat, per step) or "monolithic".
     pub coupling: CouplingChoice,
     /// "auto" (the default: faer, unless its factors would not fit in the memory the run
     /// has, then PETSc's multigrid where it is built), "faer" (one process) or "petsc" (the
     /// distributed engine; what `mpirun` runs on whatever this says).
-    pub engine: EngineChoice,
+    pub engine: Spanned<EngineChoice>,
     /// `[solver.petsc]`: the PETSc engine's options.
     pub petsc: PetscOptions,
+}
+
+impl Default for Solver {
+    fn default() -> Self {
+        Solver {
+            linear: Spanned::new(0..0, LinearChoice::Auto),
+            coupling: CouplingChoice::Auto,
+            engine: Spanned::new(0..0, EngineChoice::Auto),
+            petsc: PetscOptions::default(),
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug, Deserialize, Default, PartialEq, Eq)]
@@ -109,7 +120,7 @@ mod tests {
             .file
             .solver;
         assert_eq!(
-            (s.linear, s.engine, s.petsc.method),
+            (*s.linear.get_ref(), *s.engine.get_ref(), s.petsc.method),
             (
                 LinearChoice::Lu,
                 EngineChoice::Petsc,

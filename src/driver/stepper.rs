@@ -30,7 +30,7 @@ pub(super) struct Plan {
 
 impl Plan {
     pub(super) fn new(case: &Case, model: &Model, opts: &SolveOptions) -> Result<Plan, SolveError> {
-        let kind = choose_linear(case.file.solver.linear, &model.physics);
+        let kind = choose_linear(*case.file.solver.linear.get_ref(), &model.physics);
         if kind == LinearKind::Ldlt && !symmetric_tangent(&model.physics) {
             let span = case.file.mesh.span();
             let why = if model.physics.friction {
@@ -54,7 +54,6 @@ impl Plan {
             solver: &case.file.solver,
             whole: kind,
             idle: opts.idle_threads,
-            span: case.file.mesh.span(),
             memory_mb: opts.memory_mb,
         };
         let Planned {

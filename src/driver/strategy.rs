@@ -27,7 +27,10 @@ pub fn choose_strategy(solver: &crate::case::Solver, physics: &Physics) -> Strat
         Strategy::SingleField
     } else if physics.heat_to_mechanics
         || solver.coupling == CouplingChoice::Monolithic
-        || matches!(solver.linear, LinearChoice::Lu | LinearChoice::Gmres)
+        || matches!(
+            solver.linear.get_ref(),
+            LinearChoice::Lu | LinearChoice::Gmres
+        )
     {
         Strategy::Monolithic
     } else {

@@ -113,8 +113,6 @@ pub struct Request<'a> {
     pub solver: &'a Solver,
     pub whole: LinearKind,
     pub idle: IdleThreads,
-    /// Where an error about the engine as a whole points in the case (a byte range).
-    pub span: Range<usize>,
     /// The memory (MB) the linear algebra may take (`None`: what the machine has available),
     /// for `engine = "auto"`.
     pub memory_mb: Option<f64>,
@@ -193,7 +191,7 @@ pub enum PlanError {
 /// in the memory the run has, then with its multigrid; faer otherwise): its assembler (on
 /// several ranks, each rank's part of the mesh) and one solver for each of `systems`.
 pub fn plan(model: &Model, request: &Request, systems: &[System]) -> Result<Planned, PlanError> {
-    if request.solver.engine == EngineChoice::Petsc || !Ranks::world().is_serial() {
+    if *request.solver.engine.get_ref() == EngineChoice::Petsc || !Ranks::world().is_serial() {
         return on_ranks(model, request, systems, request.solver.petsc.method);
     }
     let asm = Assembler::new(model);
@@ -202,8 +200,8 @@ pub fn plan(model: &Model, request: &Request, systems: &[System]) -> Result<Plan
         whole: request.whole,
     }
     .solvers(systems, &asm.pattern, &structure)?;
-    let auto = request.solver.engine == EngineChoice::Auto
-        && request.solver.linear == crate::case::LinearChoice::Auto;
+    let auto = *request.solver.engine.get_ref() == EngineChoice::Auto
+        && *request.solver.linear.get_ref() == crate::case::LinearChoice::Auto;
     let mut note = None;
     if auto && let Some((need, budget)) = over_budget(request, &asm.pattern, &solvers) {
         let why = format!(
@@ -226,7 +224,7 @@ pub fn plan(model: &Model, request: &Request, systems: &[System]) -> Result<Plan
         ));
     }
     if !auto && let Some((need, budget)) = over_budget(request, &asm.pattern, &solvers) {
-        let asked = match request.solver.engine {
+        let asked = match request.solver.engine.get_ref() {
             EngineChoice::Faer => "engine \"faer\"",
             _ => "a `linear` solver given",
         };
@@ -237,7 +235,7 @@ pub fn plan(model: &Model, request: &Request, systems: &[System]) -> Result<Plan
         ));
     }
     let petsc = &request.solver.petsc;
-    if request.solver.engine == EngineChoice::Faer
+    if *request.solver.engine.get_ref() == EngineChoice::Faer
         && (petsc.options.is_some() || petsc.method != PetscMethod::Direct)
     {
         let ignored = "warning: engine \"faer\": [solver.petsc] is for the PETSc engine, and \
@@ -272,9 +270,9 @@ fn on_ranks(
     use crate::parallel::Distribution;
     use crate::parallel::petsc;
     let solver = request.solver;
-    if solver.linear != LinearChoice::Auto {
+    if *solver.linear.get_ref() != LinearChoice::Auto {
         return Err(PlanError::Case {
-            span: request.span.clone(),
+            span: solver.linear.span(),
             message: "[solver] linear chooses faer's solvers; on the PETSc engine choose with \
                       [solver.petsc] options (e.g. \"-ksp_type gmres -pc_type gamg\")"
                 .into(),
@@ -333,7 +331,7 @@ fn on_ranks(
         return Err(PlanError::Setup(NOT_BUILT.into()));
     }
     Err(PlanError::Case {
-        span: request.span.clone(),
+        span: request.solver.engine.span(),
         message: format!("[solver] engine = \"petsc\": {NOT_BUILT}"),
     })
 }

@@ -6,7 +6,7 @@
 
 use crate::common;
 
-use common::{point_array, root, scratch, solve_cli, stderr, summary, tmc};
+use common::{case_body, case_file, point_array, root, scratch, solve_cli, stderr, summary, tmc};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -999,4 +999,28 @@ fn a_reconnected_friction_layer_is_refused_on_several_ranks_with_the_folder_kept
     let e = stderr(&c);
     assert!(!c.status.success(), "{e}");
     assert_eq!(e.matches("runs on one process").count(), 1, "{e}");
+}
+
+/// `[solver]` keys that conflict are reported at the key's own line, not at the file's first.
+#[test]
+fn a_linear_solver_on_the_petsc_engine_is_refused_at_its_line() {
+    let text = case_body("block") + "\n[solver]\nengine = \"petsc\"\nlinear = \"lu\"\n";
+    let case = case_file("solver-lines", "block.geo", "", &text);
+    let written = std::fs::read_to_string(&case).unwrap();
+    let line = 1 + written
+        .lines()
+        .position(|l| l == "linear = \"lu\"")
+        .unwrap();
+    for o in [
+        tmc(&["check", case.to_str().unwrap()]),
+        solve_cli(&case, &case.with_file_name("out"), &[]),
+    ] {
+        let e = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{e}");
+        assert!(
+            e.contains(&format!("case.toml:{line}:"))
+                && e.contains("[solver] linear chooses faer's solvers"),
+            "line {line}: {e}"
+        );
+    }
 }
