@@ -176,6 +176,11 @@ impl Case {
                             "\"{k}\" is an exchange with the surroundings, which acts in full \
                              from the start and is never ramped"
                         )
+                    } else if !RAMPED_VALUES.contains(&k.as_str()) && !given.is_empty() {
+                        format!(
+                            "\"{k}\" is no value a block gives (this one: it gives {})",
+                            given.join(", ")
+                        )
                     } else if !RAMPED_VALUES.contains(&k.as_str()) {
                         format!("\"{k}\" is no value a block gives")
                     } else if given.is_empty() {
@@ -360,8 +365,8 @@ mod tests {
             ),
             (
                 "theta = 1.0\nramp = { tehta = false }\n",
-                "\"tehta\" is no value a block gives; `ramp` takes the values the block gives \
-                 of ux, uy, uz, theta, traction, heat_flux",
+                "\"tehta\" is no value a block gives (this one: it gives theta); `ramp` takes \
+                 the values the block gives of ux, uy, uz, theta, traction, heat_flux",
             ),
         ] {
             let e = refused(&format!("[[bc]]\ngroup = \"top\"\n{keys}"));
