@@ -5,7 +5,6 @@
 //! [`Totals`]; the recorder writes them.
 
 use super::SolveError;
-use super::records::group_flows;
 use super::state::Totals;
 use super::stepper::Stepper;
 use crate::assembly::AssemblyError;
@@ -13,9 +12,7 @@ use crate::case::RegionKind;
 use crate::dofs::Field;
 use crate::mesh::point_text;
 use crate::model::{Model, StepContext};
-use crate::post::{
-    convection_heat, corners_through_medium, friction_work, heat_stored, kinetic_energy,
-};
+use crate::post::{corners_through_medium, friction_work, heat_stored, kinetic_energy};
 use crate::solver::newton::StepReport;
 use std::time::Instant;
 
@@ -92,14 +89,14 @@ impl Accounts {
             .assemble(model, &st.x, step, false, None)
             .map_err(invalid)?;
         self.totals.t_reactions += t0.elapsed().as_secs_f64();
-        let convected = convection_heat(model, &st.x).map_err(invalid)?;
-        self.totals.reactions = group_flows(model, &st.asm.r_full, &convected, step.t);
+        let convected;
+        (self.totals.reactions, convected) = st.flows_assembled(step.t).map_err(invalid)?;
         // the history of the converged state (just assembled) is what the next step starts from
         st.asm.commit();
         let mut fe = vec![0.0; model.dofs.n_dofs];
         model.f_ext(step.lambda, &mut fe);
         if model.physics.transient {
-            self.heat(st, step, &fe, convected.iter().sum())?;
+            self.heat(st, step, &fe, convected)?;
         }
         let f_now = self.forces(st, &fe);
         let tot = &mut self.totals;

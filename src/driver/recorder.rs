@@ -7,7 +7,9 @@ use super::SolveError;
 use super::SolveOptions;
 use super::account::Accounts;
 use super::checkpoint::{self, Checkpoint};
-use super::records::{HistoryLayout, Reactions, StepRow, Summary, peak_memory_mb, reaction};
+use super::records::{
+    FORCE_KEYS, HistoryLayout, Reactions, StepRow, Summary, flow, peak_memory_mb,
+};
 use super::state::{Files, RunState, Totals};
 use super::stepper::Stepper;
 use super::strategy::Strategy;
@@ -107,7 +109,7 @@ impl<'a> Recorder<'a> {
 
     /// The probes at the stepper's last accepted state, whose reactions are `reactions`.
     fn probe_values(&self, st: &Stepper, reactions: &Reactions) -> Vec<f64> {
-        let reaction = |g: &str, c: usize| reaction(reactions, g, c);
+        let reaction = |g: &str, c: usize| flow(reactions, g, FORCE_KEYS[c]);
         (self.probes.iter())
             .map(|p| p.eval(&st.model.mesh, &st.model.dofs, &st.x, &reaction))
             .collect()

@@ -245,7 +245,6 @@ pub fn group_flows(model: &Model, r_full: &[f64], convected: &[f64], t: f64) -> 
 pub fn reactions(model: &Model, r_full: &[f64]) -> Reactions {
     let mut out: BTreeMap<String, BTreeMap<String, f64>> = BTreeMap::new();
     let d = model.dofs.dim;
-    let comp = ["x", "y", "z"];
     for (n, _) in model.mesh.coords.iter().enumerate() {
         if model.dofs.has(Field::U) {
             for c in 0..d {
@@ -253,7 +252,7 @@ pub fn reactions(model: &Model, r_full: &[f64]) -> Reactions {
                 if let Some(p) = model.cons.prescribed[dof] {
                     *out.entry(model.bc_groups[p.bc].name.clone())
                         .or_default()
-                        .entry(comp[c].into())
+                        .entry(FORCE_KEYS[c].into())
                         .or_default() += r_full[dof];
                 }
             }
@@ -287,31 +286,32 @@ pub type Reactions = BTreeMap<String, BTreeMap<String, f64>>;
 /// force (a heat flow) that is not zero.
 pub fn flow_change(before: &Reactions, after: &Reactions) -> (f64, f64) {
     let (mut force, mut heat) = (0.0f64, 0.0f64);
-    for (group, b) in before {
-        let a = after.get(group);
-        let value = |m: Option<&BTreeMap<String, f64>>, k: &str| {
-            m.and_then(|m| m.get(k)).copied().unwrap_or(0.0)
-        };
+    for group in before.keys() {
+        let (b, a) = (
+            |k: &str| flow(before, group, k),
+            |k: &str| flow(after, group, k),
+        );
         let (mut size, mut change) = (0.0, 0.0);
-        for k in ["x", "y", "z"] {
-            let v = value(Some(b), k);
-            size += v * v;
-            change += (value(a, k) - v).powi(2);
+        for k in FORCE_KEYS {
+            size += b(k) * b(k);
+            change += (a(k) - b(k)).powi(2);
         }
         if size > 0.0 {
             force = force.max((change / size).sqrt());
         }
-        let q = value(Some(b), "heat");
+        let q = b("heat");
         if q != 0.0 {
-            heat = heat.max((value(a, "heat") - q).abs() / q.abs());
+            heat = heat.max((a("heat") - q).abs() / q.abs());
         }
     }
     (force, heat)
 }
 
-/// Component `c` (0, 1, 2: x, y, z) of `group`'s reaction in `reactions`; 0 where it has none.
-pub fn reaction(reactions: &Reactions, group: &str, c: usize) -> f64 {
-    let key = ["x", "y", "z"][c];
+/// The keys of a group's force components in [`Reactions`], x, y, z in order.
+pub const FORCE_KEYS: [&str; 3] = ["x", "y", "z"];
+
+/// `group`'s flow `key` ("x", "y", "z" or "heat") in `reactions`; 0 where it has none.
+pub fn flow(reactions: &Reactions, group: &str, key: &str) -> f64 {
     (reactions.get(group).and_then(|m| m.get(key)))
         .copied()
         .unwrap_or(0.0)
@@ -471,13 +471,7 @@ impl HistoryLayout {
             s.energy,
         ];
         row.extend_from_slice(probes);
-        row.extend(self.reactions.iter().map(|(g, k)| {
-            reactions
-                .get(g)
-                .and_then(|m| m.get(k))
-                .copied()
-                .unwrap_or(0.0)
-        }));
+        row.extend(self.reactions.iter().map(|(g, k)| flow(reactions, g, k)));
         row.extend([s.krylov as f64, s.halvings as f64, s.time, s.work]);
         if self.transient {
             let (stored, supplied) = s.heat.unwrap_or((0.0, 0.0));

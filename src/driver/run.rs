@@ -7,7 +7,7 @@
 use super::account::{Accounts, joined_heat, point_totals};
 use super::checkpoint::Checkpoint;
 use super::recorder::Recorder;
-use super::records::{Reactions, StepRow, Summary, flow_change, group_flows};
+use super::records::{Reactions, StepRow, Summary, flow_change};
 use super::stepper::{Plan, Stepper, assemble_initial};
 use super::strategy::describe;
 use super::{SolveError, SolveOptions};
@@ -16,7 +16,6 @@ use crate::model::Model;
 use crate::output::RunFolder;
 use crate::output::probes::Probe;
 use crate::parallel::Ranks;
-use crate::post::convection_heat;
 use crate::solver::newton::{StepFailure, StepReport};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -82,9 +81,8 @@ impl<'a> Run<'a> {
         // the points' history starts there (inertia: displaced, at rest)
         st.asm.commit();
         self.accounts.totals.energy = stats0.energy;
-        let convected = convection_heat(model, &st.x)
+        let (r0, _) = (st.flows_assembled(0.0))
             .map_err(|e| SolveError::Setup(format!("the initial state is invalid: {e}")))?;
-        let r0 = group_flows(model, &st.asm.r_full, &convected, 0.0);
         let row = StepRow {
             min_J_solid: stats0.min_J_solid,
             min_J_medium: stats0.min_J_medium,
@@ -253,10 +251,9 @@ impl<'a> Run<'a> {
         st.asm
             .assemble(st.model, &st.x, &step, false, None)
             .map_err(invalid)?;
-        let convected = convection_heat(st.model, &st.x).map_err(invalid)?;
-        let flows = group_flows(st.model, &st.asm.r_full, &convected, t);
+        let flows = st.flows_assembled(t).map_err(invalid);
         st.asm.restore();
-        Ok(flows)
+        Ok(flows?.0)
     }
 
     /// After the medium was made again (and [`Run::rejoined`]): how much each group's

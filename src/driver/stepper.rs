@@ -4,13 +4,15 @@
 //! accepted step leaves behind is the recorder's (`recorder.rs`), what it did the accounts'
 //! (`account.rs`).
 
+use super::records::{Reactions, group_flows};
 use super::strategy::{Strategy, choose_linear, choose_strategy, symmetric_tangent};
 use super::{SolveError, SolveOptions};
-use crate::assembly::{Assembler, AssemblyStats};
+use crate::assembly::{Assembler, AssemblyError, AssemblyStats};
 use crate::case::Case;
 use crate::dofs::Field;
 use crate::model::{Model, StepContext};
 use crate::parallel::Ranks;
+use crate::post::convection_heat;
 use crate::solver::engine::{self, PlanError, Planned, Request, System};
 use crate::solver::linear::{LinearKind, LinearSolver};
 use crate::solver::newton::{Newton, Part, StepFailure, StepReport};
@@ -178,6 +180,14 @@ impl<'a> Stepper<'a> {
     pub(super) fn cut(&mut self) -> Result<(), f64> {
         self.asm.restore();
         self.ctl.reject()
+    }
+
+    /// Each group's reaction and heat flow at time `t` from the residual of the last assembly,
+    /// which must have been at the state, and the heat all boundaries convect away.
+    pub(super) fn flows_assembled(&self, t: f64) -> Result<(Reactions, f64), AssemblyError> {
+        let convected = convection_heat(self.model, &self.x)?;
+        let flows = group_flows(self.model, &self.asm.r_full, &convected, t);
+        Ok((flows, convected.iter().sum()))
     }
 
     /// The mechanics settled at the time reached, over a step of no length; in a transient

@@ -65,21 +65,24 @@ pub(super) fn regularization<const N: usize, const D: usize, M: MulAdd>(
                 Bf[a][I] += rm.grad[q] * g[I][J];
             }
         }
+        // per current volume, Ψ and its first derivatives are kept without dV as well
+        let keep = current.is_some();
+        if keep {
+            parts.psi += psi + 0.5 * reg.beta2 * gp2;
+        }
         for I in 0..N {
             for a in 0..D {
-                r[lay.u(I, a)] += d1[0] * Bf[a][I] * dV;
+                let du = d1[0] * Bf[a][I];
+                r[lay.u(I, a)] += du * dV;
+                if keep {
+                    parts.du[a][I] += du;
+                }
             }
             let gg: f64 = (0..D).map(|J| gp[J] * g[I][J]).sum();
-            r[lay.p(I, c)] += (d1[1] * Nv[I] + reg.beta2 * gg) * dV;
-        }
-        if current.is_some() {
-            parts.psi += psi + 0.5 * reg.beta2 * gp2;
-            for I in 0..N {
-                for a in 0..D {
-                    parts.du[a][I] += d1[0] * Bf[a][I];
-                }
-                let gg: f64 = (0..D).map(|J| gp[J] * g[I][J]).sum();
-                parts.dp[c][I] += d1[1] * Nv[I] + reg.beta2 * gg;
+            let dp = d1[1] * Nv[I] + reg.beta2 * gg;
+            r[lay.p(I, c)] += dp * dV;
+            if keep {
+                parts.dp[c][I] += dp;
             }
         }
         let Some((uu, pb)) = tangent.as_mut() else {
