@@ -30,7 +30,8 @@
 //! greatest, against μ), at the end, and how far the middle of the block's bottom slid (x = 1;
 //! in 3D at mid-depth).
 //!
-//! Sixth table: the same one-cell block pressed lightly (docs/notes/2026-11-29-friction-measurements.md, "The press decides"):
+//! Sixth table: the same one-cell block pressed lightly
+//! (docs/notes/2026-11-29-friction-measurements.md, "The press decides"):
 //! 0.27 (the medium's 0.25 closed and the block squeezed 2 %, where 0.35 squeezes it 10 % and
 //! pitches its leading end onto the base's corner) and 0.25 (the block hardly squeezed), with
 //! the medium's γ = 1e-4 and, at 0.25, 1e-5, the last also with `friction.forget_slip` (the

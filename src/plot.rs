@@ -350,8 +350,7 @@ pub fn default_columns(h: &History) -> Vec<String> {
 
 /// `tmc plot`: one PNG per column of `results/NAME/history.csv` against `x` (default: the
 /// physical time where the run has one, the pseudo-time where λ holds during it, else λ),
-/// written to `out` (default the results
-/// folder). Returns the files written.
+/// written to `out` (default the results folder). Returns the files written.
 pub fn plot_results(
     dir: &Path,
     columns: &[String],

@@ -143,7 +143,8 @@ fn heavy_solids(case: &Case, model: &Model) -> Vec<String> {
 
 /// A medium region with friction but no `rho` in a scene with inertia: the folds that turn a
 /// drag's path are inside the layer, so the solids' mass alone does not carry drags through
-/// (measured: docs/notes/2026-11-29-friction-measurements.md, "Inertia through slip events"). A note naming the region.
+/// (measured: docs/notes/2026-11-29-friction-measurements.md, "Inertia through slip events"). A
+/// note naming the region.
 fn massless_friction(case: &Case, model: &Model) -> Vec<String> {
     if !model.physics.inertia || !model.physics.friction {
         return Vec::new();
@@ -156,7 +157,8 @@ fn massless_friction(case: &Case, model: &Model) -> Vec<String> {
             Some(format!(
                 "note: line {}: region[{i}] (\"{}\") has friction but no `rho`: inertia carries \
                  drags through their slip events only where the medium has mass too (give it \
-                 the solids' `rho`; docs/notes/2026-11-29-friction-measurements.md, \"Inertia through slip events\")",
+                 the solids' `rho`; docs/notes/2026-11-29-friction-measurements.md, \"Inertia \
+                 through slip events\")",
                 line(fr.span()),
                 r.group.get_ref()
             ))
@@ -167,7 +169,8 @@ fn massless_friction(case: &Case, model: &Model) -> Vec<String> {
 /// A friction region with a given normal whose layer is several cells across it (its extent
 /// along the normal over its cells' mean extent): over a long slide the slip spreads over the
 /// rows in series and the force ratio falls below μ, where one cell across holds it
-/// (measured: docs/notes/2026-11-29-friction-measurements.md, "The block with one cell across"). A note naming the region.
+/// (measured: docs/notes/2026-11-29-friction-measurements.md, "The block with one cell across"). A
+/// note naming the region.
 fn layered_friction(case: &Case, model: &Model) -> Vec<String> {
     let mut notes = Vec::new();
     for (i, r) in case.file.region.iter().enumerate() {

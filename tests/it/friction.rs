@@ -941,7 +941,8 @@ fn with_the_limit_lagged_the_pad_slides_its_own_width_at_mu_0_5() {
     // limit μ p_n moving with p_n inside the step (the test below): with the last accepted
     // step's p_n, the whole drag of 2.0 completes. The largest force ratio is μ within 3 %
     // (measured 0.511); as the pad leaves the plate's middle the ratio settles low as at
-    // μ = 0.3, here by up to 17 % (0.414 at the end; docs/notes/2026-11-29-friction-measurements.md, "Where drags stall").
+    // μ = 0.3, here by up to 17 % (0.414 at the end;
+    // docs/notes/2026-11-29-friction-measurements.md, "Where drags stall").
     let mu = 0.5;
     let case = drag_case(2, Some(mu), 2.0, DRAG, 0.025)
         .replace("normal = [0, 1] }", "normal = [0, 1], limit = \"lagged\" }");
@@ -987,7 +988,8 @@ fn pad_stall(name: &str, params: &str, case: &str) -> (String, std::path::PathBu
 #[test]
 fn a_pad_corner_that_passes_below_the_plate_between_the_mediums_points_is_counted() {
     // the pad with one (bilinear) cell across the medium stalls at μ = 0.5 after a drag of
-    // 0.155 (docs/notes/2026-11-29-friction-measurements.md, "Where drags stall"); before that its leading corner has gone below
+    // 0.155 (docs/notes/2026-11-29-friction-measurements.md, "Where drags stall"); before that its
+    // leading corner has gone below
     // the plate's surface while every quadrature point's J in the medium stayed positive: the
     // cell ahead of it is inverted at that corner (measured: one cell, the corner at
     // y = -7.9e-5 when the drag stops)
@@ -1028,7 +1030,8 @@ fn a_pad_corner_that_passes_below_the_plate_between_the_mediums_points_is_counte
 #[test]
 fn a_stall_whose_residual_is_met_says_the_updates_do_not_shrink() {
     // the one-cell pad on n = 32 at μ = 0.3 with a slip viscosity of 1e-3 stops after a drag
-    // of 0.176 (docs/notes/2026-11-29-friction-measurements.md, "A slip viscosity"): there Newton's residual falls to 1.9e-13 of
+    // of 0.176 (docs/notes/2026-11-29-friction-measurements.md, "A slip viscosity"): there Newton's
+    // residual falls to 1.9e-13 of
     // its reference while its updates stay at 7e-7, the tangent singular along them. The
     // error says so rather than only "no convergence" beside a residual far below tolerance.
     let case = drag_case(2, Some(0.3), 2.0, DRAG, 0.025)
@@ -1045,7 +1048,8 @@ fn a_stall_whose_residual_is_met_says_the_updates_do_not_shrink() {
 fn with_one_cell_across_the_medium_the_block_slides_four_times_its_thickness() {
     // One medium cell between block and base: nothing can fold inside the layer where the
     // block's leading corner pitches down (with 4 or 8 cells, drags at μ ≥ 0.3 stall there:
-    // docs/notes/2026-11-29-friction-measurements.md, "Why long drags stall"). The whole drag of 1.0 completes; while the block
+    // docs/notes/2026-11-29-friction-measurements.md, "Why long drags stall"). The whole drag of
+    // 1.0 completes; while the block
     // still sits on the base (drag up to 0.3, after which it overhangs the base's end and
     // tilts over its corner), the force ratio in full slip is μ within 3 %.
     let mu = 0.3;
@@ -1287,11 +1291,14 @@ fn the_four_cell_pad_dragged_its_width_at_mu_1_makes_no_energy() {
 fn with_inertia_the_block_of_issue_36_slides_twice_the_medium_thickness() {
     // the issue's block: four cells across the medium, pressed 0.35, dragged 0.5 (twice the
     // medium's thickness). Quasi-statically μ = 0.3 stalls at 0.167 and μ = 0.5 at 0.285
-    // (docs/notes/2026-11-29-friction-measurements.md, "A slip viscosity"); with a mass density of 1e-4 both complete, the force
+    // (docs/notes/2026-11-29-friction-measurements.md, "A slip viscosity"); with a mass density of
+    // 1e-4 both complete, the force
     // ratio peaking within 4 % of μ (measured 0.290 and 0.487: across four cells the rotation
-    // regularization carries part of the shear, docs/notes/2026-11-29-friction-measurements.md, "Four formulation changes", and
+    // regularization carries part of the shear, docs/notes/2026-11-29-friction-measurements.md,
+    // "Four formulation changes", and
     // the quasi-static drag peaks at 0.290 too before it stalls) before the block overhangs
-    // the base's end and the ratio falls (docs/notes/2026-11-29-friction-measurements.md, "Why long drags stall").
+    // the base's end and the ratio falls (docs/notes/2026-11-29-friction-measurements.md, "Why long
+    // drags stall").
     for mu in [0.3, 0.5] {
         let case = with_mass(&drag_case(2, Some(mu), 0.5, DRAG, 0.025), 1e-4)
             .replace("uy = -0.3", "uy = -0.35");
@@ -1549,7 +1556,8 @@ fn the_block_with_one_cell_across_slides_twice_the_medium_s_thickness_with_inert
     // 0.3011), and at μ = 0.5 on triangles it ends within 1 % of μ (0.4990). The 3D block in
     // tetrahedra holds μ within 3 % at μ = 0.5 as well (measured 0.4923–0.4977), with no slip
     // event. At μ = 1 the block pitches on its leading corner and does not slide as a whole
-    // (docs/notes/2026-11-29-friction-measurements.md, "The block with one cell across"): only that it completes is asserted.
+    // (docs/notes/2026-11-29-friction-measurements.md, "The block with one cell across"): only that
+    // it completes is asserted.
     // pressed 0.35: the press's line is the only one ending in -0.3
     let press = |case: String| with_mass(&case.replacen("= -0.3\n", "= -0.35\n", 1), 1e-4);
     let runs = [
@@ -1602,7 +1610,8 @@ fn the_block_with_one_cell_across_slides_twice_the_medium_s_thickness_with_inert
 fn pressed_lightly_the_one_cell_block_holds_mu_net_of_the_medium_s_own_drag() {
     // issue 36's block (one cell across, ρ = 1e-4, dragged 0.5) pressed 0.27: the medium's
     // 0.25 closed and the block squeezed 2 %, so that its leading end does not pitch onto the
-    // base's corner as at 0.35 (docs/notes/2026-11-29-friction-measurements.md, "The press decides"). The medium resists the slide
+    // base's corner as at 0.35 (docs/notes/2026-11-29-friction-measurements.md, "The press
+    // decides"). The medium resists the slide
     // without friction too (its own shear stiffness γ): that drag, measured at μ = 0 at the
     // same drag, is at most 1 % of the normal force (measured 0.0067 on T1, 0.0052 on Q1,
     // 0.0065 on H1, 0.0071 on T4), and net of it F_t/F_n is μ within 3 % from a drag of 0.3

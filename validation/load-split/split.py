@@ -1,6 +1,6 @@
 """Where a dragged body's force goes: the medium's internal forces on it, by term and by
-where the cell lies in the undeformed mesh (docs/notes/2026-11-29-friction-measurements.md, "Where the ratio goes" and "The
-one-cell block's leading end").
+where the cell lies in the undeformed mesh (docs/notes/2026-11-29-friction-measurements.md,
+"Where the ratio goes" and "The one-cell block's leading end").
 
 Needs a tmc built with split.patch applied (see README.md); prints one row per drag.
 usage: python3 split.py TMC_BINARY [n] [mu] [l] [a] [beta2]      the pad of geo/pad.geo
