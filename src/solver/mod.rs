@@ -9,5 +9,4 @@ pub mod linear;
 pub mod newton;
 #[cfg(feature = "petsc")]
 pub mod petsc;
-pub mod static_lu;
 pub mod stepping;
