@@ -1180,7 +1180,8 @@ fn a_sphere_dragged_one_radius_turns_its_friction_work_into_heat() {
     assert!(tip > 0.3 && tip < 0.4, "tip moved {tip}");
     assert!(s.probes["theta_slider_tip"] > 0.0 && s.probes["theta_plate"] > 0.0);
     // full slip: drag force over normal force above μ (the medium ploughed ahead adds to
-    // friction, THEORY.md, "Curved bodies dragged")
+    // friction, docs/notes/2026-11-29-friction-measurements.md, "Four formulation changes",
+    // "Curved bodies dragged")
     let (cols, rows) = history(&out);
     let (fx, fz) = (
         column(&cols, &rows, "R_slider_top_x"),

@@ -310,7 +310,7 @@ fn block_plate(name: &str) -> f64 {
         s.load_steps
     );
     // faer's block-triangular preconditioner: a few GMRES iterations per update (measured
-    // 2.87, 3.14, 3.14, 3.27 per solve; PERFORMANCE.md, "Krylov iterations against the mesh")
+    // 2.87, 3.14, 3.14, 3.27 per solve; PERFORMANCE.md, "How time and memory grow")
     let per_solve = s.krylov_iterations as f64 / s.linear_solves as f64;
     assert!(
         per_solve < 4.0,
@@ -487,8 +487,8 @@ fn the_block_preconditioner_takes_as_many_iterations_on_a_finer_mesh() {
     // 20 502 unknowns), its whole load path: GMRES with faer's block-triangular
     // preconditioner takes about as many iterations per update on the finer mesh (measured
     // 3.14 and 3.50 per solve, asked: within 1.5 times; with a factorisation at every
-    // update 2.71, 2.20 and 2.26 at 3k, 20.5k and 147k: PERFORMANCE.md, "Krylov iterations
-    // against the mesh"), and the gap converges (4.1263e-4, 4.0500e-4; 4.0560e-4 at 147k)
+    // update 2.71, 2.20 and 2.26 at 3k, 20.5k and 147k: PERFORMANCE.md, "How time and memory
+    // grow"), and the gap converges (4.1263e-4, 4.0500e-4; 4.0560e-4 at 147k)
     let per_solve = |n: usize| {
         let tag = format!("table2-krylov-{n}");
         let out = scratch(&tag);
