@@ -490,50 +490,81 @@ fn solve_model(
             before_remake = Some(run.flows_at_rest()?);
         }
         let (mut cp, kept) = run.end_to_rejoin();
-        let t = cp.state.clock.t;
-        model = match (change, layer.as_mut(), &medium) {
-            (Change::Join(shift), Some(layer), _) => {
-                cp.state.totals.layer_joins += 1;
-                let mut mesh = model.mesh.clone();
-                layer.join(&model, &mut mesh, &mut cp.state.x, shift);
-                if opts.verbose {
-                    crate::note!("friction layer joined again, shifted {shift} cells, at t = {t}");
-                }
-                model_on(case, mesh, true)?.0
-            }
-            (Change::Remake, _, Some(medium)) => {
-                cp.state.totals.medium_remakes += 1;
-                let new;
-                (new, probes) = remade(case, &model, medium, &mut cp, &out_dir)?;
-                if opts.verbose {
-                    crate::note!(
-                        "medium made again at t = {t}: {} nodes",
-                        new.mesh.coords.len()
-                    );
-                }
-                new
-            }
-            _ => unreachable!("a change comes from the layer or the medium there is"),
-        };
+        let (new, placed) = changed_model(
+            case, &model, change, &mut layer, &medium, &mut cp, &out_dir, opts,
+        )?;
+        model = new;
+        if let Some(placed) = placed {
+            probes = placed;
+        }
         if let Some(rate) = medium.as_ref().map(|m| m.rate) {
-            // the new medium's blocks, and its slivers as made: the next step takes none of
-            // them past the end of its edge at the speed of the last (but is not cut to less
-            // than a tenth of the largest step)
             medium = remake::Medium::find(&model, remaking(case))?;
             if let Some(m) = medium.as_mut() {
-                let room = m.start(&model, &cp.state.x, t, rate);
-                let largest = match &case.file.time {
-                    Some(time) => time.dt_max(),
-                    None => case.file.steps.max,
-                };
-                let clock = &mut cp.state.clock;
-                clock.dt = clock.dt.min(room.max(0.1 * largest));
+                restart_medium(case, &model, m, &mut cp, rate);
             }
         }
         folder = kept;
         from = Some(cp);
         changed = true;
     }
+}
+
+/// The model on which a run goes on after `change` at the checkpoint `cp`'s state (laid out
+/// again for it), and, for a remade medium, the probes re-placed on it.
+#[allow(clippy::too_many_arguments)]
+fn changed_model(
+    case: &Case,
+    model: &Model,
+    change: Change,
+    layer: &mut Option<Layer>,
+    medium: &Option<remake::Medium>,
+    cp: &mut checkpoint::Checkpoint,
+    out_dir: &Path,
+    opts: &SolveOptions,
+) -> Result<(Model, Option<Vec<Probe>>), SolveError> {
+    let t = cp.state.clock.t;
+    match (change, layer.as_mut(), medium) {
+        (Change::Join(shift), Some(layer), _) => {
+            cp.state.totals.layer_joins += 1;
+            let mut mesh = model.mesh.clone();
+            layer.join(model, &mut mesh, &mut cp.state.x, shift);
+            if opts.verbose {
+                crate::note!("friction layer joined again, shifted {shift} cells, at t = {t}");
+            }
+            Ok((model_on(case, mesh, true)?.0, None))
+        }
+        (Change::Remake, _, Some(medium)) => {
+            cp.state.totals.medium_remakes += 1;
+            let (new, probes) = remade(case, model, medium, cp, out_dir)?;
+            if opts.verbose {
+                crate::note!(
+                    "medium made again at t = {t}: {} nodes",
+                    new.mesh.coords.len()
+                );
+            }
+            Ok((new, Some(probes)))
+        }
+        _ => unreachable!("a change comes from the layer or the medium there is"),
+    }
+}
+
+/// Start the new medium `m` at the checkpoint's state, and cut the next step so that it takes
+/// none of its slivers, as made, past the end of its edge at the speed of the last (`rate`;
+/// but not to less than a tenth of the largest step).
+fn restart_medium(
+    case: &Case,
+    model: &Model,
+    m: &mut remake::Medium,
+    cp: &mut checkpoint::Checkpoint,
+    rate: f64,
+) {
+    let room = m.start(model, &cp.state.x, cp.state.clock.t, rate);
+    let largest = match &case.file.time {
+        Some(time) => time.dt_max(),
+        None => case.file.steps.max,
+    };
+    let clock = &mut cp.state.clock;
+    clock.dt = clock.dt.min(room.max(0.1 * largest));
 }
 
 /// The model on which a run goes on once its medium is made again at the checkpoint `cp`'s

@@ -205,25 +205,11 @@ pub fn remesh(
     medium: &[usize],
     scratch: &Path,
 ) -> Result<Remeshed, String> {
-    // the regions: medium blocks by their physical groups
-    let mut regions: Vec<(Vec<usize>, Vec<usize>)> = Vec::new();
-    for &b in medium {
-        let groups = &mesh.cells[b].groups;
-        match regions.iter_mut().find(|r| &r.0 == groups) {
-            Some(r) => r.1.push(b),
-            None => regions.push((groups.clone(), vec![b])),
-        }
-    }
+    let regions = regions_of(mesh, medium);
     let loops: Vec<Vec<Vec<usize>>> = (regions.iter())
         .map(|r| boundary_loops(mesh, &r.1))
         .collect::<Result<_, _>>()?;
-    let (text, _) = geo_text(&loops, x);
-    std::fs::create_dir_all(scratch).map_err(|e| format!("{}: {e}", scratch.display()))?;
-    let geo = scratch.join("medium.geo");
-    std::fs::write(&geo, text).map_err(|e| format!("{}: {e}", geo.display()))?;
-    let made = mesh_geo(&geo, &scratch.join("medium.msh"), &MeshOptions::default())
-        .map_err(|e| e.to_string())?
-        .mesh;
+    let made = gmsh_between(&loops, x, scratch)?;
     // the boundary nodes, found again by their places
     let on_boundary: Vec<usize> = {
         let mut b: Vec<usize> = loops.iter().flatten().flatten().copied().collect();
@@ -231,39 +217,8 @@ pub fn remesh(
         b.dedup();
         b
     };
-    let scale = super::extent_of(x).max(f64::MIN_POSITIVE);
-    let tol = 1e-9 * scale;
-    let key = |p: [f64; 3]| ((p[0] / tol).round() as i64, (p[1] / tol).round() as i64);
-    let mut at: HashMap<(i64, i64), usize> = HashMap::new();
-    for &n in &on_boundary {
-        at.insert(key(x[n]), n);
-    }
-    let find = |p: [f64; 3]| -> Option<usize> {
-        let (i, j) = key(p);
-        (-1..=1)
-            .flat_map(|a| (-1..=1).map(move |b| (i + a, j + b)))
-            .find_map(|k| at.get(&k).copied())
-    };
-    // the old nodes kept: those of every other cell and facet, and the medium's boundary
-    let n_old = mesh.coords.len();
-    let mut keep = vec![false; n_old];
-    for (b, blk) in mesh.cells.iter().enumerate() {
-        if !medium.contains(&b) {
-            blk.conn.iter().for_each(|&n| keep[n] = true);
-        }
-    }
-    for blk in &mesh.facets {
-        blk.conn.iter().for_each(|&n| keep[n] = true);
-    }
-    on_boundary.iter().for_each(|&n| keep[n] = true);
-    let mut new_of = vec![usize::MAX; n_old];
-    let mut old_of = Vec::new();
-    let mut coords = Vec::new();
-    for n in (0..n_old).filter(|&n| keep[n]) {
-        new_of[n] = coords.len();
-        coords.push(mesh.coords[n]);
-        old_of.push(Some(n));
-    }
+    let find = finder(x, &on_boundary);
+    let (new_of, mut old_of, mut coords) = kept_nodes(mesh, medium, &on_boundary);
     // the made mesh's nodes: a boundary node is the old one, any other is new
     let mut made_to_new = Vec::with_capacity(made.coords.len());
     for &p in &made.coords {
@@ -323,6 +278,81 @@ pub fn remesh(
         old_of,
         medium: new_medium,
     })
+}
+
+/// The medium blocks `medium` grouped by their physical groups: (groups, blocks) per region.
+fn regions_of(mesh: &Mesh, medium: &[usize]) -> Vec<(Vec<usize>, Vec<usize>)> {
+    let mut regions: Vec<(Vec<usize>, Vec<usize>)> = Vec::new();
+    for &b in medium {
+        let groups = &mesh.cells[b].groups;
+        match regions.iter_mut().find(|r| &r.0 == groups) {
+            Some(r) => r.1.push(b),
+            None => regions.push((groups.clone(), vec![b])),
+        }
+    }
+    regions
+}
+
+/// The triangles gmsh makes inside the boundary `loops` (nodes at their places `x`), through
+/// a `.geo` written under `scratch`.
+fn gmsh_between(loops: &[Vec<Vec<usize>>], x: &[[f64; 3]], scratch: &Path) -> Result<Mesh, String> {
+    let (text, _) = geo_text(loops, x);
+    std::fs::create_dir_all(scratch).map_err(|e| format!("{}: {e}", scratch.display()))?;
+    let geo = scratch.join("medium.geo");
+    std::fs::write(&geo, text).map_err(|e| format!("{}: {e}", geo.display()))?;
+    Ok(
+        mesh_geo(&geo, &scratch.join("medium.msh"), &MeshOptions::default())
+            .map_err(|e| e.to_string())?
+            .mesh,
+    )
+}
+
+/// The node of `nodes` standing at a place (to 1e-9 of the extent of `x`), if any.
+fn finder(x: &[[f64; 3]], nodes: &[usize]) -> impl Fn([f64; 3]) -> Option<usize> {
+    let scale = super::extent_of(x).max(f64::MIN_POSITIVE);
+    let tol = 1e-9 * scale;
+    let key = move |p: [f64; 3]| ((p[0] / tol).round() as i64, (p[1] / tol).round() as i64);
+    let mut at: HashMap<(i64, i64), usize> = HashMap::new();
+    for &n in nodes {
+        at.insert(key(x[n]), n);
+    }
+    move |p: [f64; 3]| {
+        let (i, j) = key(p);
+        (-1..=1)
+            .flat_map(|a| (-1..=1).map(move |b| (i + a, j + b)))
+            .find_map(|k| at.get(&k).copied())
+    }
+}
+
+/// The old nodes kept (those of every other cell and facet, and the medium's boundary
+/// `on_boundary`), numbered anew in their order: the new number of each old node
+/// (`usize::MAX` if dropped), the old node of each new one, and their coordinates.
+#[allow(clippy::type_complexity)]
+fn kept_nodes(
+    mesh: &Mesh,
+    medium: &[usize],
+    on_boundary: &[usize],
+) -> (Vec<usize>, Vec<Option<usize>>, Vec<[f64; 3]>) {
+    let n_old = mesh.coords.len();
+    let mut keep = vec![false; n_old];
+    for (b, blk) in mesh.cells.iter().enumerate() {
+        if !medium.contains(&b) {
+            blk.conn.iter().for_each(|&n| keep[n] = true);
+        }
+    }
+    for blk in &mesh.facets {
+        blk.conn.iter().for_each(|&n| keep[n] = true);
+    }
+    on_boundary.iter().for_each(|&n| keep[n] = true);
+    let mut new_of = vec![usize::MAX; n_old];
+    let mut old_of = Vec::new();
+    let mut coords = Vec::new();
+    for n in (0..n_old).filter(|&n| keep[n]) {
+        new_of[n] = coords.len();
+        coords.push(mesh.coords[n]);
+        old_of.push(Some(n));
+    }
+    (new_of, old_of, coords)
 }
 
 /// Whether the medium blocks `medium` of `mesh` can be made again, and if not, why.
