@@ -47,29 +47,53 @@ pub enum SolveError {
     #[error("{0}")]
     Setup(String),
     /// `at`: where the run stands ("λ = 0.5", or "t = 1.2 (λ = 1)" with `[time]`); `step`:
-    /// the step that failed ("Δλ = 2e-5", or "Δt = 2e-5"); `hint`: what the scene's physics
-    /// suggests to read ("" or a sentence starting with "; ").
+    /// the step that failed ("Δλ = 2e-5", or "Δt = 2e-5"); `left`: what the run left in its
+    /// folder ([`Left`]); `hint`: what the scene's physics suggests to read ("" or a sentence
+    /// starting with "; ").
     #[error(
-        "load step from {at} failed with {step}, below the minimum step ({reason}); \
-         the {steps} converged steps up to {at} are in {dir}{hint}"
+        "load step from {at} failed with {step}, below the minimum step ({reason}); {left}{hint}"
     )]
     StepTooSmall {
         at: String,
         step: String,
         reason: String,
         steps: usize,
-        dir: PathBuf,
+        left: Left,
         hint: &'static str,
     },
-    #[error(
-        "interrupted at {at} after {steps} converged steps; they are in {dir} \
-         (summary.json says \"interrupted\")"
-    )]
+    #[error("interrupted at {at} after {steps} converged steps; {left}")]
     Interrupted {
         at: String,
         steps: usize,
-        dir: PathBuf,
+        left: Left,
     },
+}
+
+/// What a run that stopped early left in its output folder: its converged steps (`steps`, up
+/// to `at`), or, where it took none and the folder held a previous run's, those results as
+/// they were.
+#[derive(Debug)]
+pub struct Left(String);
+
+impl Left {
+    /// For a run that stopped at `at` after `steps` converged steps in `dir`; `interrupted`:
+    /// by the user (its summary.json says so).
+    pub fn new(steps: usize, at: &str, dir: &Path, kept_previous: bool, interrupted: bool) -> Left {
+        let dir = dir.display();
+        Left(match (kept_previous, interrupted) {
+            (true, _) => {
+                format!("no load step was taken, so {dir} keeps the previous run's results")
+            }
+            (false, false) => format!("the {steps} converged steps up to {at} are in {dir}"),
+            (false, true) => format!("they are in {dir} (summary.json says \"interrupted\")"),
+        })
+    }
+}
+
+impl std::fmt::Display for Left {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
 }
 
 impl From<remake::RemakeError> for SolveError {

@@ -207,6 +207,12 @@ impl<'a> Recorder<'a> {
     }
 
     /// The output folder, handed on (to the run that goes on on a mesh joined again).
+    /// Whether the folder holds a previous run's results aside, to come back unless this run
+    /// takes a load step.
+    pub(super) fn holds_previous(&self) -> bool {
+        self.folder.as_ref().is_some_and(RunFolder::holds_previous)
+    }
+
     pub(super) fn take_folder(&mut self) -> Option<RunFolder> {
         self.folder.take()
     }
@@ -400,8 +406,12 @@ impl<'a> Recorder<'a> {
         if let Some(folder) = &mut self.folder {
             let json = serde_json::to_string_pretty(&*s).expect("serialisable");
             write_atomic(&self.out_dir.join("summary.json"), json.as_bytes())?;
-            // results of this run's own, even if it failed: they replace the previous run's
-            folder.settle()?;
+            // a run that took a load step has results of its own, even if it then failed:
+            // they replace the previous run's; one that did not (it failed or was stopped at
+            // λ = 0) leaves the previous run's results as they were, where there are any
+            if ctl.accepted > 0 || !folder.holds_previous() {
+                folder.settle()?;
+            }
         }
         Ok(())
     }

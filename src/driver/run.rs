@@ -10,7 +10,7 @@ use super::recorder::Recorder;
 use super::records::{Reactions, StepRow, Summary, flow_change};
 use super::stepper::{Plan, Stepper, assemble_initial};
 use super::strategy::describe;
-use super::{SolveError, SolveOptions};
+use super::{Left, SolveError, SolveOptions};
 use crate::case::Case;
 use crate::model::Model;
 use crate::output::RunFolder;
@@ -355,7 +355,13 @@ impl<'a> Run<'a> {
                 step,
                 reason,
                 steps: st.ctl.accepted,
-                dir: self.rec.out_dir().to_owned(),
+                left: Left::new(
+                    st.ctl.accepted,
+                    &st.position(),
+                    self.rec.out_dir(),
+                    st.ctl.accepted == 0 && self.rec.holds_previous(),
+                    false,
+                ),
                 hint,
             };
             self.finish(false, err.to_string())?;
@@ -388,7 +394,13 @@ impl<'a> Run<'a> {
         let err = SolveError::Interrupted {
             at: self.st.position(),
             steps: self.st.ctl.accepted,
-            dir: self.rec.out_dir().to_owned(),
+            left: Left::new(
+                self.st.ctl.accepted,
+                &self.st.position(),
+                self.rec.out_dir(),
+                self.st.ctl.accepted == 0 && self.rec.holds_previous(),
+                true,
+            ),
         };
         self.finish(false, format!("interrupted: {err}"))?;
         Err(err)

@@ -34,6 +34,8 @@ pub struct RunFolder {
     held: bool,
     /// The folder did not exist before this run.
     created: bool,
+    /// [`HELD`] holds files of a previous run (not only its manifest).
+    held_results: bool,
 }
 
 impl RunFolder {
@@ -86,6 +88,7 @@ impl RunFolder {
             replaced: false,
             held: false,
             created,
+            held_results: false,
         })
     }
 
@@ -108,7 +111,7 @@ impl RunFolder {
         {
             let p = self.dir.join(name);
             match std::fs::rename(&p, held.join(name)) {
-                Ok(()) => {}
+                Ok(()) => self.held_results |= name != MANIFEST,
                 Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
                 Err(e) => return Err(werr(&p, e)),
             }
@@ -126,6 +129,11 @@ impl RunFolder {
         std::fs::rename(&held, &gone).map_err(|e| werr(&held, e))?;
         self.held = false;
         remove_discarded(&self.dir)
+    }
+
+    /// Whether a previous run's results wait aside, to come back unless this run settles.
+    pub fn holds_previous(&self) -> bool {
+        self.held && self.held_results
     }
 
     /// Keep the previous run's files: this run continues it (a restart), and its manifest

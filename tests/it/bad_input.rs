@@ -297,6 +297,48 @@ fn nothing_a_user_wrote_is_lost() {
 }
 
 #[test]
+fn a_rerun_that_takes_no_load_step_keeps_the_previous_results() {
+    // a first run, then a rerun into its folder that cannot take its first load step (one
+    // Newton iteration allowed, no step below the first): the folder stays as it was, byte
+    // for byte, and the message says so
+    let dir = scratch("bad-no-step");
+    let out = dir.join("out");
+    let good = slab_case(&dir, "good", &format!("{SOLID}{HELD}"));
+    assert!(solve(&good, &out).status.success());
+    let files = |dir: &Path| -> Vec<(String, Vec<u8>)> {
+        (listing(dir).into_iter())
+            .map(|f| (f.clone(), std::fs::read(dir.join(&f)).unwrap()))
+            .collect()
+    };
+    let before = files(&out);
+    assert!(before.iter().any(|(f, _)| f == "summary.json"));
+    let stuck = slab_case(
+        &dir,
+        "stuck",
+        &format!("{SOLID}{HELD}[steps]\ninitial = 1.0\nmin = 0.9\nmax_iter = 1\n"),
+    );
+    let e = fails_with(&solve(&stuck, &out), &["load step from λ = 0"]);
+    assert!(
+        e.contains("no load step was taken") && e.contains("keeps the previous run's results"),
+        "{e}"
+    );
+    assert!(
+        before == files(&out),
+        "the previous run's results as they were"
+    );
+    // with no previous run, the stuck run's own summary is what the folder holds
+    let fresh = dir.join("fresh");
+    let e = fails_with(
+        &solve(&stuck, &fresh),
+        &["the 0 converged steps up to λ = 0"],
+    );
+    assert!(!e.contains("previous run"), "{e}");
+    let s = common::summary(&fresh);
+    assert_eq!(s["converged"], false);
+    assert_eq!(s["load_steps"], 0);
+}
+
+#[test]
 fn bad_values_are_named_by_file_line_and_key() {
     let dir = scratch("bad-values");
     let out = dir.join("out");
