@@ -76,7 +76,7 @@ pub struct Region {
     beta2: Option<Spanned<f64>>,
     alpha_r: Option<Spanned<f64>>,
     /// Body force per reference volume (ramped).
-    pub body_force: Option<Vec<f64>>,
+    pub body_force: Option<Spanned<Vec<f64>>>,
     /// Heat source per reference volume (ramped).
     pub heat_source: Option<f64>,
     /// Heat capacity ρc per reference volume: with `[time]`, the region stores heat

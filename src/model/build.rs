@@ -570,7 +570,7 @@ fn external_loads(
             let w = facet_weights(b.kind, nodes, mesh);
             for (&n, wi) in nodes.iter().zip(&w) {
                 if let (Some(bf), true) = (&r.body_force, dofs.has(Field::U)) {
-                    for (i, bi) in bf.iter().enumerate() {
+                    for (i, bi) in bf.get_ref().iter().enumerate() {
                         f_ramp[dofs.u[n * dofs.dim + i] as usize] += bi * wi;
                     }
                 }

@@ -65,7 +65,7 @@ pub fn decide_physics(case: &Case) -> Physics {
             || f.region.iter().any(|r| {
                 r.body_force
                     .as_ref()
-                    .is_some_and(|b| b.iter().any(|&v| v != 0.0))
+                    .is_some_and(|b| b.get_ref().iter().any(|&v| v != 0.0))
             });
     let mechanics = mechanical_load || expansion;
     let medium = f.region.iter().any(|r| r.kind == RegionKind::Medium);

@@ -212,13 +212,20 @@ fn validate_bcs(case: &Case, mesh: &Mesh) -> Result<(), CaseError> {
 
 /// Vectors and points have the mesh's dimension.
 fn validate_sizes(case: &Case, mesh: &Mesh) -> Result<(), CaseError> {
-    for r in &case.file.region {
+    for (i, r) in case.file.region.iter().enumerate() {
         if let Some(b) = &r.body_force
-            && b.len() != mesh.dim
+            && b.get_ref().len() != mesh.dim
         {
             return case.error(
-                r.group.span(),
-                format!("body_force needs {} components", mesh.dim),
+                b.span(),
+                format!(
+                    "region[{i}] (\"{}\"): body_force has {} components; this mesh is {}D and \
+                     needs {}",
+                    r.group.get_ref(),
+                    b.get_ref().len(),
+                    mesh.dim,
+                    mesh.dim
+                ),
             );
         }
     }

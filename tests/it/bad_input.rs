@@ -359,6 +359,15 @@ fn bad_values_are_named_by_file_line_and_key() {
             vec!["force-c.toml:9", "body_force[0]", "out of range"],
         ),
         (
+            "dims",
+            format!("{}body_force = [0.0, -1.0, 0.0]\n{HELD}", SOLID),
+            vec![
+                "dims-c.toml:9",
+                "region[0] (\"solid\")",
+                "body_force has 3 components; this mesh is 2D",
+            ],
+        ),
+        (
             "value",
             format!("{SOLID}{}", HELD.replace("ux = 0.2", "ux = -inf")),
             vec!["value-c.toml:", "ux = -inf"],
