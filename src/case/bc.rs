@@ -243,12 +243,12 @@ impl Case {
                 })
                 .next();
             if let Some((what, at)) = law {
-                let theta_line = self.line_of(bc.group.span());
+                let theta_line = self.place(bc.group.span());
                 return self.error(
                     at,
                     format!(
                         "bc on \"{g}\": the group {what} here and has a prescribed \
-                         `theta` in the [[bc]] at line {theta_line}; a boundary is either held \
+                         `theta` in the [[bc]] at {theta_line}; a boundary is either held \
                          at a temperature or lets heat out by a law"
                     ),
                 );

@@ -110,6 +110,9 @@ pub struct Case {
     pub file: CaseFile,
     /// Each `[[region]]`'s material, in case order (what its checked keys give).
     pub materials: Vec<Material>,
+    /// Where `--set` made this case from the file: the file's own text and the settings, so
+    /// that a message cites the file's line, or the `--set` that gave the key.
+    pub written: Option<(String, Vec<(String, String)>)>,
 }
 
 /// Most load or time steps a case may ask for (a `path` value or a `dt` is at least one).
@@ -204,7 +207,8 @@ impl Case {
             }
         }
         let text = toml::to_string(&doc).map_err(|e| err(e.to_string()))?;
-        Case::parse(&self.path, text).map_err(|e| {
+        let written = Some((self.text.clone(), sets.to_vec()));
+        Case::parse_set(&self.path, text, written).map_err(|e| {
             let detail = e.detail();
             // a table made by a --set holds that key alone: what it lacks is the --set's
             match (detail.contains("missing field"), made.first()) {
@@ -226,6 +230,15 @@ impl Case {
     }
 
     pub fn parse(path: &Path, text: String) -> Result<Case, CaseError> {
+        Self::parse_set(path, text, None)
+    }
+
+    /// [`Case::parse`] of a text `--set` made from the file's (`written`).
+    fn parse_set(
+        path: &Path,
+        text: String,
+        written: Option<(String, Vec<(String, String)>)>,
+    ) -> Result<Case, CaseError> {
         let file: CaseFile = toml::from_str(&text).map_err(|e| CaseError::Syntax {
             path: path.to_owned(),
             msg: e.to_string().trim_end().to_string(),
@@ -235,14 +248,11 @@ impl Case {
             text,
             file,
             materials: Vec::new(),
+            written,
         };
         case.materials = case.check_values()?;
         // what the checks of each key leave: any other number not finite or absurd
-        check_numbers(&case.text).map_err(|(at, msg)| CaseError::Invalid {
-            path: case.path.clone(),
-            line: case.line_of(at..at),
-            msg,
-        })?;
+        check_numbers(&case.text).or_else(|(at, msg)| case.error(at..at, msg))?;
         Ok(case)
     }
 
@@ -260,22 +270,54 @@ impl Case {
             .unwrap_or_else(|| "case".into())
     }
 
+    /// The line of the case file that `span` (of [`Case::text`]) stands on: where `--set`
+    /// made the text, the line in the file of the same key in the same table (0 where the
+    /// file does not have it, or a `--set` gave it).
     pub fn line_of(&self, span: std::ops::Range<usize>) -> usize {
-        self.text[..span.start.min(self.text.len())]
+        let line = self.text[..span.start.min(self.text.len())]
             .matches('\n')
             .count()
-            + 1
+            + 1;
+        match &self.written {
+            None => line,
+            Some((file, sets)) => sets::line_in_file(&self.text, line, file, sets).unwrap_or(0),
+        }
     }
 
+    /// Where `span` stands, in words: "line N" of the case file, or the `--set` that gave it.
+    pub fn place(&self, span: std::ops::Range<usize>) -> String {
+        match (self.line_of(span), &self.written) {
+            (0, Some((_, sets))) => {
+                let said: Vec<String> = sets.iter().map(|(k, v)| format!("{k}={v}")).collect();
+                format!("--set {}", said.join(" "))
+            }
+            (line, _) => format!("line {line}"),
+        }
+    }
+
+    /// An error at `span`: at its line of the case file, or, where a `--set` gave the key or
+    /// the file does not have it, naming the settings.
     pub fn error<T>(
         &self,
         span: std::ops::Range<usize>,
         msg: impl Into<String>,
     ) -> Result<T, CaseError> {
-        Err(CaseError::Invalid {
-            path: self.path.clone(),
-            line: self.line_of(span),
-            msg: msg.into(),
+        let msg = msg.into();
+        Err(match (self.line_of(span), &self.written) {
+            (0, Some((_, sets))) => CaseError::Set {
+                path: self.path.clone(),
+                sets: sets
+                    .iter()
+                    .map(|(k, v)| format!("{k}={v}"))
+                    .collect::<Vec<_>>()
+                    .join(" "),
+                msg,
+            },
+            (line, _) => CaseError::Invalid {
+                path: self.path.clone(),
+                line,
+                msg,
+            },
         })
     }
 
@@ -332,6 +374,30 @@ mod tests {
             e.contains("`mesh_options.params.n = 1e300` is out of range"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn a_case_made_by_sets_cites_the_file_s_lines_or_the_set() {
+        let body = "[[region]]\ngroup = \"a\"\nkind = \"solid\"\nK = 1.0\nmu = 1.0\n\n\
+                    [[region]]\n# the second\ngroup = \"b\"\nkind = \"medium\"\ngamma = 1e-4\n";
+        let case = parsed(body).unwrap();
+        let set = |k: &str, v: &str| vec![(k.to_string(), v.to_string())];
+        let changed = case.with_sets(&set("steps.max", "0.25")).unwrap();
+        // region b's group stands on line 10 of the file (the mesh key first), whatever line
+        // the re-written text puts it on
+        let span = changed.file.region[1].group.span();
+        assert_eq!(changed.line_of(span.clone()), 10);
+        let e = changed.error::<()>(span, "bad").unwrap_err().to_string();
+        assert_eq!(e, "t.toml:10: bad");
+        // a key a --set gave is the --set's
+        let changed = parsed(body)
+            .unwrap()
+            .with_sets(&set("region.b.gamma", "1e-3"))
+            .unwrap();
+        let gamma = changed.text.find("gamma").unwrap();
+        let e = (changed.error::<()>(gamma..gamma, "bad").unwrap_err()).to_string();
+        assert_eq!(e, "t.toml with --set region.b.gamma=1e-3: bad");
+        assert_eq!(changed.place(gamma..gamma), "--set region.b.gamma=1e-3");
     }
 
     #[test]

@@ -127,11 +127,11 @@ fn heavy_solids(case: &Case, model: &Model) -> Vec<String> {
         let ratio = rho.get_ref() * h * h / (stiffness * dt * dt);
         if ratio > 1.0 {
             notes.push(format!(
-                "note: line {}: region[{i}] (\"{}\"): with `rho` = {:e} its cells' inertia over a \
+                "note: {}: region[{i}] (\"{}\"): with `rho` = {:e} its cells' inertia over a \
                  step of {dt} is {ratio:.1e} times their stiffness: the region barely follows its \
                  loads within a step (a dynamic scene). For a load path meant to be \
                  quasi-static, keep `rho` well below {:.1e} (THEORY.md, \"Time\")",
-                case.line_of(rho.span()),
+                case.place(rho.span()),
                 r.group.get_ref(),
                 rho.get_ref(),
                 stiffness * dt * dt / (h * h)
@@ -149,13 +149,13 @@ fn massless_friction(case: &Case, model: &Model) -> Vec<String> {
     if !model.physics.inertia || !model.physics.friction {
         return Vec::new();
     }
-    let line = |span| case.line_of(span);
+    let line = |span| case.place(span);
     (case.file.region.iter().enumerate())
         .filter(|(_, r)| r.rho.is_none())
         .filter_map(|(i, r)| {
             let fr = r.friction.as_ref()?;
             Some(format!(
-                "note: line {}: region[{i}] (\"{}\") has friction but no `rho`: inertia carries \
+                "note: {}: region[{i}] (\"{}\") has friction but no `rho`: inertia carries \
                  drags through their slip events only where the medium has mass too (give it \
                  the solids' `rho`; docs/notes/2026-11-29-friction-measurements.md, \"Inertia \
                  through slip events\")",
@@ -199,11 +199,11 @@ fn layered_friction(case: &Case, model: &Model) -> Vec<String> {
         let rows = (high - low) / (extents / cells as f64);
         if cells > 0 && rows.round() >= 2.0 {
             notes.push(format!(
-                "note: line {}: region[{i}] (\"{}\"): its friction layer is {} cells across its \
+                "note: {}: region[{i}] (\"{}\"): its friction layer is {} cells across its \
                  slip plane: over a slide longer than its thickness ({:.3e}) the force ratio \
                  falls below μ, the slip spread over its rows; one cell across holds \
                  it (docs/CASE.md, \"How far friction slides\")",
-                case.line_of(fr.span()),
+                case.place(fr.span()),
                 r.group.get_ref(),
                 rows.round(),
                 high - low
@@ -218,7 +218,7 @@ fn layered_friction(case: &Case, model: &Model) -> Vec<String> {
 /// goes nowhere.
 fn unused_keys(case: &Case, model: &Model) -> Vec<String> {
     let mut notes = Vec::new();
-    let line = |span| case.line_of(span);
+    let line = |span| case.place(span);
     for (i, r) in case.file.region.iter().enumerate() {
         let g = r.group.get_ref();
         if let Some(rho_c) = &r.rho_c
@@ -230,7 +230,7 @@ fn unused_keys(case: &Case, model: &Model) -> Vec<String> {
                 "the scene conducts no heat"
             };
             notes.push(format!(
-                "note: line {}: region[{i}] (\"{g}\"): `rho_c` has no effect: {why}",
+                "note: {}: region[{i}] (\"{g}\"): `rho_c` has no effect: {why}",
                 line(rho_c.span())
             ));
         }
@@ -238,7 +238,7 @@ fn unused_keys(case: &Case, model: &Model) -> Vec<String> {
             && !model.physics.inertia
         {
             notes.push(format!(
-                "note: line {}: region[{i}] (\"{g}\"): `rho` has no effect: the scene does not \
+                "note: {}: region[{i}] (\"{g}\"): `rho` has no effect: the scene does not \
                  deform",
                 line(rho.span())
             ));
@@ -248,7 +248,7 @@ fn unused_keys(case: &Case, model: &Model) -> Vec<String> {
             && !model.physics.frictional_heating
         {
             notes.push(format!(
-                "note: line {}: region[{i}] (\"{g}\"): `friction.heat_fraction` has no effect: \
+                "note: {}: region[{i}] (\"{g}\"): `friction.heat_fraction` has no effect: \
                  frictional heat needs [time] and a scene that conducts",
                 line(eta.span())
             ));
