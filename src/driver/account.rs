@@ -9,7 +9,7 @@ use super::state::Totals;
 use super::stepper::Stepper;
 use crate::assembly::AssemblyError;
 use crate::case::RegionKind;
-use crate::dofs::Field;
+use crate::dofs::{Field, NONE};
 use crate::mesh::point_text;
 use crate::model::{Model, StepContext};
 use crate::post::{corners_through_medium, friction_work, heat_stored, kinetic_energy};
@@ -98,6 +98,7 @@ impl Accounts {
         if model.physics.transient {
             self.heat(st, step, &fe, convected)?;
         }
+        self.balance(st, &fe, convected);
         let f_now = self.forces(st, &fe);
         let tot = &mut self.totals;
         tot.work += self
@@ -138,6 +139,53 @@ impl Accounts {
         tot.heat_in = Some(tot.heat_in.unwrap_or(0.0) + step.dt * rate);
         tot.heat_stored = Some(heat_stored(model, &st.asm.reference, &st.x).map_err(invalid)?);
         Ok(())
+    }
+
+    /// The accepted state's force balance (without inertia) and a steady scene's heat balance,
+    /// each kept as the largest relative imbalance of the run: Σ over the held dofs' reactions
+    /// and every dof's external load `fe` (and the heat `convected` in), over the
+    /// sum of their sizes. Translation leaves the internal forces summing to zero, so what is
+    /// left is the residual Newton left at the free dofs.
+    fn balance(&mut self, st: &Stepper, fe: &[f64], convected: f64) {
+        let model = st.model;
+        let r = &st.asm.r_full;
+        let sum = |dofs: &mut dyn Iterator<Item = usize>| {
+            let (mut net, mut size) = (0.0, 0.0);
+            for d in dofs {
+                let held = if model.cons.prescribed[d].is_some() {
+                    r[d]
+                } else {
+                    0.0
+                };
+                net += held + fe[d];
+                size += held.abs() + fe[d].abs();
+            }
+            (net, size)
+        };
+        let relative = |(net, size): (f64, f64)| (size > 0.0).then(|| net.abs() / size);
+        let worse = |a: Option<f64>, b: Option<f64>| match (a, b) {
+            (Some(a), Some(b)) => Some(a.max(b)),
+            (a, b) => a.or(b),
+        };
+        let tot = &mut self.totals;
+        if !model.physics.inertia && !model.dofs.u.is_empty() {
+            let dim = model.mesh.dim;
+            for c in 0..dim {
+                let mut dofs = (0..model.dofs.n_nodes)
+                    .map(|n| model.dofs.u[n * dim + c])
+                    .filter(|&d| d != NONE)
+                    .map(|d| d as usize);
+                tot.force_imbalance = worse(tot.force_imbalance, relative(sum(&mut dofs)));
+            }
+        }
+        if !model.physics.transient && !model.dofs.theta.is_empty() {
+            let mut dofs = (model.dofs.theta.iter())
+                .filter(|&&d| d != NONE)
+                .map(|&d| d as usize);
+            let (net, size) = sum(&mut dofs);
+            let flows = (net + convected, size + convected.abs());
+            tot.heat_imbalance = worse(tot.heat_imbalance, relative(flows));
+        }
     }
 
     /// The largest nodal displacement of the accepted state at `t`, kept for the summary; the

@@ -8,7 +8,7 @@ use super::SolveOptions;
 use super::account::Accounts;
 use super::checkpoint::{self, Checkpoint};
 use super::records::{
-    FORCE_KEYS, HistoryLayout, Reactions, StepRow, Summary, flow, peak_memory_mb,
+    Balances, FORCE_KEYS, HistoryLayout, Reactions, StepRow, Summary, flow, peak_memory_mb,
 };
 use super::state::{Files, RunState, Totals};
 use super::stepper::Stepper;
@@ -403,6 +403,12 @@ impl<'a> Recorder<'a> {
         // 0 until the first join
         s.heat_joined = (self.layout.joined).then(|| tot.heat_joined.unwrap_or(0.0));
         s.largest_displacement = tot.largest_displacement;
+        s.balances = balances(s, tot, st.newton.tol);
+        let open = open_balances(&s.balances);
+        if let (Some(open), Some(_)) = (open, &self.folder) {
+            self.say(&open);
+        }
+        let s = &mut self.summary;
         if let Some(folder) = &mut self.folder {
             let json = serde_json::to_string_pretty(&*s).expect("serialisable");
             write_atomic(&self.out_dir.join("summary.json"), json.as_bytes())?;
@@ -439,4 +445,44 @@ fn progress_bar(quiet: bool) -> indicatif::ProgressBar {
         .expect("valid template"),
     );
     pb
+}
+
+/// The run's balances at its end: the force and steady heat imbalances its accepted states
+/// kept, and a transient scene's heat balance, `heat_stored` against `heat_in` +
+/// `friction_heat` + `heat_joined`, over the largest of them; held to Newton's `tol`.
+fn balances(s: &Summary, tot: &Totals, tol: f64) -> Balances {
+    let heat = match s.heat_stored.zip(s.heat_in) {
+        Some((stored, supplied)) => {
+            let made = s.friction_heat.unwrap_or(0.0);
+            let joined = s.heat_joined.unwrap_or(0.0);
+            let size = [stored, supplied, made, joined]
+                .iter()
+                .fold(0.0f64, |a, v| a.max(v.abs()));
+            (size > 0.0).then(|| (stored - supplied - made - joined).abs() / size)
+        }
+        None => tot.heat_imbalance,
+    };
+    Balances::judged(tot.force_imbalance, heat, Balances::tolerance_for(tol))
+}
+
+/// A warning naming the balances a run left open, if any.
+fn open_balances(b: &Balances) -> Option<String> {
+    let open: Vec<String> = (b.open.iter())
+        .map(|name| {
+            let value = match name.as_str() {
+                "force" => b.force,
+                _ => b.heat,
+            };
+            format!("{name} balance open by {:.1e}", value.unwrap_or(f64::NAN))
+        })
+        .collect();
+    (!open.is_empty()).then(|| {
+        format!(
+            "warning: {} of the flows it balances (tolerance {:.0e}): the answers are not \
+             an equilibrium; a tighter [steps] tol, or `tmc check`, may say why \
+             (summary.json: balances)",
+            open.join(", "),
+            b.tolerance
+        )
+    })
 }

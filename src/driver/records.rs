@@ -116,6 +116,50 @@ pub struct Summary {
     /// heat stored by, so far; with it, `heat_stored` = `heat_in` + `friction_heat` +
     /// `heat_joined` (`null` otherwise).
     pub heat_joined: Option<f64>,
+    /// What the run checked of its own answers ([`Balances`]).
+    pub balances: Balances,
+}
+
+/// How far a run's balances are from closing, each the largest over its accepted states
+/// relative to the flows it balances (`null` where the scene has none to check), the tolerance
+/// they are held to, and those left open. The force balance: the held groups' reactions and
+/// the applied loads sum to zero, per component (not checked with inertia, whose forces are
+/// the bodies' momentum). The heat balance: in a transient scene `heat_stored` = `heat_in` +
+/// `friction_heat` + `heat_joined` (at the run's end); in a steady one the heat flows of the
+/// groups, the sources and convection sum to zero.
+#[derive(Clone, Debug, Default, Serialize, PartialEq)]
+pub struct Balances {
+    pub force: Option<f64>,
+    pub heat: Option<f64>,
+    pub tolerance: f64,
+    /// The balances beyond the tolerance: "force", "heat".
+    pub open: Vec<String>,
+}
+
+impl Balances {
+    /// The balances of a run whose largest relative imbalances were `force` and `heat`,
+    /// held to `tolerance`.
+    pub fn judged(force: Option<f64>, heat: Option<f64>, tolerance: f64) -> Balances {
+        let open = [("force", force), ("heat", heat)]
+            .into_iter()
+            .filter(|(_, v)| v.is_some_and(|v| !(v <= tolerance)))
+            .map(|(name, _)| name.to_string())
+            .collect();
+        Balances {
+            force,
+            heat,
+            tolerance,
+            open,
+        }
+    }
+
+    /// The tolerance of a run solved to Newton's relative `tol`: a balance sums the residual
+    /// Newton leaves at every free unknown, each up to `tol` of its field's reference.
+    pub fn tolerance_for(tol: f64) -> f64 {
+        // to three digits: 1e3 × 1e-9 is 1.0000000000000002e-6 in binary
+        let t = format!("{:.2e}", (1e3 * tol).max(1e-6));
+        t.parse().unwrap_or(1e3 * tol)
+    }
 }
 
 impl Summary {
@@ -189,6 +233,7 @@ impl Summary {
             medium_remade_force_change: None,
             medium_remade_heat_change: None,
             heat_joined: None,
+            balances: Balances::default(),
             output: out_dir.display().to_string(),
             units: Quantity::ALL
                 .into_iter()
@@ -497,7 +542,18 @@ impl HistoryLayout {
 
 #[cfg(test)]
 mod tests {
-    use super::{Reactions, flow_change};
+    use super::{Balances, Reactions, flow_change};
+
+    #[test]
+    fn a_balance_beyond_its_tolerance_is_open_and_one_not_checked_is_not() {
+        let b = Balances::judged(Some(3e-6), Some(1e-9), Balances::tolerance_for(1e-9));
+        assert_eq!(
+            (b.tolerance, b.open.clone()),
+            (1e-6, vec!["force".to_string()])
+        );
+        let b = Balances::judged(None, Some(f64::NAN), Balances::tolerance_for(1e-6));
+        assert_eq!((b.tolerance, b.open), (1e-3, vec!["heat".to_string()]));
+    }
 
     fn flows(rows: &[(&str, &[(&str, f64)])]) -> Reactions {
         (rows.iter())

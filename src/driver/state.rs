@@ -72,6 +72,12 @@ pub struct Totals {
     /// stored by (its cells re-paired with other nodes' temperatures).
     #[serde(default)]
     pub heat_joined: Option<f64>,
+    /// The largest relative force imbalance of an accepted state, and a steady scene's heat
+    /// imbalance (`Balances`; `None` where there is none to check).
+    #[serde(default)]
+    pub force_imbalance: Option<f64>,
+    #[serde(default)]
+    pub heat_imbalance: Option<f64>,
 }
 
 impl Totals {
