@@ -86,6 +86,24 @@ fn solve(case: &Path, out: &Path) -> Output {
     common::solve_cli(case, out, &[])
 }
 
+/// A scratch folder `name` holding a slab case "good" solved into its folder "out": the
+/// folder, that output folder, the case, and the output's files with their bytes.
+fn finished_run(name: &str) -> (PathBuf, PathBuf, PathBuf, Vec<(String, Vec<u8>)>) {
+    let dir = scratch(name);
+    let out = dir.join("out");
+    let good = slab_case(&dir, "good", &format!("{SOLID}{HELD}"));
+    assert!(solve(&good, &out).status.success());
+    let before = contents(&out);
+    (dir, out, good, before)
+}
+
+/// Each file in `dir` with its bytes, by name.
+fn contents(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    (listing(dir).into_iter())
+        .map(|f| (f.clone(), std::fs::read(dir.join(&f)).unwrap()))
+        .collect()
+}
+
 /// File names in `dir`, sorted.
 fn listing(dir: &Path) -> Vec<String> {
     let mut v: Vec<String> = std::fs::read_dir(dir)
@@ -189,12 +207,7 @@ fn gmsh_exiting_or_a_full_disk_never_ends_in_success() {
     let out = dir.join("full");
     let o = solve(&case, &out);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let files = |dir: &Path| -> Vec<(String, Vec<u8>)> {
-        (listing(dir).into_iter())
-            .map(|f| (f.clone(), std::fs::read(dir.join(&f)).unwrap()))
-            .collect()
-    };
-    let before = files(&out);
+    let before = contents(&out);
     let o = limited(&format!("solve {} -o {} -q", case.display(), out.display()));
     let e = fails_with(&o, &["cannot write"]);
     assert!(e.contains("File too large") || e.contains("space"), "{e}");
@@ -205,7 +218,7 @@ fn gmsh_exiting_or_a_full_disk_never_ends_in_success() {
         }
     }
     assert!(
-        before == files(&out),
+        before == contents(&out),
         "the first run's results as they were"
     );
     // into a new folder: it fails the same way and leaves no folder behind
@@ -221,14 +234,7 @@ fn gmsh_exiting_or_a_full_disk_never_ends_in_success() {
 
 #[test]
 fn nothing_a_user_wrote_is_lost() {
-    let dir = scratch("bad-loss");
-    let out = dir.join("out");
-    let good = slab_case(&dir, "good", &format!("{SOLID}{HELD}"));
-    assert!(solve(&good, &out).status.success());
-    let before: Vec<(String, Vec<u8>)> = listing(&out)
-        .into_iter()
-        .map(|f| (f.clone(), std::fs::read(out.join(&f)).unwrap()))
-        .collect();
+    let (dir, out, good, before) = finished_run("bad-loss");
     // a rerun with a misspelt group fails before touching the folder
     let typo = slab_case(
         &dir,
@@ -298,19 +304,10 @@ fn nothing_a_user_wrote_is_lost() {
 
 #[test]
 fn a_rerun_that_takes_no_load_step_keeps_the_previous_results() {
-    // a first run, then a rerun into its folder that cannot take its first load step (one
-    // Newton iteration allowed, no step below the first): the folder stays as it was, byte
+    // a first run, then a rerun into its folder that cannot take its first load step (two
+    // Newton iterations allowed, no step below the first): the folder stays as it was, byte
     // for byte, and the message says so
-    let dir = scratch("bad-no-step");
-    let out = dir.join("out");
-    let good = slab_case(&dir, "good", &format!("{SOLID}{HELD}"));
-    assert!(solve(&good, &out).status.success());
-    let files = |dir: &Path| -> Vec<(String, Vec<u8>)> {
-        (listing(dir).into_iter())
-            .map(|f| (f.clone(), std::fs::read(dir.join(&f)).unwrap()))
-            .collect()
-    };
-    let before = files(&out);
+    let (dir, out, _, before) = finished_run("bad-no-step");
     assert!(before.iter().any(|(f, _)| f == "summary.json"));
     let stuck = slab_case(
         &dir,
@@ -323,7 +320,7 @@ fn a_rerun_that_takes_no_load_step_keeps_the_previous_results() {
         "{e}"
     );
     assert!(
-        before == files(&out),
+        before == contents(&out),
         "the previous run's results as they were"
     );
     // with no previous run, the stuck run's own summary is what the folder holds
