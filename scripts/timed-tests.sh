@@ -1,0 +1,19 @@
+#!/usr/bin/env bash
+# Run a `cargo test` command line with each test's time reported, keep the whole output in
+# target/test-times.log, and end with the ten slowest tests. The exit status is the tests'.
+#
+#   scripts/timed-tests.sh cargo test --release --features petsc
+#
+# libtest reports a test's time only with an unstable option; RUSTC_BOOTSTRAP lets the stable
+# test harness take it (it changes nothing else in the build or the tests).
+set -uo pipefail
+cd "$(dirname "$0")/.."
+mkdir -p target
+log=target/test-times.log
+RUSTC_BOOTSTRAP=1 "$@" -- -Z unstable-options --report-time 2>&1 | tee "$log"
+status=${PIPESTATUS[0]}
+echo
+echo "the ten slowest tests (of $(grep -c '^test .* <[0-9.]*s>$' "$log") timed; $log has them all):"
+sed -n 's/^test \(.*\) \.\.\. [a-zA-Z]* <\([0-9.]*\)s>$/\2 \1/p' "$log" | sort -rn | head -10 |
+    awk '{ printf "  %8.1f s  %s\n", $1, $2 }'
+exit "$status"
