@@ -312,7 +312,7 @@ fn a_rerun_that_takes_no_load_step_keeps_the_previous_results() {
     let stuck = slab_case(
         &dir,
         "stuck",
-        &format!("{SOLID}{HELD}[steps]\ninitial = 1.0\nmin = 0.9\nmax_iter = 1\n"),
+        &format!("{SOLID}{HELD}[steps]\ninitial = 1.0\nmin = 0.9\nmax_iter = 2\n"),
     );
     let e = fails_with(&solve(&stuck, &out), &["load step from λ = 0"]);
     assert!(
