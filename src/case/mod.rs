@@ -284,6 +284,33 @@ impl Case {
         }
     }
 
+    /// Where in the text the key `key` of the table `[table]` is written: the start of its
+    /// line, or of the table's header where the table does not give it (or `key` is empty), or
+    /// 0 where there is no such table.
+    pub fn key_at(&self, table: &str, key: &str) -> usize {
+        let header = format!("[{table}]");
+        let mut offset = 0;
+        let mut inside = false;
+        let mut header_at = None;
+        for line in self.text.split_inclusive('\n') {
+            let t = line.trim();
+            if t.starts_with('[') {
+                inside = t.replace(' ', "") == header;
+                if inside {
+                    header_at = Some(offset);
+                }
+            } else if inside
+                && !key.is_empty()
+                && t.strip_prefix(key)
+                    .is_some_and(|rest| rest.trim_start().starts_with('='))
+            {
+                return offset;
+            }
+            offset += line.len();
+        }
+        header_at.unwrap_or(0)
+    }
+
     /// Where `span` stands, in words: "line N" of the case file, or the `--set` that gave it.
     pub fn place(&self, span: std::ops::Range<usize>) -> String {
         match (self.line_of(span), &self.written) {

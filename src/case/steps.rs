@@ -111,44 +111,65 @@ impl Case {
     pub(super) fn check_steps(&self) -> Result<usize, CaseError> {
         let f = &self.file;
         let s = &f.steps;
-        let steps_at = self.text.find("[steps]").unwrap_or(0);
-        let bad = |msg: &str| self.error::<()>(steps_at..steps_at, format!("[steps]: {msg}"));
+        // each refusal at the line of the key it is about (the table's, where it is not given)
+        let bad_at = |key: &str, msg: &str| {
+            let at = self.key_at("steps", key);
+            self.error::<()>(at..at, format!("[steps]: {msg}"))
+        };
         if !(s.min > 0.0 && s.min <= s.initial && s.initial <= s.max && s.max <= 1.0) {
-            bad("need 0 < min <= initial <= max <= 1")?;
+            let key = if !(s.min > 0.0) {
+                "min"
+            } else if !(s.min <= s.initial) {
+                "initial"
+            } else {
+                "max"
+            };
+            bad_at(key, "need 0 < min <= initial <= max <= 1")?;
         }
         if s.min < MIN_STEP {
-            bad(&format!(
-                "min = {:e} is below {MIN_STEP:e}: a step that small changes nothing a double \
+            bad_at(
+                "min",
+                &format!(
+                    "min = {:e} is below {MIN_STEP:e}: a step that small changes nothing a double \
                  can hold, and cutting down to it takes thousands of failed attempts",
-                s.min
-            ))?;
+                    s.min
+                ),
+            )?;
         }
         if let Some(p) = &s.path
             && p.len() > MAX_STEPS
         {
-            bad(&format!(
-                "path has {} values; at most {MAX_STEPS} (each is at least one load step)",
-                p.len()
-            ))?;
+            bad_at(
+                "path",
+                &format!(
+                    "path has {} values; at most {MAX_STEPS} (each is at least one load step)",
+                    p.len()
+                ),
+            )?;
         }
         if !(s.tol > 0.0 && s.tol < 1.0) {
-            bad("tol must be in (0, 1)")?;
+            bad_at("tol", "tol must be in (0, 1)")?;
         }
         if s.max_iter < 2 {
-            bad("max_iter must be at least 2")?;
+            bad_at("max_iter", "max_iter must be at least 2")?;
         }
         if !(s.grow >= 1.0 && s.cut > 0.0 && s.cut < 1.0) {
-            bad("need grow >= 1 and 0 < cut < 1")?;
+            let key = if s.grow >= 1.0 { "cut" } else { "grow" };
+            bad_at(key, "need grow >= 1 and 0 < cut < 1")?;
         }
         let n_path = match (&s.path, &f.time) {
             (Some(_), Some(_)) => {
-                bad(
+                bad_at(
+                    "path",
                     "`path` is over pseudo-time; with [time], give the load factor as [time] lambda = [[t, λ], …]",
                 )?;
                 0
             }
             (Some(p), None) if p.len() < 2 || p[0] != 0.0 || p.iter().any(|v| !v.is_finite()) => {
-                bad("path needs at least two finite values, the first 0 (the unloaded state)")?;
+                bad_at(
+                    "path",
+                    "path needs at least two finite values, the first 0 (the unloaded state)",
+                )?;
                 0
             }
             (Some(p), None) => p.len(),
