@@ -1304,3 +1304,182 @@ fn a_study_setting_the_new_features_badly_ends_naming_the_variant_and_the_key() 
         "{table}"
     );
 }
+
+/// The keys docs/CASE.md's tables list, each with the table it belongs in (its place in a
+/// case: "" for the top level, "mesh_options", "region.solid", "region.medium", "friction",
+/// "bc", "steps", "time", "solver", "solver.petsc", "output", "units", "probe") and whether
+/// its type is a string or a bool (a number is the wrong type for it; a string for the rest),
+/// and whether it is one number (for which −1e300 is out of range).
+fn keys_of_the_case_reference() -> Vec<(&'static str, String, bool, bool)> {
+    let doc = std::fs::read_to_string(root().join("docs/CASE.md")).unwrap();
+    // each heading's tables, in order
+    let places: &[(&str, &[&'static str])] = &[
+        ("## Top level", &["", "mesh_options"]),
+        ("## `[[region]]`: a solid", &["region.solid"]),
+        (
+            "## `[[region]]`: the third medium",
+            &["region.medium", "friction"],
+        ),
+        ("## `[[bc]]`", &["bc"]),
+        ("## `[steps]`", &["steps"]),
+        ("## `[time]`", &["time"]),
+        ("## `[solver]`", &["solver", "solver.petsc"]),
+        ("## `[output]`", &["output", "units"]),
+        ("## `[[probe]]`", &["probe"]),
+    ];
+    let (mut keys, mut tables, mut in_table) = (Vec::new(), None::<&[&str]>, false);
+    let mut n = 0;
+    for line in doc.lines() {
+        if line.starts_with("## ") {
+            tables = places
+                .iter()
+                .find(|(h, _)| line.starts_with(h))
+                .map(|p| p.1);
+            n = 0;
+            in_table = false;
+            continue;
+        }
+        let Some(t) = tables else { continue };
+        if line.starts_with("| key |") {
+            in_table = true;
+            continue;
+        }
+        if !line.starts_with('|') {
+            if in_table {
+                n += 1;
+            }
+            in_table = false;
+            continue;
+        }
+        if !line.starts_with("| `") || n >= t.len() {
+            continue;
+        }
+        let cells: Vec<&str> = line.split('|').collect();
+        let (names, kind) = (cells[1], cells.get(2).copied().unwrap_or(""));
+        let textual = kind.contains("string") || kind.contains("bool") || kind.contains('"');
+        // one number (a scalar): out of range is a value for it too
+        let scalar = (kind.contains("number") || kind.contains("integer"))
+            && !["numbers", "vector", "rows", "table", "point", ","]
+                .iter()
+                .any(|w| kind.contains(w));
+        for name in names.split('`').skip(1).step_by(2) {
+            keys.push((t[n], name.to_string(), textual, scalar));
+        }
+    }
+    keys
+}
+
+#[test]
+fn every_key_of_the_case_reference_of_the_wrong_type_is_refused_at_its_line_or_set() {
+    let dir = scratch("bad-every-key");
+    let mesh = root().join("geo/block.geo");
+    let base = format!(
+        "mesh = \"{}\"\n[mesh_options]\nparams = {{ n = 4, m = 4, l = 1 }}\n\
+         [[region]]\ngroup = \"solid\"\nkind = \"solid\"\nK = 20.0\nmu = 10.0\n\
+         [[region]]\ngroup = \"medium\"\nkind = \"medium\"\ngamma = 1e-4\n\
+         friction = {{ mu = 0.1, normal = [0, 1] }}\n\
+         [[bc]]\ngroup = \"bottom\"\nux = 0.0\nuy = 0.0\n\
+         [[bc]]\ngroup = \"top\"\nuy = -0.1\n\
+         [steps]\nmax = 0.5\n[time]\nend = 1.0\ndt = 0.5\n[solver]\nlinear = \"auto\"\n\
+         [solver.petsc]\nmethod = \"direct\"\n[output]\nevery = 1\n[units]\nlength = \"mm\"\n\
+         [[probe]]\nname = \"p\"\nfield = \"ux\"\nat = [1.0, 1.0]\n",
+        mesh.display()
+    );
+    let good = dir.join("base.toml");
+    std::fs::write(&good, &base).unwrap();
+    let o = tmc(&["check", good.to_str().unwrap()]);
+    assert!(o.status.success(), "the base case is checked: {}", err(&o));
+    let keys = keys_of_the_case_reference();
+    assert!(
+        keys.len() > 80,
+        "{} keys read from docs/CASE.md",
+        keys.len()
+    );
+    let mut wrong = Vec::new();
+    let values = |textual: bool, scalar: bool| match (textual, scalar) {
+        (true, _) => vec!["1.5"],
+        (false, true) => vec!["\"x\"", "-1e300"],
+        (false, false) => vec!["\"x\""],
+    };
+    let cases = (keys.iter()).flat_map(|(place, key, textual, scalar)| {
+        (values(*textual, *scalar).into_iter()).map(move |v| (*place, key, v))
+    });
+    for (place, key, value) in cases {
+        // the line of the table the key goes in, and the line it is written on
+        let header = match place {
+            "" => None,
+            "region.solid" => Some("kind = \"solid\"".to_string()),
+            "region.medium" | "friction" => Some("kind = \"medium\"".to_string()),
+            "bc" => Some("group = \"top\"".to_string()),
+            "probe" => Some("name = \"p\"".to_string()),
+            p => Some(format!("[{p}]")),
+        };
+        let mut lines: Vec<String> = base.lines().map(String::from).collect();
+        let at = match (place, &header) {
+            ("friction", _) => {
+                let i = lines
+                    .iter()
+                    .position(|l| l.starts_with("friction"))
+                    .unwrap();
+                lines[i] = match key.as_str() {
+                    "mu" => format!("friction = {{ mu = {value}, normal = [0, 1] }}"),
+                    "normal" => format!("friction = {{ mu = 0.1, normal = {value} }}"),
+                    _ => format!("friction = {{ mu = 0.1, normal = [0, 1], {key} = {value} }}"),
+                };
+                i
+            }
+            (_, header) => {
+                let start = header
+                    .as_ref()
+                    .map_or(0, |h| lines.iter().position(|l| l == h).unwrap() + 1);
+                let end = (start..lines.len())
+                    .find(|&i| lines[i].starts_with('['))
+                    .unwrap_or(lines.len());
+                let line = format!("{key} = {value}");
+                match (start..end).find(|&i| lines[i].starts_with(&format!("{key} = "))) {
+                    Some(i) => {
+                        lines[i] = line;
+                        i
+                    }
+                    None => {
+                        lines.insert(start, line);
+                        start
+                    }
+                }
+            }
+        };
+        let tag = if value == "-1e300" { "-range" } else { "" };
+        let case = dir.join(format!("{}-{key}{tag}.toml", place.replace('.', "-")));
+        std::fs::write(&case, lines.join("\n") + "\n").unwrap();
+        let o = tmc(&["check", case.to_str().unwrap()]);
+        let e = err(&o);
+        let line = at + 1;
+        let cited = e.contains(&format!(":{line}:")) || e.contains(&format!("line {line}"));
+        if o.status.success() || !cited || e.contains("panicked") {
+            wrong.push(format!("{place} {key} = {value} (line {line}): {e}"));
+        }
+        // the same from --set, on the case as the base has it
+        let path = match place {
+            "" => key.clone(),
+            "region.solid" => format!("region.solid.{key}"),
+            "region.medium" => format!("region.medium.{key}"),
+            "friction" => format!("region.medium.friction.{key}"),
+            "bc" => format!("bc.top.{key}"),
+            "probe" => format!("probe.p.{key}"),
+            p => format!("{p}.{key}"),
+        };
+        let set = format!("{path}={}", value.trim_matches('"'));
+        let o = tmc(&["check", good.to_str().unwrap(), "--set", &set]);
+        let e = err(&o);
+        if o.status.success() || !e.contains(&format!("--set {set}")) || e.contains("panicked") {
+            wrong.push(format!("--set {set}: {e}"));
+        }
+    }
+    assert!(
+        wrong.is_empty(),
+        "{} of {} keys:\n{}",
+        wrong.len(),
+        keys.len(),
+        wrong.join("\n")
+    );
+}
