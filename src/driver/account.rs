@@ -162,7 +162,13 @@ impl Accounts {
             }
             (net, size)
         };
-        let relative = |(net, size): (f64, f64)| (size > 0.0).then(|| net.abs() / size);
+        // flows below what Newton leaves as round-off at every node are not judged by
+        // themselves (a component no load acts along sums round-off to round-off)
+        let nodes = model.dofs.n_nodes as f64;
+        let relative = |net: f64, size: f64, floor: f64| {
+            let scale = size.max(nodes * floor);
+            (scale > 0.0).then(|| net.abs() / scale)
+        };
         let worse = |a: Option<f64>, b: Option<f64>| match (a, b) {
             (Some(a), Some(b)) => Some(a.max(b)),
             (a, b) => a.or(b),
@@ -170,21 +176,32 @@ impl Accounts {
         let tot = &mut self.totals;
         if !model.physics.inertia && !model.dofs.u.is_empty() {
             let dim = model.mesh.dim;
-            for c in 0..dim {
-                let mut dofs = (0..model.dofs.n_nodes)
-                    .map(|n| model.dofs.u[n * dim + c])
-                    .filter(|&d| d != NONE)
-                    .map(|d| d as usize);
-                tot.force_imbalance = worse(tot.force_imbalance, relative(sum(&mut dofs)));
-            }
+            let sums: Vec<(f64, f64)> = (0..dim)
+                .map(|c| {
+                    let mut dofs = (0..model.dofs.n_nodes)
+                        .map(|n| model.dofs.u[n * dim + c])
+                        .filter(|&d| d != NONE)
+                        .map(|d| d as usize);
+                    sum(&mut dofs)
+                })
+                .collect();
+            // each component's net against every component's flows: the forces balanced
+            let size: f64 = sums.iter().map(|s| s.1).sum();
+            let net = sums.iter().fold(0.0f64, |a, s| a.max(s.0.abs()));
+            let rel = relative(net, size, st.newton.floor(Field::U));
+            tot.force_imbalance = worse(tot.force_imbalance, rel);
         }
         if !model.physics.transient && !model.dofs.theta.is_empty() {
             let mut dofs = (model.dofs.theta.iter())
                 .filter(|&&d| d != NONE)
                 .map(|&d| d as usize);
             let (net, size) = sum(&mut dofs);
-            let flows = (net + convected, size + convected.abs());
-            tot.heat_imbalance = worse(tot.heat_imbalance, relative(flows));
+            let rel = relative(
+                net + convected,
+                size + convected.abs(),
+                st.newton.floor(Field::Theta),
+            );
+            tot.heat_imbalance = worse(tot.heat_imbalance, rel);
         }
     }
 

@@ -14,6 +14,7 @@ use super::state::{Files, RunState, Totals};
 use super::stepper::Stepper;
 use super::strategy::Strategy;
 use crate::case::Case;
+use crate::dofs::Field;
 use crate::model::Model;
 use crate::output::probes::Probe;
 use crate::output::{History, OutputError, RunFolder, Series, write_atomic};
@@ -403,7 +404,9 @@ impl<'a> Recorder<'a> {
         // 0 until the first join
         s.heat_joined = (self.layout.joined).then(|| tot.heat_joined.unwrap_or(0.0));
         s.largest_displacement = tot.largest_displacement;
-        s.balances = balances(s, tot, st.newton.tol);
+        // heat below what Newton leaves as round-off at every node over the run's time
+        let heat_floor = model.dofs.n_nodes as f64 * st.newton.floor(Field::Theta) * ctl.t;
+        s.balances = balances(s, tot, st.newton.tol, heat_floor);
         let open = open_balances(&s.balances);
         if let (Some(open), Some(_)) = (open, &self.folder) {
             self.say(&open);
@@ -449,15 +452,16 @@ fn progress_bar(quiet: bool) -> indicatif::ProgressBar {
 
 /// The run's balances at its end: the force and steady heat imbalances its accepted states
 /// kept, and a transient scene's heat balance, `heat_stored` against `heat_in` +
-/// `friction_heat` + `heat_joined`, over the largest of them; held to Newton's `tol`.
-fn balances(s: &Summary, tot: &Totals, tol: f64) -> Balances {
+/// `friction_heat` + `heat_joined`, over the largest of them (at least `floor`, the heat
+/// that is round-off); held to Newton's `tol`.
+fn balances(s: &Summary, tot: &Totals, tol: f64, floor: f64) -> Balances {
     let heat = match s.heat_stored.zip(s.heat_in) {
         Some((stored, supplied)) => {
             let made = s.friction_heat.unwrap_or(0.0);
             let joined = s.heat_joined.unwrap_or(0.0);
             let size = [stored, supplied, made, joined]
                 .iter()
-                .fold(0.0f64, |a, v| a.max(v.abs()));
+                .fold(floor, |a, v| a.max(v.abs()));
             (size > 0.0).then(|| (stored - supplied - made - joined).abs() / size)
         }
         None => tot.heat_imbalance,

@@ -323,6 +323,11 @@ impl Newton {
     }
 
     /// The residual references and the work so far (what a restart carries over).
+    /// The residual of field `f` below which it is round-off (see `floor`).
+    pub fn floor(&self, f: Field) -> f64 {
+        self.floor[idx(f)]
+    }
+
     pub fn tally(&self) -> Tally {
         Tally {
             run_ref: self.run_ref,
