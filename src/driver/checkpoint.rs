@@ -217,6 +217,23 @@ impl Checkpoint {
 
     /// The checkpoint of the run in `dir`, checked against the case and mesh it continues.
     pub fn read(dir: &Path, case: &Case, mesh: &Mesh) -> Result<Checkpoint, SolveError> {
+        let cp = Checkpoint::of_case(dir, case)?;
+        if cp.mesh != mesh_fingerprint(mesh) {
+            return Err(refusal(
+                &Checkpoint::path(dir),
+                &format!(
+                    "the mesh has changed since ({} then, {} now)",
+                    cp.mesh,
+                    mesh_fingerprint(mesh)
+                ),
+            ));
+        }
+        Ok(cp)
+    }
+
+    /// The checkpoint of the run in `dir`, checked against the case it continues (not yet
+    /// its mesh): what a restart refuses first, before what the case itself cannot restart.
+    pub fn of_case(dir: &Path, case: &Case) -> Result<Checkpoint, SolveError> {
         let path = Checkpoint::path(dir);
         let text = std::fs::read_to_string(&path).map_err(|e| {
             SolveError::Setup(format!(
@@ -245,13 +262,6 @@ impl Checkpoint {
                 "{} has changed since: {} (only [steps] controls and [output] may change)",
                 case.path.display(),
                 case_changes(&cp.case, &now)
-            ));
-        }
-        if cp.mesh != mesh_fingerprint(mesh) {
-            return refuse(&format!(
-                "the mesh has changed since ({} then, {} now)",
-                cp.mesh,
-                mesh_fingerprint(mesh)
             ));
         }
         Ok(cp)

@@ -260,6 +260,11 @@ pub fn run(case_path: &Path, opts: &SolveOptions) -> Result<Summary, SolveError>
         .unwrap_or_else(|| PathBuf::from("results").join(case.name()));
     let mut folder = RunFolder::open(&out_dir)?;
     if opts.restart {
+        // a case changed since the run is refused for what changed, before what it asks that
+        // cannot restart (a layer reconnected, a medium remade: the run had them too)
+        if checkpoint::Checkpoint::path(&out_dir).exists() {
+            checkpoint::Checkpoint::of_case(&out_dir, &case)?;
+        }
         let reconnected = (case.file.region.iter())
             .any(|r| r.friction.as_ref().is_some_and(|f| f.get_ref().reconnect()));
         if reconnected {

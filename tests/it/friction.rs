@@ -1921,4 +1921,20 @@ fn a_layer_that_cannot_be_joined_again_is_refused_with_why() {
         out.join("history.csv").exists(),
         "the first run's results are kept"
     );
+    // a run without the key, restarted with it: refused for the key the case gained, not for a
+    // reconnected layer the run never had
+    let plain = path.with_file_name("plain.toml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    std::fs::write(&plain, text.replace(", reconnect = true", "")).unwrap();
+    let out = path.with_file_name("out-plain");
+    let first = common::solve_cli(&plain, &out, &[]);
+    assert!(first.status.success(), "{}", common::stderr(&first));
+    let o = common::solve_cli(&path, &out, &["--restart"]);
+    let e = common::stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    assert!(
+        e.contains("has changed since: region[1].friction.reconnect added (true)")
+            && !e.contains("is reconnected"),
+        "{e}"
+    );
 }
