@@ -1907,12 +1907,17 @@ fn a_layer_that_cannot_be_joined_again_is_refused_with_why() {
         "params = { n = 16, m = 8, l = 1, a = 3 }",
         &with_mass(&reconnecting, 1e-4),
     );
+    // `first` solved into `out`, then `path` restarted there: refused, its message
+    let restarted = |first: &std::path::Path, out: &std::path::Path| {
+        let o = common::solve_cli(first, out, &[]);
+        assert!(o.status.success(), "{}", common::stderr(&o));
+        let o = common::solve_cli(&path, out, &["--restart"]);
+        let e = common::stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{e}");
+        e
+    };
     let out = path.with_file_name("out");
-    let first = common::solve_cli(&path, &out, &[]);
-    assert!(first.status.success(), "{}", common::stderr(&first));
-    let o = common::solve_cli(&path, &out, &["--restart"]);
-    let e = common::stderr(&o);
-    assert_eq!(o.status.code(), Some(1), "{e}");
+    let e = restarted(&path, &out);
     assert!(
         e.contains("cannot restart a run whose friction layer is reconnected"),
         "{e}"
@@ -1926,12 +1931,7 @@ fn a_layer_that_cannot_be_joined_again_is_refused_with_why() {
     let plain = path.with_file_name("plain.toml");
     let text = std::fs::read_to_string(&path).unwrap();
     std::fs::write(&plain, text.replace(", reconnect = true", "")).unwrap();
-    let out = path.with_file_name("out-plain");
-    let first = common::solve_cli(&plain, &out, &[]);
-    assert!(first.status.success(), "{}", common::stderr(&first));
-    let o = common::solve_cli(&path, &out, &["--restart"]);
-    let e = common::stderr(&o);
-    assert_eq!(o.status.code(), Some(1), "{e}");
+    let e = restarted(&plain, &path.with_file_name("out-plain"));
     assert!(
         e.contains("has changed since: region[1].friction.reconnect added (true)")
             && !e.contains("is reconnected"),
