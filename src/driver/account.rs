@@ -163,16 +163,9 @@ impl Accounts {
             (net, size)
         };
         // flows below what Newton leaves as round-off at every node are not judged by
-        // themselves (a component no load acts along sums round-off to round-off)
+        // themselves (a component no load acts along sums round-off to round-off); a state's
+        // net is judged against the largest flows of the run, as Newton judges its residuals
         let nodes = model.dofs.n_nodes as f64;
-        let relative = |net: f64, size: f64, floor: f64| {
-            let scale = size.max(nodes * floor);
-            (scale > 0.0).then(|| net.abs() / scale)
-        };
-        let worse = |a: Option<f64>, b: Option<f64>| match (a, b) {
-            (Some(a), Some(b)) => Some(a.max(b)),
-            (a, b) => a.or(b),
-        };
         let tot = &mut self.totals;
         if !model.physics.inertia && !model.dofs.u.is_empty() {
             let dim = model.mesh.dim;
@@ -188,20 +181,16 @@ impl Accounts {
             // each component's net against every component's flows: the forces balanced
             let size: f64 = sums.iter().map(|s| s.1).sum();
             let net = sums.iter().fold(0.0f64, |a, s| a.max(s.0.abs()));
-            let rel = relative(net, size, st.newton.floor(Field::U));
-            tot.force_imbalance = worse(tot.force_imbalance, rel);
+            let size = size.max(nodes * st.newton.floor(Field::U));
+            tot.force_imbalance = Totals::widen(tot.force_imbalance, net, size);
         }
         if !model.physics.transient && !model.dofs.theta.is_empty() {
             let mut dofs = (model.dofs.theta.iter())
                 .filter(|&&d| d != NONE)
                 .map(|&d| d as usize);
             let (net, size) = sum(&mut dofs);
-            let rel = relative(
-                net + convected,
-                size + convected.abs(),
-                st.newton.floor(Field::Theta),
-            );
-            tot.heat_imbalance = worse(tot.heat_imbalance, rel);
+            let size = (size + convected.abs()).max(nodes * st.newton.floor(Field::Theta));
+            tot.heat_imbalance = Totals::widen(tot.heat_imbalance, net + convected, size);
         }
     }
 

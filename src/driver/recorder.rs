@@ -464,9 +464,10 @@ fn balances(s: &Summary, tot: &Totals, tol: f64, floor: f64) -> Balances {
                 .fold(floor, |a, v| a.max(v.abs()));
             (size > 0.0).then(|| (stored - supplied - made - joined).abs() / size)
         }
-        None => tot.heat_imbalance,
+        None => Totals::relative(tot.heat_imbalance),
     };
-    Balances::judged(tot.force_imbalance, heat, Balances::tolerance_for(tol))
+    let force = Totals::relative(tot.force_imbalance);
+    Balances::judged(force, heat, Balances::tolerance_for(tol))
 }
 
 /// A warning naming the balances a run left open, if any.

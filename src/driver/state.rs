@@ -72,12 +72,26 @@ pub struct Totals {
     /// stored by (its cells re-paired with other nodes' temperatures).
     #[serde(default)]
     pub heat_joined: Option<f64>,
-    /// The largest relative force imbalance of an accepted state, and a steady scene's heat
-    /// imbalance (`Balances`; `None` where there is none to check).
+    /// The largest force imbalance of an accepted state, and a steady scene's heat
+    /// imbalance, each with the largest size of the flows it balances over the run
+    /// (`Balances`; `None` where there is none to check).
     #[serde(default)]
-    pub force_imbalance: Option<f64>,
+    pub force_imbalance: Option<(f64, f64)>,
     #[serde(default)]
-    pub heat_imbalance: Option<f64>,
+    pub heat_imbalance: Option<(f64, f64)>,
+}
+
+impl Totals {
+    /// A balance's largest net and largest size so far, with a state's `net` and `size`.
+    pub fn widen(kept: Option<(f64, f64)>, net: f64, size: f64) -> Option<(f64, f64)> {
+        let (n, s) = kept.unwrap_or((0.0, 0.0));
+        Some((n.max(net.abs()), s.max(size)))
+    }
+
+    /// A balance kept by [`Totals::widen`], relative: its largest net over its largest size.
+    pub fn relative(kept: Option<(f64, f64)>) -> Option<f64> {
+        kept.and_then(|(net, size)| (size > 0.0).then(|| net / size))
+    }
 }
 
 impl Totals {
