@@ -174,6 +174,12 @@ fn check_numbers(text: &str) -> Result<(), (usize, String)> {
     )
 }
 
+/// Settings as a user gave them: `key=value key=value`.
+fn said(sets: &[(String, String)]) -> String {
+    let said: Vec<String> = sets.iter().map(|(k, v)| format!("{k}={v}")).collect();
+    said.join(" ")
+}
+
 impl Case {
     /// The case with `sets` applied: dotted paths as in a study's `set`
     /// (`mesh_options.params.n`, `region.medium.gamma`, `steps.max`), values in TOML syntax
@@ -183,11 +189,7 @@ impl Case {
         if sets.is_empty() {
             return Ok(self);
         }
-        let said = sets
-            .iter()
-            .map(|(k, v)| format!("{k}={v}"))
-            .collect::<Vec<_>>()
-            .join(" ");
+        let said = said(sets);
         let err = |msg: String| CaseError::Set {
             path: self.path.clone(),
             sets: said.clone(),
@@ -289,22 +291,16 @@ impl Case {
     /// 0 where there is no such table.
     pub fn key_at(&self, table: &str, key: &str) -> usize {
         let header = format!("[{table}]");
-        let mut offset = 0;
-        let mut inside = false;
-        let mut header_at = None;
-        for line in self.text.split_inclusive('\n') {
-            let t = line.trim();
-            if t.starts_with('[') {
-                inside = t.replace(' ', "") == header;
-                if inside {
-                    header_at = Some(offset);
+        let (mut offset, mut header_at) = (0, None);
+        for (line, (h, _, k)) in
+            (self.text.split_inclusive('\n')).zip(sets::table_lines(&self.text))
+        {
+            if h == header {
+                if k.is_empty() {
+                    header_at.get_or_insert(offset);
+                } else if k == key {
+                    return offset;
                 }
-            } else if inside
-                && !key.is_empty()
-                && t.strip_prefix(key)
-                    .is_some_and(|rest| rest.trim_start().starts_with('='))
-            {
-                return offset;
             }
             offset += line.len();
         }
@@ -314,10 +310,7 @@ impl Case {
     /// Where `span` stands, in words: "line N" of the case file, or the `--set` that gave it.
     pub fn place(&self, span: std::ops::Range<usize>) -> String {
         match (self.line_of(span), &self.written) {
-            (0, Some((_, sets))) => {
-                let said: Vec<String> = sets.iter().map(|(k, v)| format!("{k}={v}")).collect();
-                format!("--set {}", said.join(" "))
-            }
+            (0, Some((_, sets))) => format!("--set {}", said(sets)),
             (line, _) => format!("line {line}"),
         }
     }
@@ -333,11 +326,7 @@ impl Case {
         Err(match (self.line_of(span), &self.written) {
             (0, Some((_, sets))) => CaseError::Set {
                 path: self.path.clone(),
-                sets: sets
-                    .iter()
-                    .map(|(k, v)| format!("{k}={v}"))
-                    .collect::<Vec<_>>()
-                    .join(" "),
+                sets: said(sets),
                 msg,
             },
             (line, _) => CaseError::Invalid {

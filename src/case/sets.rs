@@ -138,6 +138,27 @@ fn entry_lines(text: Option<&str>, seg: &str) -> Vec<usize> {
     })
 }
 
+/// Each line of the TOML `text`: its table's header (as written, spaces and comments removed),
+/// that header's occurrence, and the line's key ("" for a header line, a blank or a comment).
+pub(super) fn table_lines(text: &str) -> Vec<(String, usize, String)> {
+    let mut seen: std::collections::HashMap<String, usize> = Default::default();
+    let (mut header, mut nth) = (String::new(), 0);
+    (text.lines())
+        .map(|l| {
+            let t = l.split('#').next().unwrap_or("").trim();
+            if t.starts_with('[') {
+                header = t.replace(' ', "");
+                let n = seen.entry(header.clone()).or_insert(0);
+                nth = *n;
+                *n += 1;
+                return (header.clone(), nth, String::new());
+            }
+            let key = t.split('=').next().unwrap_or("").trim();
+            (header.clone(), nth, key.trim_matches('"').to_string())
+        })
+        .collect()
+}
+
 /// The line of the case file `file` that holds what line `line` of `text` (the file's case
 /// re-written with the settings `sets` applied) holds: the same key in the same occurrence of
 /// the same table; `None` where the file has no such line or a `--set` gave the key.
@@ -147,27 +168,7 @@ pub fn line_in_file(
     file: &str,
     sets: &[(String, String)],
 ) -> Option<usize> {
-    /// Each line's table header (as written, spaces removed), that header's occurrence, and
-    /// the line's key ("" for a header line itself).
-    fn places(text: &str) -> Vec<(String, usize, String)> {
-        let mut seen: std::collections::HashMap<String, usize> = Default::default();
-        let (mut header, mut nth) = (String::new(), 0);
-        (text.lines())
-            .map(|l| {
-                let t = l.split('#').next().unwrap_or("").trim();
-                if t.starts_with('[') {
-                    header = t.replace(' ', "");
-                    let n = seen.entry(header.clone()).or_insert(0);
-                    nth = *n;
-                    *n += 1;
-                    return (header.clone(), nth, String::new());
-                }
-                let key = t.split('=').next().unwrap_or("").trim();
-                (header.clone(), nth, key.trim_matches('"').to_string())
-            })
-            .collect()
-    }
-    let target = places(text).into_iter().nth(line.checked_sub(1)?)?;
+    let target = table_lines(text).into_iter().nth(line.checked_sub(1)?)?;
     let set_here = sets.iter().any(|(k, _)| {
         let last = k.rsplit('.').next().unwrap_or(k);
         !target.2.is_empty() && last.split('#').next() == Some(target.2.as_str())
@@ -175,7 +176,7 @@ pub fn line_in_file(
     if set_here || target.2.is_empty() && target.0.is_empty() {
         return None;
     }
-    (places(file).iter())
+    (table_lines(file).iter())
         .position(|p| *p == target)
         .map(|i| i + 1)
 }
