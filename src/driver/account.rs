@@ -142,10 +142,10 @@ impl Accounts {
     }
 
     /// The accepted state's force balance (without inertia) and a steady scene's heat balance,
-    /// each kept as the largest relative imbalance of the run: Σ over the held dofs' reactions
-    /// and every dof's external load `fe` (and the heat `convected` in), over the
-    /// sum of their sizes. Translation leaves the internal forces summing to zero, so what is
-    /// left is the residual Newton left at the free dofs.
+    /// each widened into the run's ([`Totals::widen`]): the net Σ over the held dofs' reactions
+    /// and every dof's external load `fe` (and the heat `convected` in), and the sum of their
+    /// sizes. Translation leaves the internal forces summing to zero, so what is left is the
+    /// residual Newton left at the free dofs.
     fn balance(&mut self, st: &Stepper, fe: &[f64], convected: f64) {
         let model = st.model;
         let r = &st.asm.r_full;

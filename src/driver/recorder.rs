@@ -207,13 +207,13 @@ impl<'a> Recorder<'a> {
         Ok(())
     }
 
-    /// The output folder, handed on (to the run that goes on on a mesh joined again).
     /// Whether the folder holds a previous run's results aside, to come back unless this run
     /// takes a load step.
     pub(super) fn holds_previous(&self) -> bool {
         self.folder.as_ref().is_some_and(RunFolder::holds_previous)
     }
 
+    /// The output folder, handed on (to the run that goes on on a mesh joined again).
     pub(super) fn take_folder(&mut self) -> Option<RunFolder> {
         self.folder.take()
     }

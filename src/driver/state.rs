@@ -92,9 +92,7 @@ impl Totals {
     pub fn relative(kept: Option<(f64, f64)>) -> Option<f64> {
         kept.and_then(|(net, size)| (size > 0.0).then(|| net / size))
     }
-}
 
-impl Totals {
     /// Take the smallest J of an accepted step (∞ where it has no solid, or no medium).
     pub fn lower_min_J(&mut self, solid: f64, medium: f64) {
         let lower = |so_far: Option<f64>, now: f64| {
