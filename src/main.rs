@@ -412,6 +412,16 @@ fn check_command(
                 let running = rayon::current_num_threads();
                 say!("threads: {running} per process ({})", t.why);
             }
+            if !r.predicted_speedup.is_empty() {
+                let at: Vec<String> = (r.predicted_speedup.iter())
+                    .map(|(p, s)| format!("{s:.1}× at {p}"))
+                    .collect();
+                say!(
+                    "factorisation: its elimination tree bounds its speed-up at {} threads \
+                     (multiply-adds only)",
+                    at.join(", ")
+                );
+            }
             if let Some(why) = &r.engine_note {
                 say!("{why}");
             }

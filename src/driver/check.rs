@@ -31,6 +31,9 @@ pub struct CheckReport {
     pub factor_entries: Option<usize>,
     /// Bytes of their values, each factor in its precision.
     pub factor_bytes: Option<usize>,
+    /// The largest factor's numeric factorisation: its speed-up at 2, 4, 16 and 64 threads as
+    /// its elimination tree predicts it; empty where no factor is worked over its tree.
+    pub predicted_speedup: Vec<(usize, f64)>,
     /// Why the engine is not the usual one (`engine = "auto"` over the memory), if so.
     pub engine_note: Option<String>,
     /// The probes' names.
@@ -113,6 +116,11 @@ pub fn check(case_path: &Path, opts: &SolveOptions) -> Result<CheckReport, Solve
         .iter()
         .map(|(_, s)| s.factor_bytes())
         .sum::<Option<usize>>();
+    let largest = (plan.solvers.iter()).max_by_key(|(_, s)| s.factor_entries().unwrap_or(0));
+    let predicted_speedup = [2, 4, 16, 64]
+        .into_iter()
+        .filter_map(|p| Some((p, largest?.1.predicted_speedup(p as f64)?)))
+        .collect();
     let tangent_entries = plan.asm.pattern.row_idx.len();
     let ranks = plan.asm.ranks;
     let per_rank = if ranks.is_serial() {
@@ -136,6 +144,7 @@ pub fn check(case_path: &Path, opts: &SolveOptions) -> Result<CheckReport, Solve
         tangent_entries,
         factor_entries,
         factor_bytes,
+        predicted_speedup,
         engine_note: plan.note,
         linear: (plan.solvers.iter())
             .map(|(part, s)| format!("{}: {}", part.name(), s.method()))

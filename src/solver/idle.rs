@@ -3,8 +3,9 @@
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
-/// What the pool's other threads do while a linear solve runs: most of a factorisation or
-/// triangular solve is on one thread.
+/// What the pool's other threads do while a linear solve runs: between the parallel parts of
+/// a factorisation or a solve (the elimination tree's subtrees, a wide front's products), and
+/// through GMRES's sequential steps, they have nothing to do.
 ///
 /// Why spin at all: on a virtual machine a core left idle halts, and the next parallel work
 /// waits for it to come back (one assembly, H1 16×16 on 2 threads, `benches/assembly.rs`:
@@ -60,17 +61,17 @@ impl IdleThreads {
 
     /// [`IdleThreads::run`], counting in `gave_up` the spinners that stopped for want of work.
     fn run_counting<R: Send>(self, f: impl FnOnce() -> R + Send, gave_up: &AtomicUsize) -> R {
-        let threads = rayon::current_num_threads();
+        let spinners = spinners(rayon::current_num_threads(), crate::threads::usable_cpus());
         let bound = match self {
             IdleThreads::Sleep => return f(),
             IdleThreads::SpinFor(d) if d.is_zero() => return f(),
-            _ if threads < 2 => return f(),
+            _ if spinners == 0 => return f(),
             IdleThreads::SpinFor(d) => Some(d),
             IdleThreads::Spin => None,
         };
         let done = AtomicBool::new(false);
         rayon::scope(|s| {
-            for _ in 1..threads {
+            for _ in 0..spinners {
                 let idle = Idle {
                     done: &done,
                     gave_up,
@@ -95,6 +96,13 @@ impl std::fmt::Display for IdleThreads {
             IdleThreads::Sleep => f.write_str("sleep"),
         }
     }
+}
+
+/// How many of a pool's `threads` spin beside the solve's own, on `cpus` usable CPUs: one per
+/// CPU left. A spinner beyond the CPUs would take its time slices from a thread with work (on
+/// 2 CPUs, 16 threads spinning made a solve twenty times slower).
+fn spinners(threads: usize, cpus: usize) -> usize {
+    threads.min(cpus).saturating_sub(1)
 }
 
 /// Milliseconds the default spins without work: the length of a few assemblies, so a solve
@@ -145,7 +153,17 @@ fn spin<'s>(s: &rayon::Scope<'s>, mut idle: Idle<'s>) {
 
 #[cfg(test)]
 mod tests {
-    use super::IdleThreads;
+    use super::{IdleThreads, spinners};
+
+    #[test]
+    fn no_more_threads_spin_than_there_are_cpus_beside_the_solve() {
+        assert_eq!(spinners(2, 2), 1);
+        assert_eq!(spinners(16, 2), 1);
+        assert_eq!(spinners(16, 16), 15);
+        assert_eq!(spinners(4, 16), 3);
+        assert_eq!(spinners(1, 8), 0);
+        assert_eq!(spinners(8, 1), 0);
+    }
     use rayon::prelude::*;
     use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
     use std::time::{Duration, Instant};

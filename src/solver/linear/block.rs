@@ -82,6 +82,14 @@ impl Factorization for BlockTriangular {
         Some(mech + self.ft.as_ref().map_or(0, |f| f.symbolic.len_val()))
     }
 
+    /// The mechanics block's, the larger, beside which the temperature block factors.
+    fn predicted_speedup(&self, threads: f64) -> Option<f64> {
+        match &self.fm {
+            Some(MechanicsFactor::Ldlt(m)) => m.tree.as_ref().map(|t| t.predicted_speedup(threads)),
+            _ => None,
+        }
+    }
+
     fn factor_bytes(&self) -> Option<usize> {
         let mech = self.fm.as_ref().map_or(0, MechanicsFactor::bytes);
         Some(mech + self.ft.as_ref().map_or(0, SymFactor::bytes))

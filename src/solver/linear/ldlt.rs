@@ -3,6 +3,7 @@
 
 use super::ordering::nested_dissection;
 use super::submatrix::SubMatrix;
+use super::tree::TreeLdlt;
 use super::{Factorization, LinearError, PARALLEL_FACTOR_NNZ};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::perm::PermRef;
@@ -30,6 +31,10 @@ impl Factorization for SymFactor {
     fn factor_bytes(&self) -> Option<usize> {
         Some(self.bytes())
     }
+
+    fn predicted_speedup(&self, threads: f64) -> Option<f64> {
+        self.tree.as_ref().map(|t| t.predicted_speedup(threads))
+    }
 }
 
 /// The precision of an LDLᵀ factor: double for direct solves, single where the factor only
@@ -46,6 +51,8 @@ pub(super) enum Precision {
 pub(super) struct SymFactor {
     pub(super) sub: SubMatrix,
     pub(super) symbolic: SymbolicCholesky<usize>,
+    /// The numeric factorisation over the elimination tree (`None`: a simplicial analysis).
+    pub(super) tree: Option<TreeLdlt>,
     pub(super) precision: Precision,
     pub(super) par: Par,
     pub(super) l64: Vec<f64>,
@@ -54,6 +61,8 @@ pub(super) struct SymFactor {
     pub(super) factor_mem: MemBuffer,
     /// Solve scratch and, in single precision, the right-hand side in f32.
     pub(super) solve_mem: std::cell::RefCell<(MemBuffer, Vec<f32>)>,
+    /// The tree solve's permuted unknowns, in either precision.
+    pub(super) x: std::cell::RefCell<(Vec<f64>, Vec<f32>)>,
     pub(super) factored: bool,
 }
 
@@ -94,7 +103,9 @@ impl SymFactor {
             )
         };
         let len = symbolic.len_val();
+        let tree = TreeLdlt::new(&symbolic, &sub.pattern);
         Ok(SymFactor {
+            tree,
             l64: if single { Vec::new() } else { vec![0.0; len] },
             l32: if single { vec![0.0; len] } else { Vec::new() },
             a32: if single {
@@ -107,6 +118,7 @@ impl SymFactor {
                 MemBuffer::new(solve_mem),
                 vec![0.0; if single { n } else { 0 }],
             )),
+            x: Default::default(),
             symbolic,
             precision,
             par,
@@ -133,30 +145,35 @@ impl SymFactor {
     /// Numeric factorisation of the block's values as last taken.
     pub(super) fn factor_current(&mut self) -> Result<(), LinearError> {
         self.factored = false;
-        let pattern = &self.sub.pattern;
-        let stack = MemStack::new(&mut self.factor_mem);
-        match self.precision {
-            Precision::Double => ldlt_numeric(
+        if self.precision == Precision::Single {
+            for (s, d) in self.sub.values.iter().zip(self.a32.iter_mut()) {
+                *d = *s as f32;
+            }
+        }
+        let pivot = |e: usize| LinearError::Factor(format!("ZeroPivot {{ index: {e} }}"));
+        match (&self.tree, self.precision) {
+            (Some(tree), Precision::Double) => tree
+                .factor(&mut self.l64, &self.sub.values)
+                .map_err(pivot)?,
+            (Some(tree), Precision::Single) => {
+                tree.factor(&mut self.l32, &self.a32).map_err(pivot)?
+            }
+            (_, Precision::Double) => ldlt_numeric(
                 &self.symbolic,
                 &mut self.l64,
-                pattern,
+                &self.sub.pattern,
                 &self.sub.values,
                 self.par,
-                stack,
+                MemStack::new(&mut self.factor_mem),
             )?,
-            Precision::Single => {
-                for (s, d) in self.sub.values.iter().zip(self.a32.iter_mut()) {
-                    *d = *s as f32;
-                }
-                ldlt_numeric(
-                    &self.symbolic,
-                    &mut self.l32,
-                    pattern,
-                    &self.a32,
-                    self.par,
-                    stack,
-                )?
-            }
+            (_, Precision::Single) => ldlt_numeric(
+                &self.symbolic,
+                &mut self.l32,
+                &self.sub.pattern,
+                &self.a32,
+                self.par,
+                MemStack::new(&mut self.factor_mem),
+            )?,
         }
         self.factored = true;
         Ok(())
@@ -201,9 +218,21 @@ impl SymFactor {
         let mut guard = self.solve_mem.borrow_mut();
         let (mem, b32) = &mut *guard;
         let stack = MemStack::new(mem);
-        match self.precision {
-            Precision::Double => ldlt_solve(&self.symbolic, &self.l64, b, self.par, stack),
-            Precision::Single => {
+        let mut x = self.x.borrow_mut();
+        let (x64, x32) = &mut *x;
+        match (&self.tree, self.precision) {
+            (Some(tree), Precision::Double) => tree.solve(&self.l64, b, x64),
+            (Some(tree), Precision::Single) => {
+                for (d, s) in b32.iter_mut().zip(b.iter()) {
+                    *d = *s as f32;
+                }
+                tree.solve(&self.l32, b32, x32);
+                for (d, s) in b.iter_mut().zip(b32.iter()) {
+                    *d = *s as f64;
+                }
+            }
+            (_, Precision::Double) => ldlt_solve(&self.symbolic, &self.l64, b, self.par, stack),
+            (_, Precision::Single) => {
                 for (d, s) in b32.iter_mut().zip(b.iter()) {
                     *d = *s as f32;
                 }

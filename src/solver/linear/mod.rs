@@ -37,6 +37,7 @@ pub mod static_lu;
 mod submatrix;
 #[cfg(test)]
 mod tests;
+mod tree;
 
 use crate::dofs::{Pattern, Structure};
 use block::BlockTriangular;
@@ -103,6 +104,11 @@ pub trait Factorization: Send {
     fn describe(&self) -> Option<String> {
         None
     }
+    /// The numeric factorisation's speed-up on `threads` threads as its elimination tree
+    /// predicts it (multiply-adds only), where the engine works over the tree.
+    fn predicted_speedup(&self, _threads: f64) -> Option<f64> {
+        None
+    }
     /// The engine, as `summary.json` names it.
     fn engine(&self) -> &'static str {
         "faer"
@@ -157,6 +163,12 @@ impl LinearSolver {
     /// lays its factor out when it factorises.
     pub fn factor_entries(&self) -> Option<usize> {
         self.backend.entries()
+    }
+
+    /// The numeric factorisation's speed-up on `threads` threads as its elimination tree
+    /// predicts it ([`Factorization::predicted_speedup`]).
+    pub fn predicted_speedup(&self, threads: f64) -> Option<f64> {
+        self.backend.predicted_speedup(threads)
     }
 
     /// Bytes of the factor(s)' values, each in its precision (single where

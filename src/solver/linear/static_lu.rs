@@ -17,7 +17,7 @@ use faer::reborrow::{IntoConst, Reborrow, ReborrowMut};
 use faer::sparse::SymbolicSparseColMat;
 use faer::traits::ComplexField;
 use faer::{Accum, MatMut, MatRef, Par};
-use std::ops::{Div, Mul, Sub, SubAssign};
+use std::ops::{Div, DivAssign, Mul, Sub, SubAssign};
 use std::sync::Arc;
 
 /// The precision of a factor: f64, or f32 where it only preconditions a Krylov method that
@@ -28,6 +28,7 @@ pub trait Real:
     + Sub<Output = Self>
     + Mul<Output = Self>
     + Div<Output = Self>
+    + DivAssign
     + SubAssign
     + Default
     + ComplexField

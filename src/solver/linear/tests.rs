@@ -635,3 +635,211 @@ fn nested_dissection_keeps_node_unknowns_together() {
         assert_eq!(node[pair[0]], node[pair[1]]);
     }
 }
+
+/// A 3D grid of k³ nodes with `dofs` unknowns each, coupled as elasticity couples them (every
+/// unknown of a node to every unknown of its 6 neighbours), symmetric positive definite:
+/// the pattern (both triangles), its values and each equation's node.
+fn grid(k: usize, dofs: usize) -> (SymbolicSparseColMat<usize>, Vec<f64>, Vec<u32>) {
+    let at = |x: usize, y: usize, z: usize| x + k * (y + k * z);
+    let n = k * k * k * dofs;
+    let (mut col_ptr, mut row_idx, mut vals) = (vec![0], Vec::new(), Vec::new());
+    for z in 0..k {
+        for y in 0..k {
+            for x in 0..k {
+                let mut nodes = vec![at(x, y, z)];
+                for (d, c) in [(x, 0), (y, 1), (z, 2)] {
+                    let step = [1, k, k * k][c];
+                    if d > 0 {
+                        nodes.push(at(x, y, z) - step);
+                    }
+                    if d + 1 < k {
+                        nodes.push(at(x, y, z) + step);
+                    }
+                }
+                nodes.sort_unstable();
+                for a in 0..dofs {
+                    let j = at(x, y, z) * dofs + a;
+                    for &nd in &nodes {
+                        for b in 0..dofs {
+                            let i = nd * dofs + b;
+                            row_idx.push(i);
+                            // diagonally dominant: 7 neighbours' couplings of at most 1
+                            let h = ((i * j + i + j) % 13) as f64 / 13.0;
+                            vals.push(if i == j {
+                                8.0 * dofs as f64
+                            } else if nd == at(x, y, z) {
+                                0.5
+                            } else {
+                                -0.5 - 0.5 * h
+                            });
+                        }
+                    }
+                    col_ptr.push(row_idx.len());
+                }
+            }
+        }
+    }
+    let node = (0..n).map(|e| (e / dofs) as u32).collect();
+    let sp = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
+    (sp, vals, node)
+}
+
+#[test]
+fn the_tree_factor_is_faers_factor_at_every_thread_count() {
+    use super::tree::TreeLdlt;
+    use faer::dyn_stack::{MemBuffer, MemStack};
+    let (sp, vals, node) = grid(14, 3);
+    let n = sp.nrows();
+    let (fwd, inv) = nested_dissection(&sp, &node);
+    let perm = PermRef::new_checked(&fwd, &inv, n);
+    let symbolic = factorize_symbolic_cholesky(
+        sp.as_ref(),
+        Side::Lower,
+        SymmetricOrdering::Custom(perm),
+        Default::default(),
+    )
+    .unwrap();
+    let mut reference = vec![0.0; symbolic.len_val()];
+    let mut mem = MemBuffer::new(
+        symbolic.factorize_numeric_ldlt_scratch::<f64>(faer::Par::Seq, Default::default()),
+    );
+    ldlt::ldlt_numeric(
+        &symbolic,
+        &mut reference,
+        &sp,
+        &vals,
+        faer::Par::Seq,
+        MemStack::new(&mut mem),
+    )
+    .unwrap();
+    let tree = TreeLdlt::new(&symbolic, &sp).expect("a supernodal analysis");
+    let largest = reference.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let mut first: Option<Vec<f64>> = None;
+    for threads in [1, 2, 4] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let mut l = vec![f64::NAN; symbolic.len_val()];
+        pool.install(|| tree.factor(&mut l, &vals)).unwrap();
+        let off = l
+            .iter()
+            .zip(&reference)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0f64, f64::max);
+        assert!(
+            off <= 1e-13 * largest,
+            "{threads} threads: {off:.2e} from faer's factor (largest entry {largest:.2e})"
+        );
+        // its solve is faer's: b = A·1 gives back 1, at every thread count
+        let mut b = vec![0.0; n];
+        for j in 0..n {
+            for k in sp.col_ptr()[j]..sp.col_ptr()[j + 1] {
+                b[sp.row_idx()[k]] += vals[k] * (1.0 + (j % 7) as f64);
+            }
+        }
+        let mut faers = b.clone();
+        let mut mem = MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(1, faer::Par::Seq));
+        ldlt::ldlt_solve(
+            &symbolic,
+            &reference,
+            &mut faers,
+            faer::Par::Seq,
+            MemStack::new(&mut mem),
+        );
+        pool.install(|| tree.solve(&l, &mut b, &mut Vec::new()));
+        for (j, (x, y)) in b.iter().zip(&faers).enumerate() {
+            let exact = 1.0 + (j % 7) as f64;
+            assert!((y - exact).abs() < 1e-12 * exact, "faer: x[{j}] = {y}");
+            assert!(
+                (x - exact).abs() < 1e-12 * exact,
+                "{threads} threads: x[{j}] = {x}"
+            );
+            assert!(
+                (x - y).abs() < 1e-13 * exact,
+                "{threads} threads: x[{j}] {x} against faer's {y}"
+            );
+        }
+        // the same factor at every thread count (a dense product split across threads may
+        // add in another order)
+        match &first {
+            None => first = Some(l),
+            Some(f) => {
+                let d = l
+                    .iter()
+                    .zip(f)
+                    .map(|(a, b)| (a - b).abs())
+                    .fold(0.0f64, f64::max);
+                assert!(
+                    d <= 1e-14 * largest,
+                    "{threads} threads: {d:.2e} from 1 thread"
+                );
+            }
+        }
+    }
+    // and in single precision, as the block preconditioner holds it
+    let v32: Vec<f32> = vals.iter().map(|&v| v as f32).collect();
+    let mut l32 = vec![0.0f32; symbolic.len_val()];
+    tree.factor(&mut l32, &v32).unwrap();
+    let off = l32
+        .iter()
+        .zip(&reference)
+        .map(|(a, b)| (*a as f64 - b).abs())
+        .fold(0.0f64, f64::max);
+    assert!(off <= 1e-4 * largest, "single precision: {off:.2e}");
+}
+
+#[test]
+fn the_tree_factor_names_a_zero_pivot() {
+    use super::tree::TreeLdlt;
+    let (sp, mut vals, node) = grid(12, 3);
+    let n = sp.nrows();
+    // equation 0 becomes a copy of nothing: its row and column zero
+    for j in 0..n {
+        for k in sp.col_ptr()[j]..sp.col_ptr()[j + 1] {
+            if j == 0 || sp.row_idx()[k] == 0 {
+                vals[k] = 0.0;
+            }
+        }
+    }
+    let (fwd, inv) = nested_dissection(&sp, &node);
+    let perm = PermRef::new_checked(&fwd, &inv, n);
+    let symbolic = factorize_symbolic_cholesky(
+        sp.as_ref(),
+        Side::Lower,
+        SymmetricOrdering::Custom(perm),
+        Default::default(),
+    )
+    .unwrap();
+    let tree = TreeLdlt::new(&symbolic, &sp).expect("a supernodal analysis");
+    let mut l = vec![0.0; symbolic.len_val()];
+    assert_eq!(tree.factor(&mut l, &vals), Err(inv[0]));
+}
+
+#[test]
+fn the_trees_model_predicts_what_its_shape_allows() {
+    use super::tree::TreeLdlt;
+    let (sp, _, node) = grid(14, 3);
+    let n = sp.nrows();
+    let (fwd, inv) = nested_dissection(&sp, &node);
+    let perm = PermRef::new_checked(&fwd, &inv, n);
+    let symbolic = factorize_symbolic_cholesky(
+        sp.as_ref(),
+        Side::Lower,
+        SymmetricOrdering::Custom(perm),
+        Default::default(),
+    )
+    .unwrap();
+    let tree = TreeLdlt::new(&symbolic, &sp).unwrap();
+    let s: Vec<f64> = [1.0, 2.0, 4.0, 16.0, 64.0, 1e6]
+        .iter()
+        .map(|&p| tree.predicted_speedup(p))
+        .collect();
+    // one thread is the work itself; more never predict less, nor more than their number
+    assert!((s[0] - 1.0).abs() < 1e-12, "{s:?}");
+    for (k, p) in [2.0, 4.0, 16.0, 64.0].iter().enumerate() {
+        assert!(s[k + 1] >= s[k] && s[k + 1] <= *p + 1e-9, "{s:?}");
+    }
+    // unbounded threads are held by the critical path: the root separator's dense work
+    assert!(s[5] < 1e3 && s[5] >= s[4], "{s:?}");
+}
