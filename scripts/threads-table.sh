@@ -1,0 +1,79 @@
+#!/usr/bin/env bash
+# The threads table: Table 2's H1 rows (block-plate-3d-tm1, one medium layer) solved by one
+# built binary at 1, 2, 4, 8, ... threads, up to the CPUs this process may use, the runs of
+# each thread count interleaved; a markdown table of the median wall, solver and assembly
+# seconds, each against one thread, and the counts that must not change with the threads.
+#
+#   scripts/threads-table.sh [-b BINARY] [-n "16 32"] [-t "1 2 4 8 16"] [-r REPEATS]
+#
+# Defaults: target/release/tmc, the 16×16 row (20.5k unknowns; add 32 for the 147k row, which
+# takes minutes per run), one run per thread count. Runs go to target/threads-table/.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bin=target/release/tmc
+rows="16"
+repeats=1
+cpus=$(nproc)
+threads=""
+while getopts "b:n:t:r:" o; do
+    case $o in
+    b) bin=$OPTARG ;;
+    n) rows=$OPTARG ;;
+    t) threads=$OPTARG ;;
+    r) repeats=$OPTARG ;;
+    *) sed -n '2,10p' "$0"; exit 2 ;;
+    esac
+done
+if [ -z "$threads" ]; then
+    t=1
+    while [ "$t" -le "$cpus" ]; do threads="$threads $t"; t=$((t * 2)); done
+    [ $((t / 2)) -lt "$cpus" ] && threads="$threads $cpus"
+fi
+[ -x "$bin" ] || { echo "no binary at $bin (cargo build --release, or -b BINARY)" >&2; exit 2; }
+out=target/threads-table
+mkdir -p "$out"
+geo=$(pwd)/geo/block-plate-3d.geo
+echo "binary $bin, $cpus CPUs usable, threads:$threads, $repeats run(s) each"
+for n in $rows; do
+    nb=$((n * 10 / 16)); nq=$((n * 6 / 16))
+    case=$out/h1-$n.toml
+    sed -e "s#^mesh = .*#mesh = \"$geo\"#" \
+        -e "s#^params = .*#params = { n = $n, nb = $nb, nm = 1, nq = $nq }#" \
+        cases/block-plate-3d-tm1.toml >"$case"
+    for r in $(seq "$repeats"); do
+        for t in $threads; do
+            dir=$out/h1-$n-t$t-r$r
+            RAYON_NUM_THREADS=$t "$bin" solve "$case" -o "$dir" >"$dir.log" 2>&1 ||
+                echo "  $n×$n at $t threads, run $r: failed (see $dir.log)"
+        done
+    done
+    python3 - "$out" "$n" "$repeats" $threads <<'PY'
+import json, statistics, sys
+out, n, repeats, threads = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4:]
+rows = {}
+for t in threads:
+    runs = []
+    for r in range(1, repeats + 1):
+        try:
+            runs.append(json.load(open(f"{out}/h1-{n}-t{t}-r{r}/summary.json")))
+        except OSError:
+            pass
+    if runs:
+        rows[t] = runs
+if not rows:
+    sys.exit(f"{n}×{n}: no run finished")
+med = lambda runs, k: statistics.median(s[k] for s in runs)
+base = rows.get("1")
+print(f"\n{n}×{n}, {next(iter(rows.values()))[0]['dofs']} unknowns")
+print("| threads | wall s | solver s | assembly s | wall / 1 thread | solver / 1 thread | Newton its | Krylov its | gap |")
+print("|---|---|---|---|---|---|---|---|---|")
+for t, runs in rows.items():
+    w, s, a = med(runs, "wall_seconds"), med(runs, "solver_seconds"), med(runs, "assembly_seconds")
+    rw = f"{w / med(base, 'wall_seconds'):.2f}" if base else "–"
+    rs = f"{s / med(base, 'solver_seconds'):.2f}" if base else "–"
+    its = sorted({x["newton_iterations"] for x in runs})
+    kry = sorted({x["krylov_iterations"] for x in runs})
+    gaps = sorted({f"{x['probes'].get('gap', float('nan')):.12e}" for x in runs})
+    print(f"| {t} | {w:.2f} | {s:.2f} | {a:.2f} | {rw} | {rs} | {'/'.join(map(str, its))} | {'/'.join(map(str, kry))} | {' '.join(gaps)} |")
+PY
+done
