@@ -86,7 +86,7 @@ impl SymFactor {
         // threads pay only for large dense fronts: below this, their synchronisation costs
         // more than it saves (measured on 2 cores, 15k 3D unknowns: 24.6 s → 17.1 s sequential)
         let par = if symbolic.len_val() > PARALLEL_FACTOR_NNZ {
-            Par::rayon(0)
+            super::dense_par()
         } else {
             Par::Seq
         };

@@ -41,6 +41,7 @@ mod tree;
 
 use crate::dofs::{Pattern, Structure};
 use block::BlockTriangular;
+use faer::Par;
 pub use gmres::gmres;
 use ldlt::{Precision, SymFactor};
 use lu::{LaggedLu, SINGLE_LU_ENTRIES};
@@ -144,6 +145,17 @@ const GMRES_RESTART: usize = 60;
 const GMRES_MAX: usize = 300;
 /// Factors with more entries than this are computed and applied with all threads.
 const PARALLEL_FACTOR_NNZ: usize = 30_000_000;
+
+/// faer's parallelism for a dense product or factorisation: every thread of the pool, but no
+/// more than the CPUs this process may use. faer's threads meet at barriers they spin on; more
+/// of them than CPUs take their time slices from the ones with work (16 threads on 2 CPUs
+/// made a run six times slower).
+pub(super) fn dense_par() -> Par {
+    match rayon::current_num_threads().min(crate::threads::usable_cpus()) {
+        0 | 1 => Par::Seq,
+        n => Par::rayon(n),
+    }
+}
 
 /// A sparse direct solver for a fixed pattern.
 pub struct LinearSolver {

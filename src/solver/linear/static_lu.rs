@@ -465,7 +465,7 @@ impl<T: Real> StaticLu<T> {
 /// Both threads for dense work of more than [`PARALLEL_FLOPS`] multiply-adds, one below.
 fn threads_for(flops: usize) -> Par {
     if flops > PARALLEL_FLOPS {
-        Par::rayon(0)
+        super::dense_par()
     } else {
         Par::Seq
     }

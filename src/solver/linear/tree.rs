@@ -531,7 +531,7 @@ impl<T: Real + Send + Sync> Work<'_, T> {
             return;
         }
         let par = if plan.work[s] > WIDE_FLOPS {
-            Par::rayon(0)
+            super::dense_par()
         } else {
             Par::Seq
         };
