@@ -41,6 +41,8 @@ bench: deps
 	$(CARGO) bench --bench assembly
 	$(CARGO) bench --bench output
 	$(CARGO) bench --features petsc --bench distributed
+	$(CARGO) build --release
+	scripts/threads-table.sh -b $(TMC) -n 16
 
 # tmc against FEniCSx on eight scenes (T1, T2, Q1, tet4, H1, H2; H1 in Mooney-Rivlin, T1 radiating);
 # writes validation/fenicsx/RESULTS.md.
