@@ -1005,3 +1005,70 @@ fn the_thread_count_comes_from_the_cpus_a_process_may_use_and_is_passed_to_rayon
         "{zero}"
     );
 }
+
+/// `tmc solve cases/block-plate-3d-tm1.toml` (Table 2's 8×8 row: a coupled 3D scene whose
+/// factors are worked over their elimination tree) on `threads` threads into `out`; its
+/// history as rows of fields, the header first.
+fn history_on_threads(threads: &str, out: &Path) -> Vec<Vec<String>> {
+    let o = Command::new(env!("CARGO_BIN_EXE_tmc"))
+        .args(["solve", "cases/block-plate-3d-tm1.toml", "-o"])
+        .arg(out)
+        .env("RAYON_NUM_THREADS", threads)
+        .current_dir(root())
+        .output()
+        .expect("tmc runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(out.join("history.csv")).unwrap();
+    text.lines()
+        .map(|l| l.split(',').map(str::to_string).collect())
+        .collect()
+}
+
+#[test]
+fn a_3d_run_gives_the_same_answers_at_one_and_two_threads_and_the_same_history_twice() {
+    let dir = scratch("threads");
+    let one = history_on_threads("1", &dir.join("one"));
+    let two = history_on_threads("2", &dir.join("two"));
+    let again = history_on_threads("2", &dir.join("again"));
+    let head = &one[0];
+    let col = |name: &str| head.iter().position(|h| h == name).unwrap();
+    // twice on two threads: the same history, every column but the clock's
+    let wall = col("wall_seconds");
+    let strip = |h: &[Vec<String>]| -> Vec<Vec<String>> {
+        h.iter()
+            .map(|r| {
+                (r.iter().enumerate().filter(|(c, _)| *c != wall))
+                    .map(|(_, v)| v.clone())
+                    .collect()
+            })
+            .collect()
+    };
+    assert_eq!(strip(&two), strip(&again), "two runs on two threads differ");
+    // one thread against two: the same steps and Newton iterations, the gap and every
+    // reaction and heat flow to 1e-10 of the column's largest
+    assert_eq!(one.len(), two.len(), "load steps differ with the threads");
+    assert!(one.len() > 5, "{} rows", one.len());
+    let its = col("newton_iterations");
+    for (a, b) in one.iter().zip(&two).skip(1) {
+        assert_eq!(a[its], b[its], "Newton iterations differ at step {}", a[0]);
+    }
+    let answers: Vec<usize> = (0..head.len())
+        .filter(|&c| head[c] == "gap" || head[c].starts_with("R_") || head[c].starts_with("Q_"))
+        .collect();
+    assert!(answers.len() >= 5, "{head:?}");
+    for c in answers {
+        let value = |r: &Vec<String>| r[c].parse::<f64>().unwrap();
+        let largest = (one.iter().skip(1))
+            .map(|r| value(r).abs())
+            .fold(0.0, f64::max);
+        for (a, b) in one.iter().zip(&two).skip(1) {
+            let (x, y) = (value(a), value(b));
+            assert!(
+                (x - y).abs() <= 1e-10 * largest,
+                "{} at step {}: {x} on one thread, {y} on two",
+                head[c],
+                a[0]
+            );
+        }
+    }
+}
