@@ -64,7 +64,7 @@ if not rows:
     sys.exit(f"{n}×{n}: no run finished")
 med = lambda runs, k: statistics.median(s[k] for s in runs)
 base = rows.get("1")
-print(f"\n{n}×{n}, {next(iter(rows.values()))[0]['dofs']} unknowns")
+print(f"\n{n}×{n}, {next(iter(rows.values()))[0]['dofs']['free']} free unknowns")
 print("| threads | wall s | solver s | assembly s | wall / 1 thread | solver / 1 thread | Newton its | Krylov its | gap |")
 print("|---|---|---|---|---|---|---|---|---|")
 for t, runs in rows.items():
