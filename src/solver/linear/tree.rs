@@ -9,8 +9,9 @@
 //! same time: a subtree is a task once its work is worth one, its children's subtrees run
 //! side by side before it, and the large fronts near the root, where the tree offers no
 //! more tasks than threads, give their dense products every thread (faer's `Par`). The
-//! factor is laid out exactly as faer's, so faer's solves read it. What a supernode computes
-//! does not depend on where or when it runs: the factor is the same at every thread count.
+//! factor is laid out exactly as faer's (the tests compare the two). What a supernode
+//! computes does not depend on where or when it runs: the factor is the same at every thread
+//! count.
 
 use super::static_lu::Real;
 use faer::dyn_stack::{MemBuffer, MemStack};
@@ -65,13 +66,14 @@ pub(super) struct TreeLdlt {
     subtree_work: Vec<f64>,
     /// The factor's entries in each supernode's subtree: a solve's work.
     subtree_solve: Vec<f64>,
-    /// The solves' maps from a row to its place in a supernode's pattern, one per task.
+    /// Maps from a row to its place in a supernode's panel or pattern, one per task at work.
     maps: Mutex<Vec<Vec<usize>>>,
 }
 
 /// One task's scratch: the local row of each row of the supernode being worked, a product's
 /// buffers, and the dense factorisation's stack.
 struct Scratch<T> {
+    /// A map of [`TreeLdlt::maps`].
     local: Vec<usize>,
     /// The panel's rows of the rows an update reaches.
     rows: Vec<usize>,
@@ -271,6 +273,9 @@ impl TreeLdlt {
             failed: Mutex::new(None),
         };
         self.roots.par_iter().for_each(|&s| work.subtree(s));
+        for sc in work.pool.into_inner().unwrap() {
+            self.give_map(sc.local);
+        }
         match work.failed.into_inner().unwrap() {
             Some(e) => Err(e),
             None => Ok(()),
@@ -305,7 +310,8 @@ impl TreeLdlt {
         }
     }
 
-    /// The supernodes of s's subtree, increasing (each after its descendants).
+    /// The supernodes of s's subtree, increasing (each after its descendants; faer does not
+    /// number a subtree's supernodes together).
     fn subtree_nodes(&self, s: usize) -> Vec<usize> {
         let mut nodes = vec![s];
         let mut k = 0;
@@ -317,18 +323,38 @@ impl TreeLdlt {
         nodes
     }
 
+    /// A map of rows, from the pool or new (its entries are set before they are read).
+    fn take_map(&self) -> Vec<usize> {
+        let pooled = self.maps.lock().unwrap().pop();
+        pooled.unwrap_or_else(|| vec![0; self.n])
+    }
+
+    fn give_map(&self, map: Vec<usize>) {
+        self.maps.lock().unwrap().push(map);
+    }
+
+    /// Supernode s's columns `sb..se`, the rows below them, and its panel of `l` split into
+    /// the diagonal block and the rows below.
+    fn panel<'l, T: Real>(
+        &self,
+        s: usize,
+        l: &'l [T],
+    ) -> (usize, usize, &[usize], MatRef<'l, T>, MatRef<'l, T>) {
+        let (sb, se) = (self.begin[s], self.begin[s + 1]);
+        let pat = self.pattern(s);
+        let ls = &l[self.val_at[s]..self.val_at[s + 1]];
+        let (top, bot) =
+            MatRef::from_column_major_slice(ls, se - sb + pat.len(), se - sb).split_at_row(se - sb);
+        (sb, se, pat, top, bot)
+    }
+
     /// L⁻¹ b on the unknowns of s's subtree; what it subtracts from the rows below s (s's
     /// pattern), returned in that pattern's order.
     fn forward_tree<T: Real + Send + Sync>(&self, s: usize, l: &[T], x: &Panels<T>) -> Vec<T> {
         let se = self.begin[s + 1];
         let pat = self.pattern(s);
         let mut sent = vec![T::of(0.0); pat.len()];
-        let mut local = self
-            .maps
-            .lock()
-            .unwrap()
-            .pop()
-            .unwrap_or_else(|| vec![0; self.n]);
+        let mut local = self.take_map();
         for (i, &r) in pat.iter().enumerate() {
             local[r] = i;
         }
@@ -358,7 +384,7 @@ impl TreeLdlt {
             }
             self.forward_node(s, l, x, &mut tmp, |r, v| out(r, v, &mut sent));
         }
-        self.maps.lock().unwrap().push(local);
+        self.give_map(local);
         sent
     }
 
@@ -372,15 +398,10 @@ impl TreeLdlt {
         tmp: &mut Vec<T>,
         mut out: impl FnMut(usize, T),
     ) {
-        let (sb, se) = (self.begin[s], self.begin[s + 1]);
-        let w = se - sb;
-        let pat = self.pattern(s);
-        let m = w + pat.len();
-        let ls = MatRef::from_column_major_slice(&l[self.val_at[s]..self.val_at[s + 1]], m, w);
-        let (top, bot) = ls.split_at_row(w);
+        let (sb, se, pat, top, bot) = self.panel(s, l);
         // SAFETY: only this task writes supernode s's unknowns
         let xs = unsafe { x.get_mut(sb, se) };
-        let mut xm = MatMut::from_column_major_slice_mut(xs, w, 1);
+        let mut xm = MatMut::from_column_major_slice_mut(xs, se - sb, 1);
         faer::linalg::triangular_solve::solve_unit_lower_triangular_in_place(
             top,
             xm.as_mut(),
@@ -419,12 +440,7 @@ impl TreeLdlt {
 
     /// Supernode s's unknowns of L⁻ᵀ D⁻¹ y, from those of its ancestors (finished).
     fn backward<T: Real>(&self, s: usize, l: &[T], x: &Panels<T>, tmp: &mut Vec<T>) {
-        let (sb, se) = (self.begin[s], self.begin[s + 1]);
-        let w = se - sb;
-        let pat = self.pattern(s);
-        let m = w + pat.len();
-        let ls = MatRef::from_column_major_slice(&l[self.val_at[s]..self.val_at[s + 1]], m, w);
-        let (top, bot) = ls.split_at_row(w);
+        let (sb, se, pat, top, bot) = self.panel(s, l);
         grow(tmp, pat.len());
         for (t, &r) in tmp.iter_mut().zip(pat) {
             // SAFETY: r is an ancestor's unknown, finished
@@ -435,7 +451,7 @@ impl TreeLdlt {
         for (j, v) in xs.iter_mut().enumerate() {
             *v /= top[(j, j)];
         }
-        let mut xm = MatMut::from_column_major_slice_mut(xs, w, 1);
+        let mut xm = MatMut::from_column_major_slice_mut(xs, se - sb, 1);
         if !pat.is_empty() {
             faer::linalg::matmul::matmul(
                 xm.as_mut(),
@@ -479,7 +495,7 @@ impl TreeLdlt {
                 let ps = p * self.subtree_work[s] / sum;
                 // the gathering in its bands, the diagonal block and panel in pieces
                 let (gather, dense) = (self.gather[s], self.work[s] - self.gather[s]);
-                let bands = (gather / (WIDE_FLOPS / 4.0)).clamp(1.0, MAX_BANDS);
+                let bands = bands(gather) as f64;
                 let pieces = (dense / (WIDE_FLOPS / 8.0)).max(1.0);
                 let own = gather / ps.min(bands).max(1.0) + dense / ps.min(pieces).max(1.0);
                 own + self.forest_time(self.children(s), ps)
@@ -502,7 +518,7 @@ struct Work<'a, T> {
 impl<T: Real + Send + Sync> Work<'_, T> {
     fn scratch(&self) -> Scratch<T> {
         self.pool.lock().unwrap().pop().unwrap_or_else(|| Scratch {
-            local: vec![0; self.plan.n],
+            local: self.plan.take_map(),
             rows: Vec::new(),
             product: Vec::new(),
             scaled: Vec::new(),
@@ -566,7 +582,7 @@ impl<T: Real + Send + Sync> Work<'_, T> {
         let ls = unsafe { self.panels.get_mut(plan.val_at[s], plan.val_at[s + 1]) };
         let bands = match par {
             Par::Seq => 1,
-            _ => (plan.gather[s] / (WIDE_FLOPS / 4.0)).clamp(1.0, MAX_BANDS) as usize,
+            _ => bands(plan.gather[s]),
         };
         if bands == 1 {
             self.local_rows(s, sc);
@@ -599,9 +615,8 @@ impl<T: Real + Send + Sync> Work<'_, T> {
         }
         let mut lsm = MatMut::from_column_major_slice_mut(ls, m, w);
         let (mut top, mut bot) = lsm.as_mut().split_at_row_mut(w);
-        let need = cholesky_in_place_scratch::<T>(w, par, Default::default());
         if sc.stack_for < w {
-            sc.stack = MemBuffer::new(need);
+            sc.stack = MemBuffer::new(cholesky_in_place_scratch::<T>(w, par, Default::default()));
             sc.stack_for = w;
         }
         let stack = MemStack::new(&mut sc.stack);
@@ -710,6 +725,12 @@ impl<T: Real + Send + Sync> Work<'_, T> {
             }
         }
     }
+}
+
+/// The bands of columns a wide supernode gathers its updates in, side by side: a quarter of
+/// [`WIDE_FLOPS`] each, at most [`MAX_BANDS`].
+fn bands(gather: f64) -> usize {
+    (gather / (WIDE_FLOPS / 4.0)).clamp(1.0, MAX_BANDS) as usize
 }
 
 /// `v` at least `len` long.
