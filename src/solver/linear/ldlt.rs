@@ -2,10 +2,11 @@
 //! factorisation.
 
 use super::ordering::nested_dissection;
+use super::static_lu::Real;
 use super::submatrix::SubMatrix;
 use super::tree::TreeLdlt;
 use super::{Factorization, LinearError, PARALLEL_FACTOR_NNZ};
-use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::perm::PermRef;
 use faer::sparse::linalg::cholesky::{
     LdltRef, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky,
@@ -91,7 +92,11 @@ impl SymFactor {
             Par::Seq
         };
         let single = precision == Precision::Single;
-        let (factor_mem, solve_mem) = if single {
+        let tree = TreeLdlt::new(&symbolic, &sub.pattern);
+        // faer's scratch, where faer factors and solves
+        let (factor_mem, solve_mem) = if tree.is_some() {
+            (StackReq::EMPTY, StackReq::EMPTY)
+        } else if single {
             (
                 symbolic.factorize_numeric_ldlt_scratch::<f32>(par, Default::default()),
                 symbolic.solve_in_place_scratch::<f32>(1, par),
@@ -103,7 +108,6 @@ impl SymFactor {
             )
         };
         let len = symbolic.len_val();
-        let tree = TreeLdlt::new(&symbolic, &sub.pattern);
         Ok(SymFactor {
             tree,
             l64: if single { Vec::new() } else { vec![0.0; len] },
@@ -150,29 +154,26 @@ impl SymFactor {
                 *d = *s as f32;
             }
         }
-        let pivot = |e: usize| LinearError::Factor(format!("ZeroPivot {{ index: {e} }}"));
-        match (&self.tree, self.precision) {
-            (Some(tree), Precision::Double) => tree
-                .factor(&mut self.l64, &self.sub.values)
-                .map_err(pivot)?,
-            (Some(tree), Precision::Single) => {
-                tree.factor(&mut self.l32, &self.a32).map_err(pivot)?
-            }
-            (_, Precision::Double) => ldlt_numeric(
-                &self.symbolic,
+        let mem = &mut self.factor_mem;
+        let (tree, symbolic, pattern) = (self.tree.as_ref(), &self.symbolic, &self.sub.pattern);
+        match self.precision {
+            Precision::Double => numeric(
+                tree,
+                symbolic,
+                pattern,
                 &mut self.l64,
-                &self.sub.pattern,
                 &self.sub.values,
                 self.par,
-                MemStack::new(&mut self.factor_mem),
+                mem,
             )?,
-            (_, Precision::Single) => ldlt_numeric(
-                &self.symbolic,
+            Precision::Single => numeric(
+                tree,
+                symbolic,
+                pattern,
                 &mut self.l32,
-                &self.sub.pattern,
                 &self.a32,
                 self.par,
-                MemStack::new(&mut self.factor_mem),
+                mem,
             )?,
         }
         self.factored = true;
@@ -220,28 +221,51 @@ impl SymFactor {
         let stack = MemStack::new(mem);
         let mut x = self.x.borrow_mut();
         let (x64, x32) = &mut *x;
-        match (&self.tree, self.precision) {
-            (Some(tree), Precision::Double) => tree.solve(&self.l64, b, x64),
-            (Some(tree), Precision::Single) => {
+        match self.precision {
+            Precision::Double => self.solve_in(&self.l64, b, x64, stack),
+            Precision::Single => {
                 for (d, s) in b32.iter_mut().zip(b.iter()) {
                     *d = *s as f32;
                 }
-                tree.solve(&self.l32, b32, x32);
-                for (d, s) in b.iter_mut().zip(b32.iter()) {
-                    *d = *s as f64;
-                }
-            }
-            (_, Precision::Double) => ldlt_solve(&self.symbolic, &self.l64, b, self.par, stack),
-            (_, Precision::Single) => {
-                for (d, s) in b32.iter_mut().zip(b.iter()) {
-                    *d = *s as f32;
-                }
-                ldlt_solve(&self.symbolic, &self.l32, b32, self.par, stack);
+                self.solve_in(&self.l32, b32, x32, stack);
                 for (d, s) in b.iter_mut().zip(b32.iter()) {
                     *d = *s as f64;
                 }
             }
         }
+    }
+
+    /// b ← (L D Lᵀ)⁻¹ b with the factor `l` in its precision: over the tree, or faer's solve.
+    fn solve_in<T: Real + Send + Sync>(
+        &self,
+        l: &[T],
+        b: &mut [T],
+        x: &mut Vec<T>,
+        stack: &mut MemStack,
+    ) {
+        match &self.tree {
+            Some(tree) => tree.solve(l, b, x),
+            None => ldlt_solve(&self.symbolic, l, b, self.par, stack),
+        }
+    }
+}
+
+/// Numeric LDLᵀ of `values` into `l`, in the precision T: over the tree where there is one,
+/// else faer's (with its scratch `mem`).
+fn numeric<T: Real + Send + Sync>(
+    tree: Option<&TreeLdlt>,
+    symbolic: &SymbolicCholesky<usize>,
+    pattern: &SymbolicSparseColMat<usize>,
+    l: &mut [T],
+    values: &[T],
+    par: Par,
+    mem: &mut MemBuffer,
+) -> Result<(), LinearError> {
+    match tree {
+        Some(tree) => tree
+            .factor(l, values)
+            .map_err(|e| LinearError::Factor(format!("ZeroPivot {{ index: {e} }}"))),
+        None => ldlt_numeric(symbolic, l, pattern, values, par, MemStack::new(mem)),
     }
 }
 
