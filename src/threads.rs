@@ -14,9 +14,11 @@ pub struct Threads {
     pub why: String,
 }
 
-/// The CPUs this process may use (at least 1).
+/// The CPUs this process may use (at least 1), read once: std reads the affinity and the
+/// cgroup's files at each call, and the solvers ask at every linear solve.
 pub fn usable_cpus() -> usize {
-    std::thread::available_parallelism().map_or(1, |n| n.get())
+    static CPUS: OnceLock<usize> = OnceLock::new();
+    *CPUS.get_or_init(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
 }
 
 /// The thread count for the value `env` of `RAYON_NUM_THREADS` (`None`: unset), on `cpus`
