@@ -601,17 +601,7 @@ fn large_graphs_are_cut_by_the_best_of_several_separators() {
     assert!(n >= SEPARATOR_TRIES_FROM);
     let sp = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
     let node: Vec<u32> = (0..n as u32).collect();
-    let entries = |(fwd, inv): (Vec<usize>, Vec<usize>)| {
-        let perm = PermRef::new_checked(&fwd, &inv, n);
-        factorize_symbolic_cholesky(
-            sp.as_ref(),
-            Side::Lower,
-            SymmetricOrdering::Custom(perm),
-            Default::default(),
-        )
-        .unwrap()
-        .len_val()
-    };
+    let entries = |(fwd, inv): (Vec<usize>, Vec<usize>)| analysed(&sp, &fwd, &inv).len_val();
     let tried = entries(nested_dissection(&sp, &node));
     let first = entries(nested_dissection_trying(&sp, &node, Some(1)));
     assert!(
@@ -634,6 +624,22 @@ fn nested_dissection_keeps_node_unknowns_together() {
     for pair in fwd.chunks(2) {
         assert_eq!(node[pair[0]], node[pair[1]]);
     }
+}
+
+/// faer's symbolic LDLᵀ of `sp`'s lower triangle in the order `fwd` (`inv` its inverse).
+fn analysed(
+    sp: &SymbolicSparseColMat<usize>,
+    fwd: &[usize],
+    inv: &[usize],
+) -> faer::sparse::linalg::cholesky::SymbolicCholesky<usize> {
+    let perm = PermRef::new_checked(fwd, inv, sp.nrows());
+    factorize_symbolic_cholesky(
+        sp.as_ref(),
+        Side::Lower,
+        SymmetricOrdering::Custom(perm),
+        Default::default(),
+    )
+    .unwrap()
 }
 
 /// A 3D grid of k³ nodes with `dofs` unknowns each, coupled as elasticity couples them (every
@@ -691,14 +697,7 @@ fn the_tree_factor_is_faers_factor_at_every_thread_count() {
     let (sp, vals, node) = grid(14, 3);
     let n = sp.nrows();
     let (fwd, inv) = nested_dissection(&sp, &node);
-    let perm = PermRef::new_checked(&fwd, &inv, n);
-    let symbolic = factorize_symbolic_cholesky(
-        sp.as_ref(),
-        Side::Lower,
-        SymmetricOrdering::Custom(perm),
-        Default::default(),
-    )
-    .unwrap();
+    let symbolic = analysed(&sp, &fwd, &inv);
     let mut reference = vec![0.0; symbolic.len_val()];
     let mut mem = MemBuffer::new(
         symbolic.factorize_numeric_ldlt_scratch::<f64>(faer::Par::Seq, Default::default()),
@@ -803,14 +802,7 @@ fn the_tree_factor_names_a_zero_pivot() {
         }
     }
     let (fwd, inv) = nested_dissection(&sp, &node);
-    let perm = PermRef::new_checked(&fwd, &inv, n);
-    let symbolic = factorize_symbolic_cholesky(
-        sp.as_ref(),
-        Side::Lower,
-        SymmetricOrdering::Custom(perm),
-        Default::default(),
-    )
-    .unwrap();
+    let symbolic = analysed(&sp, &fwd, &inv);
     let tree = TreeLdlt::new(&symbolic, &sp).expect("a supernodal analysis");
     let mut l = vec![0.0; symbolic.len_val()];
     assert_eq!(tree.factor(&mut l, &vals), Err(inv[0]));
@@ -820,16 +812,8 @@ fn the_tree_factor_names_a_zero_pivot() {
 fn the_trees_model_predicts_what_its_shape_allows() {
     use super::tree::TreeLdlt;
     let (sp, _, node) = grid(14, 3);
-    let n = sp.nrows();
     let (fwd, inv) = nested_dissection(&sp, &node);
-    let perm = PermRef::new_checked(&fwd, &inv, n);
-    let symbolic = factorize_symbolic_cholesky(
-        sp.as_ref(),
-        Side::Lower,
-        SymmetricOrdering::Custom(perm),
-        Default::default(),
-    )
-    .unwrap();
+    let symbolic = analysed(&sp, &fwd, &inv);
     let tree = TreeLdlt::new(&symbolic, &sp).unwrap();
     let s: Vec<f64> = [1.0, 2.0, 4.0, 16.0, 64.0, 1e6]
         .iter()
