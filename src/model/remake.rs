@@ -8,13 +8,18 @@
 //! starts from a reference of its own (as a reconnected layer's cells do,
 //! `assembly/reference.rs`):
 //!
+//! - a layer one cell across (triangles whose nodes are all on solids) that was closed
+//!   somewhere (J below [`CLOSED`]) from its current shape stretched across itself to one
+//!   thickness of reference for the whole layer, the median of what its closed cells had
+//!   (see [`Layers`]): the contact pressure depends on the gap alone, as exact contact's
+//!   does, and does not travel with the cells as the bodies slide;
 //! - the open medium from its current shape, stress-free: what removes the ploughing; a sliver
 //!   from its shape opened across its long edge to a slenderness of [`THINNEST`], so that it
 //!   is not a stiff cell;
-//! - a closed layer (J < [`CLOSED`] at the new cell's centre or half way to its nodes, the
-//!   smallest) from its current shape stretched back across the layer by 1/J, so that it
-//!   carries the same compression, hence the same contact pressure, without the shear it had
-//!   (F₀ = I + (J − 1) n⊗n, n the direction the old cell was squeezed most);
+//! - where no layer has closed yet, a squeezed cell (J < [`CLOSED`] at the new cell's centre
+//!   or half way to its nodes, the smallest) from its current shape stretched back by 1/J,
+//!   so that it carries its compression without its shear (F₀ = I + (J − 1) n⊗n, n the
+//!   direction the old cell was squeezed most);
 //! - temperatures at the new nodes from the old cells where they stand; the regularization's
 //!   p fields at zero (a new cell's F₀ is symmetric: it has no rotation to measure).
 //!
@@ -483,36 +488,34 @@ impl Medium {
             Some(o) => placed[o],
             None => r.mesh.coords[n],
         };
-        let mut reference = vec![None; r.mesh.cells.len()];
+        let cells: Vec<NewCell> = (r.medium.iter())
+            .flat_map(|&b| (0..r.mesh.cells[b].n_cells()).map(move |c| (b, c)))
+            .map(|(b, c)| {
+                let p: Vec<[f64; 3]> = r.mesh.cells[b].cell(c).iter().map(|&n| here(n)).collect();
+                let F = squeezed(&find, &p);
+                NewCell { b, c, p, F }
+            })
+            .collect();
+        let layers = Layers::of(&r.mesh, &r.medium, &cells);
+        let mut reference: Vec<Option<Vec<[f64; 3]>>> = vec![None; r.mesh.cells.len()];
         for &b in &r.medium {
-            let blk = &r.mesh.cells[b];
-            let mut refs = Vec::with_capacity(blk.conn.len());
-            for c in 0..blk.n_cells() {
-                let p: Vec<[f64; 3]> = blk.cell(c).iter().map(|&n| here(n)).collect();
-                let k = p.len() as f64;
-                let mid: [f64; 3] =
-                    std::array::from_fn(|i| p.iter().map(|q| q[i]).sum::<f64>() / k);
-                // the old medium's most squeezed state over the new cell (at its centre and
-                // half way to each node): a closed layer's cell that has just opened beside
-                // others still closed does not speak for the layer
-                let F = (std::iter::once(mid).chain(
-                    p.iter()
-                        .map(|q| std::array::from_fn(|i| 0.5 * (mid[i] + q[i]))),
-                ))
-                .filter_map(|at| find.value(&at, |cell| cell.F()))
-                .min_by(|a, b| a.determinant().total_cmp(&b.determinant()))
-                .unwrap_or_else(Matrix2::identity);
-                let stretch = match carried_stretch(&F) {
-                    Some(back) => back,
-                    None => opened(&p),
-                };
-                for q in &p {
-                    let d = Vector2::new(q[0] - mid[0], q[1] - mid[1]);
-                    let X = stretch * d;
-                    refs.push([mid[0] + X[0], mid[1] + X[1], 0.0]);
-                }
+            reference[b] = Some(Vec::with_capacity(r.mesh.cells[b].conn.len()));
+        }
+        for (k, cell) in cells.iter().enumerate() {
+            let p = &cell.p;
+            let mid: [f64; 3] =
+                std::array::from_fn(|i| p.iter().map(|q| q[i]).sum::<f64>() / p.len() as f64);
+            let stretch = match layers.carried(k, p) {
+                Some(back) => back,
+                // beside a closed layer the medium is open: its old squeeze is what ploughs
+                None if layers.closed() => opened(p),
+                None => carried_stretch(&cell.F).unwrap_or_else(|| opened(p)),
+            };
+            let refs = reference[cell.b].as_mut().expect("a medium block");
+            for q in p {
+                let X = stretch * Vector2::new(q[0] - mid[0], q[1] - mid[1]);
+                refs.push([mid[0] + X[0], mid[1] + X[1], 0.0]);
             }
-            reference[b] = Some(refs);
         }
         let theta = (0..r.mesh.coords.len())
             .map(|n| match r.old_of[n] {
@@ -558,6 +561,141 @@ fn carried_stretch(F: &Matrix2<f64>) -> Option<Matrix2<f64>> {
     };
     let n: Vector2<f64> = e.eigenvectors.column(i).into();
     Some(Matrix2::identity() + (1.0 / J - 1.0) * n * n.transpose())
+}
+
+/// A new medium cell: its block and number, its nodes' places, and the old medium's most
+/// squeezed deformation gradient over it.
+struct NewCell {
+    b: usize,
+    c: usize,
+    p: Vec<[f64; 3]>,
+    F: Matrix2<f64>,
+}
+
+/// The old medium's most squeezed state over a new cell with nodes at `p` (the smallest J at
+/// its centre and half way to each node): a closed layer's cell that has just opened beside
+/// others still closed does not speak for the layer.
+fn squeezed(find: &Locator, p: &[[f64; 3]]) -> Matrix2<f64> {
+    let k = p.len() as f64;
+    let mid: [f64; 3] = std::array::from_fn(|i| p.iter().map(|q| q[i]).sum::<f64>() / k);
+    (std::iter::once(mid).chain(
+        p.iter()
+            .map(|q| std::array::from_fn(|i| 0.5 * (mid[i] + q[i]))),
+    ))
+    .filter_map(|at| find.value(&at, |cell| cell.F()))
+    .min_by(|a, b| a.determinant().total_cmp(&b.determinant()))
+    .unwrap_or_else(Matrix2::identity)
+}
+
+/// The new medium's layers one cell across: triangles whose three nodes are on solids, so
+/// that each spans the gap between two faces. Those that touch one another make a layer (a
+/// contact and its sides), and a layer that was closed somewhere (an old J below [`CLOSED`]
+/// over one of its cells) has one thickness of reference: the median over its closed cells
+/// of the thickness each had before the squeeze (its height over the old J). Each of its cells
+/// thinner than that starts squeezed to it. The pressure across the layer then depends on the
+/// gap alone, not on where each old cell stood: as the bodies slide, a cell that rides along
+/// an inclined face (its apex on one body, its base on the other) would otherwise carry into
+/// the contact the reference of the place it came from.
+struct Layers {
+    /// Per new cell: its height and the normal to its longest edge, if it spans a gap, and
+    /// the layer it belongs to.
+    across: Vec<Option<(f64, Vector2<f64>, usize)>>,
+    /// Per layer, its thickness of reference (none where it was nowhere closed).
+    thickness: Vec<Option<f64>>,
+}
+
+impl Layers {
+    fn of(mesh: &Mesh, medium: &[usize], cells: &[NewCell]) -> Layers {
+        let mut on_solid = vec![false; mesh.coords.len()];
+        for (b, blk) in mesh.cells.iter().enumerate() {
+            if !medium.contains(&b) {
+                blk.conn.iter().for_each(|&n| on_solid[n] = true);
+            }
+        }
+        // the layers: the cells across, joined where they share a node
+        let mut root: Vec<usize> = (0..cells.len()).collect();
+        fn top(root: &mut [usize], mut k: usize) -> usize {
+            while root[k] != k {
+                root[k] = root[root[k]];
+                k = root[k];
+            }
+            k
+        }
+        let mut first_at: std::collections::HashMap<usize, usize> = Default::default();
+        let mut height = vec![None; cells.len()];
+        for (k, cell) in cells.iter().enumerate() {
+            let nodes = mesh.cells[cell.b].cell(cell.c);
+            if nodes.len() != 3 || !nodes.iter().all(|&n| on_solid[n]) {
+                continue;
+            }
+            height[k] = Some(height_across(&cell.p));
+            for &n in nodes {
+                let j = *first_at.entry(n).or_insert(k);
+                let (a, b) = (top(&mut root, j), top(&mut root, k));
+                root[a.max(b)] = a.min(b);
+            }
+        }
+        let mut layer_of = vec![usize::MAX; cells.len()];
+        let mut before: Vec<Vec<f64>> = Vec::new();
+        let mut index: std::collections::HashMap<usize, usize> = Default::default();
+        for k in (0..cells.len()).filter(|&k| height[k].is_some()) {
+            let r = top(&mut root, k);
+            let l = *index.entry(r).or_insert_with(|| {
+                before.push(Vec::new());
+                before.len() - 1
+            });
+            layer_of[k] = l;
+            let J = cells[k].F.determinant();
+            if J > 0.0 && J < CLOSED {
+                before[l].push(height[k].expect("a cell across").0 / J);
+            }
+        }
+        let thickness = (before.into_iter())
+            .map(|mut g| {
+                g.sort_by(f64::total_cmp);
+                g.get(g.len() / 2).copied()
+            })
+            .collect();
+        let across = (height.into_iter().zip(layer_of))
+            .map(|(h, l)| h.map(|(t, n)| (t, n, l)))
+            .collect();
+        Layers { across, thickness }
+    }
+
+    /// Whether any layer was closed.
+    fn closed(&self) -> bool {
+        self.thickness.iter().any(Option::is_some)
+    }
+
+    /// F₀⁻¹ of new cell `k` if it is a cell across a layer that was closed: its current shape
+    /// stretched across the layer to the layer's thickness of reference where it is thinner
+    /// (the identity, or a sliver opened, where it is not); `None` for any other cell.
+    fn carried(&self, k: usize, p: &[[f64; 3]]) -> Option<Matrix2<f64>> {
+        let (t, n, l) = self.across[k]?;
+        let g = self.thickness[l]?;
+        Some(match t > 0.0 && t < g {
+            true => Matrix2::identity() + (g / t - 1.0) * n * n.transpose(),
+            false => opened(p),
+        })
+    }
+}
+
+/// A triangle's height over its longest edge, and that edge's normal.
+fn height_across(p: &[[f64; 3]]) -> (f64, Vector2<f64>) {
+    let (mut longest, mut along, mut area) = (0.0, Vector2::new(1.0, 0.0), 0.0);
+    for i in 0..3 {
+        let (a, b) = (p[i], p[(i + 1) % 3]);
+        area += 0.5 * (a[0] * b[1] - b[0] * a[1]);
+        let e = Vector2::new(b[0] - a[0], b[1] - a[1]);
+        if e.norm() > longest {
+            longest = e.norm();
+            along = e / longest;
+        }
+    }
+    (
+        2.0 * area.abs() / longest.max(f64::MIN_POSITIVE),
+        Vector2::new(-along[1], along[0]),
+    )
 }
 
 /// The slenderness (see [`slenderness`]) below which a new cell of the open medium starts
@@ -659,6 +797,73 @@ mod tests {
         // an open cell starts stress-free
         let open = Matrix2::new(1.0, 0.8, 0.0, 0.7);
         assert_eq!(carried_stretch(&open), None);
+    }
+
+    /// Two solids (a triangle below, one above) facing each other across a layer of four
+    /// triangles, each cell of the layer given the old J it stood in.
+    fn layer(gap: [f64; 3], old_J: [f64; 4]) -> (Mesh, Vec<NewCell>) {
+        use crate::mesh::{Block, CellKind};
+        let mut coords = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]];
+        coords.extend((0..3).map(|i| [i as f64, gap[i], 0.0]));
+        coords.push([1.0, -1.0, 0.0]);
+        coords.push([1.0, 2.0, 0.0]);
+        let tri = |conn: Vec<usize>| Block {
+            kind: CellKind::Tri3,
+            groups: vec![],
+            conn,
+        };
+        let medium = vec![0, 1, 3, 1, 4, 3, 1, 2, 4, 2, 5, 4];
+        let mesh = Mesh::of_cells(
+            2,
+            coords,
+            vec![
+                tri(vec![0, 6, 1, 1, 6, 2]),
+                tri(vec![3, 4, 7, 4, 5, 7]),
+                tri(medium.clone()),
+            ],
+        );
+        let cells = (0..4)
+            .map(|c| NewCell {
+                b: 2,
+                c,
+                p: medium[3 * c..3 * c + 3]
+                    .iter()
+                    .map(|&n| mesh.coords[n])
+                    .collect(),
+                F: Matrix2::new(1.0, 0.0, 0.0, old_J[c]),
+            })
+            .collect();
+        (mesh, cells)
+    }
+
+    #[test]
+    fn a_closed_layer_starts_from_one_thickness_whatever_each_old_cell_had() {
+        // the gap 1e-3 to 3e-3 along the layer; the old cells closed to J = 0.01 (thickness
+        // 0.1 before, at the gap of 1e-3), 0.02 (0.1 at 2e-3) and 0.06 (about 0.04 and 0.05)
+        let (mesh, cells) = layer([1e-3, 2e-3, 3e-3], [0.01, 0.02, 0.06, 0.06]);
+        let layers = Layers::of(&mesh, &[2], &cells);
+        assert_eq!(layers.thickness.len(), 1, "one layer");
+        let g = layers.thickness[0].unwrap();
+        let before: Vec<f64> = (0..4)
+            .map(|k| height_across(&cells[k].p).0 / cells[k].F.determinant())
+            .collect();
+        let mut sorted = before.clone();
+        sorted.sort_by(f64::total_cmp);
+        assert_eq!(g, sorted[2], "the median of {before:?}");
+        for (k, cell) in cells.iter().enumerate() {
+            let F0 = layers.carried(k, &cell.p).unwrap().try_inverse().unwrap();
+            // squeezed from the layer's thickness to the cell's height, without shear
+            let (t, n) = height_across(&cell.p);
+            assert!((F0.determinant() - t / g).abs() < 1e-9 * t / g, "cell {k}");
+            assert!(((F0 * n).norm() - t / g).abs() < 1e-9, "cell {k}");
+            assert!(shear(&F0) < 1e-7);
+        }
+        assert!(layers.closed());
+        // a layer nowhere closed carries nothing of its own: the cells' old squeeze decides
+        let (mesh, cells) = layer([0.1, 0.1, 0.1], [0.9, 0.6, 0.7, 0.8]);
+        let layers = Layers::of(&mesh, &[2], &cells);
+        assert!(!layers.closed());
+        assert!((0..4).all(|k| layers.carried(k, &cells[k].p).is_none()));
     }
 
     #[test]

@@ -38,21 +38,22 @@ fn slide_forces(dir: &Path) -> (f64, f64, f64, f64, f64) {
 fn the_cylinder_slides_on_a_medium_made_again_with_the_force_of_its_press_and_no_drag() {
     let (made, out) = solve_case("cylinder-slide");
     assert!(made.medium_remade > 0, "the medium was made again");
-    // what a remake changes of the rim's reaction at the state itself (measured: 2.3 % at
-    // most); the scene conducts no heat
+    // what a remake changes of the rim's reaction at the state itself (measured: 1.0 % at
+    // most; 2.3 % when each new cell of the closed layer carried the old J where it stood);
+    // the scene conducts no heat
     let remade = summary(&out);
     let force = remade["medium_remade_force_change"].as_f64().unwrap();
-    assert!(force > 0.0 && force < 0.05, "a remake changed F by {force}");
+    assert!(force > 0.0 && force < 0.02, "a remake changed F by {force}");
     assert_eq!(remade["medium_remade_heat_change"], 0.0);
     let (fn0, lo, hi, mean, most) = slide_forces(&out);
-    // measured: F_n 1.207 to 1.327 against 1.326 at the press's end; F_t/F_n 0.008 on
+    // measured: F_n 1.206 to 1.326 against 1.326 at the press's end; F_t/F_n −0.003 on
     // average, 0.100 at most (it swings as the cylinder's facets pass the plate's nodes).
     // The penalty per reference volume held the slide: 0.45 on average, 1.2 at most
     assert!(
         lo > 0.88 * fn0 && hi < 1.05 * fn0,
         "F_n {lo} to {hi}, {fn0} pressed"
     );
-    assert!(mean.abs() < 0.02, "F_t/F_n {mean} on average");
+    assert!(mean.abs() < 0.01, "F_t/F_n {mean} on average");
     assert!(most < 0.15, "F_t/F_n {most} at most");
     // drawn against the pseudo-time (λ holds at 1 through the slide), the ratio by its name
     let h = tmc::plot::History::read(&out.join("history.csv")).unwrap();
@@ -76,6 +77,43 @@ fn the_cylinder_slides_on_a_medium_made_again_with_the_force_of_its_press_and_no
     let (fn0, _, hi, mean, _) = slide_forces(&out);
     assert!(hi > 1.5 * fn0, "ploughed: F_n {hi}, {fn0} pressed");
     assert!(mean > 0.1, "ploughed: F_t/F_n {mean} on average");
+}
+
+/// The issue's slide of 0.5 (to 0.1 of the medium's right face), on the README's mesh and on
+/// one twice as fine: it completes, the normal force stays that of the press, and what swings
+/// is the facets passing each other, less on the finer mesh. As it stood before each remade
+/// layer had one thickness of reference, h = 0.1 stalled at a slide of 0.39 and h = 0.05 at
+/// 0.12.
+#[test]
+fn the_cylinder_slides_its_whole_way_on_two_meshes() {
+    // (h, F_n's band about the press's, largest |F_t/F_n|); measured: h = 0.1 F_n 0.898 to
+    // 1.000 of the press's, F_t/F_n 0.171 at most, 0.002 on average; h = 0.05 0.978 to
+    // 1.005, 0.077 at most (the first step of the slide, before any remake; ±0.038 after),
+    // 0.003 on average
+    for (h, band, most_allowed) in [(0.1, 0.12, 0.2), (0.05, 0.03, 0.09)] {
+        let body = case_body("cylinder-slide").replace("ux = 0.3\n", "ux = 0.5\n");
+        assert!(body.contains("ux = 0.5"));
+        let case = case_file(
+            &format!("cylinder-slide-far-{h}"),
+            "cylinder-plate.geo",
+            &format!("params = {{ h = {h} }}"),
+            &body,
+        );
+        let out = case.with_file_name("out");
+        let o = solve_cli(&case, &out, &[]);
+        assert!(o.status.success(), "h = {h}: {}", stderr(&o));
+        let (cols, rows) = history(&out);
+        let t = cols.iter().position(|c| c == "time").unwrap();
+        let end = rows.last().unwrap()[t];
+        assert!((end - 2.0).abs() < 1e-9, "h = {h}: slid to t = {end}");
+        let (fn0, lo, hi, mean, most) = slide_forces(&out);
+        assert!(
+            lo > (1.0 - band) * fn0 && hi < (1.0 + band) * fn0,
+            "h = {h}: F_n {lo} to {hi}, {fn0} pressed"
+        );
+        assert!(mean.abs() < 0.01, "h = {h}: F_t/F_n {mean} on average");
+        assert!(most < most_allowed, "h = {h}: F_t/F_n {most} at most");
+    }
 }
 
 /// The cylinder held at θ = 1 by its rim, the plate's bottom at 0, steady conduction through
@@ -114,9 +152,10 @@ fn heat_crosses_a_medium_made_again_and_is_conserved() {
             r[bottom]
         );
     }
-    // measured: 11.4 % at most over 29 remakes (most below 1 %): the issue asks 1 %
+    // measured: 0.92 % at most over 33 remakes (11.4 % when each new cell of the closed
+    // layer carried the old J where it stood, its conductance k(J) with it)
     let heat = s["medium_remade_heat_change"].as_f64().unwrap();
-    assert!(heat > 0.0 && heat < 0.2, "a remake changed Q by {heat}");
+    assert!(heat > 0.0 && heat < 0.01, "a remake changed Q by {heat}");
 }
 
 #[test]
