@@ -490,8 +490,8 @@ fn solve_model(
         if changed {
             run.rejoined();
         }
-        if let Some(before) = before_remake.take() {
-            let (force, heat) = run.remade_from(&before)?;
+        if let Some((before, since)) = before_remake.take() {
+            let (force, heat) = run.remade_from(&before, since)?;
             if opts.verbose {
                 crate::note!(
                     "  the groups' reactions changed by {:.2} % at most, their heat flows by \
@@ -516,7 +516,8 @@ fn solve_model(
             Stepped::Changed(run, change) => (run, change),
         };
         if matches!(change, Change::Remake) {
-            before_remake = Some(run.flows_at_rest()?);
+            let since = Instant::now();
+            before_remake = Some((run.flows_at_rest()?, since));
         }
         let (mut cp, kept) = run.end_to_rejoin();
         let (new, placed) = changed_model(

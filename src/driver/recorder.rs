@@ -400,6 +400,7 @@ impl<'a> Recorder<'a> {
         if tot.medium_remakes > 0 {
             s.medium_remade_force_change = Some(tot.remake_force_change);
             s.medium_remade_heat_change = Some(tot.remake_heat_change);
+            s.medium_remade_seconds = Some(tot.remake_seconds);
         }
         // 0 until the first join
         s.heat_joined = (self.layout.joined).then(|| tot.heat_joined.unwrap_or(0.0));

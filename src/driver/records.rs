@@ -112,6 +112,9 @@ pub struct Summary {
     /// medium was never made again).
     pub medium_remade_force_change: Option<f64>,
     pub medium_remade_heat_change: Option<f64>,
+    /// The wall time the remakes took, from the state at which each was due to the settled
+    /// state the next step starts from (`null` where the medium was never made again).
+    pub medium_remade_seconds: Option<f64>,
     /// Transient scenes with a friction layer with `reconnect`: what its joins changed the
     /// heat stored by, so far; with it, `heat_stored` = `heat_in` + `friction_heat` +
     /// `heat_joined` (`null` otherwise).
@@ -232,6 +235,7 @@ impl Summary {
             medium_remade: 0,
             medium_remade_force_change: None,
             medium_remade_heat_change: None,
+            medium_remade_seconds: None,
             heat_joined: None,
             balances: Balances::default(),
             output: out_dir.display().to_string(),

@@ -256,13 +256,18 @@ impl<'a> Run<'a> {
         Ok(flows?.0)
     }
 
-    /// After the medium was made again (and [`Run::rejoined`]): how much each group's
-    /// reaction and heat flow changed from `before`, the largest kept in the totals; returns
-    /// this remake's (see [`flow_change`]).
-    pub(super) fn remade_from(&mut self, before: &Reactions) -> Result<(f64, f64), SolveError> {
+    /// After the medium was made again (and [`Run::rejoined`]), `since` it was due: how much
+    /// each group's reaction and heat flow changed from `before`, the largest kept in the
+    /// totals with the time the remake took; returns this remake's (see [`flow_change`]).
+    pub(super) fn remade_from(
+        &mut self,
+        before: &Reactions,
+        since: std::time::Instant,
+    ) -> Result<(f64, f64), SolveError> {
         let after = self.flows_at_rest()?;
         let (force, heat) = flow_change(before, &after);
         let tot = &mut self.accounts.totals;
+        tot.remake_seconds += since.elapsed().as_secs_f64();
         tot.remake_force_change = tot.remake_force_change.max(force);
         tot.remake_heat_change = tot.remake_heat_change.max(heat);
         Ok((force, heat))

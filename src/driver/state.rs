@@ -68,6 +68,10 @@ pub struct Totals {
     pub remake_force_change: f64,
     #[serde(default)]
     pub remake_heat_change: f64,
+    /// The wall time the medium's remakes took: from the accepted state at which one was due
+    /// to the settled state the next step starts from (gmsh, the new model, its settling).
+    #[serde(default)]
+    pub remake_seconds: f64,
     /// Transient scenes with a reconnected friction layer: what its joins changed the heat
     /// stored by (its cells re-paired with other nodes' temperatures).
     #[serde(default)]

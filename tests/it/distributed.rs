@@ -319,7 +319,11 @@ fn the_3d_monolithic_block_plate_is_the_same_on_petsc_and_on_two_ranks() {
     let s = same_answers("block-plate-3d", &["--set", "steps.path=[0, 0.4]"]);
     for s in s {
         assert_eq!(s["lambda"], 0.4);
-        assert!(s["load_steps"].as_u64().unwrap() >= 4, "{}", s["load_steps"]);
+        assert!(
+            s["load_steps"].as_u64().unwrap() >= 4,
+            "{}",
+            s["load_steps"]
+        );
     }
 }
 

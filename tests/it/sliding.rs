@@ -45,6 +45,10 @@ fn the_cylinder_slides_on_a_medium_made_again_with_the_force_of_its_press_and_no
     let force = remade["medium_remade_force_change"].as_f64().unwrap();
     assert!(force > 0.0 && force < 0.02, "a remake changed F by {force}");
     assert_eq!(remade["medium_remade_heat_change"], 0.0);
+    // the remakes' own time is a part of the run's
+    let seconds = remade["medium_remade_seconds"].as_f64().unwrap();
+    let wall = remade["wall_seconds"].as_f64().unwrap();
+    assert!(seconds > 0.0 && seconds < wall, "{seconds} s of {wall} s");
     let (fn0, lo, hi, mean, most) = slide_forces(&out);
     // measured: F_n 1.206 to 1.326 against 1.326 at the press's end; F_t/F_n −0.003 on
     // average, 0.100 at most (it swings as the cylinder's facets pass the plate's nodes).
@@ -74,6 +78,7 @@ fn the_cylinder_slides_on_a_medium_made_again_with_the_force_of_its_press_and_no
     let o = solve_cli(&lagrangian, &out, &[]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert_eq!(summary(&out)["medium_remade"], 0);
+    assert!(summary(&out)["medium_remade_seconds"].is_null());
     let (fn0, _, hi, mean, _) = slide_forces(&out);
     assert!(hi > 1.5 * fn0, "ploughed: F_n {hi}, {fn0} pressed");
     assert!(mean > 0.1, "ploughed: F_t/F_n {mean} on average");
