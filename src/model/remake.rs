@@ -115,15 +115,40 @@ fn cell_F<const N: usize, const D: usize, E: RefElement<N, D>>(
 /// for an equilateral one, small for a sliver.
 fn slenderness(X: &[[f64; 3]], simplex: bool) -> f64 {
     let k = if simplex { 3 } else { 4 };
-    let mut area = 0.0;
-    let mut longest = 0.0f64;
-    for i in 0..k {
-        let (p, q) = (X[i], X[(i + 1) % k]);
-        area += 0.5 * (p[0] * q[1] - q[0] * p[1]);
-        longest = longest.max((q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2));
-    }
     let f = if simplex { 2.0 } else { 1.0 };
-    (f * area.abs() / longest.max(f64::MIN_POSITIVE)).min(1.0)
+    (f * area(X, k) / longest_edge(X, k).1.max(f64::MIN_POSITIVE)).min(1.0)
+}
+
+/// The area of a 2D cell with `k` corners `p` in order.
+fn area(p: &[[f64; 3]], k: usize) -> f64 {
+    let twice: f64 = (0..k)
+        .map(|i| {
+            let (a, b) = (p[i], p[(i + 1) % k]);
+            a[0] * b[1] - b[0] * a[1]
+        })
+        .sum();
+    0.5 * twice.abs()
+}
+
+/// The edge from corner `i` of a 2D cell with `k` corners `p` in order to the next.
+fn edge(p: &[[f64; 3]], k: usize, i: usize) -> Vector2<f64> {
+    let (a, b) = (p[i], p[(i + 1) % k]);
+    Vector2::new(b[0] - a[0], b[1] - a[1])
+}
+
+/// The longest edge of a 2D cell with `k` corners `p` in order (the first of equals): the
+/// corner it starts at, and its length squared.
+fn longest_edge(p: &[[f64; 3]], k: usize) -> (usize, f64) {
+    (0..k).fold((0, 0.0), |(best, l2), i| {
+        let e2 = edge(p, k, i).norm_squared();
+        if e2 > l2 { (i, e2) } else { (best, l2) }
+    })
+}
+
+/// The unit normal of a 2D cell's edge `e`.
+fn normal_to(e: Vector2<f64>) -> Vector2<f64> {
+    let along = e / e.norm().max(f64::MIN_POSITIVE);
+    Vector2::new(-along[1], along[0])
 }
 
 /// The shear of the deformation gradient `F`: sqrt((λ₂ − 1)(1 − λ₁)) with λ₁ ≤ λ₂ the
@@ -450,13 +475,7 @@ impl Medium {
                 if slenderness(&p, true) >= THINNEST {
                     continue;
                 }
-                let len = |i: usize| {
-                    let (a, b) = (p[i], p[(i + 1) % 3]);
-                    (b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)
-                };
-                let i = (0..3)
-                    .max_by(|&a, &b| len(a).total_cmp(&len(b)))
-                    .unwrap_or(0);
+                let (i, _) = longest_edge(&p, 3);
                 let mut s = Sliver {
                     block: b,
                     cell: c,
@@ -492,8 +511,10 @@ impl Medium {
             .flat_map(|&b| (0..r.mesh.cells[b].n_cells()).map(move |c| (b, c)))
             .map(|(b, c)| {
                 let p: Vec<[f64; 3]> = r.mesh.cells[b].cell(c).iter().map(|&n| here(n)).collect();
-                let F = squeezed(&find, &p);
-                NewCell { b, c, p, F }
+                let k = p.len() as f64;
+                let mid = std::array::from_fn(|i| p.iter().map(|q| q[i]).sum::<f64>() / k);
+                let F = squeezed(&find, &p, mid);
+                NewCell { b, c, p, mid, F }
             })
             .collect();
         let layers = Layers::of(&r.mesh, &r.medium, &cells);
@@ -502,9 +523,7 @@ impl Medium {
             reference[b] = Some(Vec::with_capacity(r.mesh.cells[b].conn.len()));
         }
         for (k, cell) in cells.iter().enumerate() {
-            let p = &cell.p;
-            let mid: [f64; 3] =
-                std::array::from_fn(|i| p.iter().map(|q| q[i]).sum::<f64>() / p.len() as f64);
+            let (p, mid) = (&cell.p, cell.mid);
             let stretch = match layers.carried(k, p) {
                 Some(back) => back,
                 // beside a closed layer the medium is open: its old squeeze is what ploughs
@@ -563,21 +582,20 @@ fn carried_stretch(F: &Matrix2<f64>) -> Option<Matrix2<f64>> {
     Some(Matrix2::identity() + (1.0 / J - 1.0) * n * n.transpose())
 }
 
-/// A new medium cell: its block and number, its nodes' places, and the old medium's most
-/// squeezed deformation gradient over it.
+/// A new medium cell: its block and number, its nodes' places and their mean, and the old
+/// medium's most squeezed deformation gradient over it.
 struct NewCell {
     b: usize,
     c: usize,
     p: Vec<[f64; 3]>,
+    mid: [f64; 3],
     F: Matrix2<f64>,
 }
 
-/// The old medium's most squeezed state over a new cell with nodes at `p` (the smallest J at
-/// its centre and half way to each node): a closed layer's cell that has just opened beside
-/// others still closed does not speak for the layer.
-fn squeezed(find: &Locator, p: &[[f64; 3]]) -> Matrix2<f64> {
-    let k = p.len() as f64;
-    let mid: [f64; 3] = std::array::from_fn(|i| p.iter().map(|q| q[i]).sum::<f64>() / k);
+/// The old medium's most squeezed state over a new cell with nodes at `p` and centre `mid`
+/// (the smallest J there and half way to each node): a closed layer's cell that has just
+/// opened beside others still closed does not speak for the layer.
+fn squeezed(find: &Locator, p: &[[f64; 3]], mid: [f64; 3]) -> Matrix2<f64> {
     (std::iter::once(mid).chain(
         p.iter()
             .map(|q| std::array::from_fn(|i| 0.5 * (mid[i] + q[i]))),
@@ -638,7 +656,8 @@ impl Layers {
         let mut layer_of = vec![usize::MAX; cells.len()];
         let mut before: Vec<Vec<f64>> = Vec::new();
         let mut index: std::collections::HashMap<usize, usize> = Default::default();
-        for k in (0..cells.len()).filter(|&k| height[k].is_some()) {
+        for (k, h) in height.iter().enumerate() {
+            let Some((t, _)) = h else { continue };
             let r = top(&mut root, k);
             let l = *index.entry(r).or_insert_with(|| {
                 before.push(Vec::new());
@@ -647,7 +666,7 @@ impl Layers {
             layer_of[k] = l;
             let J = cells[k].F.determinant();
             if J > 0.0 && J < CLOSED {
-                before[l].push(height[k].expect("a cell across").0 / J);
+                before[l].push(t / J);
             }
         }
         let thickness = (before.into_iter())
@@ -682,19 +701,10 @@ impl Layers {
 
 /// A triangle's height over its longest edge, and that edge's normal.
 fn height_across(p: &[[f64; 3]]) -> (f64, Vector2<f64>) {
-    let (mut longest, mut along, mut area) = (0.0, Vector2::new(1.0, 0.0), 0.0);
-    for i in 0..3 {
-        let (a, b) = (p[i], p[(i + 1) % 3]);
-        area += 0.5 * (a[0] * b[1] - b[0] * a[1]);
-        let e = Vector2::new(b[0] - a[0], b[1] - a[1]);
-        if e.norm() > longest {
-            longest = e.norm();
-            along = e / longest;
-        }
-    }
+    let (i, l2) = longest_edge(p, 3);
     (
-        2.0 * area.abs() / longest.max(f64::MIN_POSITIVE),
-        Vector2::new(-along[1], along[0]),
+        2.0 * area(p, 3) / l2.sqrt().max(f64::MIN_POSITIVE),
+        normal_to(edge(p, 3, i)),
     )
 }
 
@@ -712,15 +722,7 @@ fn opened(p: &[[f64; 3]]) -> Matrix2<f64> {
     if s >= THINNEST || s <= 0.0 {
         return Matrix2::identity();
     }
-    let (mut longest, mut along) = (0.0, Vector2::new(1.0, 0.0));
-    for i in 0..k {
-        let e = Vector2::new(p[(i + 1) % k][0] - p[i][0], p[(i + 1) % k][1] - p[i][1]);
-        if e.norm() > longest {
-            longest = e.norm();
-            along = e / longest;
-        }
-    }
-    let n = Vector2::new(-along[1], along[0]);
+    let n = normal_to(edge(p, k, longest_edge(p, k).0));
     Matrix2::identity() + (THINNEST / s - 1.0) * n * n.transpose()
 }
 
@@ -830,6 +832,7 @@ mod tests {
                     .iter()
                     .map(|&n| mesh.coords[n])
                     .collect(),
+                mid: [0.0; 3],
                 F: Matrix2::new(1.0, 0.0, 0.0, old_J[c]),
             })
             .collect();
