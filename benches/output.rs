@@ -10,6 +10,7 @@ use tmc::case::Case;
 use tmc::driver::mesh_for;
 use tmc::model::build;
 use tmc::output::Series;
+use tmc::output::contact::ContactFaces;
 
 fn main() {
     let dir = root().join("target/bench/output");
@@ -34,7 +35,7 @@ fn main() {
     );
     println!("| encoding | size (MB) | write (ms, best of 5) |");
     println!("|---|---:|---:|");
-    let mut series = Series::new(&dir, "bench", &model);
+    let mut series = Series::new(&dir, "bench", &model, ContactFaces::of(&model));
     let references = tmc::assembly::References::new(&model);
     for (name, level) in [("uncompressed", 0), ("zlib 1 (tmc)", 1), ("zlib 6", 6)] {
         series.zlib_level = level;

@@ -8,7 +8,8 @@ use super::SolveOptions;
 use super::account::Accounts;
 use super::checkpoint::{self, Checkpoint};
 use super::records::{
-    Balances, FORCE_KEYS, HistoryLayout, Reactions, StepRow, Summary, flow, peak_memory_mb,
+    Balances, FORCE_KEYS, HistoryLayout, Reactions, StepRow, Summary, contact_ratio, flow,
+    peak_memory_mb,
 };
 use super::state::{Files, RunState, Totals};
 use super::stepper::Stepper;
@@ -16,6 +17,7 @@ use super::strategy::Strategy;
 use crate::case::Case;
 use crate::dofs::Field;
 use crate::model::Model;
+use crate::output::contact::ContactFaces;
 use crate::output::probes::Probe;
 use crate::output::{History, OutputError, RunFolder, Series, write_atomic};
 use crate::post::friction_cells;
@@ -58,7 +60,8 @@ impl<'a> Recorder<'a> {
         opts: &'a SolveOptions,
         start: Instant,
     ) -> Result<Recorder<'a>, SolveError> {
-        let layout = HistoryLayout::new(model, probes, case.file.time.is_some());
+        let contact = ContactFaces::of(model);
+        let layout = HistoryLayout::new(model, probes, case.file.time.is_some(), contact.as_ref());
         for name in [
             "history.csv",
             "summary.json",
@@ -74,7 +77,7 @@ impl<'a> Recorder<'a> {
         summary.ranks = st.asm.ranks.size;
         summary.engine = solver.engine().into();
         summary.petsc_solver = solver.engine_solver();
-        let mut series = Series::new(&out_dir, &case.name(), model);
+        let mut series = Series::new(&out_dir, &case.name(), model, contact);
         if let Some(d) = st.asm.distribution().filter(|d| d.partition.parts > 1) {
             series = series.in_parts(model, d);
         }
@@ -116,6 +119,26 @@ impl<'a> Recorder<'a> {
             .collect()
     }
 
+    /// F_t/F_n along the contact's normal of the groups that have a column for it, at the
+    /// stepper's last accepted state, whose reactions are `reactions`.
+    fn contact_ratios(&self, st: &Stepper, reactions: &Reactions) -> Vec<f64> {
+        let (groups, contact) = (&self.layout.contact, self.series.contact());
+        let Some(contact) = contact.filter(|_| !groups.is_empty()) else {
+            return Vec::new();
+        };
+        // an accepted state's cells all have a stress; were one not to, the ratios are unknown
+        let t = contact.at(st.model, &st.asm.reference, &st.x, None);
+        (groups.iter())
+            .map(|(g, body)| match &t {
+                Ok(t) => {
+                    let r = std::array::from_fn(|c| flow(reactions, g, FORCE_KEYS[c]));
+                    contact_ratio(contact, *body, t, r, st.model.mesh.dim)
+                }
+                Err(_) => f64::NAN,
+            })
+            .collect()
+    }
+
     /// The row of `history.csv` of the initial state.
     pub(super) fn initial_row(
         &mut self,
@@ -124,9 +147,12 @@ impl<'a> Recorder<'a> {
         reactions: &Reactions,
     ) -> Result<(), SolveError> {
         if self.folder.is_some() {
-            let values = self
-                .layout
-                .row(row, &self.probe_values(st, reactions), reactions);
+            let values = self.layout.row(
+                row,
+                &self.probe_values(st, reactions),
+                reactions,
+                &self.contact_ratios(st, reactions),
+            );
             self.history.row(&values)?;
         }
         Ok(())
@@ -141,10 +167,12 @@ impl<'a> Recorder<'a> {
         row: &StepRow,
         rep: &StepReport,
     ) -> Result<(), SolveError> {
+        let reactions = &accounts.totals.reactions;
         let values = self.layout.row(
             row,
-            &self.probe_values(st, &accounts.totals.reactions),
-            &accounts.totals.reactions,
+            &self.probe_values(st, reactions),
+            reactions,
+            &self.contact_ratios(st, reactions),
         );
         // the step's file first (when [output] every asks for it): a row never announces a
         // file that is not there yet

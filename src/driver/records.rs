@@ -5,7 +5,8 @@ use super::strategy::Strategy;
 use crate::case::Case;
 use crate::dofs::Field;
 use crate::model::{Model, Physics};
-use crate::output::probes::Probe;
+use crate::output::contact::{Contact, ContactFaces};
+use crate::output::probes::{Probe, force_ratio};
 use crate::output::quantity::Quantity;
 use crate::solver::linear::LinearKind;
 use serde::Serialize;
@@ -376,6 +377,54 @@ pub fn flow_name(group: &str, key: &str) -> String {
     }
 }
 
+/// The history column of a group's F_t/F_n along the contact's normal.
+pub fn ratio_name(group: &str) -> String {
+    format!("Ft_Fn_{group}")
+}
+
+/// The loaded groups (Dirichlet groups that move a body: a displacement that is not zero
+/// somewhere on their path) of one body that meets the medium, each with that body: the groups
+/// whose reaction [`contact_ratio`] splits.
+fn contact_groups(model: &Model, contact: &ContactFaces) -> Vec<(String, usize)> {
+    let d = model.dofs.dim;
+    let mut loaded = vec![false; model.bc_groups.len()];
+    for dof in (0..model.mesh.coords.len() * d).map(|i| model.dofs.u[i] as usize) {
+        if let Some(p) = &model.cons.prescribed[dof] {
+            loaded[p.bc] |= p.value != 0.0 || p.start != 0.0;
+        }
+    }
+    let mut out: Vec<(String, usize)> = Vec::new();
+    for (g, _) in (model.bc_groups.iter().zip(&loaded)).filter(|(_, l)| **l) {
+        let Some(group) = model.mesh.group(&g.name) else {
+            continue;
+        };
+        let mut bodies =
+            (model.mesh.group_nodes(group).into_iter()).filter_map(|n| contact.body_of(n));
+        let Some(body) = bodies.next() else { continue };
+        if bodies.all(|b| b == body) && !out.iter().any(|(name, _)| name == &g.name) {
+            out.push((g.name.clone(), body));
+        }
+    }
+    out
+}
+
+/// F_t/F_n of the reaction `R` of a group holding body `body`, split along the contact's
+/// normal as that body meets it ([`ContactFaces::contact_normal`]; in 2D F_t signed as a
+/// `force_ratio` probe's); NaN where nothing presses.
+#[allow(non_snake_case)]
+pub fn contact_ratio(
+    contact: &ContactFaces,
+    body: usize,
+    t: &Contact,
+    R: [f64; 3],
+    dim: usize,
+) -> f64 {
+    match contact.contact_normal(body, t) {
+        Some(n) => force_ratio(R, n, dim),
+        None => f64::NAN,
+    }
+}
+
 /// One accepted step's numbers for its history row, besides probes and reactions.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct StepRow {
@@ -423,11 +472,20 @@ pub struct HistoryLayout {
     inertia: bool,
     /// (group, component) of each reaction column.
     reactions: Vec<(String, String)>,
+    /// The groups whose reaction is split along the contact's normal (`Ft_Fn_<group>`), each
+    /// with the body it holds.
+    pub contact: Vec<(String, usize)>,
 }
 
 impl HistoryLayout {
-    /// `physical_time`: the case has `[time]`, so the `time` column is a time.
-    pub fn new(model: &Model, probes: &[Probe], physical_time: bool) -> HistoryLayout {
+    /// `physical_time`: the case has `[time]`, so the `time` column is a time; `contact`: the
+    /// faces where the solids meet the medium, if any.
+    pub fn new(
+        model: &Model,
+        probes: &[Probe],
+        physical_time: bool,
+        contact: Option<&ContactFaces>,
+    ) -> HistoryLayout {
         let mut reactions: Vec<(String, String)> = Vec::new();
         for g in &model.bc_groups {
             for f in &g.fields {
@@ -464,6 +522,8 @@ impl HistoryLayout {
             let q = if k == "heat" { Power } else { Force };
             (flow_name(g, k), Some(q))
         }));
+        let contact = contact.map_or_else(Vec::new, |c| contact_groups(model, c));
+        columns.extend(contact.iter().map(|(g, _)| (ratio_name(g), None)));
         for c in HISTORY_SOLVER_COLUMNS {
             let q = (c == "time" && physical_time).then_some(Time);
             columns.push((c.into(), q));
@@ -502,11 +562,19 @@ impl HistoryLayout {
             joined,
             inertia,
             reactions,
+            contact,
         }
     }
 
-    /// The row of one step, in column order.
-    pub fn row(&self, s: &StepRow, probes: &[f64], reactions: &Reactions) -> Vec<f64> {
+    /// The row of one step, in column order; `ratios` are the `Ft_Fn_<group>` of
+    /// [`HistoryLayout::contact`]'s groups.
+    pub fn row(
+        &self,
+        s: &StepRow,
+        probes: &[f64],
+        reactions: &Reactions,
+        ratios: &[f64],
+    ) -> Vec<f64> {
         let mut row = vec![
             s.step as f64,
             s.lambda,
@@ -521,6 +589,7 @@ impl HistoryLayout {
         ];
         row.extend_from_slice(probes);
         row.extend(self.reactions.iter().map(|(g, k)| flow(reactions, g, k)));
+        row.extend_from_slice(ratios);
         row.extend([s.krylov as f64, s.halvings as f64, s.time, s.work]);
         if self.transient {
             let (stored, supplied) = s.heat.unwrap_or((0.0, 0.0));

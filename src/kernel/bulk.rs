@@ -324,12 +324,12 @@ fn add_gradient_product<const N: usize, const D: usize, M: MulAdd, const UPPER: 
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use crate::element::{Hex8, Quad4, Tet4, Tri3};
     use crate::material::{Conductivity, Regularization, SolidLaw, ThermoElastic};
 
-    const SOLID: CellMaterial = CellMaterial {
+    pub(in crate::kernel) const SOLID: CellMaterial = CellMaterial {
         law: SolidLaw::NeoHooke(ThermoElastic {
             K: 20.0,
             mu: 10.0,
@@ -374,13 +374,11 @@ mod tests {
         ..MEDIUM
     };
 
-    /// Central differences of the residual against the tangent, column by column.
-    fn check<const N: usize, const D: usize, E: RefElement<N, D>>(mat: &CellMaterial) {
-        let np = if mat.reg.is_some() && mat.reg_direct.is_none() {
-            if D == 2 { 1 } else { 3 }
-        } else {
-            0
-        };
+    /// A distorted, strained and heated cell with `np` regularization fields per node, and
+    /// its layout.
+    pub(in crate::kernel) fn distorted_cell<const N: usize, const D: usize, E: RefElement<N, D>>(
+        np: usize,
+    ) -> (CellState<N>, Layout) {
         let mut s = CellState::<N>::zero();
         for (I, xi) in E::nodes().iter().enumerate() {
             for d in 0..D {
@@ -400,6 +398,17 @@ mod tests {
             has_theta: true,
             np,
         };
+        (s, lay)
+    }
+
+    /// Central differences of the residual against the tangent, column by column.
+    fn check<const N: usize, const D: usize, E: RefElement<N, D>>(mat: &CellMaterial) {
+        let np = if mat.reg.is_some() && mat.reg_direct.is_none() {
+            if D == 2 { 1 } else { 3 }
+        } else {
+            0
+        };
+        let (s, lay) = distorted_cell::<N, D, E>(np);
         let nd = lay.ndof();
         let mut r = vec![0.0; nd];
         let mut k = vec![0.0; nd * nd];

@@ -26,7 +26,7 @@ mod point;
 pub mod regularization;
 
 pub use bulk::{bulk, inversion};
-pub use fields::{CellFields, cell_fields};
+pub use fields::{CellFields, cell_fields, nodal_forces};
 
 use crate::material::{Conductivity, Regularization, SolidLaw};
 

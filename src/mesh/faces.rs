@@ -1,12 +1,12 @@
 //! The faces between two sets of cells (a solid's surface against the medium), their unit
-//! normals, and the nearest of them to a point.
+//! normals and measures, and the nearest of them to a point.
 //!
 //! A face is a cell's side of one dimension less: an edge of a 2D cell, a triangle or a
 //! quadrilateral of a 3D one, found by its corner nodes (quadratic cells' mid-side nodes play
 //! no part: a face is taken as flat between its corners).
 
-use super::{Block, CellKind, Mesh, centroid};
-use std::collections::HashSet;
+use super::{CellKind, Mesh, centroid};
+use std::collections::HashMap;
 
 /// A face shared by a cell of one set and a cell of the other.
 #[derive(Clone, Debug, PartialEq)]
@@ -37,29 +37,46 @@ pub fn sides(kind: CellKind) -> &'static [&'static [usize]] {
     }
 }
 
-/// The faces where a cell of the blocks `a` meets a cell of the blocks `b` (indices into
-/// `mesh.cells`), each once, in the order of `a`'s cells, normals out of `a`.
-pub fn shared_faces(mesh: &Mesh, a: &[usize], b: &[usize]) -> Vec<Face> {
+/// A face shared by two cells, each named by its mesh block and its index there.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Side {
+    /// The cell of the first set and of the second, as (block in `mesh.cells`, cell).
+    pub a: (usize, usize),
+    pub b: (usize, usize),
+    /// The face's corner nodes, in the order of `a`'s side.
+    pub corners: Vec<usize>,
+}
+
+/// The sides where a cell of the blocks `a` meets a cell of the blocks `b` (indices into
+/// `mesh.cells`), each once, in the order of `a`'s cells.
+pub fn shared_sides(mesh: &Mesh, a: &[usize], b: &[usize]) -> Vec<Side> {
     let key = |nodes: &[usize], side: &[usize]| {
         let mut k: Vec<usize> = side.iter().map(|&i| nodes[i]).collect();
         k.sort_unstable();
         k
     };
-    let mut in_b: HashSet<Vec<usize>> = HashSet::new();
-    for blk in b.iter().map(|&i| &mesh.cells[i]) {
+    let mut in_b: HashMap<Vec<usize>, (usize, usize)> = HashMap::new();
+    for &bi in b {
+        let blk = &mesh.cells[bi];
         for c in 0..blk.n_cells() {
             for side in sides(blk.kind) {
-                in_b.insert(key(blk.cell(c), side));
+                in_b.insert(key(blk.cell(c), side), (bi, c));
             }
         }
     }
     let mut out = Vec::new();
-    for blk in a.iter().map(|&i| &mesh.cells[i]) {
+    for &ai in a {
+        let blk = &mesh.cells[ai];
         for c in 0..blk.n_cells() {
             let nodes = blk.cell(c);
             for side in sides(blk.kind) {
-                if in_b.remove(&key(nodes, side)) {
-                    out.push(face(mesh, blk, nodes, side));
+                if let Some(other) = in_b.remove(&key(nodes, side)) {
+                    let corners = side.iter().map(|&i| nodes[i]).collect();
+                    out.push(Side {
+                        a: (ai, c),
+                        b: other,
+                        corners,
+                    });
                 }
             }
         }
@@ -67,38 +84,62 @@ pub fn shared_faces(mesh: &Mesh, a: &[usize], b: &[usize]) -> Vec<Face> {
     out
 }
 
-/// The face `side` of the cell `nodes` of `blk`, its normal out of the cell.
-fn face(mesh: &Mesh, blk: &Block, nodes: &[usize], side: &[usize]) -> Face {
-    let x = |i: usize| mesh.coords[nodes[side[i]]];
-    let sub = |p: [f64; 3], q: [f64; 3]| [p[0] - q[0], p[1] - q[1], p[2] - q[2]];
-    let corners: Vec<usize> = side.iter().map(|&i| nodes[i]).collect();
-    let centre = centroid(&mesh.coords, &corners);
-    let mut n = match side.len() {
-        // an edge of a 2D cell: its direction turned by a right angle
-        2 => {
-            let t = sub(x(1), x(0));
-            [t[1], -t[0], 0.0]
-        }
-        // a triangle: the cross product of two edges; a quadrilateral: of its diagonals
-        k => {
-            let (p, q) = if k == 3 {
-                (sub(x(1), x(0)), sub(x(2), x(0)))
-            } else {
-                (sub(x(2), x(0)), sub(x(3), x(1)))
-            };
-            [
-                p[1] * q[2] - p[2] * q[1],
-                p[2] * q[0] - p[0] * q[2],
-                p[0] * q[1] - p[1] * q[0],
-            ]
-        }
-    };
-    let inward = sub(centroid(&mesh.coords, &nodes[..blk.kind.corners()]), centre);
-    let dot: f64 = (0..3).map(|i| n[i] * inward[i]).sum();
-    let length = n.iter().map(|v| v * v).sum::<f64>().sqrt();
-    let sign = if dot > 0.0 { -1.0 } else { 1.0 };
-    n = n.map(|v| sign * v / length);
-    Face { centre, normal: n }
+/// The faces where a cell of the blocks `a` meets a cell of the blocks `b` (indices into
+/// `mesh.cells`), each once, in the order of `a`'s cells, normals out of `a`.
+pub fn shared_faces(mesh: &Mesh, a: &[usize], b: &[usize]) -> Vec<Face> {
+    let at = |n: usize| mesh.coords[n];
+    (shared_sides(mesh, a, b).iter())
+        .map(|s| {
+            let (normal, _) = s.normal_and_measure(mesh, at);
+            let centre = centroid(&mesh.coords, &s.corners);
+            Face { centre, normal }
+        })
+        .collect()
+}
+
+impl Side {
+    /// The side's unit normal out of its cell `a` and its measure (length in 2D, area in 3D),
+    /// with the nodes at `x(n)` (the mesh's coordinates, or where the nodes have moved). A
+    /// quadrilateral is taken as flat: its normal and area from its diagonals.
+    pub fn normal_and_measure(
+        &self,
+        mesh: &Mesh,
+        x: impl Fn(usize) -> [f64; 3],
+    ) -> ([f64; 3], f64) {
+        let p = |i: usize| x(self.corners[i]);
+        let sub = |p: [f64; 3], q: [f64; 3]| [p[0] - q[0], p[1] - q[1], p[2] - q[2]];
+        let (n, measure_of_n) = match self.corners.len() {
+            // an edge of a 2D cell: its direction turned by a right angle
+            2 => {
+                let t = sub(p(1), p(0));
+                ([t[1], -t[0], 0.0], 1.0)
+            }
+            // a triangle: the cross product of two edges; a quadrilateral: of its diagonals
+            k => {
+                let (u, v) = if k == 3 {
+                    (sub(p(1), p(0)), sub(p(2), p(0)))
+                } else {
+                    (sub(p(2), p(0)), sub(p(3), p(1)))
+                };
+                let n = [
+                    u[1] * v[2] - u[2] * v[1],
+                    u[2] * v[0] - u[0] * v[2],
+                    u[0] * v[1] - u[1] * v[0],
+                ];
+                (n, 0.5)
+            }
+        };
+        let blk = &mesh.cells[self.a.0];
+        let cell = &blk.cell(self.a.1)[..blk.kind.corners()];
+        let mid = |ns: &[usize]| -> [f64; 3] {
+            std::array::from_fn(|i| ns.iter().map(|&m| x(m)[i]).sum::<f64>() / ns.len() as f64)
+        };
+        let inward = sub(mid(cell), mid(&self.corners));
+        let dot: f64 = (0..3).map(|i| n[i] * inward[i]).sum();
+        let length = n.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let sign = if dot > 0.0 { -1.0 } else { 1.0 };
+        (n.map(|v| sign * v / length), measure_of_n * length)
+    }
 }
 
 /// The faces sorted along x, for the nearest one to a point.
@@ -161,6 +202,7 @@ impl<'a> NearestFace<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::mesh::Block;
 
     fn brute(faces: &[Face], x: &[f64; 3]) -> usize {
         let d2 = |f: &Face| (0..3).map(|i| (f.centre[i] - x[i]).powi(2)).sum::<f64>();
@@ -235,6 +277,22 @@ mod tests {
             );
         }
         assert_eq!(faces[0].centre, [1.25, 0.5, 0.0]);
+        // its length, and where the nodes have moved (the side's upper end pulled up to
+        // (1.5, 3): the side along (0.5, 3))
+        let side = &shared_sides(&m, &[0], &[1])[0];
+        assert_eq!(
+            (side.a, side.b, side.corners.clone()),
+            ((0, 0), (1, 0), vec![1, 2])
+        );
+        let moved = |n: usize| if n == 2 { [1.5, 3.0, 0.0] } else { m.coords[n] };
+        let (normal, length) = side.normal_and_measure(&m, moved);
+        let l = 9.25f64.sqrt();
+        assert!((length - l).abs() < 1e-15);
+        let want = [3.0 / l, -0.5 / l, 0.0];
+        assert!(
+            (0..3).all(|i| (normal[i] - want[i]).abs() < 1e-15),
+            "{normal:?}"
+        );
         // out of the triangle, the other way
         let back = shared_faces(&m, &[1], &[0]);
         assert_eq!(back[0].normal.map(|v| -v), faces[0].normal);
@@ -259,6 +317,8 @@ mod tests {
         assert_eq!(faces.len(), 1);
         assert_eq!(faces[0].normal, [0.0, 0.0, 1.0]);
         assert_eq!(faces[0].centre, [0.5, 0.5, 1.0]);
+        let side = &shared_sides(&m, &[0], &[1])[0];
+        assert_eq!(side.normal_and_measure(&m, |n| m.coords[n]).1, 1.0);
         // tetrahedra: the faces of one tet against another sharing (1, 2, 3)
         let tets = mesh(
             3,
@@ -288,5 +348,8 @@ mod tests {
         for v in f[0].normal {
             assert!((v - s).abs() < 1e-15, "{:?}", f[0]);
         }
+        let side = &shared_sides(&tets, &[0], &[1])[0];
+        let area = side.normal_and_measure(&tets, |n| tets.coords[n]).1;
+        assert!((area - 0.75f64.sqrt()).abs() < 1e-15, "{area}");
     }
 }

@@ -3,6 +3,7 @@
 //! ([`probes`]) and what their numbers measure ([`quantity`]). Every file is written to a
 //! temporary name and renamed, so a failure never leaves a half-written file.
 
+pub mod contact;
 pub mod fields;
 pub mod folder;
 pub mod history;

@@ -4,6 +4,7 @@
 //! `step_NNNN_K.vtu` for rank K, and the first rank the `step_NNNN.pvtu` that puts them
 //! together, which the `.pvd` lists.
 
+use super::contact::ContactFaces;
 use super::fields::all_cell_fields;
 use super::nodal::nodal_fields;
 use super::vtu::{Piece, StepFields, ZLIB_LEVEL, pvtu_text, read_pvd, write_pvd, write_vtu};
@@ -34,11 +35,14 @@ pub struct Series {
     /// On the first of several ranks, the step written but not yet collected: its time, its
     /// `.pvtu`'s name and text.
     pending: Option<(f64, String, String)>,
+    /// The faces where the solids meet the medium, whose contact pressure and shear each
+    /// step's file holds at their nodes.
+    contact: Option<ContactFaces>,
 }
 
 impl Series {
-    /// A series in `dir` named `name.pvd`.
-    pub fn new(dir: &Path, name: &str, model: &Model) -> Series {
+    /// A series in `dir` named `name.pvd`, with the contact traction on the faces `contact`.
+    pub fn new(dir: &Path, name: &str, model: &Model, contact: Option<ContactFaces>) -> Series {
         let region: Vec<i32> = model
             .blocks
             .iter()
@@ -59,7 +63,13 @@ impl Series {
             piece: Piece::whole(&model.mesh),
             ranks: None,
             pending: None,
+            contact,
         }
+    }
+
+    /// The faces where the solids meet the medium, if any.
+    pub fn contact(&self) -> Option<&ContactFaces> {
+        self.contact.as_ref()
     }
 
     /// On several ranks: this process writes the cells `distribution` gives it, as its part
@@ -166,6 +176,18 @@ impl Series {
         });
         let medium: Vec<bool> = self.kind.iter().map(|&k| k == 1).collect();
         let nodal = nodal_fields(&model.mesh, &cells, &medium);
+        let contact = match &self.contact {
+            Some(faces) => {
+                let c = (faces.at(model, references, x, friction)).map_err(|e| {
+                    OutputError::Fields {
+                        step,
+                        msg: e.to_string(),
+                    }
+                })?;
+                Some(faces.at_nodes(model.mesh.coords.len(), &c))
+            }
+            None => None,
+        };
         let fields = StepFields {
             u: &u,
             theta: theta.as_deref(),
@@ -176,6 +198,7 @@ impl Series {
             kind: &self.kind,
             region_names: &self.region_names,
             friction,
+            contact: contact.as_ref().map(|(p, s)| (&p[..], &s[..])),
         };
         let file = self.file_name(step);
         let own = match self.ranks {

@@ -43,6 +43,9 @@ pub struct StepFields<'a> {
     /// Scenes with friction: each cell's slip state and slip-plane normal (`None` off the
     /// friction regions, written as zeros).
     pub friction: Option<&'a [Option<FrictionCell>]>,
+    /// Scenes where solids meet the medium: the contact pressure and shear traction per node
+    /// (zero off the faces where they meet).
+    pub contact: Option<(&'a [f64], &'a [[f64; 3]])>,
 }
 
 /// One data array: name, VTK type, components and its little-endian bytes.
@@ -161,6 +164,10 @@ fn data_arrays(mesh: &Mesh, f: &StepFields, piece: &Piece) -> (Vec<Array>, Vec<A
     ));
     if f.theta.is_some() {
         point.push(f64s("q", 3, pn.iter().flat_map(|&n| f.nodal.q[n])));
+    }
+    if let Some((pressure, shear)) = f.contact {
+        point.push(f64s("contact_pressure", 1, pn.iter().map(|&n| pressure[n])));
+        point.push(f64s("contact_shear", 3, pn.iter().flat_map(|&n| shear[n])));
     }
     if piece.part {
         point.push(i64s("node", pn.iter().map(|&n| n as i64)));

@@ -503,6 +503,7 @@ fn quadratic_cells_reach_vtk_in_vtk_order() {
             kind: &ints,
             region_names: &["all".into()],
             friction: None,
+            contact: None,
         };
         // the cells cut in two parts, every third to the second
         let second: Vec<bool> = (0..mesh.n_cells()).map(|c| c % 3 == 0).collect();

@@ -571,6 +571,50 @@ fn frictional_heat_is_shared_between_two_bodies_as_their_conductances() {
         s.heat_in.unwrap(),
     );
     assert!(made > 0.0 && ((stored - heat_in - made) / made).abs() < 1e-8);
+    // the contact as the lower block's top feels it at the end of the drag: its pressure sums
+    // to the normal force, and where the layer slips the shear is μ times the pressure
+    contact_on_the_lower_block(&out, &cols, rows.last().unwrap());
+}
+
+/// The last step of `cases/friction-partition.toml` in `out` (its history row `last`): the
+/// contact pressure over the lower block's top (y = 1 in the mesh) integrates to the bottom's
+/// normal reaction (measured: 1.464 against 1.478, the trapezoid rule over nodal values), and
+/// over the middle half of the contact, at full slip, the shear over the pressure is μ = 0.3
+/// (measured 0.304 to 0.316: the block's face has dented by up to 0.045 and its normal turned
+/// from the slip plane's [0, 1]).
+fn contact_on_the_lower_block(out: &Path, cols: &[String], last: &[f64]) {
+    let steps = tmc::output::vtu::read_pvd(&out.join("friction-partition.pvd")).unwrap();
+    let vtu = out.join(&steps.last().unwrap().1);
+    let (p, shear) = (
+        point_array(&vtu, "contact_pressure"),
+        point_array(&vtu, "contact_shear"),
+    );
+    let (u, x) = (point_array(&vtu, "u"), point_array(&vtu, "position"));
+    let mut top: Vec<usize> = (0..p.len())
+        .filter(|&n| p[n] != 0.0 && (x[3 * n + 1] - u[3 * n + 1] - 1.0).abs() < 1e-9)
+        .collect();
+    top.sort_by(|&a, &b| x[3 * a].total_cmp(&x[3 * b]));
+    assert!(
+        top.len() > 8,
+        "{} nodes of the lower block in contact",
+        top.len()
+    );
+    let normal: f64 = (top.windows(2))
+        .map(|w| 0.5 * (p[w[0]] + p[w[1]]) * (x[3 * w[1]] - x[3 * w[0]]))
+        .sum();
+    let held = last[cols.iter().position(|c| c == "R_bottom_y").unwrap()];
+    assert!(
+        (normal / held - 1.0).abs() < 0.02,
+        "∫ p = {normal} against the bottom's {held}"
+    );
+    let k = top.len();
+    for &n in &top[k / 4..k - k / 4] {
+        let ratio = shear[3 * n] / p[n];
+        assert!(
+            (ratio - 0.3).abs() < 0.02,
+            "shear / pressure {ratio} at node {n}"
+        );
+    }
 }
 
 #[test]

@@ -19,9 +19,12 @@ fn slide_forces(dir: &Path) -> (f64, f64, f64, f64, f64) {
     let slide: Vec<&Vec<f64>> = rows.iter().filter(|r| r[t] >= 1.0).collect();
     let normal: Vec<f64> = slide.iter().map(|r| -r[fy]).collect();
     let ratio: Vec<f64> = slide.iter().map(|r| r[fx] / -r[fy]).collect();
-    // the case's force-ratio probe is that ratio
+    // the case's force-ratio probe is that ratio, and so is the rim's own column: split
+    // along the normal of the plate's face, [0, 1], where the contact presses
+    let own = col("Ft_Fn_rim");
     for (r, ratio) in slide.iter().zip(&ratio) {
         assert!((r[probe] - ratio).abs() < 1e-12, "{} vs {ratio}", r[probe]);
+        assert!((r[own] - ratio).abs() < 1e-12, "{} vs {ratio}", r[own]);
     }
     let span = slide.last().unwrap()[t] - 1.0;
     let mean = (1..slide.len())
