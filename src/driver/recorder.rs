@@ -119,24 +119,28 @@ impl<'a> Recorder<'a> {
             .collect()
     }
 
-    /// F_t/F_n along the contact's normal of the groups that have a column for it, at the
-    /// stepper's last accepted state, whose reactions are `reactions`.
-    fn contact_ratios(&self, st: &Stepper, reactions: &Reactions) -> Vec<f64> {
+    /// The loaded groups' columns at the stepper's last accepted state, whose reactions are
+    /// `reactions`: F_t/F_n along the contact's normal of the groups that have a column for
+    /// it, then their displacements.
+    fn group_columns(&self, st: &Stepper, reactions: &Reactions) -> Vec<f64> {
+        let mut out = Vec::new();
         let (groups, contact) = (&self.layout.contact, self.series.contact());
-        let Some(contact) = contact.filter(|_| !groups.is_empty()) else {
-            return Vec::new();
-        };
-        // an accepted state's cells all have a stress; were one not to, the ratios are unknown
-        let t = contact.at(st.model, &st.asm.reference, &st.x, None);
-        (groups.iter())
-            .map(|(g, body)| match &t {
+        if let Some(contact) = contact.filter(|_| !groups.is_empty()) {
+            // an accepted state's cells all have a stress; were one not to, the ratios are
+            // unknown
+            let t = contact.at(st.model, &st.asm.reference, &st.x, None);
+            out.extend(groups.iter().map(|(g, body)| match &t {
                 Ok(t) => {
                     let r = std::array::from_fn(|c| flow(reactions, g, FORCE_KEYS[c]));
                     contact_ratio(contact, *body, t, r, st.model.mesh.dim)
                 }
                 Err(_) => f64::NAN,
-            })
-            .collect()
+            }));
+        }
+        for (_, _, dofs) in &self.layout.moved {
+            out.push(dofs.iter().map(|&d| st.x[d]).sum::<f64>() / dofs.len().max(1) as f64);
+        }
+        out
     }
 
     /// The row of `history.csv` of the initial state.
@@ -151,7 +155,7 @@ impl<'a> Recorder<'a> {
                 row,
                 &self.probe_values(st, reactions),
                 reactions,
-                &self.contact_ratios(st, reactions),
+                &self.group_columns(st, reactions),
             );
             self.history.row(&values)?;
         }
@@ -172,7 +176,7 @@ impl<'a> Recorder<'a> {
             row,
             &self.probe_values(st, reactions),
             reactions,
-            &self.contact_ratios(st, reactions),
+            &self.group_columns(st, reactions),
         );
         // the step's file first (when [output] every asks for it): a row never announces a
         // file that is not there yet

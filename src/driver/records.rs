@@ -408,6 +408,37 @@ fn contact_groups(model: &Model, contact: &ContactFaces) -> Vec<(String, usize)>
     out
 }
 
+/// Each loaded group's displacement unknowns per component it moves (not zero somewhere on
+/// its path), in the order of the groups' first `[[bc]]`: the `U_<group>_<c>` columns.
+fn moved_groups(model: &Model) -> Vec<(String, usize, Vec<usize>)> {
+    let d = model.dofs.dim;
+    let mut out: Vec<(String, usize, Vec<usize>)> = Vec::new();
+    let mut moved = vec![[false; 3]; model.bc_groups.len()];
+    for i in 0..model.mesh.coords.len() * d {
+        let dof = model.dofs.u[i] as usize;
+        if let Some(p) = &model.cons.prescribed[dof] {
+            moved[p.bc][i % d] |= p.value != 0.0 || p.start != 0.0;
+        }
+    }
+    for (g, group) in model.bc_groups.iter().enumerate() {
+        for c in (0..d).filter(|&c| moved[g][c]) {
+            if out.iter().any(|(n, k, _)| n == &group.name && *k == c) {
+                continue;
+            }
+            // every unknown of the group along c, whichever of its entries prescribes it
+            let dofs = (0..model.mesh.coords.len())
+                .map(|n| model.dofs.u[n * d + c] as usize)
+                .filter(|&dof| {
+                    (model.cons.prescribed[dof].as_ref())
+                        .is_some_and(|p| model.bc_groups[p.bc].name == group.name)
+                })
+                .collect();
+            out.push((group.name.clone(), c, dofs));
+        }
+    }
+    out
+}
+
 /// F_t/F_n of the reaction `R` of a group holding body `body`, split along the contact's
 /// normal as that body meets it ([`ContactFaces::contact_normal`]; in 2D F_t signed as a
 /// `force_ratio` probe's); NaN where nothing presses.
@@ -475,6 +506,9 @@ pub struct HistoryLayout {
     /// The groups whose reaction is split along the contact's normal (`Ft_Fn_<group>`), each
     /// with the body it holds.
     pub contact: Vec<(String, usize)>,
+    /// The loaded groups' displacements (`U_<group>_<x|y|z>`): each group, component and the
+    /// displacement unknowns it prescribes along it, whose mean the column is.
+    pub moved: Vec<(String, usize, Vec<usize>)>,
 }
 
 impl HistoryLayout {
@@ -511,7 +545,7 @@ impl HistoryLayout {
                 }
             }
         }
-        use Quantity::{Energy, Force, Power, Time};
+        use Quantity::{Energy, Force, Length, Power, Time};
         let mut columns: Vec<(String, Option<Quantity>)> = HISTORY_STEP_COLUMNS
             .iter()
             .map(|c| (c.to_string(), None))
@@ -524,6 +558,10 @@ impl HistoryLayout {
         }));
         let contact = contact.map_or_else(Vec::new, |c| contact_groups(model, c));
         columns.extend(contact.iter().map(|(g, _)| (ratio_name(g), None)));
+        let moved = moved_groups(model);
+        columns.extend(
+            (moved.iter()).map(|(g, c, _)| (format!("U_{g}_{}", FORCE_KEYS[*c]), Some(Length))),
+        );
         for c in HISTORY_SOLVER_COLUMNS {
             let q = (c == "time" && physical_time).then_some(Time);
             columns.push((c.into(), q));
@@ -563,17 +601,19 @@ impl HistoryLayout {
             inertia,
             reactions,
             contact,
+            moved,
         }
     }
 
-    /// The row of one step, in column order; `ratios` are the `Ft_Fn_<group>` of
-    /// [`HistoryLayout::contact`]'s groups.
+    /// The row of one step, in column order; `groups` are the loaded groups' columns: the
+    /// `Ft_Fn_<group>` of [`HistoryLayout::contact`], then the `U_<group>_<c>` of
+    /// [`HistoryLayout::moved`].
     pub fn row(
         &self,
         s: &StepRow,
         probes: &[f64],
         reactions: &Reactions,
-        ratios: &[f64],
+        groups: &[f64],
     ) -> Vec<f64> {
         let mut row = vec![
             s.step as f64,
@@ -589,7 +629,7 @@ impl HistoryLayout {
         ];
         row.extend_from_slice(probes);
         row.extend(self.reactions.iter().map(|(g, k)| flow(reactions, g, k)));
-        row.extend_from_slice(ratios);
+        row.extend_from_slice(groups);
         row.extend([s.krylov as f64, s.halvings as f64, s.time, s.work]);
         if self.transient {
             let (stored, supplied) = s.heat.unwrap_or((0.0, 0.0));

@@ -68,6 +68,25 @@ fn the_cylinder_slides_on_a_medium_made_again_with_the_force_of_its_press_and_no
     let o = tmc(&["plot", out.to_str().unwrap(), "-c", "Ft_Fn"]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(out.join("Ft_Fn.png").exists());
+    // and against the slide: the rim's displacements are columns, along the bc's paths
+    let (cols, rows) = history(&out);
+    let col = |name: &str| cols.iter().position(|c| c == name).unwrap();
+    let (t, ux, uy) = (col("time"), col("U_rim_x"), col("U_rim_y"));
+    for r in &rows {
+        let (press, slide) = (r[t].min(1.0), (r[t] - 1.0).max(0.0));
+        assert!((r[uy] + 0.15 * press).abs() < 1e-12, "{r:?}");
+        assert!((r[ux] - 0.3 * slide).abs() < 1e-12, "{r:?}");
+    }
+    let o = tmc(&[
+        "plot",
+        out.to_str().unwrap(),
+        "-x",
+        "U_rim_x",
+        "-c",
+        "Ft_Fn_rim",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(out.join("Ft_Fn_rim.png").exists());
     assert!(summary(&out)["probes"]["Ft_Fn"].as_f64().is_some());
     // the Lagrangian medium on the same slide ploughs (measured: F_n to 1.79 times the
     // press's, F_t/F_n 0.128 on average)
