@@ -292,6 +292,70 @@ impl Checkpoint {
     }
 }
 
+/// The mesh a run whose medium is made again ran on after its `remakes`-th remake, with the
+/// new medium cells' references and the regularization's extent: what a restart from a
+/// checkpoint on that mesh builds its model from. The last two are kept, [`MEDIUM_FILES`]: a
+/// run stopped after a remake and before its next step restarts from the state before it.
+#[derive(Debug, Serialize, Deserialize)]
+pub struct RemadeMedium {
+    pub remakes: usize,
+    pub d: f64,
+    pub mesh: Mesh,
+    pub reference: Vec<Option<Vec<[f64; 3]>>>,
+}
+
+/// The files of the last two remakes' meshes: the newest first.
+pub const MEDIUM_FILES: [&str; 2] = ["medium.json", "medium-previous.json"];
+
+impl RemadeMedium {
+    /// Write it into `dir` as the newest, the one it replaces kept as the previous.
+    pub fn write(&self, dir: &Path) -> Result<(), SolveError> {
+        let [newest, previous] = MEDIUM_FILES.map(|f| dir.join(f));
+        match std::fs::rename(&newest, &previous) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                return Err(SolveError::Output(crate::output::werr(&previous, e)));
+            }
+            _ => {}
+        }
+        let text = serde_json::to_string(self).expect("a mesh is serialisable");
+        crate::output::write_atomic(&newest, text.as_bytes()).map_err(SolveError::Output)
+    }
+
+    /// The medium of the `remakes`-th remake from `dir`'s files; the error says what is
+    /// missing or wrong.
+    pub fn read(dir: &Path, remakes: usize) -> Result<RemadeMedium, SolveError> {
+        let mut found = Vec::new();
+        for name in MEDIUM_FILES {
+            let path = dir.join(name);
+            let Ok(text) = std::fs::read_to_string(&path) else {
+                continue;
+            };
+            let m: RemadeMedium = serde_json::from_str(&text).map_err(|e| {
+                refusal(
+                    &path,
+                    &format!("it is not the mesh of a medium made again: {e}"),
+                )
+            })?;
+            if m.remakes == remakes {
+                return Ok(m);
+            }
+            found.push(format!("{name} holds remake {}", m.remakes));
+        }
+        let found = if found.is_empty() {
+            format!(
+                "neither {} nor {} is there",
+                MEDIUM_FILES[0], MEDIUM_FILES[1]
+            )
+        } else {
+            found.join(", ")
+        };
+        Err(refusal(
+            &Checkpoint::path(dir),
+            &format!("it continues the mesh of the medium's remake {remakes}, and {found}"),
+        ))
+    }
+}
+
 /// A checkpoint at `path` that cannot be continued from, and why.
 fn refusal(path: &Path, what: &str) -> SolveError {
     SolveError::Setup(format!(

@@ -275,12 +275,6 @@ pub fn run(case_path: &Path, opts: &SolveOptions) -> Result<Summary, SolveError>
                     .into(),
             ));
         }
-        if let Some(region) = remaking(&case) {
-            return Err(SolveError::Setup(format!(
-                "cannot restart a run whose medium is made again (`remake` of region \
-                 \"{region}\"): its mesh changes as it runs; run it again without --restart"
-            )));
-        }
         return restart(&case, folder, opts, start);
     }
     let (mut model, probes, staged) = checked_model(&case, &out_dir, opts.quiet)?;
@@ -436,7 +430,22 @@ fn restart_setup(
     } else {
         mesh_for(case, &dir)?.0
     };
-    let (model, probes) = model_on(case, mesh, opts.quiet)?;
+    // a medium made again: the mesh of the remake the checkpoint continues
+    let remakes = checkpoint::Checkpoint::of_case(&dir, case)?
+        .state
+        .totals
+        .medium_remakes;
+    let (model, probes) = match remakes {
+        n if n > 0 && remaking(case).is_some() => {
+            let remade = checkpoint::RemadeMedium::read(&dir, n)?;
+            let mut mesh = remade.mesh;
+            mesh.source = dir.join(checkpoint::MEDIUM_FILES[0]);
+            let (mut model, probes) = model_on_extent(case, mesh, remade.d, true)?;
+            model.cell_reference = remade.reference;
+            (model, probes)
+        }
+        _ => model_on(case, mesh, opts.quiet)?,
+    };
     let cp = checkpoint::Checkpoint::read(&dir, case, &model.mesh)?;
     folder.keep_previous()?;
     Ok((model, probes, cp))
@@ -458,12 +467,23 @@ fn solve_model(
     let out_dir = folder.dir().to_owned();
     let mut layer = Layer::find(&model)?;
     let mut medium = remake::Medium::find(&model, remaking(case))?;
+    // a restart decides when to make the medium again from its watch as the checkpoint kept
+    // it, after the step it ended with (as the run did before it was stopped)
+    let kept = from.as_ref().and_then(|cp| cp.state.totals.medium.clone());
+    let mut check_first = false;
     if let Some(m) = medium.as_mut() {
-        let (x, t) = match &from {
-            Some(cp) => (cp.state.x.clone(), cp.state.clock.t),
-            None => (model.initial_state(), 0.0),
-        };
-        m.start(&model, &x, t, 0.0);
+        match (kept, &from) {
+            (Some(kept), Some(_)) => {
+                *m = kept;
+                check_first = true;
+            }
+            (_, Some(cp)) => {
+                m.start(&model, &cp.state.x, cp.state.clock.t, 0.0);
+            }
+            (_, None) => {
+                m.start(&model, &model.initial_state(), 0.0, 0.0);
+            }
+        }
     }
     let (mut model, mut folder, mut from) = (model, Some(folder), from);
     let mut probes = probes.to_vec();
@@ -487,6 +507,9 @@ fn solve_model(
         if layer.is_none() && medium.is_none() {
             return step_to_end(run);
         }
+        if let Some(m) = &medium {
+            run.keep_medium(m);
+        }
         if changed {
             run.rejoined();
         }
@@ -501,17 +524,19 @@ fn solve_model(
                 );
             }
         }
-        let due = |run: &Run| match (&layer, medium.as_mut()) {
+        let due = |run: &mut Run| match (&layer, medium.as_mut()) {
             (Some(layer), _) => layer.due(&model, run.state()).map(Change::Join),
             (None, Some(medium)) => {
                 let (t, target) = run.next_step();
-                medium
-                    .due(&model, run.state(), t, target)
-                    .then_some(Change::Remake)
+                let due = medium.due(&model, run.state(), t, target);
+                // the watch after this state, for the next step's checkpoint
+                run.keep_medium(medium);
+                due.then_some(Change::Remake)
             }
             (None, None) => None,
         };
-        let (mut run, change) = match step_until(run, due)? {
+        let first = std::mem::take(&mut check_first);
+        let (mut run, change) = match step_until(run, first, due)? {
             Stepped::Ended(summary) => return Ok(summary),
             Stepped::Changed(run, change) => (run, change),
         };
@@ -527,10 +552,24 @@ fn solve_model(
         if let Some(placed) = placed {
             probes = placed;
         }
+        let mut kept = kept;
         if let Some(rate) = medium.as_ref().map(|m| m.rate) {
             medium = remake::Medium::find(&model, remaking(case))?;
             if let Some(m) = medium.as_mut() {
                 restart_medium(case, &model, m, &mut cp, rate);
+            }
+            // the new mesh on disk, for a restart from the next step's checkpoint on
+            if let Some(folder) = kept.as_mut() {
+                for name in checkpoint::MEDIUM_FILES {
+                    folder.record(name)?;
+                }
+                let remade = checkpoint::RemadeMedium {
+                    remakes: cp.state.totals.medium_remakes,
+                    d: model.d,
+                    mesh: model.mesh.clone(),
+                    reference: model.cell_reference.clone(),
+                };
+                remade.write(&out_dir)?;
             }
         }
         folder = kept;
@@ -662,17 +701,22 @@ enum Stepped<'a> {
 }
 
 /// Step until the end of the load path, a stop, or an accepted step after which `change`
-/// asks for the mesh to change.
+/// asks for the mesh to change; with `first`, `change` is asked of the state the run starts
+/// from too (a restart, whose run was stopped before it could ask).
 fn step_until<'a>(
     mut run: Run<'a>,
-    mut change: impl FnMut(&Run) -> Option<Change>,
+    first: bool,
+    mut change: impl FnMut(&mut Run) -> Option<Change>,
 ) -> Result<Stepped<'a>, SolveError> {
+    if let Some(c) = (first && !run.done()).then(|| change(&mut run)).flatten() {
+        return Ok(Stepped::Changed(run, c));
+    }
     while !run.done() {
         if run.ranks().max(f64::from(u8::from(interrupted()))) > 0.0 {
             return run.interrupt().map(Stepped::Ended);
         }
         run.step()?;
-        if let Some(c) = (!run.done()).then(|| change(&run)).flatten() {
+        if let Some(c) = (!run.done()).then(|| change(&mut run)).flatten() {
             return Ok(Stepped::Changed(run, c));
         }
     }
@@ -681,7 +725,7 @@ fn step_until<'a>(
 
 /// Step until the end of the load path, or a stop.
 fn step_to_end(run: Run) -> Result<Summary, SolveError> {
-    match step_until(run, |_| None)? {
+    match step_until(run, false, |_| None)? {
         Stepped::Ended(summary) => Ok(summary),
         Stepped::Changed(..) => unreachable!("nothing asked for the mesh to change"),
     }

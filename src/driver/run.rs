@@ -274,6 +274,12 @@ impl<'a> Run<'a> {
     }
 
     /// The last accepted state.
+    /// Keep the remade medium's watch `m` as it is after the last accepted state: the next
+    /// step's checkpoint holds it.
+    pub(super) fn keep_medium(&mut self, m: &crate::model::remake::Medium) {
+        self.accounts.totals.medium = Some(m.clone());
+    }
+
     pub(super) fn state(&self) -> &[f64] {
         &self.st.x
     }

@@ -72,6 +72,10 @@ pub struct Totals {
     /// to the settled state the next step starts from (gmsh, the new model, its settling).
     #[serde(default)]
     pub remake_seconds: f64,
+    /// A medium made again as the bodies move: its watch of the slivers at the last accepted
+    /// state before this one (the state a restart decides from, as the run would have).
+    #[serde(default)]
+    pub medium: Option<crate::model::remake::Medium>,
     /// Transient scenes with a reconnected friction layer: what its joins changed the heat
     /// stored by (its cells re-paired with other nodes' temperatures).
     #[serde(default)]

@@ -10,10 +10,11 @@ pub mod partition;
 pub mod remesh;
 pub mod strip;
 
+use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 
 /// Element types tmc reads from `.msh` files.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum CellKind {
     Point1,
     Line2,
@@ -197,7 +198,7 @@ pub fn gmsh_type_name(t: u32) -> String {
 }
 
 /// A gmsh physical group.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PhysicalGroup {
     pub name: String,
     pub dim: usize,
@@ -205,7 +206,7 @@ pub struct PhysicalGroup {
 }
 
 /// Cells of one element type from one gmsh entity, with the physical groups they belong to.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Block {
     pub kind: CellKind,
     /// Indices into [`Mesh::groups`].
@@ -224,8 +225,9 @@ impl Block {
     }
 }
 
-/// A finite-element mesh of dimension 2 or 3.
-#[derive(Clone, Debug)]
+/// A finite-element mesh of dimension 2 or 3 (as a restart file holds a medium made again:
+/// without the file it was read from and what its reader found).
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Mesh {
     pub dim: usize,
     /// Node coordinates (z = 0 in 2D).
@@ -236,8 +238,10 @@ pub struct Mesh {
     pub facets: Vec<Block>,
     pub groups: Vec<PhysicalGroup>,
     /// File the mesh was read from.
+    #[serde(skip)]
     pub source: PathBuf,
     /// What the reader found suspicious but valid (e.g. coincident nodes).
+    #[serde(skip)]
     pub warnings: Vec<String>,
 }
 

@@ -32,6 +32,7 @@ use crate::element::{RefElement, centre, local_coords, physical_gradients};
 use crate::mesh::Mesh;
 use crate::mesh::remesh::{remesh, supported};
 use nalgebra::{Matrix2, SymmetricEigen, Vector2};
+use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 /// How far (in cell sizes, see [`Medium::slid_cells`]) a medium cell's faces may slide past
@@ -56,8 +57,9 @@ impl std::fmt::Display for RemakeError {
 
 impl std::error::Error for RemakeError {}
 
-/// The medium of a model whose cells are made again as the bodies move.
-#[derive(Clone, Debug)]
+/// The medium of a model whose cells are made again as the bodies move, and its watch of the
+/// slivers, which a checkpoint keeps so that a restart decides as the run would have.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Medium {
     /// The medium's mesh blocks.
     blocks: Vec<usize>,
@@ -72,7 +74,7 @@ pub struct Medium {
 }
 
 /// A thin triangle: a node across a long edge (a layer one cell across).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 struct Sliver {
     block: usize,
     cell: usize,

@@ -246,18 +246,55 @@ fn what_remake_cannot_do_yet_check_and_solve_refuse_alike() {
 }
 
 #[test]
-fn a_medium_made_again_is_refused_a_restart_and_several_ranks_by_name() {
+fn a_run_whose_medium_is_made_again_restarts_as_if_never_stopped() {
+    // the cylinder's slide stopped by Ctrl-C once step 30 is written (the slide begins at step
+    // 20 and the medium is made again every step or two from then on), then continued with
+    // --restart on the mesh of the checkpoint's remake: the uninterrupted history to the bit
     let case = root().join("cases/cylinder-slide.toml");
-    let out = scratch("cylinder-slide-restart");
-    let o = solve_cli(&case, &out, &["--restart"]);
+    let dir = scratch("cylinder-slide-restart");
+    let (full, stopped) = (dir.join("full"), dir.join("stopped"));
+    let o = solve_cli(&case, &full, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = solve_interrupted_after(&case, &stopped, 30);
+    assert!(!o.status.success(), "the run was interrupted");
+    let checkpoint: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(stopped.join("restart.json")).unwrap())
+            .unwrap();
+    let remakes = checkpoint["totals"]["medium_remakes"].as_u64().unwrap();
+    assert!(remakes > 0, "stopped after {remakes} remakes");
+    // without the remade meshes there is nothing to continue from, and it is said
+    let bare = dir.join("bare");
+    std::fs::create_dir_all(&bare).unwrap();
+    for e in std::fs::read_dir(&stopped).unwrap() {
+        let e = e.unwrap();
+        if !e.file_name().to_string_lossy().starts_with("medium") {
+            std::fs::copy(e.path(), bare.join(e.file_name())).unwrap();
+        }
+    }
+    let o = solve_cli(&case, &bare, &["--restart"]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
-    assert!(
-        stderr(&o).contains(
-            "cannot restart a run whose medium is made again (`remake` of region \"medium\")"
-        ),
-        "{}",
-        stderr(&o)
+    let said = format!(
+        "it continues the mesh of the medium's remake {remakes}, and neither medium.json nor \
+         medium-previous.json is there"
     );
+    assert!(stderr(&o).contains(&said), "{}", stderr(&o));
+    let o = solve_cli(&case, &stopped, &["--restart"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    same_history_to_the_bit(&full, &stopped);
+    let (a, b) = (summary(&full), summary(&stopped));
+    for key in [
+        "load_steps",
+        "newton_iterations",
+        "medium_remade",
+        "reactions",
+    ] {
+        assert_eq!(a[key], b[key], "{key}");
+    }
+}
+
+#[test]
+fn a_medium_made_again_is_refused_several_ranks_by_name() {
+    let case = root().join("cases/cylinder-slide.toml");
     let o = mpirun_tmc(2, &["check".as_ref(), case.as_os_str()]);
     assert!(!o.status.success());
     let text = String::from_utf8_lossy(&o.stdout).to_string() + &stderr(&o);

@@ -64,13 +64,18 @@ pub fn solve_cli(case: &Path, out: &Path, extra: &[&str]) -> std::process::Outpu
 /// `tmc solve case -q -o out`, sent Ctrl-C (SIGINT) as soon as its step 2 is written: the run
 /// stops after the step it is in.
 pub fn solve_interrupted(case: &Path, out: &Path) -> std::process::Output {
+    solve_interrupted_after(case, out, 2)
+}
+
+/// [`solve_interrupted`] once its step `step` is written.
+pub fn solve_interrupted_after(case: &Path, out: &Path, step: usize) -> std::process::Output {
     let child = std::process::Command::new(env!("CARGO_BIN_EXE_tmc"))
         .args(solve_args(case, out))
         .stderr(std::process::Stdio::piped())
         .spawn()
         .unwrap();
     let t0 = std::time::Instant::now();
-    while !out.join("step_0002.vtu").exists() {
+    while !out.join(format!("step_{step:04}.vtu")).exists() {
         assert!(t0.elapsed().as_secs() < 300, "no step written");
         std::thread::sleep(std::time::Duration::from_millis(2));
     }
