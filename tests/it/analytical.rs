@@ -365,3 +365,57 @@ ux = 1.0
         }
     }
 }
+
+#[test]
+fn a_rigid_cylinder_presses_hertz_s_pressure_into_a_half_space() {
+    // cases/hertz.toml: the contact pressure the step file holds on the block's top against
+    // Hertz's for the load the run measured, P: a = √(4PR/(πE*)), p = p0 √(1 − x²/a²), p0 =
+    // 2P/(πa), E* = E/(1 − ν²) (plane strain, the cylinder rigid)
+    let (s, out) = solve_case("hertz");
+    assert!(s.converged);
+    let (cols, rows) = history(&out);
+    let P = -rows.last().unwrap()[cols.iter().position(|c| c == "R_rim_y").unwrap()];
+    let (K, mu) = (20.0, 10.0);
+    let (E, nu) = (
+        9.0 * K * mu / (3.0 * K + mu),
+        (3.0 * K - 2.0 * mu) / (2.0 * (3.0 * K + mu)),
+    );
+    let Es = E / (1.0 - nu * nu);
+    let a = (4.0 * P / (std::f64::consts::PI * Es)).sqrt();
+    let p0 = 2.0 * P / (std::f64::consts::PI * a);
+    // measured: P = 0.2686, a = 0.1105 (a/R = 0.11)
+    assert!(a > 0.08 && a < 0.15, "a = {a}");
+    let vtu = out.join(format!("step_{:04}.vtu", rows.len() - 1));
+    let (p, shear) = (
+        point_array(&vtu, "contact_pressure"),
+        point_array(&vtu, "contact_shear"),
+    );
+    let (u, x) = (point_array(&vtu, "u"), point_array(&vtu, "position"));
+    // the block's top: y = 0 in the mesh
+    let mut top: Vec<usize> = (0..p.len())
+        .filter(|&n| p[n] != 0.0 && (x[3 * n + 1] - u[3 * n + 1]).abs() < 1e-9)
+        .collect();
+    top.sort_by(|&i, &j| x[3 * i].total_cmp(&x[3 * j]));
+    // it sums to the load (measured: within 0.1 %, the trapezoid rule over nodal values)
+    let sum: f64 = (top.windows(2))
+        .map(|w| 0.5 * (p[w[0]] + p[w[1]]) * (x[3 * w[1]] - x[3 * w[0]]))
+        .sum();
+    assert!((sum / P - 1.0).abs() < 0.01, "∫ p = {sum} against P = {P}");
+    // its peak is p0 (measured: 1.5 % above), it follows Hertz over |x| < 0.8 a (measured:
+    // 1.4 % of p0, RMS), it is all but gone beyond 1.2 a (measured: 0.8 % of p0 at most; the
+    // medium spreads the edges), and there is no shear (frictionless; measured 0.05 % of p0)
+    let peak = top.iter().map(|&n| p[n]).fold(0.0, f64::max);
+    assert!((peak / p0 - 1.0).abs() < 0.03, "peak {peak}, p0 {p0}");
+    let inside: Vec<f64> = (top.iter())
+        .filter(|&&n| x[3 * n].abs() < 0.8 * a)
+        .map(|&n| p[n] - p0 * (1.0 - (x[3 * n] / a).powi(2)).sqrt())
+        .collect();
+    assert!(inside.len() > 20, "{} nodes inside 0.8 a", inside.len());
+    let rms = (inside.iter().map(|e| e * e).sum::<f64>() / inside.len() as f64).sqrt();
+    assert!(rms < 0.025 * p0, "RMS {rms} against p0 {p0}");
+    for &n in top.iter().filter(|&&n| x[3 * n].abs() > 1.2 * a) {
+        assert!(p[n] < 0.02 * p0, "p = {} at x = {}", p[n], x[3 * n]);
+    }
+    let most_shear = top.iter().map(|&n| shear[3 * n].abs()).fold(0.0, f64::max);
+    assert!(most_shear < 0.01 * p0, "shear {most_shear}");
+}
