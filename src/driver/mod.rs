@@ -573,6 +573,9 @@ fn solve_model(
             }
         }
         folder = kept;
+        // the run's clock goes on through the change: the time it took (gmsh, the new model)
+        // is the run's too
+        cp.state.wall = start.elapsed().as_secs_f64();
         from = Some(cp);
         changed = true;
     }

@@ -413,6 +413,9 @@ fn contact_groups(model: &Model, contact: &ContactFaces) -> Vec<(String, usize)>
 fn moved_groups(model: &Model) -> Vec<(String, usize, Vec<usize>)> {
     let d = model.dofs.dim;
     let mut out: Vec<(String, usize, Vec<usize>)> = Vec::new();
+    if !model.dofs.has(Field::U) {
+        return out;
+    }
     let mut moved = vec![[false; 3]; model.bc_groups.len()];
     for i in 0..model.mesh.coords.len() * d {
         let dof = model.dofs.u[i] as usize;

@@ -273,13 +273,13 @@ impl<'a> Run<'a> {
         Ok((force, heat))
     }
 
-    /// The last accepted state.
     /// Keep the remade medium's watch `m` as it is after the last accepted state: the next
     /// step's checkpoint holds it.
     pub(super) fn keep_medium(&mut self, m: &crate::model::remake::Medium) {
         self.accounts.totals.medium = Some(m.clone());
     }
 
+    /// The last accepted state.
     pub(super) fn state(&self) -> &[f64] {
         &self.st.x
     }
