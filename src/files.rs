@@ -3,6 +3,15 @@
 
 use std::path::{Path, PathBuf};
 
+/// A folder name of its own under the system's temporary folder for one task of this process,
+/// `tmc-<what>-<pid>-<n>`: two runs in one process (a program using the library, the tests)
+/// never share one. Not created.
+pub fn scratch_dir(what: &str) -> PathBuf {
+    static NEXT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let n = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    std::env::temp_dir().join(format!("tmc-{what}-{}-{n}", std::process::id()))
+}
+
 /// A file under a temporary name, removed when dropped unless it was moved into place.
 #[derive(Debug)]
 pub struct TempFile(Option<PathBuf>);

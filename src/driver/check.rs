@@ -88,7 +88,7 @@ fn expansion(case: &Case) -> Vec<String> {
 /// assembly. A `.geo` is meshed in a temporary folder that is removed afterwards.
 pub fn check(case_path: &Path, opts: &SolveOptions) -> Result<CheckReport, SolveError> {
     let case = Case::read(case_path)?.with_sets(&opts.sets)?;
-    let scratch = std::env::temp_dir().join(format!("tmc-check-{}", std::process::id()));
+    let scratch = crate::files::scratch_dir("check");
     std::fs::create_dir_all(&scratch).map_err(|e| SolveError::Output(werr(&scratch, e)))?;
     // the mesh's warnings go to the report
     let checked = checked_model(&case, &scratch, true);

@@ -649,7 +649,7 @@ fn remade(
     cp: &mut checkpoint::Checkpoint,
     out_dir: &Path,
 ) -> Result<(Model, Vec<Probe>), SolveError> {
-    let scratch = std::env::temp_dir().join(format!("tmc-remake-{}", std::process::id()));
+    let scratch = crate::files::scratch_dir("remake");
     let made = medium.remake(model, &cp.state.x, &scratch);
     let _ = std::fs::remove_dir_all(&scratch);
     let made = made.map_err(|e| {
