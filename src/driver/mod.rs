@@ -231,6 +231,7 @@ fn model_on_extent(
             crate::note!("warning: {}: {w}", mesh.source.display());
         }
     }
+    records::refuse_column_names(case)?;
     crate::model::validate::validate(case, &mesh)?;
     let model = crate::model::build::build_with_extent(case, mesh, d)?;
     if !quiet {

@@ -2,7 +2,7 @@
 //! reactions per Dirichlet group.
 
 use super::strategy::Strategy;
-use crate::case::Case;
+use crate::case::{Case, CaseError};
 use crate::dofs::Field;
 use crate::model::{Model, Physics};
 use crate::output::contact::{Contact, ContactFaces};
@@ -375,6 +375,47 @@ pub fn flow_name(group: &str, key: &str) -> String {
     } else {
         format!("R_{group}_{key}")
     }
+}
+
+/// A probe named as a column tmc writes itself (`lambda`, `R_<group>_x`, `Ft_Fn_<group>`,
+/// `U_<group>_x`, … for any group a `[[bc]]` names, whether or not this scene has that
+/// column) is refused at its name: `history.csv` would hold two columns of one name.
+pub fn refuse_column_names(case: &Case) -> Result<(), CaseError> {
+    let fixed = (HISTORY_STEP_COLUMNS.iter().chain(&HISTORY_SOLVER_COLUMNS)).chain(&[
+        "energy",
+        "work",
+        "heat_stored",
+        "heat_in",
+        "friction_work",
+        "friction_heat",
+        "heat_joined",
+        "kinetic_energy",
+        "wall_seconds",
+    ]);
+    let groups: Vec<&str> = (case.file.bc.iter())
+        .map(|b| b.group.get_ref().as_str())
+        .collect();
+    for p in &case.file.probe {
+        let name = p.name.get_ref().as_str();
+        let of_group = groups.iter().find_map(|g| {
+            let mut names = vec![flow_name(g, "heat"), ratio_name(g)];
+            for k in FORCE_KEYS {
+                names.push(flow_name(g, k));
+                names.push(format!("U_{g}_{k}"));
+            }
+            names.contains(&name.to_string()).then_some(*g)
+        });
+        let what = match of_group {
+            Some(g) => format!("a column tmc writes for group \"{g}\""),
+            None if fixed.clone().any(|f| *f == name) => "a column tmc writes".to_string(),
+            None => continue,
+        };
+        return case.error(
+            p.name.span(),
+            format!("probe name \"{name}\" is {what} in history.csv; name the probe otherwise"),
+        );
+    }
+    Ok(())
 }
 
 /// The history column of a group's F_t/F_n along the contact's normal.

@@ -1517,3 +1517,43 @@ fn every_key_of_the_case_reference_of_the_wrong_type_is_refused_at_its_line_or_s
         wrong.join("\n")
     );
 }
+
+#[test]
+fn a_probe_named_as_a_column_tmc_writes_is_refused_at_its_name() {
+    // history.csv would hold two columns of one name: a group's own columns (its reaction, its
+    // F_t/F_n, its displacement) and the fixed ones, whether or not this scene writes them
+    let dir = scratch("bad-probe-column");
+    let probe = |name: &str| {
+        format!("{SOLID}{HELD}[[probe]]\nname = \"{name}\"\nfield = \"ux\"\nat = [1.0, 0.5]\n")
+    };
+    let cases = vec![
+        (
+            "reaction",
+            probe("R_right_x"),
+            vec![
+                "reaction-c.toml:",
+                "probe name \"R_right_x\" is a column tmc writes for group \"right\"",
+            ],
+        ),
+        (
+            "displacement",
+            probe("U_right_x"),
+            vec!["probe name \"U_right_x\" is a column tmc writes for group \"right\""],
+        ),
+        (
+            "ratio",
+            probe("Ft_Fn_left"),
+            vec!["probe name \"Ft_Fn_left\" is a column tmc writes for group \"left\""],
+        ),
+        (
+            "fixed",
+            probe("wall_seconds"),
+            vec!["probe name \"wall_seconds\" is a column tmc writes in history.csv"],
+        ),
+    ];
+    each_refused(&dir, cases);
+    // a name that only looks like one is taken
+    let p = slab_case(&dir, "taken", &probe("U_nowhere_x"));
+    let o = tmc(&["check", p.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", err(&o));
+}
