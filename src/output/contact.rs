@@ -159,13 +159,30 @@ impl ContactFaces {
         x: &[f64],
         plane: Option<&[Option<FrictionCell>]>,
     ) -> Result<Contact, AssemblyError> {
+        let forces = self.forces(model, references, x, plane, None)?;
+        Ok(self.from_forces(model, x, &forces))
+    }
+
+    /// The force the medium's cells put on each node of the faces at the state `x` (as
+    /// [`ContactFaces::at`]), of the cells `mine` marks (in a step's cell order; all without
+    /// it): on several ranks each sums its own cells', and the ranks' sums are the whole.
+    pub fn forces(
+        &self,
+        model: &Model,
+        references: &References,
+        x: &[f64],
+        plane: Option<&[Option<FrictionCell>]>,
+        mine: Option<&[bool]>,
+    ) -> Result<Vec<[f64; 3]>, AssemblyError> {
         let mut force = vec![[0.0; 3]; self.nodes.len()];
         for &(bi, c) in &self.cells {
+            let at = self.first_cell[bi] + c;
+            if mine.is_some_and(|m| !m[at]) {
+                continue;
+            }
             let info = &model.blocks[bi];
             let blk = &model.mesh.cells[info.block];
-            let extra = plane
-                .and_then(|p| p[self.first_cell[bi] + c].as_ref())
-                .map(|f| &f.state.stress);
+            let extra = plane.and_then(|p| p[at].as_ref()).map(|f| &f.state.stress);
             let f = crate::with_cell!(blk.kind, |N, D, E| nodal_forces::<N, D, E>(
                 &info.mat,
                 &info.layout,
@@ -182,6 +199,11 @@ impl ContactFaces {
                 }
             }
         }
+        Ok(force)
+    }
+
+    /// The contact at the state `x` whose medium puts `force` on the faces' nodes.
+    pub fn from_forces(&self, model: &Model, x: &[f64], force: &[[f64; 3]]) -> Contact {
         let d = model.mesh.dim;
         let at = |n: usize| {
             let mut p = model.mesh.coords[n];
@@ -202,7 +224,12 @@ impl ContactFaces {
             out.shear
                 .push(std::array::from_fn(|k| (f[k] - fn_ * n[k]) * per));
         }
-        Ok(out)
+        out
+    }
+
+    /// How many nodes the faces have (the length of [`ContactFaces::forces`]).
+    pub fn node_count(&self) -> usize {
+        self.nodes.len()
     }
 
     /// The contact pressure and shear of every mesh node (zero off the faces).

@@ -13,7 +13,7 @@ use crate::assembly::References;
 use crate::case::RegionKind;
 use crate::dofs::{Field, NONE};
 use crate::model::Model;
-use crate::parallel::Distribution;
+use crate::parallel::{Distribution, Ranks};
 use crate::post::FrictionCell;
 use std::path::{Path, PathBuf};
 
@@ -38,6 +38,10 @@ pub struct Series {
     /// The faces where the solids meet the medium, whose contact pressure and shear each
     /// step's file holds at their nodes.
     contact: Option<ContactFaces>,
+    /// On several ranks: the cells this rank owns (in a step's cell order) and the ranks,
+    /// over which the medium's forces on the faces are summed (a friction cell's slip plane
+    /// is known to its own rank only).
+    own: Option<(Vec<bool>, Ranks)>,
 }
 
 impl Series {
@@ -64,6 +68,7 @@ impl Series {
             ranks: None,
             pending: None,
             contact,
+            own: None,
         }
     }
 
@@ -75,8 +80,10 @@ impl Series {
     /// On several ranks: this process writes the cells `distribution` gives it, as its part
     /// of each step.
     pub fn in_parts(mut self, model: &Model, distribution: &Distribution) -> Series {
-        self.piece = Piece::part(&model.mesh, &distribution.my_cells());
+        let mine = distribution.my_cells();
+        self.piece = Piece::part(&model.mesh, &mine);
         self.ranks = Some((distribution.ranks.rank, distribution.partition.parts));
+        self.own = Some((mine, distribution.ranks));
         self
     }
 
@@ -178,12 +185,22 @@ impl Series {
         let nodal = nodal_fields(&model.mesh, &cells, &medium);
         let contact = match &self.contact {
             Some(faces) => {
-                let c = (faces.at(model, references, x, friction)).map_err(|e| {
-                    OutputError::Fields {
-                        step,
-                        msg: e.to_string(),
-                    }
+                let mine = self.own.as_ref().map(|(m, _)| &m[..]);
+                let forces = faces.forces(model, references, x, friction, mine);
+                // every rank takes part in the sum, a failed one with nothing
+                let mut flat: Vec<f64> = match &forces {
+                    Ok(f) => f.iter().flatten().copied().collect(),
+                    Err(_) => vec![0.0; 3 * faces.node_count()],
+                };
+                if let Some((_, ranks)) = &self.own {
+                    ranks.sum_into(&mut flat);
+                }
+                forces.map_err(|e| OutputError::Fields {
+                    step,
+                    msg: e.to_string(),
                 })?;
+                let forces: Vec<[f64; 3]> = (flat.chunks(3)).map(|f| [f[0], f[1], f[2]]).collect();
+                let c = faces.from_forces(model, x, &forces);
                 Some(faces.at_nodes(model.mesh.coords.len(), &c))
             }
             None => None,

@@ -159,6 +159,11 @@ fn same_answers(name: &str, extra: &[&str]) -> [serde_json::Value; 2] {
         {
             same_field(&a, &b, field, &format!("{name} on {ranks} ranks"));
         }
+        // the contact on the solids' faces, each rank's part from the forces of every rank's
+        // medium cells
+        for field in ["contact_pressure", "contact_shear"] {
+            same_field(&a, &b, field, &format!("{name} on {ranks} ranks"));
+        }
     }
     if let Some(each) = summary(&dirs[2])["peak_memory_mb_ranks"].as_array() {
         assert_eq!(each.len(), 2);
@@ -822,6 +827,16 @@ fn a_drag_with_inertia_is_the_same_on_two_ranks_and_restarts_across_them() {
         assert_eq!(a[key], b[key], "{key}");
     }
     same_field(&last_step(&serial), &last_step(&full), "u", "on two ranks");
+    // the contact shear too: a friction cell's slip plane is known to its own rank only, and
+    // a node on the cut is in both parts with the same value
+    for field in ["contact_pressure", "contact_shear"] {
+        same_field(
+            &last_step(&serial),
+            &last_step(&full),
+            field,
+            "on two ranks",
+        );
+    }
     for key in ["kinetic_energy", "friction_work"] {
         let (p, q) = (a[key].as_f64().unwrap(), b[key].as_f64().unwrap());
         assert!(p > 0.0 && (p - q).abs() <= 1e-8 * p, "{key}: {p} vs {q}");
