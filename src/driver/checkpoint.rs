@@ -215,20 +215,17 @@ impl Checkpoint {
         )))
     }
 
-    /// The checkpoint of the run in `dir`, checked against the case and mesh it continues.
-    pub fn read(dir: &Path, case: &Case, mesh: &Mesh) -> Result<Checkpoint, SolveError> {
-        let cp = Checkpoint::of_case(dir, case)?;
-        if cp.mesh != mesh_fingerprint(mesh) {
+    /// The checkpoint (of the run in `dir`, read by [`Checkpoint::of_case`]), checked against
+    /// the mesh it continues.
+    pub fn on_mesh(self, dir: &Path, mesh: &Mesh) -> Result<Checkpoint, SolveError> {
+        let now = mesh_fingerprint(mesh);
+        if self.mesh != now {
             return Err(refusal(
                 &Checkpoint::path(dir),
-                &format!(
-                    "the mesh has changed since ({} then, {} now)",
-                    cp.mesh,
-                    mesh_fingerprint(mesh)
-                ),
+                &format!("the mesh has changed since ({} then, {now} now)", self.mesh),
             ));
         }
-        Ok(cp)
+        Ok(self)
     }
 
     /// The checkpoint of the run in `dir`, checked against the case it continues (not yet

@@ -432,11 +432,8 @@ fn restart_setup(
         mesh_for(case, &dir)?.0
     };
     // a medium made again: the mesh of the remake the checkpoint continues
-    let remakes = checkpoint::Checkpoint::of_case(&dir, case)?
-        .state
-        .totals
-        .medium_remakes;
-    let (model, probes) = match remakes {
+    let cp = checkpoint::Checkpoint::of_case(&dir, case)?;
+    let (model, probes) = match cp.state.totals.medium_remakes {
         n if n > 0 && remaking(case).is_some() => {
             let remade = checkpoint::RemadeMedium::read(&dir, n)?;
             let mut mesh = remade.mesh;
@@ -447,7 +444,7 @@ fn restart_setup(
         }
         _ => model_on(case, mesh, opts.quiet)?,
     };
-    let cp = checkpoint::Checkpoint::read(&dir, case, &model.mesh)?;
+    let cp = cp.on_mesh(&dir, &model.mesh)?;
     folder.keep_previous()?;
     Ok((model, probes, cp))
 }
@@ -470,18 +467,19 @@ fn solve_model(
     let mut medium = remake::Medium::find(&model, remaking(case))?;
     // a restart decides when to make the medium again from its watch as the checkpoint kept
     // it, after the step it ended with (as the run did before it was stopped)
-    let kept = from.as_ref().and_then(|cp| cp.state.totals.medium.clone());
     let mut check_first = false;
     if let Some(m) = medium.as_mut() {
-        match (kept, &from) {
-            (Some(kept), Some(_)) => {
-                *m = kept;
-                check_first = true;
-            }
-            (_, Some(cp)) => {
-                m.start(&model, &cp.state.x, cp.state.clock.t, 0.0);
-            }
-            (_, None) => {
+        match &from {
+            Some(cp) => match &cp.state.totals.medium {
+                Some(kept) => {
+                    *m = kept.clone();
+                    check_first = true;
+                }
+                None => {
+                    m.start(&model, &cp.state.x, cp.state.clock.t, 0.0);
+                }
+            },
+            None => {
                 m.start(&model, &model.initial_state(), 0.0, 0.0);
             }
         }
@@ -545,7 +543,7 @@ fn solve_model(
             let since = Instant::now();
             before_remake = Some((run.flows_at_rest()?, since));
         }
-        let (mut cp, kept) = run.end_to_rejoin();
+        let (mut cp, mut kept) = run.end_to_rejoin();
         let (new, placed) = changed_model(
             case, &model, change, &mut layer, &medium, &mut cp, &out_dir, opts,
         )?;
@@ -553,7 +551,6 @@ fn solve_model(
         if let Some(placed) = placed {
             probes = placed;
         }
-        let mut kept = kept;
         if let Some(rate) = medium.as_ref().map(|m| m.rate) {
             medium = remake::Medium::find(&model, remaking(case))?;
             if let Some(m) = medium.as_mut() {

@@ -401,7 +401,7 @@ pub fn refuse_column_names(case: &Case) -> Result<(), CaseError> {
             let mut names = vec![flow_name(g, "heat"), ratio_name(g)];
             for k in FORCE_KEYS {
                 names.push(flow_name(g, k));
-                names.push(format!("U_{g}_{k}"));
+                names.push(moved_name(g, k));
             }
             names.contains(&name.to_string()).then_some(*g)
         });
@@ -423,30 +423,31 @@ pub fn ratio_name(group: &str) -> String {
     format!("Ft_Fn_{group}")
 }
 
-/// The loaded groups (Dirichlet groups that move a body: a displacement that is not zero
-/// somewhere on their path) of one body that meets the medium, each with that body: the groups
-/// whose reaction [`contact_ratio`] splits.
-fn contact_groups(model: &Model, contact: &ContactFaces) -> Vec<(String, usize)> {
-    let d = model.dofs.dim;
-    let mut loaded = vec![false; model.bc_groups.len()];
-    for dof in (0..model.mesh.coords.len() * d).map(|i| model.dofs.u[i] as usize) {
-        if let Some(p) = &model.cons.prescribed[dof] {
-            loaded[p.bc] |= p.value != 0.0 || p.start != 0.0;
-        }
-    }
+/// The loaded groups of `moved` (see [`moved_groups`]) whose nodes are on one body that meets
+/// the medium, each with that body: the groups whose reaction [`contact_ratio`] splits.
+fn contact_groups(
+    model: &Model,
+    contact: &ContactFaces,
+    moved: &[(String, usize, Vec<usize>)],
+) -> Vec<(String, usize)> {
     let mut out: Vec<(String, usize)> = Vec::new();
-    for (g, _) in (model.bc_groups.iter().zip(&loaded)).filter(|(_, l)| **l) {
-        let Some(group) = model.mesh.group(&g.name) else {
+    for (name, _, _) in moved {
+        let Some(group) = model.mesh.group(name) else {
             continue;
         };
         let mut bodies =
             (model.mesh.group_nodes(group).into_iter()).filter_map(|n| contact.body_of(n));
         let Some(body) = bodies.next() else { continue };
-        if bodies.all(|b| b == body) && !out.iter().any(|(name, _)| name == &g.name) {
-            out.push((g.name.clone(), body));
+        if bodies.all(|b| b == body) && !out.iter().any(|(g, _)| g == name) {
+            out.push((name.clone(), body));
         }
     }
     out
+}
+
+/// The history column of a loaded group's mean displacement along `key` ("x", "y", "z").
+pub fn moved_name(group: &str, key: &str) -> String {
+    format!("U_{group}_{key}")
 }
 
 /// Each loaded group's displacement unknowns per component it moves (not zero somewhere on
@@ -600,12 +601,11 @@ impl HistoryLayout {
             let q = if k == "heat" { Power } else { Force };
             (flow_name(g, k), Some(q))
         }));
-        let contact = contact.map_or_else(Vec::new, |c| contact_groups(model, c));
-        columns.extend(contact.iter().map(|(g, _)| (ratio_name(g), None)));
         let moved = moved_groups(model);
-        columns.extend(
-            (moved.iter()).map(|(g, c, _)| (format!("U_{g}_{}", FORCE_KEYS[*c]), Some(Length))),
-        );
+        let contact = contact.map_or_else(Vec::new, |c| contact_groups(model, c, &moved));
+        columns.extend(contact.iter().map(|(g, _)| (ratio_name(g), None)));
+        columns
+            .extend((moved.iter()).map(|(g, c, _)| (moved_name(g, FORCE_KEYS[*c]), Some(Length))));
         for c in HISTORY_SOLVER_COLUMNS {
             let q = (c == "time" && physical_time).then_some(Time);
             columns.push((c.into(), q));

@@ -204,15 +204,7 @@ impl ContactFaces {
 
     /// The contact at the state `x` whose medium puts `force` on the faces' nodes.
     pub fn from_forces(&self, model: &Model, x: &[f64], force: &[[f64; 3]]) -> Contact {
-        let d = model.mesh.dim;
-        let at = |n: usize| {
-            let mut p = model.mesh.coords[n];
-            for (c, v) in p.iter_mut().enumerate().take(d) {
-                *v += x[model.dofs.u[n * d + c] as usize];
-            }
-            p
-        };
-        let (normal, area) = self.normals_and_areas(model, at);
+        let (normal, area) = self.normals_and_areas(model, |n| model.placed(n, x));
         let mut out = Contact {
             area,
             ..Default::default()
