@@ -647,10 +647,7 @@ fn remade(
     cp: &mut checkpoint::Checkpoint,
     out_dir: &Path,
 ) -> Result<(Model, Vec<Probe>), SolveError> {
-    let scratch = crate::files::scratch_dir("remake");
-    let made = medium.remake(model, &cp.state.x, &scratch);
-    let _ = std::fs::remove_dir_all(&scratch);
-    let made = made.map_err(|e| {
+    let made = medium.remake(model, &cp.state.x).map_err(|e| {
         SolveError::Setup(format!(
             "{}: the medium could not be made again at t = {}: {e}",
             out_dir.display(),

@@ -1,14 +1,15 @@
 //! The medium's cells made again between the bodies as they are: each medium region's cells
-//! are replaced by triangles gmsh makes in the region they cover at the nodes' current places,
-//! between the region's boundary nodes, which stay the nodes they are (the solids' faces, the
-//! medium's outer faces). The new nodes inside the medium stand where gmsh put them. This is
+//! are replaced by triangles of a constrained Delaunay triangulation of the region they cover
+//! at the nodes' current places, between the region's boundary nodes, which stay the nodes they
+//! are (the solids' faces, the medium's outer faces), refined inside where it is open. This is
 //! topology and geometry only: what the new cells carry is `model/remake.rs`'s.
+//!
+//! The triangulation is spade's, in this process: gmsh, forked for each remake, took 10–25 ms
+//! of a remake's 16–45 ms on the sliding cylinder, the triangulation takes about 1 ms
+//! (docs/notes/2026-12-02-remake-cost.md).
 
-use super::gmsh::{MeshOptions, mesh_geo};
 use super::{Block, CellKind, Mesh};
 use std::collections::HashMap;
-use std::fmt::Write as _;
-use std::path::Path;
 
 /// A mesh whose medium regions were made again.
 pub struct Remeshed {
@@ -70,146 +71,16 @@ fn boundary_loops(mesh: &Mesh, blocks: &[usize]) -> Result<Vec<Vec<usize>>, Stri
     Ok(loops)
 }
 
-/// Twice the signed area of loop `lp` at the places `x` (positive: counter-clockwise).
-fn signed_area(lp: &[usize], x: &[[f64; 3]]) -> f64 {
-    (0..lp.len())
-        .map(|i| {
-            let (p, q) = (x[lp[i]], x[lp[(i + 1) % lp.len()]]);
-            p[0] * q[1] - q[0] * p[1]
-        })
-        .sum()
-}
-
-/// Whether the point `p` is inside loop `lp` at the places `x` (crossing count).
-fn inside(p: [f64; 3], lp: &[usize], x: &[[f64; 3]]) -> bool {
-    let mut odd = false;
-    for i in 0..lp.len() {
-        let (a, b) = (x[lp[i]], x[lp[(i + 1) % lp.len()]]);
-        if (a[1] > p[1]) != (b[1] > p[1]) {
-            let s = a[0] + (p[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0]);
-            if p[0] < s {
-                odd = !odd;
-            }
-        }
-    }
-    odd
-}
-
-/// The `.geo` text of the medium regions `regions` (each its loops, at the places `x`): a
-/// plane surface per outer loop with the holes it holds, each boundary edge a line of its two
-/// nodes alone, the size at a node its edges' mean length. Returns the text and the node of
-/// each gmsh point, in point order.
-fn geo_text(regions: &[Vec<Vec<usize>>], x: &[[f64; 3]]) -> (String, Vec<usize>) {
-    let mut text = String::from(
-        "Mesh.MeshSizeFromCurvature = 0;\nMesh.MeshSizeExtendFromBoundary = 1;\n\
-         Mesh.Algorithm = 6;\n",
-    );
-    let mut point: HashMap<usize, usize> = HashMap::new();
-    let mut nodes = Vec::new();
-    let mut size: HashMap<usize, (f64, usize)> = HashMap::new();
-    for lp in regions.iter().flatten() {
-        for i in 0..lp.len() {
-            let (a, b) = (lp[i], lp[(i + 1) % lp.len()]);
-            let l = (0..2)
-                .map(|k| (x[a][k] - x[b][k]).powi(2))
-                .sum::<f64>()
-                .sqrt();
-            for n in [a, b] {
-                let s = size.entry(n).or_insert((0.0, 0));
-                s.0 += l;
-                s.1 += 1;
-            }
-        }
-    }
-    let mut lines: HashMap<(usize, usize), i64> = HashMap::new();
-    let mut n_lines = 0;
-    let mut n_loops = 0;
-    for (r, loops) in regions.iter().enumerate() {
-        let mut loop_tags = Vec::new();
-        for lp in loops {
-            let mut tags = Vec::new();
-            for i in 0..lp.len() {
-                let (a, b) = (lp[i], lp[(i + 1) % lp.len()]);
-                for n in [a, b] {
-                    if let std::collections::hash_map::Entry::Vacant(e) = point.entry(n) {
-                        nodes.push(n);
-                        e.insert(nodes.len());
-                        let (s, k) = size[&n];
-                        let _ = writeln!(
-                            text,
-                            "Point({}) = {{{:e}, {:e}, 0, {:e}}};",
-                            nodes.len(),
-                            x[n][0],
-                            x[n][1],
-                            s / k as f64
-                        );
-                    }
-                }
-                let tag = match (lines.get(&(a, b)), lines.get(&(b, a))) {
-                    (Some(&t), _) => t,
-                    (_, Some(&t)) => -t,
-                    _ => {
-                        n_lines += 1;
-                        let _ = writeln!(
-                            text,
-                            "Line({n_lines}) = {{{}, {}}};\nTransfinite Curve{{{n_lines}}} = 2;",
-                            point[&a], point[&b]
-                        );
-                        lines.insert((a, b), n_lines);
-                        n_lines
-                    }
-                };
-                tags.push(tag.to_string());
-            }
-            n_loops += 1;
-            let _ = writeln!(text, "Curve Loop({n_loops}) = {{{}}};", tags.join(", "));
-            loop_tags.push((n_loops, signed_area(lp, x), lp));
-        }
-        // outer loops (counter-clockwise) each with the holes (clockwise) whose nearest outer
-        // loop they are
-        let outers: Vec<_> = loop_tags.iter().filter(|l| l.1 > 0.0).collect();
-        let mut surfaces = Vec::new();
-        for o in &outers {
-            let holes: Vec<String> = (loop_tags.iter())
-                .filter(|h| h.1 < 0.0)
-                .filter(|h| {
-                    let p = x[h.2[0]];
-                    let holder = (outers.iter())
-                        .filter(|c| inside(p, c.2, x))
-                        .min_by(|a, b| a.1.total_cmp(&b.1));
-                    holder.is_some_and(|c| c.0 == o.0)
-                })
-                .map(|h| h.0.to_string())
-                .collect();
-            let wires: Vec<String> = std::iter::once(o.0.to_string()).chain(holes).collect();
-            let s = format!("{}{}", r + 1, surfaces.len() + 1);
-            let _ = writeln!(text, "Plane Surface({s}) = {{{}}};", wires.join(", "));
-            surfaces.push(s);
-        }
-        let _ = writeln!(
-            text,
-            "Physical Surface(\"medium{r}\") = {{{}}};",
-            surfaces.join(", ")
-        );
-    }
-    (text, nodes)
-}
-
 /// The mesh `mesh` with the cells of its medium blocks `medium` made again at the nodes'
-/// places `x`: the blocks of each set of physical groups meshed together as one region, by
-/// gmsh, between their boundary nodes. Files are written in the folder `scratch`. 2D, linear
-/// cells only (a caller checks first with [`supported`]).
-pub fn remesh(
-    mesh: &Mesh,
-    x: &[[f64; 3]],
-    medium: &[usize],
-    scratch: &Path,
-) -> Result<Remeshed, String> {
+/// places `x`: the blocks of each set of physical groups triangulated together as one region,
+/// between their boundary nodes. 2D, linear cells only (a caller checks first with
+/// [`supported`]).
+pub fn remesh(mesh: &Mesh, x: &[[f64; 3]], medium: &[usize]) -> Result<Remeshed, String> {
     let regions = regions_of(mesh, medium);
     let loops: Vec<Vec<Vec<usize>>> = (regions.iter())
         .map(|r| boundary_loops(mesh, &r.1))
         .collect::<Result<_, _>>()?;
-    let made = gmsh_between(&loops, x, scratch)?;
+    let made = triangulate_between(&loops, x)?;
     // the boundary nodes, found again by their places
     let on_boundary: Vec<usize> = {
         let mut b: Vec<usize> = loops.iter().flatten().flatten().copied().collect();
@@ -245,12 +116,9 @@ pub fn remesh(
         let name = format!("medium{r}");
         let g = made
             .group(&name)
-            .ok_or("gmsh made no cells in a medium region")?;
+            .ok_or("no cells were made in a medium region")?;
         let mut conn = Vec::new();
         for blk in made.cells.iter().filter(|b| b.groups.contains(&g)) {
-            if blk.kind != CellKind::Tri3 {
-                return Err(format!("gmsh made {} cells", blk.kind.name()));
-            }
             conn.extend(blk.conn.iter().map(|&n| made_to_new[n]));
         }
         if conn.contains(&usize::MAX) {
@@ -293,18 +161,111 @@ fn regions_of(mesh: &Mesh, medium: &[usize]) -> Vec<(Vec<usize>, Vec<usize>)> {
     regions
 }
 
-/// The triangles gmsh makes inside the boundary `loops` (nodes at their places `x`), through
-/// a `.geo` written under `scratch`.
-fn gmsh_between(loops: &[Vec<Vec<usize>>], x: &[[f64; 3]], scratch: &Path) -> Result<Mesh, String> {
-    let (text, _) = geo_text(loops, x);
-    std::fs::create_dir_all(scratch).map_err(|e| format!("{}: {e}", scratch.display()))?;
-    let geo = scratch.join("medium.geo");
-    std::fs::write(&geo, text).map_err(|e| format!("{}: {e}", geo.display()))?;
-    Ok(
-        mesh_geo(&geo, &scratch.join("medium.msh"), &MeshOptions::default())
-            .map_err(|e| e.to_string())?
-            .mesh,
-    )
+/// The triangles of a constrained Delaunay triangulation between the boundary `loops` (nodes
+/// at their places `x`; the region is where a point is inside an odd number of loops),
+/// refined inside (Ruppert's refinement, spade's): no boundary edge split, no angle below 30°
+/// where the boundary allows it, none larger than an equilateral triangle on the median
+/// boundary edge (the longest would follow the medium's free faces as they are stretched,
+/// remake after remake); triangles smaller than one on a tenth of the shortest edge are left as
+/// they are (a closed layer's, one cell across between the bodies' faces). One region per
+/// entry of `loops`, its cells in group `medium{r}`, counter-clockwise.
+fn triangulate_between(loops: &[Vec<Vec<usize>>], x: &[[f64; 3]]) -> Result<Mesh, String> {
+    use spade::{
+        AngleLimit, ConstrainedDelaunayTriangulation, Point2, RefinementParameters, Triangulation,
+    };
+    let mut coords: Vec<[f64; 3]> = Vec::new();
+    let mut cells = Vec::new();
+    let mut groups = Vec::new();
+    let equilateral = 3f64.sqrt() / 4.0;
+    for (r, region) in loops.iter().enumerate() {
+        let mut cdt = ConstrainedDelaunayTriangulation::<Point2<f64>>::new();
+        let mut vertex: HashMap<usize, spade::handles::FixedVertexHandle> = HashMap::new();
+        let mut lengths = Vec::new();
+        for lp in region {
+            for &n in lp {
+                if vertex.contains_key(&n) {
+                    continue;
+                }
+                let before = cdt.num_vertices();
+                let v = (cdt.insert(Point2::new(x[n][0], x[n][1])))
+                    .map_err(|e| format!("node {n} at {:?}: {e:?}", x[n]))?;
+                if cdt.num_vertices() == before {
+                    return Err(format!(
+                        "two of the medium's boundary nodes stand at one place, {:?}",
+                        x[n]
+                    ));
+                }
+                vertex.insert(n, v);
+            }
+        }
+        for lp in region {
+            for i in 0..lp.len() {
+                let (a, b) = (lp[i], lp[(i + 1) % lp.len()]);
+                let l = (0..2).map(|k| (x[a][k] - x[b][k]).powi(2)).sum::<f64>();
+                lengths.push(l.sqrt());
+                let (va, vb) = (vertex[&a], vertex[&b]);
+                if !cdt.can_add_constraint(va, vb) {
+                    return Err(format!(
+                        "the medium's boundary crosses itself at its edge from {:?} to {:?}",
+                        x[a], x[b]
+                    ));
+                }
+                cdt.add_constraint(va, vb);
+                if cdt.get_edge_from_neighbors(va, vb).is_none() {
+                    return Err(format!(
+                        "a node stands on the medium's boundary edge from {:?} to {:?}",
+                        x[a], x[b]
+                    ));
+                }
+            }
+        }
+        lengths.sort_by(f64::total_cmp);
+        let (shortest, median) = (lengths[0], lengths[lengths.len() / 2]);
+        let params = RefinementParameters::<f64>::new()
+            .exclude_outer_faces(true)
+            .keep_constraint_edges()
+            .with_angle_limit(AngleLimit::from_deg(30.0))
+            .with_max_allowed_area(equilateral * median * median)
+            .with_min_required_area(equilateral * (0.1 * shortest).powi(2));
+        let refined = cdt.refine(params);
+        if !refined.refinement_complete {
+            return Err(format!(
+                "its triangles' refinement stopped at {} nodes, the most it may add to the {} \
+                 of its boundary",
+                cdt.num_vertices(),
+                vertex.len()
+            ));
+        }
+        let outer: std::collections::HashSet<_> = refined.excluded_faces.into_iter().collect();
+        let first = coords.len();
+        coords.extend(
+            cdt.vertices()
+                .map(|v| [v.position().x, v.position().y, 0.0]),
+        );
+        let mut conn = Vec::new();
+        for f in cdt.inner_faces().filter(|f| !outer.contains(&f.fix())) {
+            conn.extend(f.vertices().map(|v| first + v.fix().index()));
+        }
+        groups.push(super::PhysicalGroup {
+            name: format!("medium{r}"),
+            dim: 2,
+            tag: r as i32 + 1,
+        });
+        cells.push(Block {
+            kind: CellKind::Tri3,
+            groups: vec![r],
+            conn,
+        });
+    }
+    Ok(Mesh {
+        dim: 2,
+        coords,
+        cells,
+        facets: Vec::new(),
+        groups,
+        source: std::path::PathBuf::from("medium"),
+        warnings: Vec::new(),
+    })
 }
 
 /// The node of `nodes` standing at a place (to 1e-9 of the extent of `x`), if any.
@@ -376,6 +337,31 @@ pub fn supported(mesh: &Mesh, medium: &[usize]) -> Result<(), String> {
 mod tests {
     use super::*;
 
+    /// Twice the signed area of loop `lp` at the places `x` (positive: counter-clockwise).
+    fn signed_area(lp: &[usize], x: &[[f64; 3]]) -> f64 {
+        (0..lp.len())
+            .map(|i| {
+                let (p, q) = (x[lp[i]], x[lp[(i + 1) % lp.len()]]);
+                p[0] * q[1] - q[0] * p[1]
+            })
+            .sum()
+    }
+
+    /// Whether the point `p` is inside loop `lp` at the places `x` (crossing count).
+    fn inside(p: [f64; 3], lp: &[usize], x: &[[f64; 3]]) -> bool {
+        let mut odd = false;
+        for i in 0..lp.len() {
+            let (a, b) = (x[lp[i]], x[lp[(i + 1) % lp.len()]]);
+            if (a[1] > p[1]) != (b[1] > p[1]) {
+                let s = a[0] + (p[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0]);
+                if p[0] < s {
+                    odd = !odd;
+                }
+            }
+        }
+        odd
+    }
+
     /// A square of medium (4 × 4 quads over [0, 4]²) with a hole of one cell at its middle
     /// left out: the boundary is an outer loop (counter-clockwise) and a hole (clockwise).
     fn square_with_hole() -> Mesh {
@@ -434,9 +420,7 @@ mod tests {
         let x: Vec<[f64; 3]> = (mesh.coords.iter())
             .map(|p| [p[0] + 0.3 * p[1], p[1], 0.0])
             .collect();
-        let dir = std::env::temp_dir().join(format!("tmc-remesh-{}", std::process::id()));
-        let r = remesh(&mesh, &x, &[0], &dir).unwrap();
-        let _ = std::fs::remove_dir_all(&dir);
+        let r = remesh(&mesh, &x, &[0]).unwrap();
         // the 20 boundary nodes kept, the 5 inside the medium made again
         let kept = r.old_of.iter().filter(|o| o.is_some()).count();
         assert_eq!(kept, 20);
@@ -456,5 +440,93 @@ mod tests {
         let area: f64 = areas.iter().sum();
         // every triangle counter-clockwise, together the sheared square less its hole
         assert!((area - 15.0).abs() < 1e-9, "area {area}");
+    }
+
+    /// Two rows of nodes `gap` apart, bottom (0..=n, 0) and top (n..=0, gap), closed at the
+    /// ends: the region between as one loop.
+    fn layer(n: usize, gap: f64) -> (Vec<Vec<usize>>, Vec<[f64; 3]>) {
+        let mut x: Vec<[f64; 3]> = (0..=n).map(|i| [i as f64 * 0.1, 0.0, 0.0]).collect();
+        // the top row shifted by a third of a cell, as a slid layer's is
+        x.extend((0..=n).rev().map(|i| [(i as f64 + 0.3) * 0.1, gap, 0.0]));
+        (vec![(0..x.len()).collect()], x)
+    }
+
+    #[test]
+    fn a_closed_layer_is_made_one_cell_across() {
+        // a layer closed to 1e-4 of its cells' length: no node inside it, each triangle with
+        // corners on both rows, together its area
+        let n = 10;
+        let (lp, x) = layer(n, 1e-4);
+        let made = triangulate_between(&[lp], &x).unwrap();
+        assert_eq!(made.coords.len(), x.len(), "no node added");
+        let blk = &made.cells[0];
+        assert_eq!(blk.n_cells(), 2 * n);
+        let mut area = 0.0;
+        for c in 0..blk.n_cells() {
+            let q: Vec<[f64; 3]> = blk.cell(c).iter().map(|&k| made.coords[k]).collect();
+            assert!(q.iter().any(|p| p[1] == 0.0) && q.iter().any(|p| p[1] > 0.0));
+            let a = 0.5
+                * ((q[1][0] - q[0][0]) * (q[2][1] - q[0][1])
+                    - (q[2][0] - q[0][0]) * (q[1][1] - q[0][1]));
+            assert!(a > 0.0, "counter-clockwise");
+            area += a;
+        }
+        // a trapezoid: the rows 1.0 long, the top shifted 0.03
+        assert!((area - 1e-4).abs() < 1e-12, "area {area}");
+    }
+
+    #[test]
+    fn an_open_region_is_filled_with_cells_of_its_boundary_s_size() {
+        // a square of side 1, ten edges a side: nodes inside, triangles about as large as an
+        // equilateral one on the boundary's edge (0.1), none with an angle below 30°
+        let corner = |k: usize| [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]][k % 4];
+        let x: Vec<[f64; 3]> = (0..40)
+            .map(|i| {
+                let (a, b, s) = (corner(i / 10), corner(i / 10 + 1), (i % 10) as f64 / 10.0);
+                [a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1]), 0.0]
+            })
+            .collect();
+        let lp: Vec<usize> = (0..40).collect();
+        let made = triangulate_between(&[vec![lp]], &x).unwrap();
+        assert!(
+            made.coords.len() > x.len() + 40,
+            "{} nodes",
+            made.coords.len()
+        );
+        let blk = &made.cells[0];
+        let largest = 3f64.sqrt() / 4.0 * 0.1 * 0.1;
+        let (mut area, mut most, mut sharpest) = (0.0, 0f64, 90f64);
+        for c in 0..blk.n_cells() {
+            let q: Vec<[f64; 3]> = blk.cell(c).iter().map(|&k| made.coords[k]).collect();
+            let a = 0.5
+                * ((q[1][0] - q[0][0]) * (q[2][1] - q[0][1])
+                    - (q[2][0] - q[0][0]) * (q[1][1] - q[0][1]));
+            assert!(a > 0.0, "cell {c}: {q:?}");
+            most = most.max(a / largest);
+            let l: Vec<f64> = (0..3)
+                .map(|i| {
+                    let (p, r) = (q[i], q[(i + 1) % 3]);
+                    ((p[0] - r[0]).powi(2) + (p[1] - r[1]).powi(2)).sqrt()
+                })
+                .collect();
+            // the smallest angle, opposite the shortest edge
+            let (s, long) = (l[0].min(l[1]).min(l[2]), l[0].max(l[1]).max(l[2]));
+            let mid = l[0] + l[1] + l[2] - s - long;
+            let cos = (long * long + mid * mid - s * s) / (2.0 * long * mid);
+            sharpest = sharpest.min(cos.acos().to_degrees());
+            area += a;
+        }
+        // measured: 1.25 times the equilateral triangle at most (beside the boundary, whose
+        // edges are not split), 30.6° the smallest angle
+        assert!(most < 1.3 && sharpest > 30.0, "{most}, {sharpest}°");
+        assert!((area - 1.0).abs() < 1e-9, "area {area}");
+    }
+
+    #[test]
+    fn boundary_nodes_at_one_place_are_refused() {
+        let (lp, mut x) = layer(4, 1e-3);
+        x[2] = x[1];
+        let e = triangulate_between(&[lp], &x).unwrap_err();
+        assert!(e.contains("stand at one place"), "{e}");
     }
 }

@@ -33,7 +33,6 @@ use crate::mesh::Mesh;
 use crate::mesh::remesh::{remesh, supported};
 use nalgebra::{Matrix2, SymmetricEigen, Vector2};
 use serde::{Deserialize, Serialize};
-use std::path::Path;
 
 /// How far (in cell sizes, see [`Medium::slid_cells`]) a medium cell's faces may slide past
 /// each other before the medium is made again.
@@ -497,13 +496,12 @@ impl Medium {
         }
     }
 
-    /// The medium made again at the accepted state `x` of `model` (gmsh's files in the folder
-    /// `scratch`).
-    pub fn remake(&self, model: &Model, x: &[f64], scratch: &Path) -> Result<Remade, String> {
+    /// The medium made again at the accepted state `x` of `model`.
+    pub fn remake(&self, model: &Model, x: &[f64]) -> Result<Remade, String> {
         let placed: Vec<[f64; 3]> = (0..model.mesh.coords.len())
             .map(|n| model.placed(n, x))
             .collect();
-        let r = remesh(&model.mesh, &placed, &self.blocks, scratch)?;
+        let r = remesh(&model.mesh, &placed, &self.blocks)?;
         let find = Locator::new(model, &self.blocks, x);
         let here = |n: usize| match r.old_of[n] {
             Some(o) => placed[o],
