@@ -40,6 +40,7 @@ bench: deps
 	$(CARGO) bench --bench kernel
 	$(CARGO) bench --bench assembly
 	$(CARGO) bench --bench output
+	$(CARGO) bench --bench sliding
 	$(CARGO) bench --features petsc --bench distributed
 	$(CARGO) build --release
 	scripts/threads-table.sh -b $(TMC) -n 16
