@@ -539,14 +539,18 @@ fn solve_model(
             Stepped::Ended(summary) => return Ok(summary),
             Stepped::Changed(run, change) => (run, change),
         };
-        if matches!(change, Change::Remake) {
+        // the new medium is made while the run can still end with its summary if it cannot be
+        let mut made = None;
+        if let (Change::Remake, Some(m)) = (&change, &medium) {
             let since = Instant::now();
+            match m.remake(&model, run.state()) {
+                Ok(new) => made = Some(new),
+                Err(e) => return Err(run.cannot_change("the medium could not be made again", &e)),
+            }
             before_remake = Some((run.flows_at_rest()?, since));
         }
         let (mut cp, mut kept) = run.end_to_rejoin();
-        let (new, placed) = changed_model(
-            case, &model, change, &mut layer, &medium, &mut cp, &out_dir, opts,
-        )?;
+        let (new, placed) = changed_model(case, &model, change, &mut layer, made, &mut cp, opts)?;
         model = new;
         if let Some(placed) = placed {
             probes = placed;
@@ -587,13 +591,12 @@ fn changed_model(
     model: &Model,
     change: Change,
     layer: &mut Option<Layer>,
-    medium: &Option<remake::Medium>,
+    made: Option<remake::Remade>,
     cp: &mut checkpoint::Checkpoint,
-    out_dir: &Path,
     opts: &SolveOptions,
 ) -> Result<(Model, Option<Vec<Probe>>), SolveError> {
     let t = cp.state.clock.t;
-    match (change, layer.as_mut(), medium) {
+    match (change, layer.as_mut(), made) {
         (Change::Join(shift), Some(layer), _) => {
             cp.state.totals.layer_joins += 1;
             let mut mesh = model.mesh.clone();
@@ -603,9 +606,9 @@ fn changed_model(
             }
             Ok((model_on(case, mesh, true)?.0, None))
         }
-        (Change::Remake, _, Some(medium)) => {
+        (Change::Remake, _, Some(made)) => {
             cp.state.totals.medium_remakes += 1;
-            let (new, probes) = remade(case, model, medium, cp, out_dir)?;
+            let (new, probes) = remade(case, model, made, cp)?;
             if opts.verbose {
                 crate::note!(
                     "medium made again at t = {t}: {} nodes",
@@ -637,23 +640,15 @@ fn restart_medium(
     clock.dt = clock.dt.min(room.max(0.1 * largest));
 }
 
-/// The model on which a run goes on once its medium is made again at the checkpoint `cp`'s
-/// state (which is laid out again for it): the new medium's cells measured from their own
-/// references, the regularization's extent d kept.
+/// The model on which a run goes on once its medium is made again (`made`) at the checkpoint
+/// `cp`'s state (which is laid out again for it): the new medium's cells measured from their
+/// own references, the regularization's extent d kept.
 fn remade(
     case: &Case,
     model: &Model,
-    medium: &remake::Medium,
+    made: remake::Remade,
     cp: &mut checkpoint::Checkpoint,
-    out_dir: &Path,
 ) -> Result<(Model, Vec<Probe>), SolveError> {
-    let made = medium.remake(model, &cp.state.x).map_err(|e| {
-        SolveError::Setup(format!(
-            "{}: the medium could not be made again at t = {}: {e}",
-            out_dir.display(),
-            cp.state.clock.t
-        ))
-    })?;
     let mut mesh = made.mesh.clone();
     mesh.warnings.clear();
     let (mut new, probes) = model_on_extent(case, mesh, model.d, true)?;

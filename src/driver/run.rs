@@ -399,6 +399,27 @@ impl<'a> Run<'a> {
         Ok(err)
     }
 
+    /// The mesh could not be changed as the run asked after its last accepted step (`what`
+    /// could not be done, `why`): the run ends there, its summary written, as at a step that
+    /// fails.
+    pub(super) fn cannot_change(mut self, what: &str, why: &str) -> SolveError {
+        self.rec.clear_bar();
+        let st = &self.st;
+        let why = format!("{what} at {}: {why}", st.position());
+        let left = Left::new(
+            st.ctl.accepted,
+            &st.position(),
+            self.rec.out_dir(),
+            st.ctl.accepted == 0 && self.rec.holds_previous(),
+            false,
+        );
+        let err = SolveError::Setup(format!("{why}; {left}"));
+        match self.finish(false, err.to_string()) {
+            Ok(()) => err,
+            Err(e) => e,
+        }
+    }
+
     /// A stop was asked for (a signal): write the summary of the steps so far and say so.
     pub(super) fn interrupt(mut self) -> Result<Summary, SolveError> {
         self.rec.clear_bar();

@@ -161,6 +161,16 @@ fn regions_of(mesh: &Mesh, medium: &[usize]) -> Vec<(Vec<usize>, Vec<usize>)> {
     regions
 }
 
+/// Twice the signed area of loop `lp` at the places `x` (positive: counter-clockwise).
+fn signed_area(lp: &[usize], x: &[[f64; 3]]) -> f64 {
+    (0..lp.len())
+        .map(|i| {
+            let (p, q) = (x[lp[i]], x[lp[(i + 1) % lp.len()]]);
+            p[0] * q[1] - q[0] * p[1]
+        })
+        .sum()
+}
+
 /// The triangles of a constrained Delaunay triangulation between the boundary `loops` (nodes
 /// at their places `x`; the region is where a point is inside an odd number of loops),
 /// refined inside (Ruppert's refinement, spade's): no boundary edge split, no angle below 30°
@@ -221,12 +231,19 @@ fn triangulate_between(loops: &[Vec<Vec<usize>>], x: &[[f64; 3]]) -> Result<Mesh
         }
         lengths.sort_by(f64::total_cmp);
         let (shortest, median) = (lengths[0], lengths[lengths.len() / 2]);
+        let largest = equilateral * median * median;
+        // the nodes the refinement may add: spade's default, ten times the boundary's, is too
+        // few where the region's area grows faster than its boundary (a mesh made finer);
+        // the loops turn with the region on their left, so their signed areas sum to its own
+        let area = 0.5 * region.iter().map(|lp| signed_area(lp, x)).sum::<f64>();
+        let inside = (4.0 * area.abs() / largest).ceil() as usize;
         let params = RefinementParameters::<f64>::new()
             .exclude_outer_faces(true)
             .keep_constraint_edges()
             .with_angle_limit(AngleLimit::from_deg(30.0))
-            .with_max_allowed_area(equilateral * median * median)
-            .with_min_required_area(equilateral * (0.1 * shortest).powi(2));
+            .with_max_allowed_area(largest)
+            .with_min_required_area(equilateral * (0.1 * shortest).powi(2))
+            .with_max_additional_vertices(10 * vertex.len() + inside);
         let refined = cdt.refine(params);
         if !refined.refinement_complete {
             return Err(format!(
@@ -336,16 +353,6 @@ pub fn supported(mesh: &Mesh, medium: &[usize]) -> Result<(), String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// Twice the signed area of loop `lp` at the places `x` (positive: counter-clockwise).
-    fn signed_area(lp: &[usize], x: &[[f64; 3]]) -> f64 {
-        (0..lp.len())
-            .map(|i| {
-                let (p, q) = (x[lp[i]], x[lp[(i + 1) % lp.len()]]);
-                p[0] * q[1] - q[0] * p[1]
-            })
-            .sum()
-    }
 
     /// Whether the point `p` is inside loop `lp` at the places `x` (crossing count).
     fn inside(p: [f64; 3], lp: &[usize], x: &[[f64; 3]]) -> bool {
@@ -520,6 +527,25 @@ mod tests {
         // edges are not split), 30.6° the smallest angle
         assert!(most < 1.3 && sharpest > 30.0, "{most}, {sharpest}°");
         assert!((area - 1.0).abs() < 1e-9, "area {area}");
+    }
+
+    #[test]
+    fn a_region_finer_than_ten_times_its_boundary_is_filled() {
+        // a unit square of 100 edges a side (400 boundary nodes): its inside needs some
+        // 11 000 nodes, more than the ten times the boundary that spade adds by default
+        let corner = |k: usize| [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]][k % 4];
+        let x: Vec<[f64; 3]> = (0..400)
+            .map(|i| {
+                let (a, b, s) = (
+                    corner(i / 100),
+                    corner(i / 100 + 1),
+                    (i % 100) as f64 / 100.0,
+                );
+                [a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1]), 0.0]
+            })
+            .collect();
+        let made = triangulate_between(&[vec![(0..400).collect()]], &x).unwrap();
+        assert!(made.coords.len() > 4400, "{} nodes", made.coords.len());
     }
 
     #[test]
