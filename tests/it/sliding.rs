@@ -144,6 +144,41 @@ fn the_cylinder_slides_its_whole_way_on_two_meshes() {
     }
 }
 
+/// Dragged 1.2, the cylinder runs off the plate's end (x = 2) and the medium's boundary
+/// there crosses itself: the medium cannot be made again. The run ends as at a step that
+/// fails: its error says so and where, `summary.json` is written with it (before, a failed
+/// remake left no summary), and the converged steps are kept.
+#[test]
+fn a_medium_that_cannot_be_made_again_ends_the_run_with_its_summary() {
+    let body = case_body("cylinder-slide").replace("ux = 0.3\n", "ux = 1.2\n");
+    assert!(body.contains("ux = 1.2"));
+    let case = case_file(
+        "cylinder-slide-off-the-end",
+        "cylinder-plate.geo",
+        "params = { h = 0.1 }",
+        &body,
+    );
+    let out = case.with_file_name("out");
+    let o = solve_cli(&case, &out, &[]);
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    assert!(
+        e.contains("the medium could not be made again at t = ")
+            && e.contains("the medium's boundary crosses itself")
+            && e.contains("converged steps up to"),
+        "{e}"
+    );
+    let s = summary(&out);
+    assert_eq!(s["converged"], false);
+    let message = s["message"].as_str().unwrap();
+    assert!(e.contains(message), "{message} / {e}");
+    // every converged step is in the history and has its file
+    let steps = s["load_steps"].as_u64().unwrap() as usize;
+    assert!(steps > 40, "{steps} steps");
+    assert_eq!(history(&out).1.len(), steps + 1);
+    assert!(out.join(format!("step_{steps:04}.vtu")).exists());
+}
+
 /// The cylinder held at θ = 1 by its rim, the plate's bottom at 0, steady conduction through
 /// the closing and sliding medium: what enters at the rim leaves at the bottom in every step
 /// (across every remake), and a remake's change of the heat flow is measured.
