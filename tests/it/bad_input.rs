@@ -1518,6 +1518,108 @@ fn every_key_of_the_case_reference_of_the_wrong_type_is_refused_at_its_line_or_s
     );
 }
 
+/// Every region key of docs/CASE.md that belongs to one kind of region (solid or medium),
+/// given well typed to a region of the other kind: refused by `check`, at the key's own line
+/// from the file and naming the `--set` from the command line, saying what kind it belongs to.
+#[test]
+fn every_region_key_on_the_wrong_kind_is_refused_at_its_line_or_set() {
+    let doc = std::fs::read_to_string(root().join("docs/CASE.md")).unwrap();
+    // the first table after a heading: each key with its type column
+    let table = |heading: &str| -> Vec<(String, String)> {
+        let lines = doc.lines().skip_while(|l| !l.starts_with(heading));
+        let rows = lines.skip_while(|l| !l.starts_with("| key |")).skip(2);
+        rows.take_while(|l| l.starts_with('|'))
+            .flat_map(|l| {
+                let cells: Vec<&str> = l.split('|').map(str::trim).collect();
+                let ty = cells[2].to_string();
+                (cells[1]
+                    .split(", ")
+                    .map(|k| k.trim_matches('`').to_string()))
+                .map(move |k| (k, ty.clone()))
+                .collect::<Vec<_>>()
+            })
+            .collect()
+    };
+    let solid = table("## `[[region]]`: a solid");
+    let medium = table("## `[[region]]`: the third medium");
+    let only = |a: &[(String, String)], b: &[(String, String)]| -> Vec<(String, String)> {
+        (a.iter())
+            .filter(|(k, _)| k != "group" && k != "kind" && !b.iter().any(|(o, _)| o == k))
+            .cloned()
+            .collect()
+    };
+    // a value of the key's own type, so that what is refused is its place
+    let value = |key: &str, ty: &str| -> String {
+        if ty.contains("bool") {
+            "true".into()
+        } else if ty.contains("table") {
+            "{ mu = 0.1, normal = [0, 1] }".into()
+        } else if ty.contains("rows") {
+            "[[0.5, 1.0], [1.0, 2.0]]".into()
+        } else if ty.starts_with("`\"") {
+            ty.split('`').nth(1).unwrap().to_string()
+        } else if ty.contains("number") {
+            "1.0".into()
+        } else {
+            panic!("no value for `{key}` of type \"{ty}\": teach this test one")
+        }
+    };
+    let base = std::fs::read_to_string(root().join("cases/block.toml"))
+        .unwrap()
+        .replace("\"../geo/", &format!("\"{}/geo/", root().display()));
+    let dir = scratch("bad-wrong-kind");
+    let good = dir.join("base.toml");
+    std::fs::write(&good, &base).unwrap();
+    let (mut tried, mut wrong) = (0, Vec::new());
+    // what is said after the region is named (its group is named as its kind here) names
+    // the kind the key belongs to
+    let names = |e: &str, kind: &str, belongs: &str| {
+        e.split_once(&format!("(\"{kind}\"): "))
+            .is_some_and(|(_, said)| said.contains(belongs))
+    };
+    for (keys, kind, belongs) in [
+        (only(&solid, &medium), "medium", "solid"),
+        (only(&medium, &solid), "solid", "medium"),
+    ] {
+        assert!(keys.len() >= 4, "{kind}: {keys:?}");
+        for (key, ty) in keys {
+            tried += 1;
+            let v = value(&key, &ty);
+            let mut lines: Vec<String> = base.lines().map(String::from).collect();
+            let at = 1 + lines
+                .iter()
+                .position(|l| *l == format!("kind = \"{kind}\""))
+                .unwrap();
+            lines.insert(at, format!("{key} = {v}"));
+            let case = dir.join(format!("{kind}-{key}.toml"));
+            std::fs::write(&case, lines.join("\n") + "\n").unwrap();
+            let o = tmc(&["check", case.to_str().unwrap()]);
+            let e = err(&o);
+            if o.status.success()
+                || !e.contains(&format!(":{}:", at + 1))
+                || !names(&e, kind, belongs)
+            {
+                wrong.push(format!("{key} = {v} on the {kind} (line {}): {e}", at + 1));
+            }
+            let set = format!("region.{kind}.{key}={v}");
+            let o = tmc(&["check", good.to_str().unwrap(), "--set", &set]);
+            let e = err(&o);
+            if o.status.success()
+                || !e.contains(&format!("--set {set}"))
+                || !names(&e, kind, belongs)
+            {
+                wrong.push(format!("--set {set}: {e}"));
+            }
+        }
+    }
+    assert!(
+        wrong.is_empty(),
+        "{} of {tried}:\n{}",
+        wrong.len(),
+        wrong.join("\n")
+    );
+}
+
 #[test]
 fn a_probe_named_as_a_column_tmc_writes_is_refused_at_its_name() {
     // history.csv would hold two columns of one name: a group's own columns (its reaction, its
