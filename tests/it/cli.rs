@@ -931,7 +931,7 @@ fn without_petsc_the_engine_and_mpirun_say_how_to_build_it() {
     );
     assert!(!out.join("summary.json").exists(), "nothing solved");
     // under mpirun: every rank ends with the same words, no MPI abort
-    let o = mpirun_refused(
+    let o = mpirun_tmc(
         2,
         &[
             "solve".as_ref(),

@@ -15,11 +15,6 @@ fn mpirun(ranks: usize, case: &Path, out: &Path, extra: &[&str]) -> std::process
     common::mpirun_tmc(ranks, &solve_args(case, out, extra))
 }
 
-/// `mpirun` of a solve that every rank refuses by itself (`common::mpirun_refused`).
-fn mpirun_refused(ranks: usize, case: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
-    common::mpirun_refused(ranks, &solve_args(case, out, extra))
-}
-
 fn solve_args<'a>(case: &'a Path, out: &'a Path, extra: &[&'a str]) -> Vec<&'a std::ffi::OsStr> {
     let mut args = vec![
         "solve".as_ref(),
@@ -425,7 +420,7 @@ fn a_rerun_failing_on_its_engine_leaves_the_previous_results_as_they_were() {
         let args = ["--set", "solver.engine=\"petsc\"", "--set", &set];
         let o = match ranks {
             1 => solve_cli(&case, &out, &args),
-            _ => mpirun_refused(ranks, &case, &out, &args),
+            _ => mpirun(ranks, &case, &out, &args),
         };
         let e = stderr(&o);
         assert_eq!(o.status.code(), Some(1), "{ranks} {options}: {e}");
@@ -586,7 +581,7 @@ fn a_bad_input_under_mpirun_ends_every_rank_with_the_error_printed_once() {
     for (name, text, says) in cases {
         let case = dir.join(name);
         std::fs::write(&case, text).unwrap();
-        let o = mpirun_refused(2, &case, &dir.join(format!("out-{name}")), &[]);
+        let o = mpirun(2, &case, &dir.join(format!("out-{name}")), &[]);
         let e = stderr(&o);
         assert_eq!(o.status.code(), Some(1), "{name}: {e}");
         assert_eq!(e.matches(says).count(), 1, "{name}: {e}");
@@ -595,7 +590,7 @@ fn a_bad_input_under_mpirun_ends_every_rank_with_the_error_printed_once() {
     // -o naming a file: refused, the file kept
     let case = dir.join("good.toml");
     std::fs::write(&case, &good).unwrap();
-    let o = mpirun_refused(2, &case, &a_file, &[]);
+    let o = mpirun(2, &case, &a_file, &[]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(!stderr(&o).contains("MPI_ERR"), "{}", stderr(&o));
     assert_eq!(std::fs::read_to_string(&a_file).unwrap(), "the user's");
@@ -611,7 +606,7 @@ fn a_bad_input_under_mpirun_ends_every_rank_with_the_error_printed_once() {
     )
     .unwrap();
     let study_out = dir.join("study-out");
-    let o = common::mpirun_refused(
+    let o = common::mpirun_tmc(
         2,
         &[
             "study".as_ref(),
@@ -817,7 +812,7 @@ fn a_distributed_run_restarts_on_as_many_ranks_or_on_others() {
         let before = folder_files(&out);
         let mut args = vec!["--restart"];
         args.extend(extra);
-        let o = mpirun_refused(2, case, &out, &args);
+        let o = mpirun(2, case, &out, &args);
         let e = stderr(&o);
         assert_eq!(o.status.code(), Some(1), "{says}: {e}");
         assert_eq!(e.matches(says).count(), 1, "{says}: {e}");
@@ -1039,7 +1034,7 @@ fn a_reconnected_friction_layer_is_refused_on_several_ranks_with_the_folder_kept
     let out = case.with_file_name("out");
     std::fs::create_dir_all(&out).unwrap();
     std::fs::write(out.join("mine.txt"), "kept").unwrap();
-    let o = mpirun_refused(2, &case, &out, &[]);
+    let o = mpirun(2, &case, &out, &[]);
     let e = stderr(&o);
     assert!(!o.status.success(), "{e}");
     assert_eq!(e.matches("runs on one process").count(), 1, "{e}");
@@ -1048,7 +1043,7 @@ fn a_reconnected_friction_layer_is_refused_on_several_ranks_with_the_folder_kept
         "kept"
     );
     // and `tmc check` under mpirun refuses it as the solve does
-    let c = common::mpirun_refused(2, &["check".as_ref(), case.as_os_str()]);
+    let c = common::mpirun_tmc(2, &["check".as_ref(), case.as_os_str()]);
     let e = stderr(&c);
     assert!(!c.status.success(), "{e}");
     assert_eq!(e.matches("runs on one process").count(), 1, "{e}");

@@ -332,7 +332,7 @@ fn a_run_whose_medium_is_made_again_restarts_as_if_never_stopped() {
 #[test]
 fn a_medium_made_again_is_refused_several_ranks_by_name() {
     let case = root().join("cases/cylinder-slide.toml");
-    let o = mpirun_refused(2, &["check".as_ref(), case.as_os_str()]);
+    let o = mpirun_tmc(2, &["check".as_ref(), case.as_os_str()]);
     assert!(!o.status.success());
     let text = String::from_utf8_lossy(&o.stdout).to_string() + &stderr(&o);
     assert!(

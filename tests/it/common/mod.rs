@@ -302,16 +302,3 @@ pub fn mpirun_command(ranks: usize) -> std::process::Command {
 pub fn mpirun_tmc(ranks: usize, args: &[&std::ffi::OsStr]) -> std::process::Output {
     mpirun_command(ranks).args(args).output().unwrap()
 }
-
-/// `mpirun -n RANKS` of tmc with `args`, for a run every rank refuses by itself. Once a rank
-/// has ended with an error, mpirun gives the others a second between SIGTERM and SIGKILL
-/// (`odls_base_sigkill_timeout`), even when they have ended too: that second was all of such a
-/// run's time. Not for runs that are interrupted or killed, whose ranks need it.
-#[allow(dead_code)]
-pub fn mpirun_refused(ranks: usize, args: &[&std::ffi::OsStr]) -> std::process::Output {
-    mpirun_command(ranks)
-        .env("OMPI_MCA_odls_base_sigkill_timeout", "0")
-        .args(args)
-        .output()
-        .unwrap()
-}
