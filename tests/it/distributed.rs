@@ -15,6 +15,26 @@ fn mpirun(ranks: usize, case: &Path, out: &Path, extra: &[&str]) -> std::process
     common::mpirun_tmc(ranks, &solve_args(case, out, extra))
 }
 
+/// [`mpirun`] of several jobs started together, their outputs in order. For refusals: Open MPI
+/// waits a second or two after a rank ends with an error before it ends the job, time the
+/// jobs can spend side by side.
+fn mpirun_together(jobs: &[(usize, Vec<&std::ffi::OsStr>)]) -> Vec<std::process::Output> {
+    let started: Vec<std::process::Child> = (jobs.iter())
+        .map(|(ranks, args)| {
+            common::mpirun_command(*ranks)
+                .args(args)
+                .stdout(std::process::Stdio::piped())
+                .stderr(std::process::Stdio::piped())
+                .spawn()
+                .unwrap()
+        })
+        .collect();
+    started
+        .into_iter()
+        .map(|job| job.wait_with_output().unwrap())
+        .collect()
+}
+
 fn solve_args<'a>(case: &'a Path, out: &'a Path, extra: &[&'a str]) -> Vec<&'a std::ffi::OsStr> {
     let mut args = vec![
         "solve".as_ref(),
@@ -578,24 +598,19 @@ fn a_bad_input_under_mpirun_ends_every_rank_with_the_error_printed_once() {
             "\"nothere\" is not in the mesh",
         ),
     ];
-    for (name, text, says) in cases {
-        let case = dir.join(name);
-        std::fs::write(&case, text).unwrap();
-        let o = mpirun(2, &case, &dir.join(format!("out-{name}")), &[]);
-        let e = stderr(&o);
-        assert_eq!(o.status.code(), Some(1), "{name}: {e}");
-        assert_eq!(e.matches(says).count(), 1, "{name}: {e}");
-        assert!(!e.contains("MPI_ERR"), "{name}: {e}");
-    }
-    // -o naming a file: refused, the file kept
+    let files: Vec<(PathBuf, PathBuf)> = (cases.iter())
+        .map(|(name, text, _)| {
+            let case = dir.join(name);
+            std::fs::write(&case, text).unwrap();
+            (case, dir.join(format!("out-{name}")))
+        })
+        .collect();
+    // and -o naming a file: refused, the file kept
     let case = dir.join("good.toml");
     std::fs::write(&case, &good).unwrap();
-    let o = mpirun(2, &case, &a_file, &[]);
-    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
-    assert!(!stderr(&o).contains("MPI_ERR"), "{}", stderr(&o));
-    assert_eq!(std::fs::read_to_string(&a_file).unwrap(), "the user's");
-    // a study starts its variants as processes of their own, which cannot start MPI inside
-    // the job: refused at once (before, the variants failed in MPI_Init or the ranks hung)
+    // and a study, which starts its variants as processes of their own, which cannot start
+    // MPI inside the job: refused at once (before, the variants failed in MPI_Init or the
+    // ranks hung)
     let study = dir.join("study.toml");
     std::fs::write(
         &study,
@@ -606,17 +621,25 @@ fn a_bad_input_under_mpirun_ends_every_rank_with_the_error_printed_once() {
     )
     .unwrap();
     let study_out = dir.join("study-out");
-    let o = common::mpirun_tmc(
-        2,
-        &[
-            "study".as_ref(),
-            study.as_os_str(),
-            "-o".as_ref(),
-            study_out.as_os_str(),
-        ],
-    );
-    let e = stderr(&o);
-    assert_eq!(o.status.code(), Some(1), "{e}");
+    let mut jobs: Vec<_> = (files.iter())
+        .map(|(case, out)| (2, solve_args(case, out, &[])))
+        .collect();
+    jobs.push((2, solve_args(&case, &a_file, &[])));
+    let study_args = ["study".as_ref(), study.as_os_str(), "-o".as_ref()];
+    jobs.push((2, [&study_args[..], &[study_out.as_os_str()]].concat()));
+    let mut ended = mpirun_together(&jobs);
+    let (studied, o) = (ended.pop().unwrap(), ended.pop().unwrap());
+    for ((name, _, says), o) in cases.iter().zip(ended) {
+        let e = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{name}: {e}");
+        assert_eq!(e.matches(says).count(), 1, "{name}: {e}");
+        assert!(!e.contains("MPI_ERR"), "{name}: {e}");
+    }
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("MPI_ERR"), "{}", stderr(&o));
+    assert_eq!(std::fs::read_to_string(&a_file).unwrap(), "the user's");
+    let e = stderr(&studied);
+    assert_eq!(studied.status.code(), Some(1), "{e}");
     assert_eq!(e.matches("tmc study runs on one process").count(), 1, "{e}");
     assert!(!dir.join("study-out").exists());
 }
@@ -745,16 +768,16 @@ fn a_distributed_run_restarts_on_as_many_ranks_or_on_others() {
         "stopped after {done} of {} rows",
         all_rows.len()
     );
-    let copy = |to: &str| {
+    let copy = |from: &Path, to: &str| {
         let to = dir.join(to);
         std::fs::create_dir_all(&to).unwrap();
-        for e in std::fs::read_dir(&stopped).unwrap() {
+        for e in std::fs::read_dir(from).unwrap() {
             let e = e.unwrap();
             std::fs::copy(e.path(), to.join(e.file_name())).unwrap();
         }
         to
     };
-    let (on_one, on_three) = (copy("on-one"), copy("on-three"));
+    let (on_one, on_three) = (copy(&stopped, "on-one"), copy(&stopped, "on-three"));
     for (ranks, out) in [(2, &stopped), (1, &on_one), (3, &on_three)] {
         let mut args = vec!["--restart"];
         args.extend(finer);
@@ -768,7 +791,7 @@ fn a_distributed_run_restarts_on_as_many_ranks_or_on_others() {
     }
     // and what cannot be continued is said once, every rank ending with it, the folder as it
     // was: no run there, a finished run, a changed case, another case, a damaged checkpoint,
-    // a damaged history
+    // a damaged history (each in a folder of its own: the jobs run together)
     let other = root().join("cases/block-transient.toml");
     std::fs::write(on_one.join("restart.json"), "{").unwrap();
     let history = on_three.join("history.csv");
@@ -783,36 +806,41 @@ fn a_distributed_run_restarts_on_as_many_ranks_or_on_others() {
     cp.as_object_mut().unwrap().remove("seal");
     let sealed = tmc::driver::checkpoint::seal(&cp.to_string());
     std::fs::write(on_three.join("restart.json"), sealed).unwrap();
-    let k = ["--set", "time.dt=0.01", "--set", "region.solid.k=2.0"];
+    let k = [
+        "--restart",
+        "--set",
+        "time.dt=0.01",
+        "--set",
+        "region.solid.k=2.0",
+    ];
     let nothing = dir.join("nothing");
     std::fs::create_dir_all(&nothing).unwrap();
-    for (case, out, extra, says) in [
-        (&case, nothing.clone(), &[][..], "has no restart.json"),
-        (&case, full.clone(), &finer[..], "has finished"),
+    let (changed, other_case) = (copy(&full, "changed"), copy(&full, "other-case"));
+    let finer = ["--restart", finer[0], finer[1]];
+    let refused = [
+        (&case, &nothing, &["--restart"][..], "has no restart.json"),
+        (&case, &full, &finer[..], "has finished"),
         (
             &case,
-            full.clone(),
+            &changed,
             &k[..],
             "has changed since: region[0].k: 1.0 then, 2.0 now",
         ),
-        (&other, full.clone(), &[][..], "has changed since"),
+        (&other, &other_case, &["--restart"][..], "has changed since"),
+        (&case, &on_one, &finer[..], "does not begin with its seal"),
         (
             &case,
-            on_one.clone(),
-            &finer[..],
-            "does not begin with its seal",
-        ),
-        (
-            &case,
-            on_three.clone(),
+            &on_three,
             &finer[..],
             "history.csv does not go with it",
         ),
-    ] {
-        let before = folder_files(&out);
-        let mut args = vec!["--restart"];
-        args.extend(extra);
-        let o = mpirun(2, case, &out, &args);
+    ];
+    let before: Vec<_> = refused.iter().map(|r| folder_files(r.1)).collect();
+    let jobs: Vec<_> = (refused.iter())
+        .map(|&(case, out, args, _)| (2, solve_args(case, out, args)))
+        .collect();
+    for (i, o) in mpirun_together(&jobs).into_iter().enumerate() {
+        let (_, out, _, says) = refused[i];
         let e = stderr(&o);
         assert_eq!(o.status.code(), Some(1), "{says}: {e}");
         assert_eq!(e.matches(says).count(), 1, "{says}: {e}");
@@ -820,7 +848,7 @@ fn a_distributed_run_restarts_on_as_many_ranks_or_on_others() {
             !e.contains("MPI_ERR") && !e.contains("panicked"),
             "{says}: {e}"
         );
-        assert_eq!(folder_files(&out), before, "{says}: the folder as it was");
+        assert_eq!(folder_files(out), before[i], "{says}: the folder as it was");
     }
 }
 
