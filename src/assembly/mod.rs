@@ -608,6 +608,14 @@ fn term_rank(model: &Model, p: &Partition, term: Term, c: usize) -> usize {
     }
 }
 
+/// The terms that keep a history per point, in the order of their slabs (a checkpoint's
+/// `point_history`).
+pub fn history_terms(model: &Model) -> Vec<Term> {
+    (model.terms().into_iter())
+        .filter(|&t| integrand(model, t).history_per_point(model) > 0)
+        .collect()
+}
+
 /// The history at the initial state, one slab per term that keeps one (in term order), and
 /// each term's slab: as each term's [`Integrand::initial_history`] makes it.
 fn initial_history(model: &Model, terms: &[Term]) -> (PointHistory, Vec<Option<usize>>) {

@@ -21,7 +21,7 @@ use crate::mesh::Mesh;
 use crate::mesh::gmsh::{GmshError, MeshOptions, mesh_geo};
 use crate::mesh::msh::{MshError, read_msh};
 use crate::model::rejoin::{Layer, LayerError};
-use crate::model::{Model, remake};
+use crate::model::{Model, Term, remake};
 use crate::output::probes::{self, Probe};
 use crate::output::{OutputError, RunFolder, werr};
 use crate::parallel::Ranks;
@@ -654,7 +654,8 @@ fn remade(
     let (mut new, probes) = model_on_extent(case, mesh, model.d, true)?;
     new.cell_reference = made.reference.clone();
     let from = made.old_dofs(model, &new);
-    cp.state.x = made.state(model, &cp.state.x, &new);
+    let old_state = std::mem::take(&mut cp.state.x);
+    cp.state.x = made.state(model, &old_state, &new);
     // the forces the work is counted from, per displacement dof in dof order: a new node's
     // are nil (no load acts inside the medium)
     let old_u: Vec<usize> = (0..model.dofs.n_dofs)
@@ -672,8 +673,25 @@ fn remade(
             o => f_of.get(&(o as usize)).copied().unwrap_or(0.0),
         })
         .collect();
-    // the point history is the solids' alone (a medium with one is not made again), in the
-    // same order: their blocks keep theirs
+    // the point history: the solids' blocks keep theirs (a medium with stored heat or a mass
+    // is not made again); the medium's friction carries on what it transmitted
+    let terms = crate::assembly::history_terms(model);
+    let of = |t: Term| terms.iter().position(|&o| o == t);
+    let old_friction: Vec<Vec<f64>> = (0..model.friction_blocks.len())
+        .map(|f| cp.state.point_history[of(Term::Friction(f)).expect("a friction slab")].clone())
+        .collect();
+    let mut friction = match new.friction_blocks.is_empty() {
+        true => Vec::new(),
+        false => remake::carried_friction(model, &old_state, &old_friction, &new, &cp.state.x)
+            .map_err(|e| SolveError::Setup(format!("the medium could not be made again: {e}")))?,
+    }
+    .into_iter();
+    cp.state.point_history = (crate::assembly::history_terms(&new).into_iter())
+        .map(|t| match t {
+            Term::Friction(_) => friction.next().expect("a carried friction slab"),
+            t => cp.state.point_history[of(t).expect("a solid's slab kept")].clone(),
+        })
+        .collect();
     Ok((new, probes))
 }
 

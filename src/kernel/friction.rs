@@ -108,6 +108,96 @@ pub fn shift_slip(history: &mut [f64], shift: &[f64]) {
     }
 }
 
+/// What a point with history `h` (the last accepted step's) transmits across its slip plane
+/// of unit normal `normal` at the deformation `F`: its traction F τ as a share φ ∈ [0, 1] of
+/// its Coulomb limit μ p_n, and that traction's direction in the current configuration (zero
+/// where it carries none). A medium made again carries these on ([`carried_cell`]): a share
+/// of the limit, not a traction, so that a point that slipped slips on at its own limit
+/// wherever the new cells put the normal traction. The direction is that of the traction on
+/// the side the plane's current normal n points to, given as e ⊗ n (n's sign is the normal's,
+/// which a new cell may have the other way round).
+pub fn transmitted(
+    mat: &FrictionMaterial,
+    normal: &Vector3<f64>,
+    F: &Matrix3<f64>,
+    h: &[f64],
+) -> (f64, Matrix3<f64>) {
+    let J = F.determinant();
+    let limit = mat.mu * h[P_N];
+    let none = (0.0, Matrix3::zeros());
+    let Some(Finv) = F.try_inverse() else {
+        return none;
+    };
+    if J <= 0.0 || limit.is_nan() || limit <= 0.0 {
+        return none;
+    }
+    let (G, _) = shear_modulus(mat.c_f, mat.medium.bulk_modulus(), J);
+    let t = F * ((shear_of(F, normal) - Vector3::new(h[0], h[1], h[2])) * G);
+    let n = (Finv.transpose() * normal).normalize();
+    match t.norm() {
+        size if size > 0.0 => ((size / limit).min(1.0), t * n.transpose() / size),
+        _ => none,
+    }
+}
+
+/// The history of one new friction cell (state `s`, slip-plane unit normal `normal`) of a
+/// medium made again, into `out` (`HISTORY_PER_POINT` values per point), and its points'
+/// reference volumes into `dV`. `old(y)` says what the medium it replaces transmitted at the
+/// current place y ([`transmitted`]): the share φ of the Coulomb limit and the traction's
+/// direction e ⊗ n. Each point's slip g is set so that its traction F τ, τ = G_f(J) (γ − g),
+/// is φ of its own limit μ p_n (p_n from the medium's stress at its F), along e (taken on the
+/// side its own n points to) as it lies in the point's plane; where its plane is open, τ = 0. Its step's slip is nil, its normal traction
+/// its p_n, its work nil (the caller shares out the old medium's).
+pub fn carried_cell<const N: usize, const D: usize, E: RefElement<N, D>>(
+    mat: &FrictionMaterial,
+    normal: &Vector3<f64>,
+    lay: &Layout,
+    s: &CellState<N>,
+    old: impl Fn(&[f64; 3]) -> (f64, Matrix3<f64>),
+    out: &mut [f64],
+    dV: &mut [f64],
+) -> Result<(), KernelError> {
+    for (q, (xi, w)) in E::quadrature().iter().enumerate() {
+        let p = point::<N, D, E>(xi, *w, lay, s, mat.medium.theta0())?;
+        let inverted = KernelError::Inverted {
+            J: p.F.determinant(),
+        };
+        let m = mat.medium.stress(&p.F, p.theta).ok_or(inverted)?;
+        let Finv = p.F.try_inverse().ok_or(inverted)?;
+        let n = (Finv.transpose() * normal).normalize();
+        let p_n = -n.dot(&(m.P * normal));
+        let shape = E::shape(xi);
+        let y: [f64; 3] =
+            std::array::from_fn(|i| (0..N).map(|I| shape[I] * (s.X[I][i] + s.u[I][i])).sum());
+        let (phi, en) = old(&y);
+        let e = en * n;
+        // the direction as it lies in this point's plane, F τ ⊥ n (τ ⊥ N)
+        let along = e - n * n.dot(&e);
+        let tau = match along.norm() {
+            size if p_n > 0.0 && phi > 0.0 && size > 0.0 => {
+                Finv * along * (phi * mat.mu * p_n / size)
+            }
+            _ => Vector3::zeros(),
+        };
+        let (G, _) = shear_modulus(mat.c_f, mat.medium.bulk_modulus(), m.J);
+        let slip = shear_of(&p.F, normal) - tau / G;
+        let h = &mut out[q * HISTORY_PER_POINT..(q + 1) * HISTORY_PER_POINT];
+        h.fill(0.0);
+        h[..3].copy_from_slice(slip.as_slice());
+        h[P_N] = p_n;
+        dV[q] = p.dV;
+    }
+    Ok(())
+}
+
+/// Give the points of a cell's history (`HISTORY_PER_POINT` values per point) the work
+/// `per_volume` times their reference volumes `dV`.
+pub fn share_work(history: &mut [f64], dV: &[f64], per_volume: f64) {
+    for (h, v) in history.chunks_mut(HISTORY_PER_POINT).zip(dV) {
+        h[WORK] = per_volume * v;
+    }
+}
+
 /// Residual and (optionally) tangent of the friction term of one medium cell with slip-plane
 /// unit normal `normal`, from the history `committed` of the last accepted step; writes the
 /// trial history to `trial`. `heat_rate` is
@@ -370,15 +460,89 @@ mod tests {
         (s, h)
     }
 
+    /// A cell's accepted state handed to a new cell that is the same cell: each point's
+    /// share of its limit and its traction's direction ([`transmitted`]) give back the slip
+    /// and the normal traction the step left ([`carried_cell`]), and the plane's stress
+    /// N⊗τ + τ⊗N is the same when the new cell's normal points the other way.
+    fn carried_round_trip<const N: usize, const D: usize, E: RefElement<N, D>>(
+        mat: &FrictionMaterial,
+    ) {
+        let (s, committed) = state::<N, D, E>();
+        let lay = Layout {
+            n: N,
+            dim: D,
+            has_u: true,
+            has_theta: false,
+            np: 0,
+        };
+        let (_, trial) = residual_of::<N, D, E>(mat, 0.0, &lay, &s, &committed);
+        let nq = E::quadrature().len();
+        let mut sent = Vec::new();
+        for (q, (xi, w)) in E::quadrature().iter().enumerate() {
+            let p = point::<N, D, E>(xi, *w, &lay, &s, mat.medium.theta0()).unwrap();
+            let h = &trial[q * HISTORY_PER_POINT..(q + 1) * HISTORY_PER_POINT];
+            let shape = E::shape(xi);
+            let y: [f64; 3] =
+                std::array::from_fn(|i| (0..N).map(|I| shape[I] * (s.X[I][i] + s.u[I][i])).sum());
+            sent.push((y, transmitted(mat, &NORMAL, &p.F, h), p.F));
+        }
+        let old = |y: &[f64; 3]| {
+            let d = |a: &[f64; 3]| (0..3).map(|i| (a[i] - y[i]).powi(2)).sum::<f64>();
+            let k = (0..sent.len())
+                .min_by(|&a, &b| d(&sent[a].0).total_cmp(&d(&sent[b].0)))
+                .unwrap();
+            sent[k].1
+        };
+        for normal in [NORMAL, -NORMAL] {
+            let (mut out, mut dV) = (vec![0.0; nq * HISTORY_PER_POINT], vec![0.0; nq]);
+            carried_cell::<N, D, E>(mat, &normal, &lay, &s, old, &mut out, &mut dV).unwrap();
+            for q in 0..nq {
+                let (h, c) = (
+                    &trial[q * HISTORY_PER_POINT..(q + 1) * HISTORY_PER_POINT],
+                    &out[q * HISTORY_PER_POINT..(q + 1) * HISTORY_PER_POINT],
+                );
+                let F = sent[q].2;
+                let (G, _) = shear_modulus(mat.c_f, mat.medium.bulk_modulus(), F.determinant());
+                let stress = |n: &Vector3<f64>, g: &[f64]| {
+                    plane_pair(n, &((shear_of(&F, n) - Vector3::new(g[0], g[1], g[2])) * G))
+                };
+                let (was, is) = (stress(&NORMAL, h), stress(&normal, c));
+                assert!(
+                    (was - is).norm() <= 1e-9 * was.norm(),
+                    "{normal:?}: {was} then {is}"
+                );
+                assert!(
+                    (c[P_N] - h[P_N]).abs() <= 1e-12 * h[P_N].abs(),
+                    "p_n {} then {}",
+                    h[P_N],
+                    c[P_N]
+                );
+                assert!(dV[q] > 0.0 && c[WORK] == 0.0);
+            }
+        }
+    }
+
+    #[test]
+    fn a_cell_handed_its_own_state_carries_its_slip_and_stress() {
+        // slipping (μ = 0.3) and sticking (μ large) points
+        for mu in [0.3, 50.0] {
+            let mat = FrictionMaterial { mu, ..MATERIAL };
+            carried_round_trip::<3, 2, Tri3>(&mat);
+            carried_round_trip::<4, 2, Quad4>(&mat);
+            carried_round_trip::<4, 3, Tet4>(&mat);
+            carried_round_trip::<8, 3, Hex8>(&mat);
+        }
+    }
+
     /// The friction residual of the cell `s` under `mat` from the history `committed` (heat
-    /// made at `heat_rate`), without its tangent.
+    /// made at `heat_rate`), without its tangent, and the trial history it wrote.
     fn residual_of<const N: usize, const D: usize, E: RefElement<N, D>>(
         mat: &FrictionMaterial,
         heat_rate: f64,
         lay: &Layout,
         s: &CellState<N>,
         committed: &[f64],
-    ) -> Vec<f64> {
+    ) -> (Vec<f64>, Vec<f64>) {
         let mut trial = committed.to_vec();
         let mut r = vec![0.0; lay.ndof()];
         friction::<N, D, E>(
@@ -395,7 +559,7 @@ mod tests {
             None,
         )
         .unwrap();
-        r
+        (r, trial)
     }
 
     /// Central differences of the residual (u rows and the heat) against the tangent, for a
@@ -540,7 +704,7 @@ mod tests {
         };
         let (s, mut committed) = state::<4, 2, Quad4>();
         let residual = |mat: &FrictionMaterial, committed: &[f64]| {
-            residual_of::<4, 2, Quad4>(mat, 2.5, &lay, &s, committed)
+            residual_of::<4, 2, Quad4>(mat, 2.5, &lay, &s, committed).0
         };
         let lagged = FrictionMaterial {
             lagged: true,
@@ -615,7 +779,7 @@ mod tests {
         };
         let (s, committed) = state::<3, 2, Tri3>();
         let residual = |mat: &FrictionMaterial, committed: &[f64]| {
-            residual_of::<3, 2, Tri3>(mat, 0.0, &lay, &s, committed)
+            residual_of::<3, 2, Tri3>(mat, 0.0, &lay, &s, committed).0
         };
         let free = FrictionMaterial {
             mu: 0.0,

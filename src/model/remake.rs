@@ -29,9 +29,10 @@
 use super::{Model, RegionKind};
 use crate::dofs::{CellState, Field, NONE, gather, rebase};
 use crate::element::{RefElement, centre, local_coords, physical_gradients};
+use crate::kernel::friction::HISTORY_PER_POINT;
 use crate::mesh::Mesh;
 use crate::mesh::remesh::{remesh, supported};
-use nalgebra::{Matrix2, SymmetricEigen, Vector2};
+use nalgebra::{Matrix2, Matrix3, SymmetricEigen, Vector2};
 use serde::{Deserialize, Serialize};
 
 /// How far (in cell sizes, see [`Medium::slid_cells`]) a medium cell's faces may slide past
@@ -287,6 +288,7 @@ impl<'a> Locator<'a> {
             at(&At::<N, D, E> {
                 s,
                 xi,
+                cell: (*b, *c),
                 nodes,
                 model: self.model,
                 x: self.x,
@@ -319,15 +321,20 @@ fn outside<const N: usize, const D: usize, E: RefElement<N, D>>(
     }
 }
 
-/// An old cell at a point: its deformation gradient and its interpolated temperature there.
+/// An old cell at a point: its deformation gradient and its interpolated temperature there,
+/// the cell (block and index) and its quadrature point nearest the point.
 trait CellAt {
     fn F(&self) -> Option<Matrix2<f64>>;
     fn theta(&self) -> f64;
+    fn cell(&self) -> (usize, usize);
+    fn nearest_point(&self) -> usize;
 }
 
 struct At<'a, const N: usize, const D: usize, E> {
     s: CellState<N>,
     xi: [f64; D],
+    /// The cell's block and index.
+    cell: (usize, usize),
     nodes: &'a [usize],
     model: &'a Model,
     x: &'a [f64],
@@ -337,6 +344,15 @@ struct At<'a, const N: usize, const D: usize, E> {
 impl<const N: usize, const D: usize, E: RefElement<N, D>> CellAt for At<'_, N, D, E> {
     fn F(&self) -> Option<Matrix2<f64>> {
         cell_F::<N, D, E>(&self.s, &self.xi)
+    }
+    fn cell(&self) -> (usize, usize) {
+        self.cell
+    }
+    fn nearest_point(&self) -> usize {
+        let d2 = |q: &[f64; D]| (0..D).map(|i| (q[i] - self.xi[i]).powi(2)).sum::<f64>();
+        (E::quadrature().iter().enumerate())
+            .min_by(|a, b| d2(&a.1.0).total_cmp(&d2(&b.1.0)))
+            .map_or(0, |(q, _)| q)
     }
     fn theta(&self) -> f64 {
         let th = &self.model.dofs.theta;
@@ -376,8 +392,11 @@ impl Medium {
             .filter(|b| model.regions[b.region].1 == RegionKind::Medium)
             .map(|b| b.block)
             .collect();
-        if !model.friction_blocks.is_empty() {
-            return refuse("does not carry friction's slip across yet; leave out `friction`");
+        if model.friction_blocks.iter().any(|f| f.mat.forget_slip) {
+            return refuse(
+                "cannot be given with `friction.forget_slip`: a remade medium starts from its \
+                 current shape, with nothing of the slip to forget; leave out `forget_slip`",
+            );
         }
         let with_history = (model.capacity_blocks.iter().map(|b| b.block))
             .chain(model.inertia_blocks.iter().map(|b| b.block))
@@ -549,6 +568,87 @@ impl Medium {
             theta,
         })
     }
+}
+
+/// The friction history of every friction block of `new`, the model of a medium made again,
+/// at its state `x` (one slab per block, in the order of `new.friction_blocks`): each new point
+/// carries on what the old medium (`old` at the state `old_x`, the committed history
+/// `old_slabs` per friction block of `old`) transmitted where it stands, the share of its
+/// Coulomb limit and its traction's direction (`kernel::friction::carried_cell`). The work a
+/// region's old cells dissipated is shared among its new points by their volume, so that the
+/// run's friction work and heat go on whole.
+pub fn carried_friction(
+    old: &Model,
+    old_x: &[f64],
+    old_slabs: &[Vec<f64>],
+    new: &Model,
+    x: &[f64],
+) -> Result<Vec<Vec<f64>>, String> {
+    use crate::kernel::friction::{carried_cell, dissipated_work, share_work, transmitted};
+    let mut slabs = Vec::with_capacity(new.friction_blocks.len());
+    let mut volumes = Vec::with_capacity(new.friction_blocks.len());
+    for fb in &new.friction_blocks {
+        let olds: Vec<usize> = (0..old.friction_blocks.len())
+            .filter(|&k| old.friction_blocks[k].region == fb.region)
+            .collect();
+        let blocks: Vec<usize> = olds.iter().map(|&k| old.friction_blocks[k].block).collect();
+        let find = Locator::new(old, &blocks, old_x);
+        let at = |y: &[f64; 3]| {
+            find.value(y, |cell| {
+                let (b, c) = cell.cell();
+                let k = olds[blocks.iter().position(|&o| o == b)?];
+                let ofb = &old.friction_blocks[k];
+                let width = old_slabs[k].len() / old.mesh.cells[b].n_cells();
+                let q = width * c + cell.nearest_point() * HISTORY_PER_POINT;
+                let f = cell.F()?;
+                let F = Matrix3::new(
+                    f[(0, 0)],
+                    f[(0, 1)],
+                    0.0,
+                    f[(1, 0)],
+                    f[(1, 1)],
+                    0.0,
+                    0.0,
+                    0.0,
+                    1.0,
+                );
+                let h = &old_slabs[k][q..q + HISTORY_PER_POINT];
+                Some(transmitted(&ofb.mat, ofb.normals.of(c), &F, h))
+            })
+            .unwrap_or((0.0, Matrix3::zeros()))
+        };
+        let blk = &new.mesh.cells[fb.block];
+        let (slab, dV) = crate::with_cell!(blk.kind, |N, D, E| {
+            let points = E::quadrature().len();
+            let mut slab = vec![0.0; blk.n_cells() * points * HISTORY_PER_POINT];
+            let mut dV = vec![0.0; blk.n_cells() * points];
+            let cells = slab.chunks_mut(points * HISTORY_PER_POINT);
+            for (c, (h, v)) in cells.zip(dV.chunks_mut(points)).enumerate() {
+                let s = new.cell_state::<N>(fb.block, c, x);
+                carried_cell::<N, D, E>(&fb.mat, fb.normals.of(c), &fb.layout, &s, at, h, v)
+                    .map_err(|e| format!("cell {c} of the new medium: {e:?}"))?;
+            }
+            Ok::<_, String>((slab, dV))
+        })?;
+        slabs.push(slab);
+        volumes.push(dV);
+    }
+    for (f, fb) in new.friction_blocks.iter().enumerate() {
+        let same = |g: &&crate::model::FrictionBlock| g.region == fb.region;
+        let work: f64 = (old.friction_blocks.iter().zip(old_slabs))
+            .filter(|(g, _)| same(g))
+            .map(|(_, h)| dissipated_work(h))
+            .sum();
+        let volume: f64 = (new.friction_blocks.iter().zip(&volumes))
+            .filter(|(g, _)| same(g))
+            .map(|(_, v)| v.iter().sum::<f64>())
+            .sum();
+        let per_volume = if volume > 0.0 { work / volume } else { 0.0 };
+        for (h, v) in slabs[f].chunks_mut(HISTORY_PER_POINT).zip(&volumes[f]) {
+            share_work(h, std::slice::from_ref(v), per_volume);
+        }
+    }
+    Ok(slabs)
 }
 
 /// Where along its edge a sliver's node across it stands at the state `x` (0 and 1 at the
