@@ -677,8 +677,9 @@ fn remade(
     // is not made again); the medium's friction carries on what it transmitted
     let terms = crate::assembly::history_terms(model);
     let of = |t: Term| terms.iter().position(|&o| o == t);
-    let old_friction: Vec<Vec<f64>> = (0..model.friction_blocks.len())
-        .map(|f| cp.state.point_history[of(Term::Friction(f)).expect("a friction slab")].clone())
+    let mut old_history = std::mem::take(&mut cp.state.point_history);
+    let old_friction: Vec<&[f64]> = (0..model.friction_blocks.len())
+        .map(|f| &old_history[of(Term::Friction(f)).expect("a friction slab")][..])
         .collect();
     let mut friction = match new.friction_blocks.is_empty() {
         true => Vec::new(),
@@ -689,7 +690,7 @@ fn remade(
     cp.state.point_history = (crate::assembly::history_terms(&new).into_iter())
         .map(|t| match t {
             Term::Friction(_) => friction.next().expect("a carried friction slab"),
-            t => cp.state.point_history[of(t).expect("a solid's slab kept")].clone(),
+            t => std::mem::take(&mut old_history[of(t).expect("a solid's slab kept")]),
         })
         .collect();
     Ok((new, probes))

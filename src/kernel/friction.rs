@@ -146,8 +146,9 @@ pub fn transmitted(
 /// current place y ([`transmitted`]): the share φ of the Coulomb limit and the traction's
 /// direction e ⊗ n. Each point's slip g is set so that its traction F τ, τ = G_f(J) (γ − g),
 /// is φ of its own limit μ p_n (p_n from the medium's stress at its F), along e (taken on the
-/// side its own n points to) as it lies in the point's plane; where its plane is open, τ = 0. Its step's slip is nil, its normal traction
-/// its p_n, its work nil (the caller shares out the old medium's).
+/// side its own n points to) as it lies in the point's plane; where its plane is open, τ = 0.
+/// Its step's slip is nil, its normal traction its p_n, its work nil (the caller shares out
+/// the old medium's).
 pub fn carried_cell<const N: usize, const D: usize, E: RefElement<N, D>>(
     mat: &FrictionMaterial,
     normal: &Vector3<f64>,
@@ -166,10 +167,7 @@ pub fn carried_cell<const N: usize, const D: usize, E: RefElement<N, D>>(
         let Finv = p.F.try_inverse().ok_or(inverted)?;
         let n = (Finv.transpose() * normal).normalize();
         let p_n = -n.dot(&(m.P * normal));
-        let shape = E::shape(xi);
-        let y: [f64; 3] =
-            std::array::from_fn(|i| (0..N).map(|I| shape[I] * (s.X[I][i] + s.u[I][i])).sum());
-        let (phi, en) = old(&y);
+        let (phi, en) = old(&place::<N, D, E>(s, xi));
         let e = en * n;
         // the direction as it lies in this point's plane, F τ ⊥ n (τ ⊥ N)
         let along = e - n * n.dot(&e);
@@ -190,7 +188,16 @@ pub fn carried_cell<const N: usize, const D: usize, E: RefElement<N, D>>(
     Ok(())
 }
 
-/// Give the points of a cell's history (`HISTORY_PER_POINT` values per point) the work
+/// The current place of the point ξ of the cell `s`.
+fn place<const N: usize, const D: usize, E: RefElement<N, D>>(
+    s: &CellState<N>,
+    xi: &[f64; D],
+) -> [f64; 3] {
+    let shape = E::shape(xi);
+    std::array::from_fn(|i| (0..N).map(|I| shape[I] * (s.X[I][i] + s.u[I][i])).sum())
+}
+
+/// Give the points of a history (`HISTORY_PER_POINT` values per point) the work
 /// `per_volume` times their reference volumes `dV`.
 pub fn share_work(history: &mut [f64], dV: &[f64], per_volume: f64) {
     for (h, v) in history.chunks_mut(HISTORY_PER_POINT).zip(dV) {
@@ -481,9 +488,7 @@ mod tests {
         for (q, (xi, w)) in E::quadrature().iter().enumerate() {
             let p = point::<N, D, E>(xi, *w, &lay, &s, mat.medium.theta0()).unwrap();
             let h = &trial[q * HISTORY_PER_POINT..(q + 1) * HISTORY_PER_POINT];
-            let shape = E::shape(xi);
-            let y: [f64; 3] =
-                std::array::from_fn(|i| (0..N).map(|I| shape[I] * (s.X[I][i] + s.u[I][i])).sum());
+            let y = place::<N, D, E>(&s, xi);
             sent.push((y, transmitted(mat, &NORMAL, &p.F, h), p.F));
         }
         let old = |y: &[f64; 3]| {

@@ -580,7 +580,7 @@ impl Medium {
 pub fn carried_friction(
     old: &Model,
     old_x: &[f64],
-    old_slabs: &[Vec<f64>],
+    old_slabs: &[&[f64]],
     new: &Model,
     x: &[f64],
 ) -> Result<Vec<Vec<f64>>, String> {
@@ -644,9 +644,7 @@ pub fn carried_friction(
             .map(|(_, v)| v.iter().sum::<f64>())
             .sum();
         let per_volume = if volume > 0.0 { work / volume } else { 0.0 };
-        for (h, v) in slabs[f].chunks_mut(HISTORY_PER_POINT).zip(&volumes[f]) {
-            share_work(h, std::slice::from_ref(v), per_volume);
-        }
+        share_work(&mut slabs[f], &volumes[f], per_volume);
     }
     Ok(slabs)
 }
