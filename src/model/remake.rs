@@ -2,7 +2,7 @@
 //! between bodies that slide past each other is sheared without end: ahead of a body it is
 //! ploughed, and a closed layer drags the faces it joins. The medium is fictitious, so nothing
 //! physical is lost when its cells and its reference are renewed. The medium's cells are made
-//! again by gmsh between the bodies as they are (`mesh/remesh.rs`) once any of its cells'
+//! again between the bodies as they are (`mesh/remesh.rs`) once any of its cells'
 //! faces have slid [`SLID`] of a cell past each other, or a sliver's node (a layer one cell
 //! across) would pass the end of the edge across from it in the next step. Each new cell
 //! starts from a reference of its own (as a reconnected layer's cells do,
@@ -447,7 +447,7 @@ impl Medium {
             .map(|&b| model.mesh.cells[b].n_cells())
             .sum();
         format!(
-            "medium made again as the bodies move: its {cells} cells replaced by gmsh's \
+            "medium made again as the bodies move: its {cells} cells replaced by new \
              triangles once any cell's faces have slid {SLID} of a cell past each other"
         )
     }
