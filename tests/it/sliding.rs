@@ -355,7 +355,10 @@ fn a_medium_made_again_is_refused_several_ranks_by_name() {
 /// 0.265, swinging 0.14 … 0.39 as the cylinder's facets pass the plate's nodes, as the
 /// frictionless slide swings ±0.10 about 0). The work done on the rim is not the energy kept
 /// plus friction's: a remake lets go of what the medium stored (measured: 11 % of the work
-/// here, 13 % on the frictionless slide), which no column counts yet.
+/// here, 13 % on the frictionless slide), which no column counts yet. Stopped by Ctrl-C part
+/// way through the slide and continued with `--restart`, the run gives the uninterrupted
+/// history to the bit (the Krylov count of its first step aside): the checkpoint holds the
+/// carried friction of the last remake.
 #[test]
 fn friction_and_its_heat_carry_across_a_medium_made_again() {
     let body = case_body("cylinder-slide")
@@ -408,4 +411,29 @@ fn friction_and_its_heat_carry_across_a_medium_made_again() {
     }
     let (_, _, _, mean, _) = slide_forces(&out);
     assert!((mean - 0.3).abs() < 0.05, "F_t/F_n {mean} over the slide");
+    // the slide begins after step 20, and the medium is made again every step or two
+    let stopped = out.with_file_name("stopped");
+    let case = out.with_file_name("case.toml");
+    let o = solve_interrupted_after(&case, &stopped, 45);
+    assert!(!o.status.success(), "the run was interrupted");
+    let checkpoint: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(stopped.join("restart.json")).unwrap())
+            .unwrap();
+    let remakes = checkpoint["totals"]["medium_remakes"].as_u64().unwrap();
+    assert!(remakes > 5, "stopped after {remakes} remakes");
+    let o = solve_cli(&case, &stopped, &["--restart"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    same_state_to_the_bit(&out, &stopped);
+    let again = summary(&stopped);
+    for key in [
+        "load_steps",
+        "newton_iterations",
+        "medium_remade",
+        "friction_work",
+        "friction_heat",
+        "heat_stored",
+        "heat_in",
+    ] {
+        assert_eq!(s[key], again[key], "{key}");
+    }
 }
