@@ -777,12 +777,12 @@ fn a_distributed_run_restarts_on_as_many_ranks_or_on_others() {
         to
     };
     let (on_one, on_three) = (copy(&stopped, "on-one"), copy(&stopped, "on-three"));
+    let restart = ["--restart"];
     for (ranks, out) in [(2, &stopped), (1, &on_one), (3, &on_three)] {
-        let args = ["--restart"];
         let o = if ranks == 1 {
-            solve_cli(&case, out, &args)
+            solve_cli(&case, out, &restart)
         } else {
-            mpirun(ranks, &case, out, &args)
+            mpirun(ranks, &case, out, &restart)
         };
         assert!(o.status.success(), "{ranks} ranks: {}", stderr(&o));
         same_history(&full, out, &format!("restarted on {ranks} ranks"));
@@ -808,9 +808,8 @@ fn a_distributed_run_restarts_on_as_many_ranks_or_on_others() {
     let nothing = dir.join("nothing");
     std::fs::create_dir_all(&nothing).unwrap();
     let (changed, other_case) = (copy(&full, "changed"), copy(&full, "other-case"));
-    let restart = ["--restart"];
     let refused = [
-        (&case, &nothing, &["--restart"][..], "has no restart.json"),
+        (&case, &nothing, &restart[..], "has no restart.json"),
         (&case, &full, &restart[..], "has finished"),
         (
             &case,
@@ -818,7 +817,7 @@ fn a_distributed_run_restarts_on_as_many_ranks_or_on_others() {
             &k[..],
             "has changed since: region[0].k: 1.0 then, 2.0 now",
         ),
-        (&other, &other_case, &["--restart"][..], "has changed since"),
+        (&other, &other_case, &restart[..], "has changed since"),
         (&case, &on_one, &restart[..], "does not begin with its seal"),
         (
             &case,

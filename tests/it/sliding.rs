@@ -288,6 +288,17 @@ fn what_remake_cannot_do_yet_check_and_solve_refuse_alike() {
     }
 }
 
+/// `case` solved into `stopped` and interrupted by Ctrl-C once step `step` is written: the
+/// remakes its checkpoint counts.
+fn interrupted_after(case: &Path, stopped: &Path, step: usize) -> u64 {
+    let o = solve_interrupted_after(case, stopped, step);
+    assert!(!o.status.success(), "the run was interrupted");
+    let checkpoint: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(stopped.join("restart.json")).unwrap())
+            .unwrap();
+    checkpoint["totals"]["medium_remakes"].as_u64().unwrap()
+}
+
 #[test]
 fn a_run_whose_medium_is_made_again_restarts_as_if_never_stopped() {
     // the cylinder's slide stopped by Ctrl-C once step 30 is written (the slide begins at step
@@ -298,12 +309,7 @@ fn a_run_whose_medium_is_made_again_restarts_as_if_never_stopped() {
     let (full, stopped) = (dir.join("full"), dir.join("stopped"));
     let o = solve_cli(&case, &full, &[]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let o = solve_interrupted_after(&case, &stopped, 30);
-    assert!(!o.status.success(), "the run was interrupted");
-    let checkpoint: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(stopped.join("restart.json")).unwrap())
-            .unwrap();
-    let remakes = checkpoint["totals"]["medium_remakes"].as_u64().unwrap();
+    let remakes = interrupted_after(&case, &stopped, 30);
     assert!(remakes > 0, "stopped after {remakes} remakes");
     // without the remade meshes there is nothing to continue from, and it is said
     let bare = dir.join("bare");
@@ -414,12 +420,7 @@ fn friction_and_its_heat_carry_across_a_medium_made_again() {
     // the slide begins after step 20, and the medium is made again every step or two
     let stopped = out.with_file_name("stopped");
     let case = out.with_file_name("case.toml");
-    let o = solve_interrupted_after(&case, &stopped, 45);
-    assert!(!o.status.success(), "the run was interrupted");
-    let checkpoint: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(stopped.join("restart.json")).unwrap())
-            .unwrap();
-    let remakes = checkpoint["totals"]["medium_remakes"].as_u64().unwrap();
+    let remakes = interrupted_after(&case, &stopped, 45);
     assert!(remakes > 5, "stopped after {remakes} remakes");
     let o = solve_cli(&case, &stopped, &["--restart"]);
     assert!(o.status.success(), "{}", stderr(&o));
