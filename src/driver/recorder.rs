@@ -43,6 +43,8 @@ pub(super) struct Recorder<'a> {
     written: Option<usize>,
     /// What the results depend on (case, mesh), for the checkpoints.
     fingerprint: (String, String),
+    /// Wall seconds spent writing the run's files.
+    writing: f64,
 }
 
 impl<'a> Recorder<'a> {
@@ -98,6 +100,7 @@ impl<'a> Recorder<'a> {
                 checkpoint::case_fingerprint(case),
                 checkpoint::mesh_fingerprint(&model.mesh),
             ),
+            writing: 0.0,
         })
     }
 
@@ -171,6 +174,7 @@ impl<'a> Recorder<'a> {
         row: &StepRow,
         rep: &StepReport,
     ) -> Result<(), SolveError> {
+        let started = Instant::now();
         let reactions = &accounts.totals.reactions;
         let values = self.layout.row(
             row,
@@ -181,16 +185,17 @@ impl<'a> Recorder<'a> {
         // the step's file first (when [output] every asks for it): a row never announces a
         // file that is not there yet
         if st.ctl.accepted.is_multiple_of(self.every) {
-            self.write_step(st)?;
+            self.write_vtu(st)?;
         }
         if self.folder.is_some() {
             self.history.row(&values)?;
         }
-        self.save_checkpoint(st, &accounts.totals)?;
+        self.write_checkpoint(st, &accounts.totals)?;
         if let Some(folder) = &mut self.folder {
             // a step taken: the previous run's files go for good
             folder.settle()?;
         }
+        self.writing += started.elapsed().as_secs_f64();
         self.report_step(st, accounts, row, rep);
         Ok(())
     }
@@ -211,6 +216,7 @@ impl<'a> Recorder<'a> {
                     series: self.series.written().len(),
                     written: self.written,
                     history: self.history.mark(),
+                    seconds: self.writing,
                 },
                 wall: self.wall(),
             },
@@ -223,6 +229,13 @@ impl<'a> Recorder<'a> {
         st: &Stepper,
         totals: &Totals,
     ) -> Result<(), SolveError> {
+        let started = Instant::now();
+        let saved = self.write_checkpoint(st, totals);
+        self.writing += started.elapsed().as_secs_f64();
+        saved
+    }
+
+    fn write_checkpoint(&mut self, st: &Stepper, totals: &Totals) -> Result<(), SolveError> {
         if self.folder.is_none() {
             // on several ranks each holds its own cells' history per point, gathered by
             // every rank before the first rank writes it
@@ -280,6 +293,7 @@ impl<'a> Recorder<'a> {
             SolveError::Setup(text.into())
         })?;
         self.written = files.written;
+        self.writing = files.seconds;
         // wall seconds go on from where the run stopped
         self.start = Instant::now()
             .checked_sub(std::time::Duration::from_secs_f64(wall))
@@ -336,6 +350,13 @@ impl<'a> Recorder<'a> {
     /// part, the first rank's `.pvtu` putting them together, and one error for all if any
     /// rank's failed.
     pub(super) fn write_step(&mut self, st: &Stepper) -> Result<(), SolveError> {
+        let started = Instant::now();
+        let written = self.write_vtu(st);
+        self.writing += started.elapsed().as_secs_f64();
+        written
+    }
+
+    fn write_vtu(&mut self, st: &Stepper) -> Result<(), SolveError> {
         let step = st.ctl.accepted;
         if self.written == Some(step) {
             return Ok(());
@@ -403,6 +424,7 @@ impl<'a> Recorder<'a> {
         s.wall_seconds = wall;
         s.assembly_seconds = spent.assembly + tot.t_reactions;
         s.solver_seconds = spent.solve;
+        s.output_seconds = self.writing;
         s.peak_memory_mb = peak_memory_mb();
         let ranks = st.asm.ranks;
         if !ranks.is_serial() {

@@ -50,6 +50,8 @@ pub struct Summary {
     pub assembly_seconds: f64,
     /// Factorisation and linear-solve time of every attempt.
     pub solver_seconds: f64,
+    /// Time spent writing the run's files: each step's `.vtu`, history row and checkpoint.
+    pub output_seconds: f64,
     /// GMRES iterations over all accepted steps (0 with a direct solver).
     pub krylov_iterations: usize,
     /// Accepted steps whose converging residual was assembled without the tangent (its
@@ -211,6 +213,7 @@ impl Summary {
             wall_seconds: 0.0,
             assembly_seconds: 0.0,
             solver_seconds: 0.0,
+            output_seconds: 0.0,
             krylov_iterations: 0,
             tangents_skipped: 0,
             peak_memory_mb: None,

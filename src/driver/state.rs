@@ -118,6 +118,9 @@ pub struct Files {
     pub series: usize,
     pub written: Option<usize>,
     pub history: Mark,
+    /// Wall seconds spent writing the run's files so far (a checkpoint without it: 0).
+    #[serde(default)]
+    pub seconds: f64,
 }
 
 #[cfg(test)]
@@ -160,6 +163,7 @@ mod tests {
                     bytes: 10,
                     hash: u64::MAX,
                 },
+                seconds: 0.25,
             },
             wall: 12.5,
         };
@@ -174,5 +178,6 @@ mod tests {
         );
         assert_eq!(back.clock, state.clock);
         assert_eq!(back.totals.heat_in, state.totals.heat_in);
+        assert_eq!(back.files.seconds, state.files.seconds);
     }
 }

@@ -40,6 +40,7 @@ fn mesh_then_solve_2d_and_3d() {
             "wall_seconds",
             "assembly_seconds",
             "solver_seconds",
+            "output_seconds",
             "probes",
             "min_J",
             "reactions",
