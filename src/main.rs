@@ -413,13 +413,21 @@ fn check_command(
                 say!("threads: {running} per process ({})", t.why);
             }
             if !r.predicted_speedup.is_empty() {
-                let at: Vec<String> = (r.predicted_speedup.iter())
-                    .map(|(p, s)| format!("{s:.1}× at {p}"))
-                    .collect();
+                let at = |f: fn(&tmc::solver::linear::Speedup) -> f64| {
+                    let at: Vec<String> = (r.predicted_speedup.iter())
+                        .map(|(p, s)| format!("{:.1}× at {p}", f(s)))
+                        .collect();
+                    at.join(", ")
+                };
                 say!(
                     "factorisation: its elimination tree bounds its speed-up at {} threads \
                      (multiply-adds only)",
-                    at.join(", ")
+                    at(|s| s.factor)
+                );
+                say!(
+                    "solves: the tree bounds their speed-up at {} threads (entries read; \
+                     the memory's bandwidth lowers it)",
+                    at(|s| s.solve)
                 );
             }
             if let Some(why) = &r.engine_note {

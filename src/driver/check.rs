@@ -12,6 +12,7 @@ use crate::mesh::Mesh;
 use crate::output::werr;
 use crate::parallel::Ranks;
 use crate::solver::engine::run_memory_mb;
+use crate::solver::linear::Speedup;
 use std::path::Path;
 
 /// What `tmc check` found.
@@ -31,9 +32,9 @@ pub struct CheckReport {
     pub factor_entries: Option<usize>,
     /// Bytes of their values, each factor in its precision.
     pub factor_bytes: Option<usize>,
-    /// The largest factor's numeric factorisation: its speed-up at 2, 4, 16 and 64 threads as
-    /// its elimination tree predicts it; empty where no factor is worked over its tree.
-    pub predicted_speedup: Vec<(usize, f64)>,
+    /// The largest factor's speed-ups at 2, 4, 16 and 64 threads as its elimination tree
+    /// predicts them; empty where no factor is worked over its tree.
+    pub predicted_speedup: Vec<(usize, Speedup)>,
     /// Why the engine is not the usual one (`engine = "auto"` over the memory), if so.
     pub engine_note: Option<String>,
     /// The probes' names.

@@ -312,8 +312,8 @@ fn on_ranks(
     Ok(Planned {
         asm,
         solvers,
-        // PETSc's calls stay on this thread: no idle-thread runner around the solves
-        idle: IdleThreads::Sleep,
+        // PETSc's calls stay on this thread: no pool around the solves
+        idle: IdleThreads::CallingThread,
         note: None,
     })
 }

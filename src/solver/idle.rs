@@ -21,6 +21,9 @@ pub enum IdleThreads {
     Spin,
     /// Sleep until the next parallel work (frees the cores for other processes at once).
     Sleep,
+    /// No pool around the solve: it runs on the calling thread, as a library that must be
+    /// called from there needs (PETSc, whose MPI may allow the main thread only).
+    CallingThread,
 }
 
 impl Default for IdleThreads {
@@ -54,7 +57,11 @@ impl IdleThreads {
         }
     }
 
-    /// Run `f` (a linear solve) with the pool's other threads doing what `self` says.
+    /// Run `f` (a linear solve) on one of the pool's threads (but for
+    /// [`IdleThreads::CallingThread`]), its other threads doing what `self` says. On the
+    /// pool, the solve's many small parallel parts (GMRES's vector operations, a solve's
+    /// bands) are handed to the other threads directly; from outside it each would wake a
+    /// pool thread and wait for it.
     pub fn run<R: Send>(self, f: impl FnOnce() -> R + Send) -> R {
         self.run_counting(f, &AtomicUsize::new(0))
     }
@@ -63,9 +70,10 @@ impl IdleThreads {
     fn run_counting<R: Send>(self, f: impl FnOnce() -> R + Send, gave_up: &AtomicUsize) -> R {
         let spinners = spinners(rayon::current_num_threads(), crate::threads::usable_cpus());
         let bound = match self {
-            IdleThreads::Sleep => return f(),
-            IdleThreads::SpinFor(d) if d.is_zero() => return f(),
-            _ if spinners == 0 => return f(),
+            IdleThreads::CallingThread => return f(),
+            IdleThreads::Sleep => return rayon::scope(|_| f()),
+            IdleThreads::SpinFor(d) if d.is_zero() => return rayon::scope(|_| f()),
+            _ if spinners == 0 => return rayon::scope(|_| f()),
             IdleThreads::SpinFor(d) => Some(d),
             IdleThreads::Spin => None,
         };
@@ -93,7 +101,7 @@ impl std::fmt::Display for IdleThreads {
         match self {
             IdleThreads::SpinFor(d) => write!(f, "{}", d.as_millis()),
             IdleThreads::Spin => f.write_str("spin"),
-            IdleThreads::Sleep => f.write_str("sleep"),
+            IdleThreads::Sleep | IdleThreads::CallingThread => f.write_str("sleep"),
         }
     }
 }

@@ -83,9 +83,9 @@ impl Factorization for BlockTriangular {
     }
 
     /// The mechanics block's, the larger, beside which the temperature block factors.
-    fn predicted_speedup(&self, threads: f64) -> Option<f64> {
+    fn predicted_speedup(&self, threads: f64) -> Option<super::Speedup> {
         match &self.fm {
-            Some(MechanicsFactor::Ldlt(m)) => m.tree.as_ref().map(|t| t.predicted_speedup(threads)),
+            Some(MechanicsFactor::Ldlt(m)) => m.tree.as_ref().map(|t| t.speedups(threads)),
             _ => None,
         }
     }

@@ -1,4 +1,39 @@
 //! Restarted, right-preconditioned GMRES.
+//!
+//! Its vector operations (the Gram–Schmidt products and updates, the norms) run on every
+//! thread for a long vector: cut into pieces of [`PIECE`] entries, a task each, a product's
+//! piece sums then added in the pieces' order. The cut depends on the length alone, so GMRES
+//! takes the same iterations to the last bit on any number of threads; a vector of one piece
+//! is summed as on one thread.
+
+use rayon::prelude::*;
+
+/// The entries of a piece of a vector operation.
+const PIECE: usize = 1 << 13;
+
+/// a · c.
+fn dot(a: &[f64], c: &[f64]) -> f64 {
+    let serial = |a: &[f64], c: &[f64]| a.iter().zip(c).map(|(p, q)| p * q).sum::<f64>();
+    if a.len() <= PIECE {
+        return serial(a, c);
+    }
+    let parts: Vec<f64> = a
+        .par_chunks(PIECE)
+        .zip(c.par_chunks(PIECE))
+        .map(|(a, c)| serial(a, c))
+        .collect();
+    parts.iter().sum()
+}
+
+/// y ← f(y, x) entry by entry.
+fn each(y: &mut [f64], x: &[f64], f: impl Fn(&mut f64, f64) + Sync) {
+    if y.len() <= PIECE {
+        return y.iter_mut().zip(x).for_each(|(a, &c)| f(a, c));
+    }
+    y.par_chunks_mut(PIECE)
+        .zip(x.par_chunks(PIECE))
+        .for_each(|(y, x)| y.iter_mut().zip(x).for_each(|(a, &c)| f(a, c)));
+}
 
 /// Restarted GMRES with right preconditioning (A M⁻¹ y = b, x = M⁻¹ y) from the `x` given,
 /// modified Gram–Schmidt and Givens rotations, until the residual is `rtol` times |b|.
@@ -18,7 +53,6 @@ pub fn gmres(
     give_up: bool,
 ) -> Result<usize, (usize, f64)> {
     let n = b.len();
-    let dot = |a: &[f64], c: &[f64]| a.iter().zip(c).map(|(p, q)| p * q).sum::<f64>();
     let bnorm = dot(b, b).sqrt();
     if bnorm == 0.0 {
         x.fill(0.0);
@@ -28,7 +62,7 @@ pub fn gmres(
     let mut w = vec![0.0; n];
     if x.iter().any(|&v| v != 0.0) {
         matvec(x, &mut w);
-        r.iter_mut().zip(&w).for_each(|(a, c)| *a -= c);
+        each(&mut r, &w, |a, c| *a -= c);
     }
     let mut its = 0;
     let mut rel = 1.0;
@@ -43,7 +77,7 @@ pub fn gmres(
             return Ok(its);
         }
         let m = restart.min(max_it - its);
-        let mut v: Vec<Vec<f64>> = vec![r.iter().map(|a| a / beta).collect()];
+        let mut v: Vec<Vec<f64>> = vec![scaled(&r, beta)];
         // M⁻¹ v_k, kept for the update (one application of M⁻¹ fewer per cycle)
         let mut zs: Vec<Vec<f64>> = Vec::new();
         let mut h = vec![vec![0.0; m]; m + 1]; // h[row][col]
@@ -59,7 +93,7 @@ pub fn gmres(
             for (i, vi) in v.iter().enumerate() {
                 let hik = dot(&w, vi);
                 h[i][k] = hik;
-                w.iter_mut().zip(vi).for_each(|(a, c)| *a -= hik * c);
+                each(&mut w, vi, |a, c| *a -= hik * c);
             }
             let wn = dot(&w, &w).sqrt();
             h[k + 1][k] = wn;
@@ -88,7 +122,7 @@ pub fn gmres(
                 behind = true;
                 break;
             }
-            v.push(w.iter().map(|a| a / wn).collect());
+            v.push(scaled(&w, wn));
         }
         // y = H⁻¹ g (upper triangular k × k), x += M⁻¹ V y = Σ y_i M⁻¹ v_i
         let mut y = vec![0.0; k];
@@ -97,13 +131,12 @@ pub fn gmres(
             y[i] = (g[i] - s) / h[i][i];
         }
         for (zi, yi) in zs.iter().zip(&y) {
-            x.iter_mut().zip(zi).for_each(|(a, c)| *a += yi * c);
+            each(x, zi, |a, c| *a += yi * c);
         }
         // true residual for the restart
         matvec(x, &mut w);
-        for i in 0..n {
-            r[i] = b[i] - w[i];
-        }
+        r.copy_from_slice(b);
+        each(&mut r, &w, |a, c| *a -= c);
     }
     let rn = dot(&r, &r).sqrt() / bnorm;
     if rn <= rtol && !behind {
@@ -111,4 +144,11 @@ pub fn gmres(
     } else {
         Err((its, rel.max(rn)))
     }
+}
+
+/// v / s.
+fn scaled(v: &[f64], s: f64) -> Vec<f64> {
+    let mut out = v.to_vec();
+    each(&mut out, v, |a, c| *a = c / s);
+    out
 }

@@ -33,8 +33,8 @@ impl Factorization for SymFactor {
         Some(self.bytes())
     }
 
-    fn predicted_speedup(&self, threads: f64) -> Option<f64> {
-        self.tree.as_ref().map(|t| t.predicted_speedup(threads))
+    fn predicted_speedup(&self, threads: f64) -> Option<super::Speedup> {
+        self.tree.as_ref().map(|t| t.speedups(threads))
     }
 }
 

@@ -58,6 +58,16 @@ pub enum LinearKind {
     Petsc,
 }
 
+/// What a factor's elimination tree predicts on some number of threads: the numeric
+/// factorisation's speed-up (its multiply-adds on the critical path against all of them) and a
+/// solve's (the factor's entries it reads, likewise). Bounds: memory bandwidth, the tasks'
+/// start and the threads' waits only lower them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Speedup {
+    pub factor: f64,
+    pub solve: f64,
+}
+
 #[derive(Debug, thiserror::Error)]
 pub enum LinearError {
     #[error("symbolic analysis failed: {0}")]
@@ -105,9 +115,9 @@ pub trait Factorization: Send {
     fn describe(&self) -> Option<String> {
         None
     }
-    /// The numeric factorisation's speed-up on `threads` threads as its elimination tree
-    /// predicts it (multiply-adds only), where the engine works over the tree.
-    fn predicted_speedup(&self, _threads: f64) -> Option<f64> {
+    /// The speed-ups on `threads` threads its elimination tree predicts, where the engine
+    /// works over the tree.
+    fn predicted_speedup(&self, _threads: f64) -> Option<Speedup> {
         None
     }
     /// The engine, as `summary.json` names it.
@@ -177,9 +187,9 @@ impl LinearSolver {
         self.backend.entries()
     }
 
-    /// The numeric factorisation's speed-up on `threads` threads as its elimination tree
-    /// predicts it ([`Factorization::predicted_speedup`]).
-    pub fn predicted_speedup(&self, threads: f64) -> Option<f64> {
+    /// The speed-ups on `threads` threads its elimination tree predicts
+    /// ([`Factorization::predicted_speedup`]).
+    pub fn predicted_speedup(&self, threads: f64) -> Option<Speedup> {
         self.backend.predicted_speedup(threads)
     }
 

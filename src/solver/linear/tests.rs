@@ -826,4 +826,128 @@ fn the_trees_model_predicts_what_its_shape_allows() {
     }
     // unbounded threads are held by the critical path: the root separator's dense work
     assert!(s[5] < 1e3 && s[5] >= s[4], "{s:?}");
+    // so are a solve's, and sooner: its root reads its diagonal block on one thread
+    let v: Vec<f64> = [1.0, 2.0, 4.0, 16.0, 64.0, 1e6]
+        .iter()
+        .map(|&p| tree.predicted_solve_speedup(p))
+        .collect();
+    assert!((v[0] - 1.0).abs() < 1e-12, "{v:?}");
+    for (k, p) in [2.0, 4.0, 16.0, 64.0].iter().enumerate() {
+        assert!(v[k + 1] >= v[k] && v[k + 1] <= *p + 1e-9, "{v:?}");
+    }
+    assert!(v[5] < s[5] && v[5] >= v[4], "{v:?} against {s:?}");
+}
+
+/// `f` on a pool of `threads` threads.
+fn on_threads<R: Send>(threads: usize, f: impl FnOnce() -> R + Send) -> R {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap();
+    pool.install(f)
+}
+
+#[test]
+fn a_large_blocks_product_is_the_same_at_every_thread_count() {
+    // a 3D grid's matrix of 670k entries: its product is cut into pieces
+    let (sp, vals, _) = grid(14, 3);
+    let n = sp.nrows();
+    let p = Pattern {
+        n,
+        col_ptr: sp.col_ptr().to_vec(),
+        row_idx: sp.row_idx().to_vec(),
+    };
+    // the block of every other row and every third column, and the whole matrix
+    let rows: Vec<usize> = (0..n).step_by(2).collect();
+    let cols: Vec<usize> = (0..n).step_by(3).collect();
+    for (rows, cols) in [(&rows, &cols), (&(0..n).collect(), &(0..n).collect())] {
+        let mut sub = SubMatrix::new(&p, rows, cols);
+        sub.update(&vals);
+        let x: Vec<f64> = (0..cols.len()).map(|j| 1.0 + (j % 11) as f64).collect();
+        // y −= A x, entry by entry
+        let y0: Vec<f64> = (0..rows.len()).map(|i| (i % 5) as f64).collect();
+        let mut exact = y0.clone();
+        for (jl, &j) in cols.iter().enumerate() {
+            for k in p.col_ptr[j]..p.col_ptr[j + 1] {
+                if let Ok(il) = rows.binary_search(&p.row_idx[k]) {
+                    exact[il] -= vals[k] * x[jl];
+                }
+            }
+        }
+        let scale = exact.iter().fold(1.0f64, |m, v| m.max(v.abs()));
+        let mut first: Option<Vec<f64>> = None;
+        for threads in [1, 2, 4] {
+            let mut y = y0.clone();
+            on_threads(threads, || sub.mul_sub(&x, &mut y));
+            let off = y.iter().zip(&exact).map(|(a, b)| (a - b).abs());
+            assert!(
+                off.fold(0.0, f64::max) <= 1e-13 * scale,
+                "{threads} threads"
+            );
+            match &first {
+                None => first = Some(y),
+                Some(f) => assert!(
+                    y.iter().zip(f).all(|(a, b)| a.to_bits() == b.to_bits()),
+                    "{threads} threads: not 1 thread's product to the bit"
+                ),
+            }
+        }
+    }
+}
+
+#[test]
+fn the_tree_solves_wide_panels_in_bands_and_the_same_at_every_thread_count() {
+    use super::tree::TreeLdlt;
+    use faer::dyn_stack::{MemBuffer, MemStack};
+    // 20 577 unknowns: the root separator and the panels below it are wide enough for bands
+    let (sp, vals, node) = grid(19, 3);
+    let n = sp.nrows();
+    let (fwd, inv) = nested_dissection(&sp, &node);
+    let symbolic = analysed(&sp, &fwd, &inv);
+    let tree = TreeLdlt::new(&symbolic, &sp).expect("a supernodal analysis");
+    let (panels, diagonals) = tree.banded();
+    assert!(
+        panels > 0 && diagonals > 0,
+        "{panels} panels, {diagonals} blocks in bands"
+    );
+    let mut l = vec![0.0; symbolic.len_val()];
+    tree.factor(&mut l, &vals).unwrap();
+    let mut b = vec![0.0; n];
+    for j in 0..n {
+        for k in sp.col_ptr()[j]..sp.col_ptr()[j + 1] {
+            b[sp.row_idx()[k]] += vals[k] * (1.0 + (j % 7) as f64);
+        }
+    }
+    let mut faers = b.clone();
+    let mut mem = MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(1, faer::Par::Seq));
+    ldlt::ldlt_solve(
+        &symbolic,
+        &l,
+        &mut faers,
+        faer::Par::Seq,
+        MemStack::new(&mut mem),
+    );
+    let mut first: Option<Vec<f64>> = None;
+    for threads in [1, 2, 4] {
+        let mut x = b.clone();
+        on_threads(threads, || tree.solve(&l, &mut x, &mut Vec::new()));
+        for (j, (a, f)) in x.iter().zip(&faers).enumerate() {
+            let exact = 1.0 + (j % 7) as f64;
+            assert!(
+                (a - exact).abs() < 1e-10 * exact,
+                "{threads} threads: x[{j}] = {a}"
+            );
+            assert!(
+                (a - f).abs() < 1e-12 * exact,
+                "{threads}: {a} against faer's {f}"
+            );
+        }
+        match &first {
+            None => first = Some(x),
+            Some(f) => assert!(
+                x.iter().zip(f).all(|(a, b)| a.to_bits() == b.to_bits()),
+                "{threads} threads: not 1 thread's solve to the bit"
+            ),
+        }
+    }
 }

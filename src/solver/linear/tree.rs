@@ -34,6 +34,14 @@ const TASK_ENTRIES: f64 = 2e5;
 /// A supernode whose own work exceeds this many multiply-adds gives its dense products every
 /// thread.
 const WIDE_FLOPS: f64 = 3e7;
+/// A solve applies a supernode's panel below its diagonal block in bands of about this many
+/// entries, a task each, where the panel holds at least two bands (the supernodes near the
+/// root, which the tree leaves to one thread). The bands follow from the panel's shape, not
+/// the threads: the answer is the same at every thread count.
+const SOLVE_BAND: usize = 1 << 16;
+/// The columns of a wide diagonal block a solve works at a time (their triangle on one
+/// thread, the rest of the block in bands).
+const SOLVE_BLOCK: usize = 128;
 
 /// The supernodes' elimination tree, the updates each supernode gathers, and where the
 /// matrix's entries land in the factor: computed once per pattern.
@@ -390,7 +398,7 @@ impl TreeLdlt {
 
     /// Supernode s's unknowns of L⁻¹ b (all that reach them already subtracted), and `out`
     /// told what they subtract from each row below.
-    fn forward_node<T: Real>(
+    fn forward_node<T: Real + Send + Sync>(
         &self,
         s: usize,
         l: &[T],
@@ -401,24 +409,30 @@ impl TreeLdlt {
         let (sb, se, pat, top, bot) = self.panel(s, l);
         // SAFETY: only this task writes supernode s's unknowns
         let xs = unsafe { x.get_mut(sb, se) };
-        let mut xm = MatMut::from_column_major_slice_mut(xs, se - sb, 1);
-        faer::linalg::triangular_solve::solve_unit_lower_triangular_in_place(
-            top,
-            xm.as_mut(),
-            Par::Seq,
-        );
+        lower_solve(top, xs);
         if pat.is_empty() {
             return;
         }
         grow(tmp, pat.len());
-        faer::linalg::matmul::matmul(
-            MatMut::from_column_major_slice_mut(&mut tmp[..pat.len()], pat.len(), 1),
-            Accum::Replace,
-            bot,
-            xm.as_ref(),
-            T::of(1.0),
-            Par::Seq,
-        );
+        let xm = MatRef::from_column_major_slice(xs, se - sb, 1);
+        let product = |r0: usize, out: &mut [T]| {
+            let len = out.len();
+            faer::linalg::matmul::matmul(
+                MatMut::from_column_major_slice_mut(out, len, 1),
+                Accum::Replace,
+                bot.subrows(r0, len),
+                xm,
+                T::of(1.0),
+                Par::Seq,
+            )
+        };
+        match band_of(pat.len(), se - sb) {
+            None => product(0, &mut tmp[..pat.len()]),
+            Some(rows) => tmp[..pat.len()]
+                .par_chunks_mut(rows)
+                .enumerate()
+                .for_each(|(b, out)| product(b * rows, out)),
+        }
         for (&r, &v) in pat.iter().zip(tmp.iter()) {
             out(r, v);
         }
@@ -439,7 +453,7 @@ impl TreeLdlt {
     }
 
     /// Supernode s's unknowns of L⁻ᵀ D⁻¹ y, from those of its ancestors (finished).
-    fn backward<T: Real>(&self, s: usize, l: &[T], x: &Panels<T>, tmp: &mut Vec<T>) {
+    fn backward<T: Real + Send + Sync>(&self, s: usize, l: &[T], x: &Panels<T>, tmp: &mut Vec<T>) {
         let (sb, se, pat, top, bot) = self.panel(s, l);
         grow(tmp, pat.len());
         for (t, &r) in tmp.iter_mut().zip(pat) {
@@ -451,22 +465,28 @@ impl TreeLdlt {
         for (j, v) in xs.iter_mut().enumerate() {
             *v /= top[(j, j)];
         }
-        let mut xm = MatMut::from_column_major_slice_mut(xs, se - sb, 1);
         if !pat.is_empty() {
-            faer::linalg::matmul::matmul(
-                xm.as_mut(),
-                Accum::Add,
-                bot.transpose(),
-                MatRef::from_column_major_slice(&tmp[..pat.len()], pat.len(), 1),
-                T::of(-1.0),
-                Par::Seq,
-            );
+            let y = MatRef::from_column_major_slice(&tmp[..pat.len()], pat.len(), 1);
+            let product = |c0: usize, out: &mut [T]| {
+                let len = out.len();
+                faer::linalg::matmul::matmul(
+                    MatMut::from_column_major_slice_mut(out, len, 1),
+                    Accum::Add,
+                    bot.subcols(c0, len).transpose(),
+                    y,
+                    T::of(-1.0),
+                    Par::Seq,
+                )
+            };
+            match band_of(se - sb, pat.len()) {
+                None => product(0, xs),
+                Some(cols) => xs
+                    .par_chunks_mut(cols)
+                    .enumerate()
+                    .for_each(|(b, out)| product(b * cols, out)),
+            }
         }
-        faer::linalg::triangular_solve::solve_unit_upper_triangular_in_place(
-            top.transpose(),
-            xm.as_mut(),
-            Par::Seq,
-        );
+        upper_solve(top, xs);
     }
 }
 
@@ -502,6 +522,68 @@ impl TreeLdlt {
             })
             .fold(0.0, f64::max);
         longest.max(sum / p)
+    }
+
+    /// A solve's speed-up on `p` threads as the tree predicts it, counting the factor's
+    /// entries read (a solve reads each once each way, and memory, not arithmetic, is what
+    /// it waits on): the threads mapped onto the subtrees as in [`Self::predicted_speedup`],
+    /// a subtree of fewer than [`TASK_ENTRIES`] entries one task, a supernode's diagonal
+    /// block by blocks ([`lower_solve`]) and its panel below in its bands ([`SOLVE_BAND`]). It leaves out
+    /// the memory's bandwidth, which all threads share: where they saturate it, the solves
+    /// stop gaining, whatever the tree allows.
+    pub(super) fn predicted_solve_speedup(&self, p: f64) -> f64 {
+        let total: f64 = self.roots.iter().map(|&s| self.subtree_solve[s]).sum();
+        total / self.solve_time(&self.roots, p)
+    }
+
+    fn solve_time(&self, trees: &[usize], p: f64) -> f64 {
+        let sum: f64 = trees.iter().map(|&s| self.subtree_solve[s]).sum();
+        if p <= 1.0 || sum == 0.0 {
+            return sum;
+        }
+        let longest = trees
+            .iter()
+            .map(|&s| {
+                if self.subtree_solve[s] < TASK_ENTRIES {
+                    return self.subtree_solve[s];
+                }
+                let ps = p * self.subtree_solve[s] / sum;
+                let (w, below) = (self.begin[s + 1] - self.begin[s], self.n_rows[s]);
+                let bands = band_of(below, w).map_or(1.0, |b| below.div_ceil(b) as f64);
+                // the diagonal block: by blocks, their triangles one after another
+                let (tri, square) = match blocked(w) {
+                    true => ((w * SOLVE_BLOCK / 2) as f64, (w * w / SOLVE_BAND) as f64),
+                    false => ((w * w) as f64, 1.0),
+                };
+                let own = tri
+                    + ((w * w) as f64 - tri) / ps.min(square).max(1.0)
+                    + (w * below) as f64 / ps.min(bands).max(1.0);
+                own + self.solve_time(self.children(s), ps)
+            })
+            .fold(0.0, f64::max);
+        longest.max(sum / p)
+    }
+
+    /// Both predictions on `p` threads.
+    pub(super) fn speedups(&self, p: f64) -> super::Speedup {
+        super::Speedup {
+            factor: self.predicted_speedup(p),
+            solve: self.predicted_solve_speedup(p),
+        }
+    }
+
+    /// The supernodes whose panel below a solve applies in bands, and those whose diagonal
+    /// block it works by blocks.
+    #[cfg(test)]
+    pub(super) fn banded(&self) -> (usize, usize) {
+        let width = |s: usize| self.begin[s + 1] - self.begin[s];
+        let ns = self.n_rows.len();
+        (
+            (0..ns)
+                .filter(|&s| band_of(self.n_rows[s], width(s)).is_some())
+                .count(),
+            (0..ns).filter(|&s| blocked(width(s))).count(),
+        )
     }
 }
 
@@ -734,6 +816,99 @@ fn bands(gather: f64) -> usize {
 }
 
 /// `v` at least `len` long.
+/// x ← L⁻¹ x, L the unit lower triangle of `top`. A diagonal block of at least two bands
+/// ([`SOLVE_BAND`]) is worked [`SOLVE_BLOCK`] columns at a time: the block's triangle on one
+/// thread, then its columns below it applied to the rows below in bands, a task each.
+fn lower_solve<T: Real + Send + Sync>(top: MatRef<'_, T>, x: &mut [T]) {
+    let w = x.len();
+    if !blocked(w) {
+        let xm = MatMut::from_column_major_slice_mut(x, w, 1);
+        return faer::linalg::triangular_solve::solve_unit_lower_triangular_in_place(
+            top,
+            xm,
+            Par::Seq,
+        );
+    }
+    for c0 in (0..w).step_by(SOLVE_BLOCK) {
+        let nb = SOLVE_BLOCK.min(w - c0);
+        let (head, below) = x.split_at_mut(c0 + nb);
+        let xb = MatMut::from_column_major_slice_mut(&mut head[c0..], nb, 1);
+        faer::linalg::triangular_solve::solve_unit_lower_triangular_in_place(
+            top.submatrix(c0, c0, nb, nb),
+            xb,
+            Par::Seq,
+        );
+        let xb = MatRef::from_column_major_slice(&head[c0..], nb, 1);
+        let rows = SOLVE_BAND.div_ceil(nb);
+        below.par_chunks_mut(rows).enumerate().for_each(|(b, out)| {
+            let len = out.len();
+            faer::linalg::matmul::matmul(
+                MatMut::from_column_major_slice_mut(out, len, 1),
+                Accum::Add,
+                top.submatrix(c0 + nb + b * rows, c0, len, nb),
+                xb,
+                T::of(-1.0),
+                Par::Seq,
+            )
+        });
+    }
+}
+
+/// x ← L⁻ᵀ x, L the unit lower triangle of `top`, by blocks as in [`lower_solve`] from the
+/// last: each block's triangle, then its rows of L applied to the unknowns before it, in
+/// bands of those unknowns.
+fn upper_solve<T: Real + Send + Sync>(top: MatRef<'_, T>, x: &mut [T]) {
+    let w = x.len();
+    if !blocked(w) {
+        let xm = MatMut::from_column_major_slice_mut(x, w, 1);
+        return faer::linalg::triangular_solve::solve_unit_upper_triangular_in_place(
+            top.transpose(),
+            xm,
+            Par::Seq,
+        );
+    }
+    let blocks = w.div_ceil(SOLVE_BLOCK);
+    for k in (0..blocks).rev() {
+        let c0 = k * SOLVE_BLOCK;
+        let nb = SOLVE_BLOCK.min(w - c0);
+        let (before, rest) = x.split_at_mut(c0);
+        let xb = MatMut::from_column_major_slice_mut(&mut rest[..nb], nb, 1);
+        faer::linalg::triangular_solve::solve_unit_upper_triangular_in_place(
+            top.submatrix(c0, c0, nb, nb).transpose(),
+            xb,
+            Par::Seq,
+        );
+        let xb = MatRef::from_column_major_slice(&rest[..nb], nb, 1);
+        let cols = SOLVE_BAND.div_ceil(nb);
+        before
+            .par_chunks_mut(cols)
+            .enumerate()
+            .for_each(|(b, out)| {
+                let len = out.len();
+                faer::linalg::matmul::matmul(
+                    MatMut::from_column_major_slice_mut(out, len, 1),
+                    Accum::Add,
+                    top.submatrix(c0, b * cols, nb, len).transpose(),
+                    xb,
+                    T::of(-1.0),
+                    Par::Seq,
+                )
+            });
+    }
+}
+
+/// Whether a solve works a diagonal block `w` wide by blocks: where it holds two bands.
+fn blocked(w: usize) -> bool {
+    w * w >= 2 * SOLVE_BAND && w >= 2 * SOLVE_BLOCK
+}
+
+/// The lines of a band of a panel with `lines` lines of `length` entries each ([`SOLVE_BAND`]),
+/// or `None` where the panel is a single band.
+fn band_of(lines: usize, length: usize) -> Option<usize> {
+    let band = SOLVE_BAND.div_ceil(length.max(1)).max(1);
+    (lines >= 2 * band).then_some(band)
+}
+
 fn grow<T: Real>(v: &mut Vec<T>, len: usize) {
     if v.len() < len {
         v.resize(len, T::of(0.0));
