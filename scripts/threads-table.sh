@@ -1,8 +1,11 @@
 #!/usr/bin/env bash
 # The threads table: Table 2's H1 rows (block-plate-3d-tm1, one medium layer) solved by one
 # built binary at 1, 2, 4, 8, ... threads, up to the CPUs this process may use, the runs of
-# each thread count interleaved; a markdown table of the median wall, solver and assembly
-# seconds, each against one thread, and the counts that must not change with the threads.
+# each thread count interleaved; a markdown table of the median wall, solver, assembly and
+# output seconds, each against one thread, and the counts that must not change with the
+# threads. Beside it, what the factor's elimination tree bounds the speed-ups at (`tmc
+# check`), and each part of the run projected to 4, 16 and 64 threads from its 1- and
+# 2-thread seconds (Amdahl's law: the part that did not halve stays, the rest divides).
 #
 #   scripts/threads-table.sh [-b BINARY] [-n "16 32"] [-t "1 2 4 8 16"] [-r REPEATS]
 #
@@ -40,6 +43,7 @@ for n in $rows; do
     sed -e "s#^mesh = .*#mesh = \"$geo\"#" \
         -e "s#^params = .*#params = { n = $n, nb = $nb, nm = 1, nq = $nq }#" \
         cases/block-plate-3d-tm1.toml >"$case"
+    "$bin" check "$case" 2>&1 | grep -E "^(factorisation|solves):" >"$out/h1-$n-check.txt" || true
     for r in $(seq "$repeats"); do
         for t in $threads; do
             dir=$out/h1-$n-t$t-r$r
@@ -65,15 +69,39 @@ if not rows:
 med = lambda runs, k: statistics.median(s[k] for s in runs)
 base = rows.get("1")
 print(f"\n{n}×{n}, {next(iter(rows.values()))[0]['dofs']['free']} free unknowns")
-print("| threads | wall s | solver s | assembly s | wall / 1 thread | solver / 1 thread | Newton its | Krylov its | gap |")
-print("|---|---|---|---|---|---|---|---|---|")
+print("| threads | wall s | solver s | assembly s | output s | wall / 1 thread | solver / 1 thread | Newton its | Krylov its | gap |")
+print("|---|---|---|---|---|---|---|---|---|---|")
 for t, runs in rows.items():
     w, s, a = med(runs, "wall_seconds"), med(runs, "solver_seconds"), med(runs, "assembly_seconds")
+    o = med(runs, "output_seconds") if all("output_seconds" in x for x in runs) else float("nan")
     rw = f"{w / med(base, 'wall_seconds'):.2f}" if base else "–"
     rs = f"{s / med(base, 'solver_seconds'):.2f}" if base else "–"
     its = sorted({x["newton_iterations"] for x in runs})
     kry = sorted({x["krylov_iterations"] for x in runs})
     gaps = sorted({f"{x['probes'].get('gap', float('nan')):.12e}" for x in runs})
-    print(f"| {t} | {w:.2f} | {s:.2f} | {a:.2f} | {rw} | {rs} | {'/'.join(map(str, its))} | {'/'.join(map(str, kry))} | {' '.join(gaps)} |")
+    print(f"| {t} | {w:.2f} | {s:.2f} | {a:.2f} | {o:.2f} | {rw} | {rs} | {'/'.join(map(str, its))} | {'/'.join(map(str, kry))} | {' '.join(gaps)} |")
+try:
+    print("\nthe elimination tree's bounds (tmc check):")
+    print(open(f"{out}/h1-{n}-check.txt").read().rstrip())
+except OSError:
+    pass
+two = rows.get("2")
+if base and two and all("output_seconds" in x for x in base + two):
+    # each part's seconds at p threads by Amdahl's law, its serial share read from 1 and 2
+    parts = {"solver": "solver_seconds", "assembly": "assembly_seconds", "output": "output_seconds"}
+    t1 = {k: med(base, v) for k, v in parts.items()}
+    t2 = {k: med(two, v) for k, v in parts.items()}
+    t1["rest"] = med(base, "wall_seconds") - sum(t1.values())
+    t2["rest"] = med(two, "wall_seconds") - sum(t2.values())
+    def at(k, p):
+        serial = min(max(2 * t2[k] / t1[k] - 1, 0), 1) if t1[k] > 0 else 1
+        return t1[k] * (serial + (1 - serial) / p)
+    print("\nprojected from 1 and 2 threads (Amdahl: what did not halve stays):")
+    print("| threads | wall s | solver s | assembly s (share) | output s (share) | wall / 1 thread |")
+    print("|---|---|---|---|---|---|")
+    for p in (4, 16, 64):
+        v = {k: at(k, p) for k in t1}
+        w = sum(v.values())
+        print(f"| {p} | {w:.2f} | {v['solver']:.2f} | {v['assembly']:.2f} ({v['assembly'] / w:.1%}) | {v['output']:.2f} ({v['output'] / w:.1%}) | {w / med(base, 'wall_seconds'):.2f} |")
 PY
 done
