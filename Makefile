@@ -2,7 +2,7 @@
 CARGO ?= cargo
 TMC := target/release/tmc
 
-.PHONY: deps deps-demo build demo test bench validate figures studies clean
+.PHONY: deps deps-demo build demo test memcheck bench validate figures studies clean
 
 # Everything the tests and the validation need (FEniCSx included).
 deps:
@@ -26,11 +26,18 @@ demo: deps-demo
 # Every test: unit, analytical, patch, tangent, end-to-end, bad input, and the PETSc engine
 # on one and two ranks; then what a build without the PETSc engine says when asked for it
 # (built in its own folder, so as not to replace the engine's build; unoptimised, as it only
-# asks and is refused: on a fresh clone 127 s to build against 285 s optimised). Ends with
-# the ten slowest tests (target/test-times.log has every test's time).
+# asks and is refused: on a fresh clone 127 s to build against 285 s optimised), beside the
+# PETSc layer under valgrind (`make memcheck`, 37 s alone). Ends with the ten slowest tests
+# (target/test-times.log has every test's time).
 test: deps
 	scripts/timed-tests.sh $(CARGO) test --release --features petsc
-	CARGO_TARGET_DIR=target/serial $(CARGO) test --test it cli::without_petsc
+	scripts/memcheck.sh >target/memcheck.log 2>&1 & m=$$!; \
+	CARGO_TARGET_DIR=target/serial $(CARGO) test --test it cli::without_petsc; s=$$?; \
+	wait $$m; c=$$?; cat target/memcheck.log; [ $$s -eq 0 ] && [ $$c -eq 0 ]
+
+# The PETSc layer under valgrind: a converging solve and its error paths, on one rank and two.
+memcheck: build
+	scripts/memcheck.sh
 
 # Benchmarks print tables (tests never assert wall time).
 bench: deps

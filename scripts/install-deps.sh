@@ -12,6 +12,8 @@ packages=(gmsh libgmsh-dev pkg-config fonts-dejavu-core)
 if [ "${1:-all}" != "demo" ]; then
   packages+=(python3-meshio python3-matplotlib python3-gmsh python3-dolfinx)
   packages+=(petsc-dev libopenmpi-dev openmpi-bin libclang-dev)
+  # the PETSc layer's memory check (scripts/memcheck.sh)
+  packages+=(valgrind)
 fi
 need=()
 for pkg in "${packages[@]}"; do
