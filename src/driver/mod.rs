@@ -3,6 +3,7 @@
 mod account;
 pub mod check;
 pub mod checkpoint;
+mod last_words;
 mod recorder;
 pub mod records;
 mod run;
@@ -129,18 +130,24 @@ pub fn request_stop() {
 
 extern "C" fn on_signal(sig: libc::c_int) {
     request_stop();
+    if sig == libc::SIGTERM {
+        last_words::on_terminate();
+    }
     // a second signal ends the process at once
     unsafe { libc::signal(sig, libc::SIG_DFL) };
 }
 
 /// Make SIGINT (Ctrl-C) and SIGTERM stop a run after its current step, with its summary
-/// written; a second signal ends the process at once. For the `tmc` binary.
+/// written; a second signal ends the process at once. Under a launcher that kills its
+/// ranks soon after SIGTERM, a run whose step does not end in time ends at its last accepted
+/// step instead (`last_words.rs`). For the `tmc` binary.
 pub fn stop_on_signals() {
     let handler = on_signal as extern "C" fn(libc::c_int) as libc::sighandler_t;
     unsafe {
         libc::signal(libc::SIGINT, handler);
         libc::signal(libc::SIGTERM, handler);
     }
+    last_words::watch();
 }
 
 /// Options of `tmc solve`.

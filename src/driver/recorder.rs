@@ -7,6 +7,7 @@ use super::SolveError;
 use super::SolveOptions;
 use super::account::Accounts;
 use super::checkpoint::{self, Checkpoint};
+use super::last_words::{self, Words};
 use super::records::{
     Balances, FORCE_KEYS, HistoryLayout, Reactions, StepRow, Summary, contact_ratio, flow,
     peak_memory_mb,
@@ -166,15 +167,19 @@ impl<'a> Recorder<'a> {
     }
 
     /// What an accepted step leaves: its `.vtu` (when `[output] every` asks), its history row,
-    /// the checkpoint, and its progress line.
+    /// the checkpoint, and its progress line; with `said` (under a launcher) also the summary
+    /// that says it should the run be stopped here (`last_words.rs`).
     pub(super) fn step(
         &mut self,
         st: &Stepper,
         accounts: &Accounts,
         row: &StepRow,
         rep: &StepReport,
+        said: Option<String>,
     ) -> Result<(), SolveError> {
         let started = Instant::now();
+        // the watcher does not speak between this step's files
+        let mut words = last_words::hold();
         let reactions = &accounts.totals.reactions;
         let values = self.layout.row(
             row,
@@ -195,6 +200,10 @@ impl<'a> Recorder<'a> {
             // a step taken: the previous run's files go for good
             folder.settle()?;
         }
+        if let Some(said) = said {
+            self.leave_words(st, &accounts.totals, said, &mut words);
+        }
+        drop(words);
         self.writing += started.elapsed().as_secs_f64();
         self.report_step(st, accounts, row, rep);
         Ok(())
@@ -407,10 +416,56 @@ impl<'a> Recorder<'a> {
     ) -> Result<(), SolveError> {
         // the last state reached always has its file
         self.write_step(st)?;
+        // from here the run writes its own summary: no last words in its place
+        last_words::forget();
+        self.summary = self.summary_at(st, totals, converged, message);
+        if let (Some(open), Some(_)) = (open_balances(&self.summary.balances), &self.folder) {
+            self.say(&open);
+        }
+        let s = &mut self.summary;
+        if let Some(folder) = &mut self.folder {
+            let json = serde_json::to_string_pretty(&*s).expect("serialisable");
+            write_atomic(&self.out_dir.join("summary.json"), json.as_bytes())?;
+            // a run that took a load step has results of its own, even if it then failed:
+            // they replace the previous run's; one that did not (it failed or was stopped at
+            // λ = 0) leaves the previous run's results as they were, where there are any
+            if st.ctl.accepted > 0 || !folder.holds_previous() {
+                folder.settle()?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Under a launcher that kills its ranks soon after a signal (`mpirun`): the summary
+    /// this run would write if stopped at the stepper's state, saying `said`, into `words`
+    /// for `last_words.rs` to write should the launcher kill the run before it can. Every
+    /// rank takes part (the summary gathers the ranks' memory); the first keeps it.
+    fn leave_words(&self, st: &Stepper, totals: &Totals, said: String, words: &mut Option<Words>) {
+        let summary = self.summary_at(st, totals, false, format!("interrupted: {said}"));
+        if let Some(folder) = &self.folder {
+            *words = Some(Words {
+                summary: self.out_dir.join("summary.json"),
+                json: serde_json::to_string_pretty(&summary).expect("serialisable"),
+                lock: folder.lock_path(),
+                said,
+            });
+        }
+    }
+
+    /// The summary of the stepper's state, with `converged` and `message` (on several ranks
+    /// every rank takes part: it gathers their peak memory).
+    fn summary_at(
+        &self,
+        st: &Stepper,
+        totals: &Totals,
+        converged: bool,
+        message: String,
+    ) -> Summary {
         let (model, ctl, tot, spent) = (st.model, &st.ctl, totals, st.newton.spent);
         let wall = self.wall();
         let probes = self.probe_values(st, &tot.reactions);
-        let s = &mut self.summary;
+        let mut summary = self.summary.clone();
+        let s = &mut summary;
         s.converged = converged;
         s.message = message;
         s.lambda = model.path.lambda(ctl.t);
@@ -462,22 +517,7 @@ impl<'a> Recorder<'a> {
         // heat below what Newton leaves as round-off at every node over the run's time
         let heat_floor = model.dofs.n_nodes as f64 * st.newton.floor(Field::Theta) * ctl.t;
         s.balances = balances(s, tot, st.newton.tol, heat_floor);
-        let open = open_balances(&s.balances);
-        if let (Some(open), Some(_)) = (open, &self.folder) {
-            self.say(&open);
-        }
-        let s = &mut self.summary;
-        if let Some(folder) = &mut self.folder {
-            let json = serde_json::to_string_pretty(&*s).expect("serialisable");
-            write_atomic(&self.out_dir.join("summary.json"), json.as_bytes())?;
-            // a run that took a load step has results of its own, even if it then failed:
-            // they replace the previous run's; one that did not (it failed or was stopped at
-            // λ = 0) leaves the previous run's results as they were, where there are any
-            if ctl.accepted > 0 || !folder.holds_previous() {
-                folder.settle()?;
-            }
-        }
-        Ok(())
+        summary
     }
 
     /// A line above the progress bar, or on stderr when the bar is hidden (not a terminal).

@@ -194,7 +194,8 @@ impl<'a> Run<'a> {
             kinetic_energy: summary.kinetic_energy,
             wall: self.rec.wall(),
         };
-        self.rec.step(&self.st, &self.accounts, &row, &rep)
+        let said = super::last_words::wanted().then(|| self.stopped_here().to_string());
+        self.rec.step(&self.st, &self.accounts, &row, &rep, said)
     }
 
     /// What the points' committed history holds, into the summary.
@@ -423,7 +424,14 @@ impl<'a> Run<'a> {
     /// A stop was asked for (a signal): write the summary of the steps so far and say so.
     pub(super) fn interrupt(mut self) -> Result<Summary, SolveError> {
         self.rec.clear_bar();
-        let err = SolveError::Interrupted {
+        let err = self.stopped_here();
+        self.finish(false, format!("interrupted: {err}"))?;
+        Err(err)
+    }
+
+    /// What a run stopped at its last accepted state says.
+    fn stopped_here(&self) -> SolveError {
+        SolveError::Interrupted {
             at: self.st.position(),
             steps: self.st.ctl.accepted,
             left: Left::new(
@@ -433,9 +441,7 @@ impl<'a> Run<'a> {
                 self.st.ctl.accepted == 0 && self.rec.holds_previous(),
                 true,
             ),
-        };
-        self.finish(false, format!("interrupted: {err}"))?;
-        Err(err)
+        }
     }
 
     /// The run reached its end: write the summary and return it.

@@ -92,6 +92,11 @@ impl RunFolder {
         })
     }
 
+    /// The lock file this run holds.
+    pub fn lock_path(&self) -> PathBuf {
+        self.dir.join(LOCK)
+    }
+
     pub fn dir(&self) -> &Path {
         &self.dir
     }

@@ -693,6 +693,45 @@ fn mpirun_interrupted(
     job.wait_with_output().unwrap()
 }
 
+/// Ctrl-C to `mpirun` itself, as a terminal sends it: Open MPI 4.1 sends the ranks SIGTERM a
+/// second later and kills them a second after that, before a step of the 20.5k row (about
+/// 2 s on two ranks here) can end. The run still ends as an interrupted run does: at its last
+/// accepted step, with `summary.json` saying so, its history and its checkpoint as long, and
+/// no lock left (issue 70, item 6).
+#[test]
+fn ctrl_c_to_mpirun_mid_step_ends_at_the_last_accepted_step_with_its_summary() {
+    let dir = common::scratch("dist-ctrl-c-mpirun");
+    let case = root().join("cases/block-plate-3d-tm1.toml");
+    let out = dir.join("run");
+    let params = [
+        "--set",
+        "mesh_options.params={ n = 16, nb = 10, nm = 1, nq = 6 }",
+    ];
+    // the first step written, the second under way
+    let job = mpirun_job(2, &case, &out, &params, 1);
+    unsafe { libc::kill(job.id() as i32, libc::SIGINT) };
+    let o = job.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{err}");
+    assert!(err.contains("interrupted at λ"), "{err}");
+    let s = common::summary(&out);
+    let message = s["message"].as_str().unwrap();
+    assert!(message.starts_with("interrupted"), "{message}");
+    let steps = s["load_steps"].as_u64().unwrap() as usize;
+    assert!(steps >= 1, "{message}");
+    let (_, rows) = common::history(&out);
+    assert_eq!(
+        rows.len(),
+        steps + 1,
+        "one history row per step the summary counts"
+    );
+    assert!(!out.join(".tmc.lock").exists(), "the lock is left");
+    // the checkpoint is of the same step, for --restart
+    let restart = std::fs::read_to_string(out.join("restart.json")).unwrap();
+    let restart: serde_json::Value = serde_json::from_str(&restart).unwrap();
+    assert_eq!(restart["accepted"].as_u64(), Some(steps as u64));
+}
+
 /// The history of the run in `out` is that of the uninterrupted run in `full`: as many rows,
 /// every physical column within 1e-10 of its largest value over the run (a column at
 /// round-off, a sideways reaction, is judged against it), the same steps and iterations, the
