@@ -177,36 +177,44 @@ impl<'a> Recorder<'a> {
         rep: &StepReport,
         said: Option<String>,
     ) -> Result<(), SolveError> {
-        let started = Instant::now();
-        // the watcher does not speak between this step's files
-        let mut words = last_words::hold();
-        let reactions = &accounts.totals.reactions;
-        let values = self.layout.row(
-            row,
-            &self.probe_values(st, reactions),
-            reactions,
-            &self.group_columns(st, reactions),
-        );
-        // the step's file first (when [output] every asks for it): a row never announces a
-        // file that is not there yet
-        if st.ctl.accepted.is_multiple_of(self.every) {
-            self.write_vtu(st)?;
-        }
-        if self.folder.is_some() {
-            self.history.row(&values)?;
-        }
-        self.write_checkpoint(st, &accounts.totals)?;
-        if let Some(folder) = &mut self.folder {
-            // a step taken: the previous run's files go for good
-            folder.settle()?;
-        }
-        if let Some(said) = said {
-            self.leave_words(st, &accounts.totals, said, &mut words);
-        }
-        drop(words);
-        self.writing += started.elapsed().as_secs_f64();
+        self.timed(|rec| {
+            // the watcher does not speak between this step's files
+            let mut words = last_words::hold();
+            let reactions = &accounts.totals.reactions;
+            let values = rec.layout.row(
+                row,
+                &rec.probe_values(st, reactions),
+                reactions,
+                &rec.group_columns(st, reactions),
+            );
+            // the step's file first (when [output] every asks for it): a row never announces
+            // a file that is not there yet
+            if st.ctl.accepted.is_multiple_of(rec.every) {
+                rec.write_vtu(st)?;
+            }
+            if rec.folder.is_some() {
+                rec.history.row(&values)?;
+            }
+            rec.write_checkpoint(st, &accounts.totals)?;
+            if let Some(folder) = &mut rec.folder {
+                // a step taken: the previous run's files go for good
+                folder.settle()?;
+            }
+            if let Some(said) = said {
+                rec.leave_words(st, &accounts.totals, said, &mut words);
+            }
+            Ok::<_, SolveError>(())
+        })?;
         self.report_step(st, accounts, row, rep);
         Ok(())
+    }
+
+    /// `f` on the recorder, its wall time counted as the run's writing.
+    fn timed<R>(&mut self, f: impl FnOnce(&mut Self) -> R) -> R {
+        let started = Instant::now();
+        let r = f(self);
+        self.writing += started.elapsed().as_secs_f64();
+        r
     }
 
     /// The run's state as a checkpoint (on several ranks every rank takes part).
@@ -238,10 +246,7 @@ impl<'a> Recorder<'a> {
         st: &Stepper,
         totals: &Totals,
     ) -> Result<(), SolveError> {
-        let started = Instant::now();
-        let saved = self.write_checkpoint(st, totals);
-        self.writing += started.elapsed().as_secs_f64();
-        saved
+        self.timed(|rec| rec.write_checkpoint(st, totals))
     }
 
     fn write_checkpoint(&mut self, st: &Stepper, totals: &Totals) -> Result<(), SolveError> {
@@ -359,10 +364,7 @@ impl<'a> Recorder<'a> {
     /// part, the first rank's `.pvtu` putting them together, and one error for all if any
     /// rank's failed.
     pub(super) fn write_step(&mut self, st: &Stepper) -> Result<(), SolveError> {
-        let started = Instant::now();
-        let written = self.write_vtu(st);
-        self.writing += started.elapsed().as_secs_f64();
-        written
+        self.timed(|rec| rec.write_vtu(st))
     }
 
     fn write_vtu(&mut self, st: &Stepper) -> Result<(), SolveError> {

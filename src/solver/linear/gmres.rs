@@ -148,7 +148,7 @@ pub fn gmres(
 
 /// v / s.
 fn scaled(v: &[f64], s: f64) -> Vec<f64> {
-    let mut out = v.to_vec();
+    let mut out = vec![0.0; v.len()];
     each(&mut out, v, |a, c| *a = c / s);
     out
 }

@@ -690,12 +690,47 @@ fn grid(k: usize, dofs: usize) -> (SymbolicSparseColMat<usize>, Vec<f64>, Vec<u3
     (sp, vals, node)
 }
 
+/// `f` on a pool of `threads` threads.
+fn on_threads<R: Send>(threads: usize, f: impl FnOnce() -> R + Send) -> R {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap();
+    pool.install(f)
+}
+
+/// b = A x for the grid's matrix `sp`, `vals` and x_j = 1 + (j mod 7), the x it returns.
+fn known_solution(sp: &SymbolicSparseColMat<usize>, vals: &[f64]) -> Vec<f64> {
+    let mut b = vec![0.0; sp.nrows()];
+    for j in 0..sp.ncols() {
+        for k in sp.col_ptr()[j]..sp.col_ptr()[j + 1] {
+            b[sp.row_idx()[k]] += vals[k] * (1.0 + (j % 7) as f64);
+        }
+    }
+    b
+}
+
+/// b ← (L D Lᵀ)⁻¹ b by faer's solve with the factor `l` of `symbolic`.
+fn faers_solve(
+    symbolic: &faer::sparse::linalg::cholesky::SymbolicCholesky<usize>,
+    l: &[f64],
+    b: &mut [f64],
+) {
+    use faer::dyn_stack::{MemBuffer, MemStack};
+    let mut mem = MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(1, faer::Par::Seq));
+    ldlt::ldlt_solve(symbolic, l, b, faer::Par::Seq, MemStack::new(&mut mem));
+}
+
+/// Whether `a` and `b` are the same to the bit.
+fn same_bits(a: &[f64], b: &[f64]) -> bool {
+    a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
+}
+
 #[test]
 fn the_tree_factor_is_faers_factor_at_every_thread_count() {
     use super::tree::TreeLdlt;
     use faer::dyn_stack::{MemBuffer, MemStack};
     let (sp, vals, node) = grid(14, 3);
-    let n = sp.nrows();
     let (fwd, inv) = nested_dissection(&sp, &node);
     let symbolic = analysed(&sp, &fwd, &inv);
     let mut reference = vec![0.0; symbolic.len_val()];
@@ -715,12 +750,8 @@ fn the_tree_factor_is_faers_factor_at_every_thread_count() {
     let largest = reference.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let mut first: Option<Vec<f64>> = None;
     for threads in [1, 2, 4] {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
         let mut l = vec![f64::NAN; symbolic.len_val()];
-        pool.install(|| tree.factor(&mut l, &vals)).unwrap();
+        on_threads(threads, || tree.factor(&mut l, &vals)).unwrap();
         let off = l
             .iter()
             .zip(&reference)
@@ -731,22 +762,10 @@ fn the_tree_factor_is_faers_factor_at_every_thread_count() {
             "{threads} threads: {off:.2e} from faer's factor (largest entry {largest:.2e})"
         );
         // its solve is faer's: b = A·1 gives back 1, at every thread count
-        let mut b = vec![0.0; n];
-        for j in 0..n {
-            for k in sp.col_ptr()[j]..sp.col_ptr()[j + 1] {
-                b[sp.row_idx()[k]] += vals[k] * (1.0 + (j % 7) as f64);
-            }
-        }
+        let mut b = known_solution(&sp, &vals);
         let mut faers = b.clone();
-        let mut mem = MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(1, faer::Par::Seq));
-        ldlt::ldlt_solve(
-            &symbolic,
-            &reference,
-            &mut faers,
-            faer::Par::Seq,
-            MemStack::new(&mut mem),
-        );
-        pool.install(|| tree.solve(&l, &mut b, &mut Vec::new()));
+        faers_solve(&symbolic, &reference, &mut faers);
+        on_threads(threads, || tree.solve(&l, &mut b, &mut Vec::new()));
         for (j, (x, y)) in b.iter().zip(&faers).enumerate() {
             let exact = 1.0 + (j % 7) as f64;
             assert!((y - exact).abs() < 1e-12 * exact, "faer: x[{j}] = {y}");
@@ -838,15 +857,6 @@ fn the_trees_model_predicts_what_its_shape_allows() {
     assert!(v[5] < s[5] && v[5] >= v[4], "{v:?} against {s:?}");
 }
 
-/// `f` on a pool of `threads` threads.
-fn on_threads<R: Send>(threads: usize, f: impl FnOnce() -> R + Send) -> R {
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .unwrap();
-    pool.install(f)
-}
-
 #[test]
 fn a_large_blocks_product_is_the_same_at_every_thread_count() {
     // a 3D grid's matrix of 670k entries: its product is cut into pieces
@@ -887,7 +897,7 @@ fn a_large_blocks_product_is_the_same_at_every_thread_count() {
             match &first {
                 None => first = Some(y),
                 Some(f) => assert!(
-                    y.iter().zip(f).all(|(a, b)| a.to_bits() == b.to_bits()),
+                    same_bits(&y, f),
                     "{threads} threads: not 1 thread's product to the bit"
                 ),
             }
@@ -898,10 +908,8 @@ fn a_large_blocks_product_is_the_same_at_every_thread_count() {
 #[test]
 fn the_tree_solves_wide_panels_in_bands_and_the_same_at_every_thread_count() {
     use super::tree::TreeLdlt;
-    use faer::dyn_stack::{MemBuffer, MemStack};
     // 20 577 unknowns: the root separator and the panels below it are wide enough for bands
     let (sp, vals, node) = grid(19, 3);
-    let n = sp.nrows();
     let (fwd, inv) = nested_dissection(&sp, &node);
     let symbolic = analysed(&sp, &fwd, &inv);
     let tree = TreeLdlt::new(&symbolic, &sp).expect("a supernodal analysis");
@@ -912,21 +920,9 @@ fn the_tree_solves_wide_panels_in_bands_and_the_same_at_every_thread_count() {
     );
     let mut l = vec![0.0; symbolic.len_val()];
     tree.factor(&mut l, &vals).unwrap();
-    let mut b = vec![0.0; n];
-    for j in 0..n {
-        for k in sp.col_ptr()[j]..sp.col_ptr()[j + 1] {
-            b[sp.row_idx()[k]] += vals[k] * (1.0 + (j % 7) as f64);
-        }
-    }
+    let b = known_solution(&sp, &vals);
     let mut faers = b.clone();
-    let mut mem = MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(1, faer::Par::Seq));
-    ldlt::ldlt_solve(
-        &symbolic,
-        &l,
-        &mut faers,
-        faer::Par::Seq,
-        MemStack::new(&mut mem),
-    );
+    faers_solve(&symbolic, &l, &mut faers);
     let mut first: Option<Vec<f64>> = None;
     for threads in [1, 2, 4] {
         let mut x = b.clone();
@@ -945,7 +941,7 @@ fn the_tree_solves_wide_panels_in_bands_and_the_same_at_every_thread_count() {
         match &first {
             None => first = Some(x),
             Some(f) => assert!(
-                x.iter().zip(f).all(|(a, b)| a.to_bits() == b.to_bits()),
+                same_bits(&x, f),
                 "{threads} threads: not 1 thread's solve to the bit"
             ),
         }

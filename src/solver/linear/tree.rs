@@ -501,64 +501,63 @@ impl TreeLdlt {
     /// only lowers the speed-up, so this is a bound to measure against.
     pub(super) fn predicted_speedup(&self, p: f64) -> f64 {
         let total: f64 = self.work.iter().sum();
-        total / self.forest_time(&self.roots, p)
-    }
-
-    fn forest_time(&self, trees: &[usize], p: f64) -> f64 {
-        let sum: f64 = trees.iter().map(|&s| self.subtree_work[s]).sum();
-        if p <= 1.0 || sum == 0.0 {
-            return sum;
-        }
-        let longest = trees
-            .iter()
-            .map(|&s| {
-                let ps = p * self.subtree_work[s] / sum;
-                // the gathering in its bands, the diagonal block and panel in pieces
-                let (gather, dense) = (self.gather[s], self.work[s] - self.gather[s]);
-                let bands = bands(gather) as f64;
-                let pieces = (dense / (WIDE_FLOPS / 8.0)).max(1.0);
-                let own = gather / ps.min(bands).max(1.0) + dense / ps.min(pieces).max(1.0);
-                own + self.forest_time(self.children(s), ps)
-            })
-            .fold(0.0, f64::max);
-        longest.max(sum / p)
+        // the gathering in its bands, the diagonal block and panel in pieces
+        let own = |s: usize, ps: f64| {
+            let (gather, dense) = (self.gather[s], self.work[s] - self.gather[s]);
+            let bands = bands(gather) as f64;
+            let pieces = (dense / (WIDE_FLOPS / 8.0)).max(1.0);
+            gather / ps.min(bands).max(1.0) + dense / ps.min(pieces).max(1.0)
+        };
+        total / self.mapped_time(&self.roots, p, &self.subtree_work, 0.0, &own)
     }
 
     /// A solve's speed-up on `p` threads as the tree predicts it, counting the factor's
     /// entries read (a solve reads each once each way, and memory, not arithmetic, is what
     /// it waits on): the threads mapped onto the subtrees as in [`Self::predicted_speedup`],
     /// a subtree of fewer than [`TASK_ENTRIES`] entries one task, a supernode's diagonal
-    /// block by blocks ([`lower_solve`]) and its panel below in its bands ([`SOLVE_BAND`]). It leaves out
-    /// the memory's bandwidth, which all threads share: where they saturate it, the solves
-    /// stop gaining, whatever the tree allows.
+    /// block by blocks ([`lower_solve`]) and its panel below in its bands ([`SOLVE_BAND`]).
+    /// It leaves out the memory's bandwidth, which all threads share: where they saturate
+    /// it, the solves stop gaining, whatever the tree allows.
     pub(super) fn predicted_solve_speedup(&self, p: f64) -> f64 {
         let total: f64 = self.roots.iter().map(|&s| self.subtree_solve[s]).sum();
-        total / self.solve_time(&self.roots, p)
+        let own = |s: usize, ps: f64| {
+            let (w, below) = (self.begin[s + 1] - self.begin[s], self.n_rows[s]);
+            let bands = band_of(below, w).map_or(1.0, |b| below.div_ceil(b) as f64);
+            // the diagonal block: by blocks, their triangles one after another
+            let (tri, square) = match blocked(w) {
+                true => ((w * SOLVE_BLOCK / 2) as f64, (w * w / SOLVE_BAND) as f64),
+                false => ((w * w) as f64, 1.0),
+            };
+            tri + ((w * w) as f64 - tri) / ps.min(square).max(1.0)
+                + (w * below) as f64 / ps.min(bands).max(1.0)
+        };
+        total / self.mapped_time(&self.roots, p, &self.subtree_solve, TASK_ENTRIES, &own)
     }
 
-    fn solve_time(&self, trees: &[usize], p: f64) -> f64 {
-        let sum: f64 = trees.iter().map(|&s| self.subtree_solve[s]).sum();
+    /// The time of the forest `trees` on `p` threads, `size[s]` the work of s's subtree: the
+    /// threads mapped onto the subtrees in proportion to their work, a subtree of less than
+    /// `task` run whole on one thread, `own(s, ps)` supernode s's own time on its `ps`
+    /// threads, and no forest finished before its work over the threads.
+    fn mapped_time(
+        &self,
+        trees: &[usize],
+        p: f64,
+        size: &[f64],
+        task: f64,
+        own: &dyn Fn(usize, f64) -> f64,
+    ) -> f64 {
+        let sum: f64 = trees.iter().map(|&s| size[s]).sum();
         if p <= 1.0 || sum == 0.0 {
             return sum;
         }
         let longest = trees
             .iter()
             .map(|&s| {
-                if self.subtree_solve[s] < TASK_ENTRIES {
-                    return self.subtree_solve[s];
+                if size[s] < task {
+                    return size[s];
                 }
-                let ps = p * self.subtree_solve[s] / sum;
-                let (w, below) = (self.begin[s + 1] - self.begin[s], self.n_rows[s]);
-                let bands = band_of(below, w).map_or(1.0, |b| below.div_ceil(b) as f64);
-                // the diagonal block: by blocks, their triangles one after another
-                let (tri, square) = match blocked(w) {
-                    true => ((w * SOLVE_BLOCK / 2) as f64, (w * w / SOLVE_BAND) as f64),
-                    false => ((w * w) as f64, 1.0),
-                };
-                let own = tri
-                    + ((w * w) as f64 - tri) / ps.min(square).max(1.0)
-                    + (w * below) as f64 / ps.min(bands).max(1.0);
-                own + self.solve_time(self.children(s), ps)
+                let ps = p * size[s] / sum;
+                own(s, ps) + self.mapped_time(self.children(s), ps, size, task, own)
             })
             .fold(0.0, f64::max);
         longest.max(sum / p)
