@@ -2,7 +2,7 @@
 # The PETSc layer under valgrind's memory checker: a solve that converges on PETSc, and its
 # error paths (a factorisation package PETSc lacks, a misspelt option, a factorisation that
 # meets a zero pivot, a Krylov solver that does not converge, a bad option under mpirun on
-# two ranks). Each must end as tmc says it ends (converged, or its error) with no invalid
+# two ranks, a rank that fails alone). Each must end as tmc says it ends (converged, or its error) with no invalid
 # read, write or free, no use of an uninitialised value and no double destruction; leaks at
 # exit are PETSc's and MPI's and not counted. Open MPI's own suppressions, and
 # scripts/valgrind.supp for PMIx's.
@@ -28,7 +28,7 @@ mesh="mesh=\"$(realpath "$out/bar.msh")\""
 run() {
     local name=$1 expect=$2 launch=()
     shift 2
-    [ "$name" = mpirun ] && launch=(mpirun -n 2)
+    [ "${name#mpirun}" != "$name" ] && launch=(mpirun -n 2)
     timeout 600 "${launch[@]}" "${vg[@]}" "$bin" solve "$case" --set "$mesh" "$@" \
         -o "$out/$name" >"$out/$name.log" 2>&1
     local rc=$?
@@ -58,4 +58,8 @@ run diverged "DIVERGED_ITS" --set 'solver.engine="petsc"' \
 failed=0
 for p in "${pids[@]}"; do wait "$p" || failed=1; done
 run mpirun "Unable to find requested PC type nonsense" --set "$(petsc "-pc_type nonsense")" || failed=1
+# a rank that fails alone: a folder in the way of the second rank's part of step 1, which
+# that rank cannot write; the first rank hears of it, and both end on it
+mkdir -p "$out/mpirun-alone/step_0001_1.vtu"
+run mpirun-alone "cannot write .*step_0001_1.vtu: Is a directory" || failed=1
 exit $failed

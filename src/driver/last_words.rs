@@ -1,25 +1,29 @@
 //! A run's last words under a launcher. Open MPI's `mpirun`, on Ctrl-C, sends its ranks
 //! SIGTERM a second later and kills them a second after that (`odls_base_sigkill_timeout`):
 //! a step longer than that never finishes, and an interrupted run would end without its
-//! summary and with its lock. So, under a launcher, each accepted step leaves ready the
-//! summary the run would write were it stopped there; on SIGTERM a watcher thread gives the
-//! run [`GRACE`] to stop by itself, and if it has not, writes that summary, removes the lock,
-//! says so and ends the process: the run ends as an interrupted run does, at its last
-//! accepted step. The step's records and the words are kept under one lock, so the watcher
-//! never speaks between a step's files.
+//! summary and with its lock. So, under a launcher, the initial state and each accepted step
+//! leave ready the summary the run would write were it stopped there; on SIGTERM a watcher
+//! thread gives the run [`GRACE`] to stop by itself, and if it has not, writes that summary,
+//! lets go of the folder (its lock removed; before the first step, a previous run's results
+//! put back), says so and ends the process: the run ends as an interrupted run does, at its
+//! last accepted state. The step's records and the words are kept under one lock, so the
+//! watcher never speaks between a step's files.
 
+use crate::output::folder::Leaving;
 use crate::output::write_atomic;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Mutex, MutexGuard};
 use std::time::Duration;
 
-/// The summary of the last accepted step as an interrupted run writes it, and where.
+/// The summary of the last accepted step (or of the initial state, before the first) as an
+/// interrupted run writes it, and where.
 pub(super) struct Words {
     pub summary: PathBuf,
     pub json: String,
-    /// The run's lock file, to remove.
-    pub lock: PathBuf,
+    /// The run's folder, to let go of as an interrupted run does (its lock removed; before
+    /// the first step, a previous run's results put back).
+    pub folder: Leaving,
     /// What the run says when it is interrupted.
     pub said: String,
 }
@@ -73,14 +77,14 @@ pub(super) fn watch() {
 /// Write the last words, if the run has left some and not written its own summary since,
 /// and end the process as an interrupted run ends.
 fn speak() {
-    let words = hold();
-    let Some(w) = words.as_ref() else {
+    let mut words = hold();
+    let Some(w) = words.take() else {
         return;
     };
     if write_atomic(&w.summary, w.json.as_bytes()).is_err() {
         return;
     }
-    let _ = std::fs::remove_file(&w.lock);
+    w.folder.end_here();
     eprintln!("error: {}", w.said);
     // SAFETY: ends the process at once, as the launcher is about to; no destructor runs
     // (MPI's would wait for ranks that are being killed)

@@ -448,10 +448,16 @@ impl<'a> Recorder<'a> {
             *words = Some(Words {
                 summary: self.out_dir.join("summary.json"),
                 json: serde_json::to_string_pretty(&summary).expect("serialisable"),
-                lock: folder.lock_path(),
+                folder: folder.leaving(),
                 said,
             });
         }
+    }
+
+    /// The last words of a run stopped at its initial state, before its first step (see
+    /// [`Recorder::leave_words`]).
+    pub(super) fn leave_initial_words(&self, st: &Stepper, totals: &Totals, said: String) {
+        self.leave_words(st, totals, said, &mut last_words::hold());
     }
 
     /// The summary of the stepper's state, with `converged` and `message` (on several ranks

@@ -96,7 +96,12 @@ impl<'a> Run<'a> {
         let mut fe = vec![0.0; model.dofs.n_dofs];
         model.f_ext(model.path.lambda(0.0), &mut fe);
         self.accounts.totals.f_last = self.accounts.forces(&self.st, &fe);
-        self.rec.save_checkpoint(&self.st, &self.accounts.totals)
+        self.rec.save_checkpoint(&self.st, &self.accounts.totals)?;
+        if super::last_words::wanted() {
+            let said = self.stopped_here().to_string();
+            (self.rec).leave_initial_words(&self.st, &self.accounts.totals, said);
+        }
+        Ok(())
     }
 
     /// A steady scene with values applied in full (`ramp = false`) starts from its equilibrium

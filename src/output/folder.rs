@@ -92,11 +92,6 @@ impl RunFolder {
         })
     }
 
-    /// The lock file this run holds.
-    pub fn lock_path(&self) -> PathBuf {
-        self.dir.join(LOCK)
-    }
-
     pub fn dir(&self) -> &Path {
         &self.dir
     }
@@ -130,8 +125,7 @@ impl RunFolder {
         if !self.held {
             return Ok(());
         }
-        let (held, gone) = (self.dir.join(HELD), self.dir.join(DISCARDED));
-        std::fs::rename(&held, &gone).map_err(|e| werr(&held, e))?;
+        set_aside_held(&self.dir)?;
         self.held = false;
         remove_discarded(&self.dir)
     }
@@ -168,6 +162,40 @@ impl RunFolder {
 
 impl Drop for RunFolder {
     fn drop(&mut self) {
+        self.leaving().leave();
+    }
+}
+
+impl RunFolder {
+    /// What letting go of the folder takes, apart from the folder itself: for a process that
+    /// must end at once, without unwinding (`driver/last_words.rs`).
+    pub fn leaving(&self) -> Leaving {
+        Leaving {
+            dir: self.dir.clone(),
+            written: self.written.clone(),
+            held: self.held,
+            held_results: self.held_results,
+            created: self.created,
+            replaced: self.replaced,
+        }
+    }
+}
+
+/// A [`RunFolder`] as it stood when [`RunFolder::leaving`] was taken.
+#[derive(Clone, Debug)]
+pub struct Leaving {
+    dir: PathBuf,
+    written: Vec<String>,
+    held: bool,
+    held_results: bool,
+    created: bool,
+    replaced: bool,
+}
+
+impl Leaving {
+    /// What dropping the folder does: an unsettled replacement is undone (the previous run
+    /// comes back), the lock goes, and a folder this run created and left empty goes too.
+    fn leave(&self) {
         let put_back = self.held && put_back(&self.dir, &self.written).is_ok();
         let _ = std::fs::remove_file(self.dir.join(LOCK));
         if self.created && (!self.replaced || put_back) {
@@ -175,6 +203,17 @@ impl Drop for RunFolder {
             // empty)
             let _ = std::fs::remove_dir(&self.dir);
         }
+    }
+
+    /// Let go of the folder as a run stopped here ends (its summary written): a previous
+    /// run's results held aside come back; with none held, this run's files stay as the
+    /// folder's results.
+    pub fn end_here(mut self) {
+        if self.held && !self.held_results && set_aside_held(&self.dir).is_ok() {
+            self.held = false;
+            let _ = remove_discarded(&self.dir);
+        }
+        self.leave();
     }
 }
 
@@ -190,15 +229,16 @@ fn read_manifest(dir: &Path) -> Vec<String> {
         .unwrap_or_default()
 }
 
-/// Undo an unsettled replacement in `dir`: remove `written` (the failed run's files), move the
-/// held files and manifest back, remove the empty [`HELD`] folder.
+/// Undo an unsettled replacement in `dir`: remove `written` (the failed run's files; a folder
+/// of the user's by one of their names, which the run could not write, stays), move the held
+/// files and manifest back, remove the empty [`HELD`] folder.
 fn put_back(dir: &Path, written: &[String]) -> Result<(), OutputError> {
     let held = dir.join(HELD);
     for name in written {
         let p = dir.join(name);
         match std::fs::remove_file(&p) {
             Ok(()) => {}
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound || p.is_dir() => {}
             Err(e) => return Err(werr(&p, e)),
         }
     }
@@ -209,6 +249,12 @@ fn put_back(dir: &Path, written: &[String]) -> Result<(), OutputError> {
         std::fs::rename(entry.path(), &to).map_err(|e| werr(&to, e))?;
     }
     std::fs::remove_dir(&held).map_err(|e| werr(&held, e))
+}
+
+/// A settled run's [`HELD`] folder renamed to [`DISCARDED`], to be removed.
+fn set_aside_held(dir: &Path) -> Result<(), OutputError> {
+    let (held, gone) = (dir.join(HELD), dir.join(DISCARDED));
+    std::fs::rename(&held, &gone).map_err(|e| werr(&held, e))
 }
 
 /// Remove a settled run's discarded files, if any are left.
@@ -323,6 +369,20 @@ mod tests {
         let dir = previous_run("dropped");
         let before = files(&dir);
         drop(new_run(&dir));
+        assert_eq!(files(&dir), before);
+    }
+
+    #[test]
+    fn a_folder_of_the_user_s_named_as_a_file_of_the_run_stays_and_the_previous_run_comes_back() {
+        // a run on two ranks whose second rank could not write its part of a step, a folder
+        // being in the way: the run fails, and before, putting back stopped at that folder
+        // and left the previous run aside
+        let dir = previous_run("in-the-way");
+        std::fs::create_dir(dir.join("step_0001_1.vtu")).unwrap();
+        let before = files(&dir);
+        let mut f = new_run(&dir);
+        f.record("step_0001_1.vtu").unwrap();
+        drop(f);
         assert_eq!(files(&dir), before);
     }
 

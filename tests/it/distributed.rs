@@ -412,7 +412,7 @@ fn folder_files(dir: &Path) -> BTreeMap<String, Vec<u8>> {
 }
 
 #[test]
-fn a_rerun_failing_on_its_engine_leaves_the_previous_results_as_they_were() {
+fn a_rerun_failing_on_its_engine_or_on_one_rank_leaves_the_previous_results_as_they_were() {
     // before, the previous run's files were removed once the case and model were checked, and
     // the engine failed after: on an option PETSc refused (set-up), or one it did not use
     // (known at the first solve), on one process and on two ranks
@@ -450,6 +450,20 @@ fn a_rerun_failing_on_its_engine_leaves_the_previous_results_as_they_were() {
             "{ranks} ranks, {options}: the folder changed"
         );
     }
+    // a rank that fails alone: the second cannot write its part of step 1, a folder of the
+    // user's in the way; both end on it, and the previous run comes back (before, putting it
+    // back stopped at that folder and left it aside)
+    std::fs::create_dir(out.join("step_0001_1.vtu")).unwrap();
+    let before = folder_files(&out);
+    let o = mpirun(2, &case, &out, &[]);
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    assert_eq!(
+        e.matches("step_0001_1.vtu: Is a directory").count(),
+        1,
+        "{e}"
+    );
+    assert!(folder_files(&out) == before, "the folder changed: {e}");
 }
 
 #[test]
@@ -730,6 +744,35 @@ fn ctrl_c_to_mpirun_mid_step_ends_at_the_last_accepted_step_with_its_summary() {
     let restart = std::fs::read_to_string(out.join("restart.json")).unwrap();
     let restart: serde_json::Value = serde_json::from_str(&restart).unwrap();
     assert_eq!(restart["accepted"].as_u64(), Some(steps as u64));
+}
+
+/// Ctrl-C to `mpirun` while a rerun takes its first step: the launcher ends the ranks before
+/// the step can, and the folder is as the previous run left it, with no lock, and the run
+/// says so (issue 70, items 5 and 6; before, the lock stayed and the previous results waited
+/// aside for the next run to put them back).
+#[test]
+fn ctrl_c_to_mpirun_before_the_first_step_leaves_the_previous_results_as_they_were() {
+    let dir = common::scratch("dist-ctrl-c-first");
+    let case = root().join("cases/block-plate-3d-tm1.toml");
+    let out = dir.join("run");
+    let coarse = "mesh_options.params={ n = 4, nb = 2, nm = 1, nq = 2 }";
+    let (case_s, out_s) = (case.to_str().unwrap(), out.to_str().unwrap());
+    let o = tmc(&["solve", case_s, "-q", "-o", out_s, "--set", coarse]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let before = folder_files(&out);
+    // on two ranks the steps are written as .pvtu: the rerun's own initial state; its first
+    // step, of Δλ = 0.45, takes about a dozen Newton iterations, seconds past mpirun's
+    let fine = "mesh_options.params={ n = 16, nb = 10, nm = 1, nq = 6 }";
+    let params = ["--set", fine, "--set", "steps.initial=0.45"];
+    let job = mpirun_job(2, &case, &out, &params, 0);
+    unsafe { libc::kill(job.id() as i32, libc::SIGINT) };
+    let o = job.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{err}");
+    assert!(err.contains("interrupted at λ"), "{err}");
+    assert!(err.contains("after 0 converged steps"), "{err}");
+    assert!(err.contains("keeps the previous run's results"), "{err}");
+    assert_eq!(folder_files(&out), before, "{err}");
 }
 
 /// The history of the run in `out` is that of the uninterrupted run in `full`: as many rows,
