@@ -472,30 +472,15 @@ fn solve_model(
     let out_dir = folder.dir().to_owned();
     let mut layer = Layer::find(&model)?;
     let mut medium = remake::Medium::find(&model, remaking(case))?;
-    // a restart decides when to make the medium again from its watch as the checkpoint kept
-    // it, after the step it ended with (as the run did before it was stopped)
-    let mut check_first = false;
-    if let Some(m) = medium.as_mut() {
-        match &from {
-            Some(cp) => match &cp.state.totals.medium {
-                Some(kept) => {
-                    *m = kept.clone();
-                    check_first = true;
-                }
-                None => {
-                    m.start(&model, &cp.state.x, cp.state.clock.t, 0.0);
-                }
-            },
-            None => {
-                m.start(&model, &model.initial_state(), 0.0, 0.0);
-            }
-        }
-    }
+    let mut check_first = medium
+        .as_mut()
+        .is_some_and(|m| watch_from(m, &model, from.as_ref()));
     let (mut model, mut folder, mut from) = (model, Some(folder), from);
     let mut probes = probes.to_vec();
     let mut changed = false;
     // the groups' flows before a remake, to measure what it changed
     let mut before_remake = None;
+    let mut stuck = Stuck::default();
     loop {
         let mut run = Run::new(
             case,
@@ -520,16 +505,9 @@ fn solve_model(
             run.rejoined();
         }
         if let Some((before, since)) = before_remake.take() {
-            let (force, heat) = run.remade_from(&before, since)?;
-            if opts.verbose {
-                crate::note!(
-                    "  the groups' reactions changed by {:.2} % at most, their heat flows by \
-                     {:.2} %",
-                    100.0 * force,
-                    100.0 * heat
-                );
-            }
+            run.remade_from(&before, since)?;
         }
+        stuck.rejected = run.rejected();
         let due = |run: &mut Run| match (&layer, medium.as_mut()) {
             (Some(layer), _) => layer.due(&model, run.state()).map(Change::Join),
             (None, Some(medium)) => {
@@ -537,7 +515,7 @@ fn solve_model(
                 let due = medium.due(&model, run.state(), t, target);
                 // the watch after this state, for the next step's checkpoint
                 run.keep_medium(medium);
-                due.then_some(Change::Remake)
+                (due || stuck.after(run.rejected(), t)).then_some(Change::Remake)
             }
             (None, None) => None,
         };
@@ -567,18 +545,8 @@ fn solve_model(
             if let Some(m) = medium.as_mut() {
                 restart_medium(case, &model, m, &mut cp, rate);
             }
-            // the new mesh on disk, for a restart from the next step's checkpoint on
             if let Some(folder) = kept.as_mut() {
-                for name in checkpoint::MEDIUM_FILES {
-                    folder.record(name)?;
-                }
-                let remade = checkpoint::RemadeMedium {
-                    remakes: cp.state.totals.medium_remakes,
-                    d: model.d,
-                    mesh: model.mesh.clone(),
-                    reference: model.cell_reference.clone(),
-                };
-                remade.write(&out_dir)?;
+                write_remade(folder, &model, &cp)?;
             }
         }
         folder = kept;
@@ -587,6 +555,77 @@ fn solve_model(
         cp.state.wall = start.elapsed().as_secs_f64();
         from = Some(cp);
         changed = true;
+    }
+}
+
+/// Start following the medium `m` of `model` as a run begins: from the watch the checkpoint
+/// `from` kept, after the step it ended with (as the run did before it was stopped; returns
+/// true: whether to make it again is asked before the first step), or from the state the run
+/// starts at.
+fn watch_from(
+    m: &mut remake::Medium,
+    model: &Model,
+    from: Option<&checkpoint::Checkpoint>,
+) -> bool {
+    match from {
+        Some(cp) => match &cp.state.totals.medium {
+            Some(kept) => {
+                *m = kept.clone();
+                return true;
+            }
+            None => {
+                m.start(model, &cp.state.x, cp.state.clock.t, 0.0);
+            }
+        },
+        None => {
+            m.start(model, &model.initial_state(), 0.0, 0.0);
+        }
+    }
+    false
+}
+
+/// The remade medium's mesh in `folder`, for a restart from the next step's checkpoint on.
+fn write_remade(
+    folder: &mut RunFolder,
+    model: &Model,
+    cp: &checkpoint::Checkpoint,
+) -> Result<(), SolveError> {
+    for name in checkpoint::MEDIUM_FILES {
+        folder.record(name)?;
+    }
+    let remade = checkpoint::RemadeMedium {
+        remakes: cp.state.totals.medium_remakes,
+        d: model.d,
+        mesh: model.mesh.clone(),
+        reference: model.cell_reference.clone(),
+    };
+    remade.write(folder.dir())?;
+    Ok(())
+}
+
+/// The attempts that failed from the last accepted state: when a step fails there twice (the
+/// cut step too), the medium is made again at that state, once (its cells may be what stops
+/// the step; a failure a cut mends, as a contact closing, leaves it).
+#[derive(Default)]
+struct Stuck {
+    /// The run's rejected attempts when last asked.
+    rejected: usize,
+    /// The accepted state's t, and how many attempts from it failed.
+    at: f64,
+    failures: usize,
+}
+
+impl Stuck {
+    /// After an attempt, given the run's rejected attempts so far and the last accepted
+    /// state's t: whether the attempt was the second to fail from that state.
+    fn after(&mut self, rejected: usize, t: f64) -> bool {
+        let failed = rejected > self.rejected;
+        self.rejected = rejected;
+        if failed {
+            self.failures = if self.at == t { self.failures + 1 } else { 1 };
+            self.at = t;
+        }
+        failed && self.failures == 2
     }
 }
 

@@ -151,6 +151,11 @@ impl<'a> Run<'a> {
         (self.st.ctl.t, self.st.ctl.target())
     }
 
+    /// The attempts rejected so far.
+    pub(super) fn rejected(&self) -> usize {
+        self.st.ctl.rejected
+    }
+
     /// Whether the run reached the end of its path.
     pub(super) fn done(&self) -> bool {
         self.st.ctl.done()
@@ -264,19 +269,26 @@ impl<'a> Run<'a> {
 
     /// After the medium was made again (and [`Run::rejoined`]), `since` it was due: how much
     /// each group's reaction and heat flow changed from `before`, the largest kept in the
-    /// totals with the time the remake took; returns this remake's (see [`flow_change`]).
+    /// totals with the time the remake took (see [`flow_change`]); `-v` says this remake's.
     pub(super) fn remade_from(
         &mut self,
         before: &Reactions,
         since: std::time::Instant,
-    ) -> Result<(f64, f64), SolveError> {
+    ) -> Result<(), SolveError> {
         let after = self.flows_at_rest()?;
         let (force, heat) = flow_change(before, &after);
         let tot = &mut self.accounts.totals;
         tot.remake_seconds += since.elapsed().as_secs_f64();
         tot.remake_force_change = tot.remake_force_change.max(force);
         tot.remake_heat_change = tot.remake_heat_change.max(heat);
-        Ok((force, heat))
+        if self.opts.verbose {
+            crate::note!(
+                "  the groups' reactions changed by {:.2} % at most, their heat flows by {:.2} %",
+                100.0 * force,
+                100.0 * heat
+            );
+        }
+        Ok(())
     }
 
     /// Keep the remade medium's watch `m` as it is after the last accepted state: the next
