@@ -9,6 +9,7 @@
 //! last accepted state. The step's records and the words are kept under one lock, so the
 //! watcher never speaks between a step's files.
 
+use crate::output::RunFolder;
 use crate::output::folder::Leaving;
 use crate::output::write_atomic;
 use std::path::PathBuf;
@@ -19,8 +20,8 @@ use std::time::Duration;
 /// The summary of the last accepted step (or of the initial state, before the first) as an
 /// interrupted run writes it, and where.
 pub(super) struct Words {
-    pub summary: PathBuf,
-    pub json: String,
+    /// Where, and what; none while the run sets up (meshing, the model), before it has one.
+    pub summary: Option<(PathBuf, String)>,
     /// The run's folder, to let go of as an interrupted run does (its lock removed; before
     /// the first step, a previous run's results put back).
     pub folder: Leaving,
@@ -48,6 +49,27 @@ pub fn wanted() -> bool {
 /// The words, held while a step is recorded (the watcher waits for it).
 pub(super) fn hold() -> MutexGuard<'static, Option<Words>> {
     WORDS.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// Under a launcher, while the run sets up in `folder` (meshing, the model, before its initial
+/// state is recorded): the folder as dropping it would leave it (its lock removed, a previous
+/// run's results put back, a folder this run created and left empty removed), and the words.
+pub(super) fn while_setting_up(folder: &RunFolder) {
+    if !wanted() {
+        return;
+    }
+    let dir = folder.dir().display();
+    let said = match folder.holds_previous() {
+        true => {
+            format!("interrupted before its first step; {dir} keeps the previous run's results")
+        }
+        false => format!("interrupted before its first step; it wrote no results in {dir}"),
+    };
+    *hold() = Some(Words {
+        summary: None,
+        folder: folder.leaving(),
+        said,
+    });
 }
 
 /// The run writes its own summary from here: nothing to speak for it.
@@ -81,7 +103,9 @@ fn speak() {
     let Some(w) = words.take() else {
         return;
     };
-    if write_atomic(&w.summary, w.json.as_bytes()).is_err() {
+    if let Some((path, json)) = &w.summary
+        && write_atomic(path, json.as_bytes()).is_err()
+    {
         return;
     }
     w.folder.end_here();

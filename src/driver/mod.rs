@@ -285,9 +285,11 @@ pub fn run(case_path: &Path, opts: &SolveOptions) -> Result<Summary, SolveError>
         }
         return restart(&case, folder, opts, start);
     }
+    last_words::while_setting_up(&folder);
     let (mut model, probes, staged) = checked_model(&case, &out_dir, opts.quiet)?;
     folder.replace_previous()?;
     commit_mesh(&mut folder, &mut model, staged)?;
+    last_words::while_setting_up(&folder);
     solve_model(&case, model, &probes, folder, opts, start, None)
 }
 
@@ -356,10 +358,12 @@ fn run_ranks(
                 serial_only(&model)?;
                 return Ok((model, probes, folder, Some(cp)));
             }
+            last_words::while_setting_up(&folder);
             let (mut model, probes, staged) = checked_model(case, &out_dir, opts.quiet)?;
             serial_only(&model)?;
             folder.replace_previous()?;
             commit_mesh(&mut folder, &mut model, staged)?;
+            last_words::while_setting_up(&folder);
             Ok((model, probes, folder, None))
         })();
         Some(setup)

@@ -445,9 +445,9 @@ impl<'a> Recorder<'a> {
     fn leave_words(&self, st: &Stepper, totals: &Totals, said: String, words: &mut Option<Words>) {
         let summary = self.summary_at(st, totals, false, format!("interrupted: {said}"));
         if let Some(folder) = &self.folder {
+            let json = serde_json::to_string_pretty(&summary).expect("serialisable");
             *words = Some(Words {
-                summary: self.out_dir.join("summary.json"),
-                json: serde_json::to_string_pretty(&summary).expect("serialisable"),
+                summary: Some((self.out_dir.join("summary.json"), json)),
                 folder: folder.leaving(),
                 said,
             });

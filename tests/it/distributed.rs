@@ -775,6 +775,46 @@ fn ctrl_c_to_mpirun_before_the_first_step_leaves_the_previous_results_as_they_we
     assert_eq!(folder_files(&out), before, "{err}");
 }
 
+/// Ctrl-C to `mpirun` while a rerun sets up (meshing, the model, the solver's analysis, before
+/// its initial state is recorded): the folder is as the previous run left it, with no lock
+/// (issue 70, item 6; before, the lock stayed and the previous results waited aside).
+#[test]
+fn ctrl_c_to_mpirun_while_a_rerun_sets_up_leaves_the_previous_results_as_they_were() {
+    use std::os::unix::process::CommandExt;
+    let dir = common::scratch("dist-ctrl-c-setup");
+    let case = root().join("cases/block-plate-3d-tm1.toml");
+    let out = dir.join("run");
+    let coarse = "mesh_options.params={ n = 4, nb = 2, nm = 1, nq = 2 }";
+    let (case_s, out_s) = (case.to_str().unwrap(), out.to_str().unwrap());
+    let o = tmc(&["solve", case_s, "-q", "-o", out_s, "--set", coarse]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let before = folder_files(&out);
+    // the rerun's setup, from its lock to its initial state's files, takes about 5 s here:
+    // past mpirun's second
+    let fine = "mesh_options.params={ n = 16, nb = 10, nm = 1, nq = 6 }";
+    let job = common::mpirun_command(2)
+        .args(["solve", case_s, "-q", "-o", out_s, "--set", fine])
+        .process_group(0)
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let lock = out.join(".tmc.lock");
+    let t0 = std::time::Instant::now();
+    while !lock.exists() {
+        assert!(t0.elapsed().as_secs() < 60, "no lock");
+        std::thread::sleep(std::time::Duration::from_millis(1));
+    }
+    unsafe { libc::kill(job.id() as i32, libc::SIGINT) };
+    let o = job.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{err}");
+    assert!(
+        err.contains("interrupted before its first step") && err.contains("keeps the previous"),
+        "{err}"
+    );
+    assert_eq!(folder_files(&out), before, "{err}");
+}
+
 /// The history of the run in `out` is that of the uninterrupted run in `full`: as many rows,
 /// every physical column within 1e-10 of its largest value over the run (a column at
 /// round-off, a sideways reaction, is judged against it), the same steps and iterations, the
