@@ -2,9 +2,9 @@
 # The PETSc layer under valgrind's memory checker: a solve that converges on PETSc, and its
 # error paths (a factorisation package PETSc lacks, a misspelt option, a factorisation that
 # meets a zero pivot, a Krylov solver that does not converge, a bad option under mpirun on
-# two ranks, a rank that fails alone). Each must end as tmc says it ends (converged, or its error) with no invalid
-# read, write or free, no use of an uninitialised value and no double destruction; leaks at
-# exit are PETSc's and MPI's and not counted. Open MPI's own suppressions, and
+# two ranks, a rank that fails alone). Each must end as tmc says it ends (converged, or its
+# error) with no invalid read, write or free, no use of an uninitialised value and no double
+# destruction; leaks at exit are PETSc's and MPI's and not counted. Open MPI's own suppressions, and
 # scripts/valgrind.supp for PMIx's.
 #
 #   scripts/memcheck.sh [BINARY]     (default target/release/tmc, built with --features petsc)

@@ -287,9 +287,7 @@ pub fn run(case_path: &Path, opts: &SolveOptions) -> Result<Summary, SolveError>
     }
     last_words::while_setting_up(&folder);
     let (mut model, probes, staged) = checked_model(&case, &out_dir, opts.quiet)?;
-    folder.replace_previous()?;
-    commit_mesh(&mut folder, &mut model, staged)?;
-    last_words::while_setting_up(&folder);
+    take_folder(&mut folder, &mut model, staged)?;
     solve_model(&case, model, &probes, folder, opts, start, None)
 }
 
@@ -317,13 +315,15 @@ pub(crate) fn refuse_on_ranks(case: &Case, model: &Model, ranks: Ranks) -> Resul
     )))
 }
 
-/// The mesh meshed for this run, if any, moved to `mesh.msh` in the run's folder: errors so far
-/// named the .geo; from now on the mesh is the file written.
-fn commit_mesh(
+/// The checked run takes its folder: the previous run's files set aside, the mesh meshed for
+/// this run, if any, moved to `mesh.msh` there (errors so far named the .geo; from now on the
+/// mesh is the file written), and under a launcher the words for a stop before the first step.
+fn take_folder(
     folder: &mut RunFolder,
     model: &mut Model,
     staged: Option<StagedMesh>,
 ) -> Result<(), SolveError> {
+    folder.replace_previous()?;
     if let Some(staged) = staged {
         folder.record("mesh.msh")?;
         model.mesh.source = folder.dir().join("mesh.msh");
@@ -331,6 +331,7 @@ fn commit_mesh(
             .commit(&model.mesh.source)
             .map_err(|e| SolveError::Output(werr(&model.mesh.source, e)))?;
     }
+    last_words::while_setting_up(folder);
     Ok(())
 }
 
@@ -361,9 +362,7 @@ fn run_ranks(
             last_words::while_setting_up(&folder);
             let (mut model, probes, staged) = checked_model(case, &out_dir, opts.quiet)?;
             serial_only(&model)?;
-            folder.replace_previous()?;
-            commit_mesh(&mut folder, &mut model, staged)?;
-            last_words::while_setting_up(&folder);
+            take_folder(&mut folder, &mut model, staged)?;
             Ok((model, probes, folder, None))
         })();
         Some(setup)
@@ -853,8 +852,7 @@ mod tests {
         };
         let mut folder = RunFolder::open(&out).unwrap();
         let (mut model, probes, staged) = checked_model(&case, &out, true).unwrap();
-        folder.replace_previous().unwrap();
-        commit_mesh(&mut folder, &mut model, staged).unwrap();
+        take_folder(&mut folder, &mut model, staged).unwrap();
         let start = Instant::now();
         let mut run = Run::new(
             &case,

@@ -667,6 +667,17 @@ fn mpirun_job(
     extra: &[&str],
     step: usize,
 ) -> std::process::Child {
+    mpirun_job_until(ranks, case, out, extra, &format!("step_{step:04}.pvtu"))
+}
+
+/// As [`mpirun_job`], returned once the file `until` is in OUT.
+fn mpirun_job_until(
+    ranks: usize,
+    case: &Path,
+    out: &Path,
+    extra: &[&str],
+    until: &str,
+) -> std::process::Child {
     use std::os::unix::process::CommandExt;
     let job = common::mpirun_command(ranks)
         .arg("solve")
@@ -678,7 +689,7 @@ fn mpirun_job(
         .stderr(std::process::Stdio::piped())
         .spawn()
         .unwrap();
-    let file = out.join(format!("step_{step:04}.pvtu"));
+    let file = out.join(until);
     let t0 = std::time::Instant::now();
     while !file.exists() {
         assert!(t0.elapsed().as_secs() < 300, "no {}", file.display());
@@ -746,33 +757,45 @@ fn ctrl_c_to_mpirun_mid_step_ends_at_the_last_accepted_step_with_its_summary() {
     assert_eq!(restart["accepted"].as_u64(), Some(steps as u64));
 }
 
+/// The 20.5k row rerun on two ranks (`extra` after its mesh) into a folder that holds a
+/// finished run of the scene on a coarse mesh, stopped by Ctrl-C to `mpirun` once the file
+/// `until` is in the folder: the rerun fails, the folder is byte for byte as the coarse run
+/// left it (no lock), and the rerun's stderr is returned.
+fn rerun_stopped_early(tag: &str, extra: &[&str], until: &str) -> String {
+    let dir = common::scratch(tag);
+    let case = root().join("cases/block-plate-3d-tm1.toml");
+    let out = dir.join("run");
+    let coarse = "mesh_options.params={ n = 4, nb = 2, nm = 1, nq = 2 }";
+    let o = solve_cli(&case, &out, &["--set", coarse]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let before = folder_files(&out);
+    let fine = "mesh_options.params={ n = 16, nb = 10, nm = 1, nq = 6 }";
+    let params = [&["--set", fine][..], extra].concat();
+    let job = mpirun_job_until(2, &case, &out, &params, until);
+    unsafe { libc::kill(job.id() as i32, libc::SIGINT) };
+    let o = job.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(!o.status.success(), "{err}");
+    assert_eq!(folder_files(&out), before, "{err}");
+    err
+}
+
 /// Ctrl-C to `mpirun` while a rerun takes its first step: the launcher ends the ranks before
 /// the step can, and the folder is as the previous run left it, with no lock, and the run
 /// says so (issue 70, items 5 and 6; before, the lock stayed and the previous results waited
 /// aside for the next run to put them back).
 #[test]
 fn ctrl_c_to_mpirun_before_the_first_step_leaves_the_previous_results_as_they_were() {
-    let dir = common::scratch("dist-ctrl-c-first");
-    let case = root().join("cases/block-plate-3d-tm1.toml");
-    let out = dir.join("run");
-    let coarse = "mesh_options.params={ n = 4, nb = 2, nm = 1, nq = 2 }";
-    let (case_s, out_s) = (case.to_str().unwrap(), out.to_str().unwrap());
-    let o = tmc(&["solve", case_s, "-q", "-o", out_s, "--set", coarse]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let before = folder_files(&out);
     // on two ranks the steps are written as .pvtu: the rerun's own initial state; its first
     // step, of Δλ = 0.45, takes about a dozen Newton iterations, seconds past mpirun's
-    let fine = "mesh_options.params={ n = 16, nb = 10, nm = 1, nq = 6 }";
-    let params = ["--set", fine, "--set", "steps.initial=0.45"];
-    let job = mpirun_job(2, &case, &out, &params, 0);
-    unsafe { libc::kill(job.id() as i32, libc::SIGINT) };
-    let o = job.wait_with_output().unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success(), "{err}");
+    let err = rerun_stopped_early(
+        "dist-ctrl-c-first",
+        &["--set", "steps.initial=0.45"],
+        "step_0000.pvtu",
+    );
     assert!(err.contains("interrupted at λ"), "{err}");
     assert!(err.contains("after 0 converged steps"), "{err}");
     assert!(err.contains("keeps the previous run's results"), "{err}");
-    assert_eq!(folder_files(&out), before, "{err}");
 }
 
 /// Ctrl-C to `mpirun` while a rerun sets up (meshing, the model, the solver's analysis, before
@@ -780,39 +803,13 @@ fn ctrl_c_to_mpirun_before_the_first_step_leaves_the_previous_results_as_they_we
 /// (issue 70, item 6; before, the lock stayed and the previous results waited aside).
 #[test]
 fn ctrl_c_to_mpirun_while_a_rerun_sets_up_leaves_the_previous_results_as_they_were() {
-    use std::os::unix::process::CommandExt;
-    let dir = common::scratch("dist-ctrl-c-setup");
-    let case = root().join("cases/block-plate-3d-tm1.toml");
-    let out = dir.join("run");
-    let coarse = "mesh_options.params={ n = 4, nb = 2, nm = 1, nq = 2 }";
-    let (case_s, out_s) = (case.to_str().unwrap(), out.to_str().unwrap());
-    let o = tmc(&["solve", case_s, "-q", "-o", out_s, "--set", coarse]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let before = folder_files(&out);
     // the rerun's setup, from its lock to its initial state's files, takes about 5 s here:
     // past mpirun's second
-    let fine = "mesh_options.params={ n = 16, nb = 10, nm = 1, nq = 6 }";
-    let job = common::mpirun_command(2)
-        .args(["solve", case_s, "-q", "-o", out_s, "--set", fine])
-        .process_group(0)
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    let lock = out.join(".tmc.lock");
-    let t0 = std::time::Instant::now();
-    while !lock.exists() {
-        assert!(t0.elapsed().as_secs() < 60, "no lock");
-        std::thread::sleep(std::time::Duration::from_millis(1));
-    }
-    unsafe { libc::kill(job.id() as i32, libc::SIGINT) };
-    let o = job.wait_with_output().unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success(), "{err}");
+    let err = rerun_stopped_early("dist-ctrl-c-setup", &[], ".tmc.lock");
     assert!(
         err.contains("interrupted before its first step") && err.contains("keeps the previous"),
         "{err}"
     );
-    assert_eq!(folder_files(&out), before, "{err}");
 }
 
 /// The history of the run in `out` is that of the uninterrupted run in `full`: as many rows,

@@ -123,6 +123,23 @@ fn the_cylinder_slides_on_a_medium_made_again_with_the_force_of_its_press_and_no
 /// is the facets passing each other, less on the finer mesh. As it stood before each remade
 /// layer had one thickness of reference, h = 0.1 stalled at a slide of 0.39 and h = 0.05 at
 /// 0.12.
+/// `cases/cylinder-slide.toml` slid 0.5 instead of 0.3, its mesh's `[mesh_options]` line
+/// `params`, solved in the scratch folder `name`: the run reaches the slide's end (t = 2).
+/// Its output folder.
+fn slid_half(name: &str, params: &str) -> std::path::PathBuf {
+    let body = case_body("cylinder-slide").replace("ux = 0.3\n", "ux = 0.5\n");
+    assert!(body.contains("ux = 0.5"));
+    let case = case_file(name, "cylinder-plate.geo", params, &body);
+    let out = case.with_file_name("out");
+    let o = solve_cli(&case, &out, &[]);
+    assert!(o.status.success(), "{params}: {}", stderr(&o));
+    let (cols, rows) = history(&out);
+    let t = cols.iter().position(|c| c == "time").unwrap();
+    let end = rows.last().unwrap()[t];
+    assert!((end - 2.0).abs() < 1e-9, "{params}: slid to t = {end}");
+    out
+}
+
 #[test]
 fn the_cylinder_slides_its_whole_way_on_two_meshes() {
     // (h, F_n's band about the press's, largest |F_t/F_n|); measured: h = 0.1 F_n 0.898 to
@@ -130,21 +147,10 @@ fn the_cylinder_slides_its_whole_way_on_two_meshes() {
     // average; h = 0.05 0.979 to 1.005, 0.077 at most (the first step of the slide, before any
     // remake; ±0.038 after), 0.004 on average
     for (h, band, most_allowed) in [(0.1, 0.12, 0.2), (0.05, 0.03, 0.09)] {
-        let body = case_body("cylinder-slide").replace("ux = 0.3\n", "ux = 0.5\n");
-        assert!(body.contains("ux = 0.5"));
-        let case = case_file(
+        let out = slid_half(
             &format!("cylinder-slide-far-{h}"),
-            "cylinder-plate.geo",
             &format!("params = {{ h = {h} }}"),
-            &body,
         );
-        let out = case.with_file_name("out");
-        let o = solve_cli(&case, &out, &[]);
-        assert!(o.status.success(), "h = {h}: {}", stderr(&o));
-        let (cols, rows) = history(&out);
-        let t = cols.iter().position(|c| c == "time").unwrap();
-        let end = rows.last().unwrap()[t];
-        assert!((end - 2.0).abs() < 1e-9, "h = {h}: slid to t = {end}");
         let (fn0, lo, hi, mean, most) = slide_forces(&out);
         assert!(
             lo > (1.0 - band) * fn0 && hi < (1.0 + band) * fn0,
@@ -164,17 +170,7 @@ fn the_cylinder_slides_its_whole_way_on_two_meshes() {
 /// end; a remake changed the rim's reaction by 0.9 % at most).
 #[test]
 fn a_cylinder_twice_as_large_slides_its_whole_way_when_the_medium_is_made_again_where_it_stops() {
-    let body = case_body("cylinder-slide").replace("ux = 0.3\n", "ux = 0.5\n");
-    assert!(body.contains("ux = 0.5"));
-    let case = case_file(
-        "cylinder-large-slide",
-        "cylinder-plate.geo",
-        "params = { h = 0.1, R = 0.8 }",
-        &body,
-    );
-    let out = case.with_file_name("out");
-    let o = solve_cli(&case, &out, &[]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    let out = slid_half("cylinder-large-slide", "params = { h = 0.1, R = 0.8 }");
     let s = summary(&out);
     assert!(s["medium_remade"].as_u64().unwrap() > 0);
     let force = s["medium_remade_force_change"].as_f64().unwrap();

@@ -699,15 +699,36 @@ fn on_threads<R: Send>(threads: usize, f: impl FnOnce() -> R + Send) -> R {
     pool.install(f)
 }
 
-/// b = A x for the grid's matrix `sp`, `vals` and x_j = 1 + (j mod 7), the x it returns.
+/// The x of [`known_solution`]: x_j = 1 + (j mod 7).
+fn known_x(j: usize) -> f64 {
+    1.0 + (j % 7) as f64
+}
+
+/// b = A x for the grid's matrix `sp`, `vals` and x of [`known_x`].
 fn known_solution(sp: &SymbolicSparseColMat<usize>, vals: &[f64]) -> Vec<f64> {
     let mut b = vec![0.0; sp.nrows()];
     for j in 0..sp.ncols() {
         for k in sp.col_ptr()[j]..sp.col_ptr()[j + 1] {
-            b[sp.row_idx()[k]] += vals[k] * (1.0 + (j % 7) as f64);
+            b[sp.row_idx()[k]] += vals[k] * known_x(j);
         }
     }
     b
+}
+
+/// `x`, solved from [`known_solution`]'s b on `threads` threads, within `to_exact` of
+/// [`known_x`] and within `to_faers` of faer's solve `faers`, each relative to x_j.
+fn solved_as_known(x: &[f64], faers: &[f64], to_exact: f64, to_faers: f64, threads: usize) {
+    for (j, (a, f)) in x.iter().zip(faers).enumerate() {
+        let exact = known_x(j);
+        assert!(
+            (a - exact).abs() < to_exact * exact,
+            "{threads} threads: x[{j}] = {a}"
+        );
+        assert!(
+            (a - f).abs() < to_faers * exact,
+            "{threads} threads: x[{j}] {a} against faer's {f}"
+        );
+    }
 }
 
 /// b ← (L D Lᵀ)⁻¹ b by faer's solve with the factor `l` of `symbolic`.
@@ -766,18 +787,11 @@ fn the_tree_factor_is_faers_factor_at_every_thread_count() {
         let mut faers = b.clone();
         faers_solve(&symbolic, &reference, &mut faers);
         on_threads(threads, || tree.solve(&l, &mut b, &mut Vec::new()));
-        for (j, (x, y)) in b.iter().zip(&faers).enumerate() {
-            let exact = 1.0 + (j % 7) as f64;
+        for (j, y) in faers.iter().enumerate() {
+            let exact = known_x(j);
             assert!((y - exact).abs() < 1e-12 * exact, "faer: x[{j}] = {y}");
-            assert!(
-                (x - exact).abs() < 1e-12 * exact,
-                "{threads} threads: x[{j}] = {x}"
-            );
-            assert!(
-                (x - y).abs() < 1e-13 * exact,
-                "{threads} threads: x[{j}] {x} against faer's {y}"
-            );
         }
+        solved_as_known(&b, &faers, 1e-12, 1e-13, threads);
         // the same factor at every thread count (a dense product split across threads may
         // add in another order)
         match &first {
@@ -927,17 +941,7 @@ fn the_tree_solves_wide_panels_in_bands_and_the_same_at_every_thread_count() {
     for threads in [1, 2, 4] {
         let mut x = b.clone();
         on_threads(threads, || tree.solve(&l, &mut x, &mut Vec::new()));
-        for (j, (a, f)) in x.iter().zip(&faers).enumerate() {
-            let exact = 1.0 + (j % 7) as f64;
-            assert!(
-                (a - exact).abs() < 1e-10 * exact,
-                "{threads} threads: x[{j}] = {a}"
-            );
-            assert!(
-                (a - f).abs() < 1e-12 * exact,
-                "{threads}: {a} against faer's {f}"
-            );
-        }
+        solved_as_known(&x, &faers, 1e-10, 1e-12, threads);
         match &first {
             None => first = Some(x),
             Some(f) => assert!(
