@@ -367,6 +367,8 @@ fn run_ranks(
         })();
         Some(setup)
     } else {
+        // a stop under the launcher takes back what this rank writes of a step under way
+        last_words::on_another_rank();
         None
     };
     // rank 0's verdict: the mesh file to read, or empty when it failed
@@ -434,6 +436,7 @@ fn restart_setup(
     folder: &mut RunFolder,
     opts: &SolveOptions,
 ) -> Result<(Model, Vec<Probe>, checkpoint::Checkpoint), SolveError> {
+    last_words::while_restarting(folder);
     let dir = folder.dir().to_owned();
     checkpoint::Checkpoint::exists(&dir)?;
     let mesh = if case.mesh_path().extension().is_some_and(|e| e == "geo") {
@@ -456,6 +459,8 @@ fn restart_setup(
     };
     let cp = cp.on_mesh(&dir, &model.mesh)?;
     folder.keep_previous()?;
+    // the folder as it now stands: a stop before the first step leaves its manifest as it was
+    last_words::while_restarting(folder);
     Ok((model, probes, cp))
 }
 

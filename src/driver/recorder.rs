@@ -17,10 +17,12 @@ use super::stepper::Stepper;
 use super::strategy::Strategy;
 use crate::case::Case;
 use crate::dofs::Field;
+use crate::files::Staged;
 use crate::model::Model;
 use crate::output::contact::ContactFaces;
+use crate::output::history::Mark;
 use crate::output::probes::Probe;
-use crate::output::{History, OutputError, RunFolder, Series, write_atomic};
+use crate::output::{History, OutputError, RunFolder, Series, werr, write_atomic};
 use crate::post::friction_cells;
 use crate::solver::newton::StepReport;
 use std::path::{Path, PathBuf};
@@ -147,25 +149,6 @@ impl<'a> Recorder<'a> {
         out
     }
 
-    /// The row of `history.csv` of the initial state.
-    pub(super) fn initial_row(
-        &mut self,
-        st: &Stepper,
-        row: &StepRow,
-        reactions: &Reactions,
-    ) -> Result<(), SolveError> {
-        if self.folder.is_some() {
-            let values = self.layout.row(
-                row,
-                &self.probe_values(st, reactions),
-                reactions,
-                &self.group_columns(st, reactions),
-            );
-            self.history.row(&values)?;
-        }
-        Ok(())
-    }
-
     /// What an accepted step leaves: its `.vtu` (when `[output] every` asks), its history row,
     /// the checkpoint, and its progress line; with `said` (under a launcher) also the summary
     /// that says it should the run be stopped here (`last_words.rs`).
@@ -177,40 +160,74 @@ impl<'a> Recorder<'a> {
         rep: &StepReport,
         said: Option<String>,
     ) -> Result<(), SolveError> {
-        self.timed(|rec| {
-            // the watcher does not speak between this step's files
-            let mut words = last_words::hold();
-            let reactions = &accounts.totals.reactions;
-            let values = rec.layout.row(
-                row,
-                &rec.probe_values(st, reactions),
-                reactions,
-                &rec.group_columns(st, reactions),
-            );
-            // the step's file first (when [output] every asks for it): a row never announces
-            // a file that is not there yet
-            if st.ctl.accepted.is_multiple_of(rec.every) {
-                rec.write_vtu(st)?;
-            }
-            if rec.folder.is_some() {
-                rec.history.row(&values)?;
-            }
-            rec.write_checkpoint(st, &accounts.totals)?;
-            if let Some(folder) = &mut rec.folder {
-                // a step taken: the previous run's files go for good
-                folder.settle()?;
-            }
-            if let Some(said) = said {
-                rec.leave_words(st, &accounts.totals, said, &mut words);
-            }
-            Ok::<_, SolveError>(())
-        })?;
+        crate::files::placing();
+        // the step's file first (when [output] every asks for it): a row never announces a
+        // file that is not there yet
+        if st.ctl.accepted.is_multiple_of(self.every) {
+            self.timed(|rec| rec.write_vtu(st))?;
+        }
+        self.timed(|rec| rec.record(st, row, &accounts.totals, said))?;
         self.report_step(st, accounts, row, rep);
         Ok(())
     }
 
+    /// The records of the stepper's state (the initial one, or an accepted step's), its `.vtu`
+    /// written and taken back should the launcher end the run first (`files::placing`): its
+    /// history row and the checkpoint; with `said` (under a launcher) also the summary that
+    /// says it should the run be stopped here (`last_words.rs`). What takes long (the
+    /// checkpoint, the summary) is made first; what replaces the previous state's records
+    /// (the history row, the `.pvd`, the checkpoint, the words) is put in place under the
+    /// words, so the watcher never speaks between a step's files. (The caller counts its time
+    /// as the run's writing, [`Recorder::timed`].)
+    pub(super) fn record(
+        &mut self,
+        st: &Stepper,
+        row: &StepRow,
+        totals: &Totals,
+        said: Option<String>,
+    ) -> Result<(), SolveError> {
+        let reactions = &totals.reactions;
+        let row = self.folder.is_some().then(|| {
+            let values = self.layout.row(
+                row,
+                &self.probe_values(st, reactions),
+                reactions,
+                &self.group_columns(st, reactions),
+            );
+            self.history.make_row(&values)
+        });
+        let mark = row.as_ref().map_or(self.history.mark(), |r| r.mark);
+        let checkpoint = self.stage_checkpoint(st, totals, mark)?;
+        let words = said.map(|said| self.words(st, totals, said));
+        if let Some(delay) = records_delay() {
+            std::thread::sleep(delay);
+        }
+        let mut held = last_words::hold();
+        if let Some(row) = row {
+            self.history.write_row(row)?;
+        }
+        self.series.list()?;
+        if let Some(c) = checkpoint {
+            let path = c.path().to_owned();
+            c.commit().map_err(|e| werr(&path, e))?;
+        }
+        if let Some(folder) = &mut self.folder {
+            // a step taken: the previous run's files go for good
+            if st.ctl.accepted > 0 {
+                folder.settle()?;
+            }
+        }
+        if let Some((summary, said)) = words {
+            // the folder as it now stands (settled above)
+            let folder = (self.folder.as_ref()).map(|f| (summary, f.leaving()));
+            *held = Some(Words::at(folder, said));
+        }
+        crate::files::placed();
+        Ok(())
+    }
+
     /// `f` on the recorder, its wall time counted as the run's writing.
-    fn timed<R>(&mut self, f: impl FnOnce(&mut Self) -> R) -> R {
+    pub(super) fn timed<R>(&mut self, f: impl FnOnce(&mut Self) -> R) -> R {
         let started = Instant::now();
         let r = f(self);
         self.writing += started.elapsed().as_secs_f64();
@@ -219,6 +236,11 @@ impl<'a> Recorder<'a> {
 
     /// The run's state as a checkpoint (on several ranks every rank takes part).
     pub(super) fn checkpoint(&self, st: &Stepper, totals: &Totals) -> Checkpoint {
+        self.checkpoint_marked(st, totals, self.history.mark())
+    }
+
+    /// As [`Recorder::checkpoint`], with the history marked at `history`.
+    fn checkpoint_marked(&self, st: &Stepper, totals: &Totals, history: Mark) -> Checkpoint {
         Checkpoint {
             version: checkpoint::VERSION,
             case: self.fingerprint.0.clone(),
@@ -232,7 +254,7 @@ impl<'a> Recorder<'a> {
                 files: Files {
                     series: self.series.written().len(),
                     written: self.written,
-                    history: self.history.mark(),
+                    history,
                     seconds: self.writing,
                 },
                 wall: self.wall(),
@@ -240,30 +262,30 @@ impl<'a> Recorder<'a> {
         }
     }
 
-    /// `restart.json` of the last accepted state (after its `.vtu` and history row).
-    pub(super) fn save_checkpoint(
+    /// `restart.json` of the stepper's state, with the history marked at `history`, written
+    /// and synced under its temporary name, to be put in place with the history row it marks.
+    fn stage_checkpoint(
         &mut self,
         st: &Stepper,
         totals: &Totals,
-    ) -> Result<(), SolveError> {
-        self.timed(|rec| rec.write_checkpoint(st, totals))
-    }
-
-    fn write_checkpoint(&mut self, st: &Stepper, totals: &Totals) -> Result<(), SolveError> {
+        history: Mark,
+    ) -> Result<Option<Staged>, SolveError> {
         if self.folder.is_none() {
             // on several ranks each holds its own cells' history per point, gathered by
             // every rank before the first rank writes it
             if !st.asm.ranks.is_serial() {
                 st.asm.whole_history(st.model);
             }
-            return Ok(());
+            return Ok(None);
         }
-        let cp = self.checkpoint(st, totals);
+        let cp = self.checkpoint_marked(st, totals, history);
         if let Some(folder) = &mut self.folder {
             folder.record(checkpoint::FILE)?;
         }
-        write_atomic(&Checkpoint::path(&self.out_dir), cp.to_json().as_bytes())?;
-        Ok(())
+        let path = Checkpoint::path(&self.out_dir);
+        let staged =
+            crate::files::stage(&path, cp.to_json().as_bytes()).map_err(|e| werr(&path, e))?;
+        Ok(Some(staged))
     }
 
     /// Whether the folder holds a previous run's results aside, to come back unless this run
@@ -364,7 +386,10 @@ impl<'a> Recorder<'a> {
     /// part, the first rank's `.pvtu` putting them together, and one error for all if any
     /// rank's failed.
     pub(super) fn write_step(&mut self, st: &Stepper) -> Result<(), SolveError> {
-        self.timed(|rec| rec.write_vtu(st))
+        self.timed(|rec| {
+            rec.write_vtu(st)?;
+            Ok(rec.series.list()?)
+        })
     }
 
     fn write_vtu(&mut self, st: &Stepper) -> Result<(), SolveError> {
@@ -380,6 +405,12 @@ impl<'a> Recorder<'a> {
         }
         let model = st.model;
         let friction = (model.physics.friction).then(|| friction_cells(model, &st.asm, &st.x));
+        if let Some(folder) = &self.folder {
+            // the other ranks' parts too are taken back should the launcher end the run
+            // before the step is recorded
+            let files = self.series.files(step).into_iter();
+            crate::files::placing_elsewhere(files.map(|f| folder.dir().join(f)));
+        }
         let written = written.and_then(|_| {
             self.series.write(
                 model,
@@ -439,25 +470,23 @@ impl<'a> Recorder<'a> {
     }
 
     /// Under a launcher that kills its ranks soon after a signal (`mpirun`): the summary
-    /// this run would write if stopped at the stepper's state, saying `said`, into `words`
-    /// for `last_words.rs` to write should the launcher kill the run before it can. Every
-    /// rank takes part (the summary gathers the ranks' memory); the first keeps it.
-    fn leave_words(&self, st: &Stepper, totals: &Totals, said: String, words: &mut Option<Words>) {
+    /// this run would write if stopped at the stepper's state, saying `said`, for
+    /// `last_words.rs` to write should the launcher kill the run before it can (where, what;
+    /// on the rank that writes the run's files). Every rank takes part (the summary gathers
+    /// the ranks' memory).
+    #[allow(clippy::type_complexity)]
+    fn words(
+        &self,
+        st: &Stepper,
+        totals: &Totals,
+        said: String,
+    ) -> (Option<(PathBuf, String)>, String) {
         let summary = self.summary_at(st, totals, false, format!("interrupted: {said}"));
-        if let Some(folder) = &self.folder {
+        let json = self.folder.as_ref().map(|_| {
             let json = serde_json::to_string_pretty(&summary).expect("serialisable");
-            *words = Some(Words {
-                summary: Some((self.out_dir.join("summary.json"), json)),
-                folder: folder.leaving(),
-                said,
-            });
-        }
-    }
-
-    /// The last words of a run stopped at its initial state, before its first step (see
-    /// [`Recorder::leave_words`]).
-    pub(super) fn leave_initial_words(&self, st: &Stepper, totals: &Totals, said: String) {
-        self.leave_words(st, totals, said, &mut last_words::hold());
+            (self.out_dir.join("summary.json"), json)
+        });
+        (json, said)
     }
 
     /// The summary of the stepper's state, with `converged` and `message` (on several ranks
@@ -539,6 +568,17 @@ impl<'a> Recorder<'a> {
 }
 
 /// The progress bar over the run's (pseudo-)time, hidden with `--quiet`.
+/// For the tests of what a launcher's kill leaves (`last_words.rs`): how long each state's
+/// records wait after their new files are written, before they are put in place, as on a
+/// disk that takes that long; `TMC_RECORDS_DELAY_MS`, unset in any real run.
+fn records_delay() -> Option<std::time::Duration> {
+    static DELAY: std::sync::OnceLock<Option<std::time::Duration>> = std::sync::OnceLock::new();
+    *DELAY.get_or_init(|| {
+        let ms = std::env::var("TMC_RECORDS_DELAY_MS").ok()?.parse().ok()?;
+        Some(std::time::Duration::from_millis(ms))
+    })
+}
+
 fn progress_bar(quiet: bool) -> indicatif::ProgressBar {
     if quiet {
         return indicatif::ProgressBar::hidden();

@@ -73,6 +73,9 @@ impl<'a> Run<'a> {
     /// work is counted from.
     pub(super) fn record_initial(&mut self) -> Result<(), SolveError> {
         let iterations = self.settle_initial()?;
+        // the initial state's files are taken back should the launcher end the run before
+        // they are all written (`files::placing`)
+        crate::files::placing();
         self.rec.write_step(&self.st)?;
         let st = &mut self.st;
         let model = st.model;
@@ -91,17 +94,13 @@ impl<'a> Run<'a> {
             wall: self.rec.wall(),
             ..StepRow::default()
         };
-        self.rec.initial_row(&self.st, &row, &r0)?;
         self.accounts.totals.reactions = r0;
         let mut fe = vec![0.0; model.dofs.n_dofs];
         model.f_ext(model.path.lambda(0.0), &mut fe);
         self.accounts.totals.f_last = self.accounts.forces(&self.st, &fe);
-        self.rec.save_checkpoint(&self.st, &self.accounts.totals)?;
-        if super::last_words::wanted() {
-            let said = self.stopped_here().to_string();
-            (self.rec).leave_initial_words(&self.st, &self.accounts.totals, said);
-        }
-        Ok(())
+        let said = super::last_words::wanted().then(|| self.stopped_here().to_string());
+        let totals = &self.accounts.totals;
+        (self.rec).timed(|rec| rec.record(&self.st, &row, totals, said))
     }
 
     /// A steady scene with values applied in full (`ramp = false`) starts from its equilibrium

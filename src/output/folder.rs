@@ -205,13 +205,19 @@ impl Leaving {
         }
     }
 
-    /// Let go of the folder as a run stopped here ends (its summary written): a previous
-    /// run's results held aside come back; with none held, this run's files stay as the
-    /// folder's results.
-    pub fn end_here(mut self) {
+    /// Let go of the folder as a run stopped here ends (its summary written), by the process
+    /// that `halted` its writing: a previous run's results held aside come back; with none
+    /// held, this run's files stay as the folder's results, its manifest as it stood when
+    /// this was taken (a step recorded after it was taken back).
+    pub fn end_here(mut self, halted: &crate::files::Halted) {
         if self.held && !self.held_results && set_aside_held(&self.dir).is_ok() {
             self.held = false;
             let _ = remove_discarded(&self.dir);
+        }
+        if !self.held && self.replaced {
+            let mut text = self.written.join("\n");
+            text.push('\n');
+            let _ = halted.write_atomic(&self.dir.join(MANIFEST), text.as_bytes());
         }
         self.leave();
     }
@@ -234,6 +240,10 @@ fn read_manifest(dir: &Path) -> Vec<String> {
 /// files and manifest back, remove the empty [`HELD`] folder.
 fn put_back(dir: &Path, written: &[String]) -> Result<(), OutputError> {
     let held = dir.join(HELD);
+    // nothing held (the run settled since): this run's files are the folder's results
+    if !held.is_dir() {
+        return Err(werr(&held, "no previous run is held aside"));
+    }
     for name in written {
         let p = dir.join(name);
         match std::fs::remove_file(&p) {

@@ -20,6 +20,15 @@ pub struct History {
     hash: Fnv,
 }
 
+/// A row of `history.csv` made and not yet written.
+pub struct Row {
+    text: String,
+    /// Whether it is the first, which writes the header too.
+    first: bool,
+    /// What the file holds once it is written.
+    pub mark: Mark,
+}
+
 /// How far a history file had got: its length and the fingerprint of those bytes (what a
 /// checkpoint keeps of it).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -78,6 +87,12 @@ impl History {
     /// Add a row: the first one with the header, replacing any older file at once; the
     /// others appended.
     pub fn row(&mut self, values: &[f64]) -> Result<(), OutputError> {
+        let row = self.make_row(values);
+        self.write_row(row)
+    }
+
+    /// A row of `values`, made but not yet written, and what the file will hold once it is.
+    pub fn make_row(&self, values: &[f64]) -> Row {
         let row: Vec<String> = values
             .iter()
             .map(|&v| {
@@ -91,19 +106,35 @@ impl History {
             })
             .collect();
         let line = csv_line(&row);
-        if self.bytes == 0 {
-            let text = format!("{}{line}", self.header);
-            write_atomic(&self.path, text.as_bytes())?;
-            self.eaten(text.as_bytes());
+        let first = self.bytes == 0;
+        let text = if first {
+            format!("{}{line}", self.header)
+        } else {
+            line
+        };
+        let mut hash = self.hash;
+        hash.eat(text.as_bytes());
+        let mark = Mark {
+            bytes: self.bytes + text.len() as u64,
+            hash: hash.0,
+        };
+        Row { text, first, mark }
+    }
+
+    /// Write `row` (made by [`History::make_row`] since the last row was written).
+    pub fn write_row(&mut self, row: Row) -> Result<(), OutputError> {
+        debug_assert_eq!(row.first, self.bytes == 0, "a row made before the last one");
+        if row.first {
+            write_atomic(&self.path, row.text.as_bytes())?;
         } else {
             // one write of the whole row
             std::fs::OpenOptions::new()
                 .append(true)
                 .open(&self.path)
-                .and_then(|mut f| f.write_all(line.as_bytes()).and_then(|_| f.sync_data()))
+                .and_then(|mut f| f.write_all(row.text.as_bytes()).and_then(|_| f.sync_data()))
                 .map_err(|e| werr(&self.path, e))?;
-            self.eaten(line.as_bytes());
         }
+        self.eaten(row.text.as_bytes());
         Ok(())
     }
 

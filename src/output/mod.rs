@@ -18,7 +18,6 @@ pub use history::History;
 pub use series::Series;
 pub use vtu::{StepFields, write_pvd, write_vtu};
 
-use crate::files::TempFile;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -49,14 +48,7 @@ pub(crate) fn werr(path: &Path, e: impl std::fmt::Display) -> OutputError {
 /// (a full disk fails here, naming the file), then renamed; on failure the temporary file is
 /// removed and `path` keeps its old content.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
-    use std::io::Write;
-    let mut tmp_name = path.file_name().unwrap_or_default().to_os_string();
-    tmp_name.push(".part");
-    let tmp = TempFile::new(path.with_file_name(tmp_name));
-    std::fs::File::create(tmp.path())
-        .and_then(|mut f| f.write_all(bytes).and_then(|_| f.sync_data()))
-        .and_then(|_| tmp.commit(path))
-        .map_err(|e| werr(path, e))
+    crate::files::write_atomic(path, bytes).map_err(|e| werr(path, e))
 }
 
 /// Write a small text file (e.g. a log) atomically.

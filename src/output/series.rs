@@ -35,6 +35,8 @@ pub struct Series {
     /// On the first of several ranks, the step written but not yet collected: its time, its
     /// `.pvtu`'s name and text.
     pending: Option<(f64, String, String)>,
+    /// Whether the `.pvd` lacks a state written since it was last written.
+    unlisted: bool,
     /// The faces where the solids meet the medium, whose contact pressure and shear each
     /// step's file holds at their nodes.
     contact: Option<ContactFaces>,
@@ -67,6 +69,7 @@ impl Series {
             piece: Piece::whole(&model.mesh),
             ranks: None,
             pending: None,
+            unlisted: false,
             contact,
             own: None,
         }
@@ -133,10 +136,10 @@ impl Series {
         files
     }
 
-    /// Write the state `x` as step `step` at `time` (with friction, its cells' slip state), and
-    /// the updated `.pvd`. On several ranks, this rank's part only: once every rank's part is
-    /// on disk, [`Series::collect`] writes the `.pvtu` and the `.pvd` (a `.pvtu` never names a
-    /// part that is not there, whichever rank dies when).
+    /// Write the state `x` as step `step` at `time` (with friction, its cells' slip state);
+    /// [`Series::list`] then lists it in the `.pvd`. On several ranks, this rank's part only:
+    /// once every rank's part is on disk, [`Series::collect`] writes the `.pvtu` (a `.pvtu`
+    /// never names a part that is not there, whichever rank dies when).
     pub fn write(
         &mut self,
         model: &Model,
@@ -244,17 +247,29 @@ impl Series {
             None => {}
         }
         self.written.push((time, file));
-        write_pvd(&self.pvd, &self.written)
+        self.unlisted = true;
+        Ok(())
     }
 
     /// On the first of several ranks, after every rank's part of the last step is written:
-    /// the `.pvtu` that puts them together, and the `.pvd` that lists it. Nothing elsewhere.
+    /// the `.pvtu` that puts them together. Nothing elsewhere.
     pub fn collect(&mut self) -> Result<(), OutputError> {
         let Some((time, file, text)) = self.pending.take() else {
             return Ok(());
         };
         write_atomic(&self.dir.join(&file), text.as_bytes())?;
         self.written.push((time, file));
+        self.unlisted = true;
+        Ok(())
+    }
+
+    /// The `.pvd` rewritten to list every state written (by the process that writes it, once
+    /// a step's files are on disk: [`Series::write`] and [`Series::collect`] leave it as it
+    /// was, so that a step's files can be taken back until their step is recorded).
+    pub fn list(&mut self) -> Result<(), OutputError> {
+        if !std::mem::take(&mut self.unlisted) || matches!(self.ranks, Some((r, _)) if r > 0) {
+            return Ok(());
+        }
         write_pvd(&self.pvd, &self.written)
     }
 }

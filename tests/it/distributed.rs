@@ -411,6 +411,18 @@ fn folder_files(dir: &Path) -> BTreeMap<String, Vec<u8>> {
         .collect()
 }
 
+/// The folder's files `now` are those `before`, byte for byte (the names of any that differ
+/// said, with `err`).
+fn same_files(now: &BTreeMap<String, Vec<u8>>, before: &BTreeMap<String, Vec<u8>>, err: &str) {
+    let names = |m: &BTreeMap<String, Vec<u8>>| m.keys().cloned().collect::<Vec<_>>();
+    assert_eq!(names(now), names(before), "{err}");
+    let changed: Vec<&String> = (now.iter())
+        .filter(|(name, bytes)| before[*name] != **bytes)
+        .map(|(name, _)| name)
+        .collect();
+    assert!(changed.is_empty(), "changed: {changed:?}; {err}");
+}
+
 #[test]
 fn a_rerun_failing_on_its_engine_or_on_one_rank_leaves_the_previous_results_as_they_were() {
     // before, the previous run's files were removed once the case and model were checked, and
@@ -667,19 +679,29 @@ fn mpirun_job(
     extra: &[&str],
     step: usize,
 ) -> std::process::Child {
-    mpirun_job_until(ranks, case, out, extra, &format!("step_{step:04}.pvtu"))
+    mpirun_job_until(
+        ranks,
+        case,
+        out,
+        extra,
+        &[],
+        &format!("step_{step:04}.pvtu"),
+    )
 }
 
-/// As [`mpirun_job`], returned once the file `until` is in OUT.
+/// As [`mpirun_job`] with the environment `env` added, returned once the file `until` is in
+/// OUT.
 fn mpirun_job_until(
     ranks: usize,
     case: &Path,
     out: &Path,
     extra: &[&str],
+    env: &[(&str, &str)],
     until: &str,
 ) -> std::process::Child {
     use std::os::unix::process::CommandExt;
     let job = common::mpirun_command(ranks)
+        .envs(env.iter().copied())
         .arg("solve")
         .arg(case)
         .args(["-q", "-o"])
@@ -762,23 +784,33 @@ fn ctrl_c_to_mpirun_mid_step_ends_at_the_last_accepted_step_with_its_summary() {
 /// `until` is in the folder: the rerun fails, the folder is byte for byte as the coarse run
 /// left it (no lock), and the rerun's stderr is returned.
 fn rerun_stopped_early(tag: &str, extra: &[&str], until: &str) -> String {
+    let fine = "mesh_options.params={ n = 16, nb = 10, nm = 1, nq = 6 }";
+    rerun_stopped_early_on(tag, &[&["--set", fine][..], extra].concat(), &[], until)
+}
+
+/// As [`rerun_stopped_early`], the rerun given `params` and the environment `env`.
+fn rerun_stopped_early_on(tag: &str, params: &[&str], env: &[(&str, &str)], until: &str) -> String {
     let dir = common::scratch(tag);
     let case = root().join("cases/block-plate-3d-tm1.toml");
     let out = dir.join("run");
-    let coarse = "mesh_options.params={ n = 4, nb = 2, nm = 1, nq = 2 }";
-    let o = solve_cli(&case, &out, &["--set", coarse]);
+    let o = solve_cli(&case, &out, &["--set", COARSE]);
     assert!(o.status.success(), "{}", stderr(&o));
     let before = folder_files(&out);
-    let fine = "mesh_options.params={ n = 16, nb = 10, nm = 1, nq = 6 }";
-    let params = [&["--set", fine][..], extra].concat();
-    let job = mpirun_job_until(2, &case, &out, &params, until);
+    let job = mpirun_job_until(2, &case, &out, params, env, until);
     unsafe { libc::kill(job.id() as i32, libc::SIGINT) };
     let o = job.wait_with_output().unwrap();
     let err = String::from_utf8_lossy(&o.stderr).into_owned();
     assert!(!o.status.success(), "{err}");
-    assert_eq!(folder_files(&out), before, "{err}");
+    same_files(&folder_files(&out), &before, &err);
     err
 }
+
+/// The block on the plate meshed coarsely: a run of seconds.
+const COARSE: &str = "mesh_options.params={ n = 4, nb = 2, nm = 1, nq = 2 }";
+
+/// Records that take `RECORDS_DELAY` after their new files are written (a slow disk): longer
+/// than `mpirun` waits after Ctrl-C.
+const SLOW_RECORDS: [(&str, &str); 1] = [("TMC_RECORDS_DELAY_MS", "3000")];
 
 /// Ctrl-C to `mpirun` while a rerun takes its first step: the launcher ends the ranks before
 /// the step can, and the folder is as the previous run left it, with no lock, and the run
@@ -810,6 +842,73 @@ fn ctrl_c_to_mpirun_while_a_rerun_sets_up_leaves_the_previous_results_as_they_we
         err.contains("interrupted before its first step") && err.contains("keeps the previous"),
         "{err}"
     );
+}
+
+/// Ctrl-C to `mpirun` while a rerun records its first step, on a disk slower than the second
+/// `mpirun` waits: the step's files already written are taken back, and the folder is as the
+/// previous run left it, with no lock (issue 70, item 6; before, the rank was killed while it
+/// recorded, its lock and the step's files left, the previous results aside).
+#[test]
+fn ctrl_c_to_mpirun_while_a_rerun_records_its_first_step_leaves_the_previous_results() {
+    let params = ["--set", COARSE];
+    let err = rerun_stopped_early_on(
+        "dist-ctrl-c-records",
+        &params,
+        &SLOW_RECORDS,
+        "step_0001.pvtu",
+    );
+    assert!(err.contains("keeps the previous run's results"), "{err}");
+}
+
+/// Ctrl-C to `mpirun` while a step is recorded on a slow disk: the run ends at the step before,
+/// none of the step's files left; and a restart stopped so before its first step leaves the
+/// folder as it was, to be restarted again (issue 70, item 6).
+#[test]
+fn ctrl_c_to_mpirun_while_a_step_is_recorded_ends_at_the_step_before_and_restarts() {
+    let dir = common::scratch("dist-ctrl-c-recording");
+    let case = root().join("cases/block-plate-3d-tm1.toml");
+    let out = dir.join("run");
+    let params = ["--set", COARSE];
+    let stop = |extra: &[&str], until: &str| {
+        let job = mpirun_job_until(2, &case, &out, extra, &SLOW_RECORDS, until);
+        unsafe { libc::kill(job.id() as i32, libc::SIGINT) };
+        let o = job.wait_with_output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr).into_owned();
+        assert!(!o.status.success(), "{err}");
+        assert!(!out.join(".tmc.lock").exists(), "the lock is left: {err}");
+        err
+    };
+    // the second step's files under way
+    let err = stop(&params, "step_0002.pvtu");
+    assert!(err.contains("interrupted at λ"), "{err}");
+    let s = common::summary(&out);
+    assert_eq!(s["load_steps"].as_u64(), Some(1), "{err}");
+    let (_, rows) = common::history(&out);
+    assert_eq!(rows.len(), 2, "one history row per step the summary counts");
+    let restart = std::fs::read_to_string(out.join("restart.json")).unwrap();
+    let restart: serde_json::Value = serde_json::from_str(&restart).unwrap();
+    assert_eq!(restart["accepted"].as_u64(), Some(1));
+    let files = folder_files(&out);
+    for name in files.keys() {
+        assert!(
+            !name.starts_with("step_0002") && !name.ends_with(".part"),
+            "{name} left: {err}"
+        );
+    }
+    let pvd = String::from_utf8_lossy(&files["block-plate-3d-tm1.pvd"]).into_owned();
+    assert!(
+        pvd.contains("step_0001.pvtu") && !pvd.contains("step_0002"),
+        "{pvd}"
+    );
+    // a restart stopped as it records its first step: the folder as it was
+    let err = stop(&[&params[..], &["--restart"]].concat(), "step_0002.pvtu");
+    assert!(err.contains("to continue with --restart"), "{err}");
+    same_files(&folder_files(&out), &files, &err);
+    let o = mpirun(2, &case, &out, &[&params[..], &["--restart"]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = common::summary(&out);
+    let (_, rows) = common::history(&out);
+    assert_eq!(rows.len() as u64, s["load_steps"].as_u64().unwrap() + 1);
 }
 
 /// The history of the run in `out` is that of the uninterrupted run in `full`: as many rows,
