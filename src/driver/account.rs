@@ -5,6 +5,7 @@
 //! [`Totals`]; the recorder writes them.
 
 use super::SolveError;
+use super::records::BEYOND;
 use super::state::Totals;
 use super::stepper::Stepper;
 use crate::assembly::AssemblyError;
@@ -15,9 +16,6 @@ use crate::model::{Model, StepContext};
 use crate::post::{corners_through_medium, friction_work, heat_stored, kinetic_energy};
 use crate::solver::newton::StepReport;
 use std::time::Instant;
-
-/// A node that has moved this many times the mesh's extent has run away.
-const RUNAWAY: f64 = 10.0;
 
 /// What the points' committed history holds at the last accepted step: the kinetic energy
 /// (with inertia), the work friction dissipated and the heat it made (with friction, and
@@ -195,7 +193,7 @@ impl Accounts {
     }
 
     /// The largest nodal displacement of the accepted state at `t`, kept for the summary; the
-    /// first time it exceeds [`RUNAWAY`] times the mesh's extent, a warning naming the node: in
+    /// first time it exceeds the mesh's extent ([`BEYOND`]), a warning naming the node: in
     /// a medium, a node that barely resists (a free corner of an open medium) has run away and
     /// its cells are no solution; in a solid, its body moves far (held by its mass alone).
     fn watch_displacement(&mut self, st: &Stepper, t: f64) -> Option<String> {
@@ -213,7 +211,7 @@ impl Accounts {
             .fold((0, 0.0), |a, b| if b.1 > a.1 { b } else { a });
         let tot = &mut self.totals;
         tot.largest_displacement = tot.largest_displacement.max(largest);
-        if largest <= RUNAWAY * model.d || tot.runaway_told {
+        if largest <= BEYOND * model.d || tot.runaway_told {
             return None;
         }
         tot.runaway_told = true;
@@ -238,7 +236,7 @@ impl Accounts {
         };
         Some(format!(
             "warning: step {} ({when}): node {node} of region \"{name}\" (at {at} in the \
-             undeformed mesh) has moved {largest:.3e}, {:.0} times the mesh's extent: {what}",
+             undeformed mesh) has moved {largest:.3e}, {:.1} times the mesh's extent: {what}",
             st.ctl.accepted,
             largest / model.d
         ))

@@ -517,7 +517,12 @@ fn solve_model(
         }
         stuck.rejected = run.rejected();
         let due = |run: &mut Run| match (&layer, medium.as_mut()) {
-            (Some(layer), _) => layer.due(&model, run.state()).map(Change::Join),
+            (Some(layer), _) => {
+                if let Some(node) = layer.overhang(&model, run.state()) {
+                    run.overhangs(node);
+                }
+                layer.due(&model, run.state()).map(Change::Join)
+            }
             (None, Some(medium)) => {
                 let (t, target) = run.next_step();
                 let due = medium.due(&model, run.state(), t, target);

@@ -553,7 +553,7 @@ impl<'a> Recorder<'a> {
         s.largest_displacement = tot.largest_displacement;
         // heat below what Newton leaves as round-off at every node over the run's time
         let heat_floor = model.dofs.n_nodes as f64 * st.newton.floor(Field::Theta) * ctl.t;
-        s.balances = balances(s, tot, st.newton.tol, heat_floor);
+        s.balances = balances(s, tot, st.newton.tol, heat_floor, st.model);
         summary
     }
 
@@ -597,7 +597,7 @@ fn progress_bar(quiet: bool) -> indicatif::ProgressBar {
 /// kept, and a transient scene's heat balance, `heat_stored` against `heat_in` +
 /// `friction_heat` + `heat_joined`, over the largest of them (at least `floor`, the heat
 /// that is round-off); held to Newton's `tol`.
-fn balances(s: &Summary, tot: &Totals, tol: f64, floor: f64) -> Balances {
+fn balances(s: &Summary, tot: &Totals, tol: f64, floor: f64, model: &Model) -> Balances {
     let heat = match s.heat_stored.zip(s.heat_in) {
         Some((stored, supplied)) => {
             let made = s.friction_heat.unwrap_or(0.0);
@@ -610,12 +610,21 @@ fn balances(s: &Summary, tot: &Totals, tol: f64, floor: f64) -> Balances {
         None => Totals::relative(tot.heat_imbalance),
     };
     let force = Totals::relative(tot.force_imbalance);
-    Balances::judged(force, heat, Balances::tolerance_for(tol))
+    let moved = (!model.dofs.u.is_empty()).then(|| s.largest_displacement / model.d);
+    let unsupported = tot.overhang.clone();
+    Balances::judged(
+        force,
+        heat,
+        moved,
+        unsupported,
+        Balances::tolerance_for(tol),
+    )
 }
 
 /// A warning naming the balances a run left open, if any.
 fn open_balances(b: &Balances) -> Option<String> {
     let open: Vec<String> = (b.open.iter())
+        .filter(|name| *name == "force" || *name == "heat")
         .map(|name| {
             let value = match name.as_str() {
                 "force" => b.force,
@@ -624,7 +633,7 @@ fn open_balances(b: &Balances) -> Option<String> {
             format!("{name} balance open by {:.1e}", value.unwrap_or(f64::NAN))
         })
         .collect();
-    (!open.is_empty()).then(|| {
+    let balances = (!open.is_empty()).then(|| {
         format!(
             "warning: {} of the flows it balances (tolerance {:.0e}): the answers are not \
              an equilibrium; a tighter [steps] tol, or `tmc check`, may say why \
@@ -632,5 +641,25 @@ fn open_balances(b: &Balances) -> Option<String> {
             open.join(", "),
             b.tolerance
         )
-    })
+    });
+    let moved = (b.open.iter().any(|name| name == "moved")).then(|| {
+        format!(
+            "warning: a node moved {:.1} times the mesh's extent, out of the scene the mesh \
+             draws (the step's warning names it; summary.json: balances.moved)",
+            b.moved.unwrap_or(f64::NAN)
+        )
+    });
+    let unsupported = b.unsupported.as_ref().map(|at| {
+        format!(
+            "warning: {at} slid past the end of the face its friction layer slides on: there \
+             it rests on the layer's stretched cells and on no face, and the forces are the \
+             medium's, not a contact's; a longer face to slide on, or a shorter slide, keeps \
+             it on its layer (summary.json: balances.unsupported)"
+        )
+    });
+    let said: Vec<String> = [balances, moved, unsupported]
+        .into_iter()
+        .flatten()
+        .collect();
+    (!said.is_empty()).then(|| said.join("\n"))
 }

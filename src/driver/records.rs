@@ -138,23 +138,49 @@ pub struct Balances {
     pub force: Option<f64>,
     pub heat: Option<f64>,
     pub tolerance: f64,
-    /// The balances beyond the tolerance: "force", "heat".
+    /// The largest displacement of any node over the mesh's extent (`null` without
+    /// displacements): beyond [`BEYOND`], a node has left the scene.
+    pub moved: Option<f64>,
+    /// Where a solid first stood past the end of the face its reconnected friction layer
+    /// slides on, resting there on no face (`null` where none did).
+    pub unsupported: Option<String>,
+    /// The balances beyond the tolerance: "force", "heat"; "moved" for a node that left the
+    /// scene; "unsupported" for a solid that slid past the end of its layer.
     pub open: Vec<String>,
 }
 
+/// A node that has moved farther than the mesh's extent has left the scene the mesh draws: in
+/// a medium, a node that barely resists (a free corner of an open medium) has run away and
+/// its cells are no solution; in a solid, its body has gone beyond everything it could touch.
+pub const BEYOND: f64 = 1.0;
+
 impl Balances {
     /// The balances of a run whose largest relative imbalances were `force` and `heat`,
-    /// held to `tolerance`.
-    pub fn judged(force: Option<f64>, heat: Option<f64>, tolerance: f64) -> Balances {
-        let open = [("force", force), ("heat", heat)]
+    /// held to `tolerance`, and whose nodes moved at most `moved` times the mesh's extent.
+    pub fn judged(
+        force: Option<f64>,
+        heat: Option<f64>,
+        moved: Option<f64>,
+        unsupported: Option<String>,
+        tolerance: f64,
+    ) -> Balances {
+        let mut open: Vec<String> = [("force", force), ("heat", heat)]
             .into_iter()
             .filter(|(_, v)| v.is_some_and(|v| !(v <= tolerance)))
             .map(|(name, _)| name.to_string())
             .collect();
+        if moved.is_some_and(|m| m > BEYOND) {
+            open.push("moved".into());
+        }
+        if unsupported.is_some() {
+            open.push("unsupported".into());
+        }
         Balances {
             force,
             heat,
             tolerance,
+            moved,
+            unsupported,
             open,
         }
     }
@@ -706,13 +732,44 @@ mod tests {
 
     #[test]
     fn a_balance_beyond_its_tolerance_is_open_and_one_not_checked_is_not() {
-        let b = Balances::judged(Some(3e-6), Some(1e-9), Balances::tolerance_for(1e-9));
+        let b = Balances::judged(
+            Some(3e-6),
+            Some(1e-9),
+            Some(0.5),
+            None,
+            Balances::tolerance_for(1e-9),
+        );
         assert_eq!(
             (b.tolerance, b.open.clone()),
             (1e-6, vec!["force".to_string()])
         );
-        let b = Balances::judged(None, Some(f64::NAN), Balances::tolerance_for(1e-6));
+        let b = Balances::judged(
+            None,
+            Some(f64::NAN),
+            None,
+            None,
+            Balances::tolerance_for(1e-6),
+        );
         assert_eq!((b.tolerance, b.open), (1e-3, vec!["heat".to_string()]));
+        // a node beyond the scene
+        let b = Balances::judged(
+            Some(1e-9),
+            None,
+            Some(2.5),
+            None,
+            Balances::tolerance_for(1e-9),
+        );
+        assert_eq!(b.open, vec!["moved".to_string()]);
+        // a solid past the end of its layer
+        let past = Some("node 7".to_string());
+        let b = Balances::judged(
+            Some(1e-9),
+            None,
+            Some(0.5),
+            past,
+            Balances::tolerance_for(1e-9),
+        );
+        assert_eq!(b.open, vec!["unsupported".to_string()]);
     }
 
     fn flows(rows: &[(&str, &[(&str, f64)])]) -> Reactions {

@@ -207,6 +207,28 @@ impl<'a> Run<'a> {
         self.rec.step(&self.st, &self.accounts, &row, &rep, said)
     }
 
+    /// A solid's node `node` stands past the end of the face its reconnected layer slides
+    /// on, at the last accepted step: kept for the summary's balances, and said once.
+    pub(super) fn overhangs(&mut self, node: usize) {
+        let tot = &mut self.accounts.totals;
+        if tot.overhang.is_some() {
+            return;
+        }
+        let model = self.st.model;
+        let at = crate::mesh::point_text(&model.mesh.coords[node], model.mesh.dim);
+        let text = format!(
+            "from step {} on, node {node} of the solid (at {at} in the undeformed mesh)",
+            self.st.ctl.accepted
+        );
+        if !self.opts.quiet {
+            self.rec.say(&format!(
+                "warning: {text} stands past the end of the face its friction layer slides \
+                 on: the layer is no longer joined, and the solid rests there on no face"
+            ));
+        }
+        tot.overhang = Some(text);
+    }
+
     /// What the points' committed history holds, into the summary.
     fn take_point_totals(&mut self) {
         let points = point_totals(&self.st);

@@ -56,6 +56,10 @@ pub struct Totals {
     pub largest_displacement: f64,
     #[serde(default)]
     pub runaway_told: bool,
+    /// Where a solid first stood past the end of the face its reconnected layer slides on
+    /// (a checkpoint without it had none).
+    #[serde(default)]
+    pub overhang: Option<String>,
     /// How many times a reconnected friction layer was joined again.
     #[serde(default)]
     pub layer_joins: usize,

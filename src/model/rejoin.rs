@@ -140,12 +140,23 @@ impl Layer {
             let i = j as i64 + strip.shift + by;
             (0..m as i64).contains(&i)
         });
-        let ends = [strip.bottom[0], strip.bottom[m - 1]].map(|n| self.along(model, x, n));
-        let over = (solid.iter()).any(|&j| {
-            let s = self.along(model, x, strip.top[j]);
-            s < ends[0] || s > ends[1]
-        });
+        let over = self.overhang(model, x).is_some();
         ((by != 0 || slid) && within && !over).then_some(strip.shift + by)
+    }
+
+    /// A node of the solid (the mesh's) that stands, at the state `x`, past an end of the
+    /// bottom face it slides on: there the solid rests on the layer's stretched cells and on
+    /// no face (the layer is no longer joined), if any does.
+    pub fn overhang(&self, model: &Model, x: &[f64]) -> Option<usize> {
+        let (strip, m) = (&self.strip, self.strip.len());
+        let ends = [strip.bottom[0], strip.bottom[m - 1]].map(|n| self.along(model, x, n));
+        (0..m)
+            .filter(|&j| self.on_solid[j])
+            .map(|j| strip.top[j])
+            .find(|&n| {
+                let s = self.along(model, x, n);
+                s < ends[0] || s > ends[1]
+            })
     }
 
     /// Top node `j`'s place along the layer past its partner's at the state `x`.

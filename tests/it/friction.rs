@@ -1565,6 +1565,51 @@ fn a_pad_on_triangles_whose_layer_is_zipped_again_slides_its_width_at_mu() {
 }
 
 #[test]
+fn a_pad_dragged_past_the_end_of_its_layer_is_told_it_rests_on_no_face() {
+    // the shipped zipped pad with its layer running 1 beyond it each side (not 3), dragged
+    // 1.5: from a drag of 1 its leading corner stands past the end of the plate's face, the
+    // layer is no longer joined there, and the pad rests on its stretched cells, which the
+    // run converged on unsaid, "holding" μ (issue 70). Its summary's balances now name the
+    // node and when; dragged 0.9, nothing is said
+    let body = common::case_body("pad-slide");
+    assert_eq!(body.matches("ux = 2.0\n").count(), 1);
+    let dragged = |drag: f64| {
+        solve_text(
+            &format!("pad-past-its-layer-{drag}"),
+            "pad.geo",
+            "n = 16, m = 8, l = 1, a = 1, tri = 1",
+            &body.replace("ux = 2.0\n", &format!("ux = {drag}\n")),
+        )
+    };
+    let (s, out) = dragged(1.5);
+    assert!(s.converged, "{}", s.message);
+    let balances = &common::summary(&out)["balances"];
+    assert_eq!(
+        balances["open"],
+        serde_json::json!(["unsupported"]),
+        "{balances}"
+    );
+    let at = balances["unsupported"].as_str().unwrap();
+    // "from step K on, node N of the solid (at (3.0000, 0.2500) …)": the leading corner
+    assert!(at.contains("of the solid (at (3.0000, 0.2500)"), "{at}");
+    let step: usize = at["from step ".len()..]
+        .split(' ')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    let (cols, rows) = history(&out);
+    // the corner lags the top, where the drag is applied, by the pad's shear (measured: told
+    // at a drag of 1.059, steps of 0.0375)
+    let drag = 1.5 * (column(&cols, &rows, "time")[step] - 1.0);
+    assert!((1.0..1.1).contains(&drag), "told at a drag of {drag}");
+    let (s, out) = dragged(0.9);
+    assert!(s.converged, "{}", s.message);
+    let balances = &common::summary(&out)["balances"];
+    assert!(balances["unsupported"].is_null(), "{balances}");
+}
+
+#[test]
 fn a_block_as_wide_as_its_base_is_not_zipped_past_the_base_s_end() {
     // geo/block.geo on triangles, one cell across, its layer reconnected, pressed 0.35 and
     // dragged 0.5 at μ = 0.3 with inertia: the block overhangs its base from the first step

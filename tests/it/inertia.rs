@@ -102,11 +102,13 @@ fn a_free_body_under_a_constant_force_moves_as_backward_euler_says() {
 }
 
 #[test]
-fn a_body_that_moves_ten_times_the_mesh_is_told_once() {
+fn a_body_that_moves_out_of_the_scene_is_told_once_and_in_the_summary() {
     // the free slab with a light mass (a = b/ρ = 500) moves u_k = a Δt² k (k + 1)/2 along x:
-    // 30 after step 3 (t = 0.3), more than ten times the mesh's extent (2), and 275 after
-    // step 10. The run says so once, at step 3, naming a node of the solid; summary.json
-    // keeps the largest displacement, which is the recurrence's u_10
+    // 5 after step 1 (t = 0.1), more than the mesh's extent (2), and 275 after step 10. The
+    // run says so once, at step 1, naming a node of the solid, and again at its end;
+    // summary.json keeps the largest displacement, which is the recurrence's u_10, and its
+    // balances say it moved 137.5 times the extent (issue 70: a node that travelled 15 in a
+    // mesh 6 wide was not told, as the warning waited for ten times the extent)
     let (b, rho, steps) = (2.0, 4e-3, 10);
     let case = common::case_file(
         "inertia-far",
@@ -120,11 +122,15 @@ fn a_body_that_moves_ten_times_the_mesh_is_told_once() {
     assert!(o.status.success(), "{e}");
     let told: Vec<&str> = e
         .lines()
-        .filter(|l| l.contains("times the mesh's extent"))
+        .filter(|l| l.contains("times the mesh's extent") && l.starts_with("warning: step"))
         .collect();
     assert_eq!(told.len(), 1, "{e}");
     assert!(
-        told[0].starts_with("warning: step 3 (t = 3.0000e-1): node ")
+        e.contains("warning: a node moved 137.5 times the mesh's extent, out of the scene"),
+        "{e}"
+    );
+    assert!(
+        told[0].starts_with("warning: step 1 (t = 1.0000e-1): node ")
             && told[0].contains("of region \"solid\"")
             && told[0].contains("its body moves far"),
         "{}",
@@ -139,13 +145,17 @@ fn a_body_that_moves_ten_times_the_mesh_is_told_once() {
         (largest - expected).abs() <= 1e-9 * expected,
         "largest displacement {largest} against {expected}"
     );
-    // quiet, nothing is said; the summary is the same
+    let balances = &common::summary(&out)["balances"];
+    let moved = balances["moved"].as_f64().unwrap();
+    assert!((moved - expected / b).abs() <= 1e-9 * moved, "{balances}");
+    assert_eq!(balances["open"], serde_json::json!(["moved"]), "{balances}");
+    // quiet, no step says so: only the run's end, as an open balance is; the summary is the
+    // same
     let quiet = case.with_file_name("quiet");
     let o = common::solve_cli(&case, &quiet, &[]);
-    assert!(
-        o.status.success() && common::stderr(&o).is_empty(),
-        "{}",
-        common::stderr(&o)
-    );
+    let e = common::stderr(&o);
+    assert!(o.status.success(), "{e}");
+    assert_eq!(e.lines().count(), 1, "{e}");
+    assert!(e.starts_with("warning: a node moved 137.5 times"), "{e}");
     assert_eq!(common::summary(&quiet)["largest_displacement"], largest);
 }
