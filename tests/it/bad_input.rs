@@ -24,8 +24,7 @@ fn fails_with(o: &Output, words: &[&str]) -> String {
 /// for a shape (its type names), and nothing written; `tmc check` refuses it with the same
 /// words (check is the promise that a solve starts).
 fn refused(case: &Path, out: &Path, tag: &str, words: &[&str]) {
-    let checked = tmc(&["check", case.to_str().unwrap()]);
-    fails_with(&checked, words);
+    checked_alike(case, words);
     let e = fails_with(&solve(case, out), words);
     assert!(
         !e.contains("untagged") && !e.contains("struct"),
@@ -35,6 +34,12 @@ fn refused(case: &Path, out: &Path, tag: &str, words: &[&str]) {
         !out.join("step_0000.vtu").exists(),
         "{tag}: nothing written: {e}"
     );
+}
+
+/// `tmc check CASE` refuses `case` with `words`, as `solve` did (check is the promise that a
+/// solve starts: issue 70, item 1).
+fn checked_alike(case: &Path, words: &[&str]) {
+    fails_with(&tmc(&["check", case.to_str().unwrap()]), words);
 }
 
 /// Each case `(tag, body, words)` on the slab, in `dir`, [`refused`].
@@ -123,6 +128,7 @@ fn what_used_to_panic_now_ends_in_an_error() {
         &solve(&case, &dir.join("out")),
         &["nothing.toml:1", "loads nothing"],
     );
+    checked_alike(&case, &["nothing.toml:1", "loads nothing"]);
     // a history row shorter than its header: indexed past its end before
     let res = dir.join("short");
     std::fs::create_dir_all(&res).unwrap();
@@ -171,6 +177,7 @@ fn gmsh_exiting_or_a_full_disk_never_ends_in_success() {
     std::fs::write(&case, format!("mesh = \"batch.geo\"\n{SOLID}{HELD}")).unwrap();
     let out = dir.join("batch-out");
     fails_with(&solve(&case, &out), &["batch.geo", "Exit"]);
+    checked_alike(&case, &["batch.geo", "Exit"]);
     assert!(!out.join("summary.json").exists());
 
     // a full disk, as a file size limit: every write checked, no truncated file left under
@@ -242,6 +249,7 @@ fn nothing_a_user_wrote_is_lost() {
         &format!("{SOLID}{}", HELD.replace("\"left\"", "\"lefft\"")),
     );
     fails_with(&solve(&typo, &out), &["typo.toml", "lefft"]);
+    checked_alike(&typo, &["typo.toml", "lefft"]);
     for (f, bytes) in &before {
         assert_eq!(&std::fs::read(out.join(f)).unwrap(), bytes, "{f} changed");
     }
@@ -373,15 +381,13 @@ fn bad_values_are_named_by_file_line_and_key() {
     each_refused(&dir, cases);
     // .geo parameters: a NaN is named against the case, a misspelt name is refused
     let p = slab_case_params(&dir, "nan-param", "n = nan", &format!("{SOLID}{HELD}"));
-    fails_with(
-        &solve(&p, &out),
-        &["nan-param.toml:3", "mesh_options.params.n = nan"],
-    );
+    let words = ["nan-param.toml:3", "mesh_options.params.n = nan"];
+    fails_with(&solve(&p, &out), &words);
+    checked_alike(&p, &words);
     let p = slab_case_params(&dir, "typo-param", "nn = 2", &format!("{SOLID}{HELD}"));
-    fails_with(
-        &solve(&p, &out),
-        &["slab.geo", "no parameter \"nn\"", "L, H, n, m"],
-    );
+    let words = ["slab.geo", "no parameter \"nn\"", "L, H, n, m"];
+    fails_with(&solve(&p, &out), &words);
+    checked_alike(&p, &words);
     fails_with(
         &tmc(&["mesh", "geo/slab.geo", "--set", "hx=0.3"]),
         &["no parameter \"hx\""],
@@ -404,6 +410,10 @@ fn bad_values_are_named_by_file_line_and_key() {
         &solve(&p, &out),
         &["cut.msh", "section $Nodes opened at line", "truncated"],
     );
+    checked_alike(
+        &p,
+        &["cut.msh", "section $Nodes opened at line", "truncated"],
+    );
     // the smaller ones
     let uz = slab_case(
         &dir,
@@ -411,12 +421,14 @@ fn bad_values_are_named_by_file_line_and_key() {
         &format!("{SOLID}{HELD}[[probe]]\nname = \"w\"\nfield = \"uz\"\nat = [1.0, 1.0]\n"),
     );
     fails_with(&solve(&uz, &out), &["uz.toml:", "z quantity in a 2D mesh"]);
+    checked_alike(&uz, &["uz.toml:", "z quantity in a 2D mesh"]);
     let tiny = slab_case(
         &dir,
         "tiny",
         &format!("{SOLID}{HELD}[steps]\nmin = 1e-300\n"),
     );
     fails_with(&solve(&tiny, &out), &["tiny.toml:", "min = 1e-300"]);
+    checked_alike(&tiny, &["tiny.toml:", "min = 1e-300"]);
     let long: Vec<String> = (0..200_000)
         .map(|k| format!("{}", k as f64 * 1e-5))
         .collect();
@@ -426,6 +438,7 @@ fn bad_values_are_named_by_file_line_and_key() {
         &format!("{SOLID}{HELD}[steps]\npath = [{}]\n", long.join(", ")),
     );
     fails_with(&solve(&long, &out), &["long.toml:", "at most 100000"]);
+    checked_alike(&long, &["long.toml:", "at most 100000"]);
     fails_with(
         &tmc_env(
             &["solve", good.to_str().unwrap()],
@@ -690,10 +703,9 @@ fn singular_systems_are_found_before_solving() {
             "{SOLID}[[bc]]\ngroup = \"left\"\nux = 0.0\n[[bc]]\ngroup = \"right\"\nux = 0.2\n"
         ),
     );
-    fails_with(
-        &solve(&case, &out),
-        &["x-only.toml:1", "region \"solid\"", "move freely in y"],
-    );
+    let words = ["x-only.toml:1", "region \"solid\"", "move freely in y"];
+    fails_with(&solve(&case, &out), &words);
+    checked_alike(&case, &words);
     // held at one point in x and y: it can still turn
     let case = slab_case(
         &dir,
@@ -706,6 +718,7 @@ fn singular_systems_are_found_before_solving() {
         &solve(&case, &out),
         &["rotate freely about an axis along z"],
     );
+    checked_alike(&case, &["rotate freely about an axis along z"]);
     // conduction with fluxes only: no temperature fixes the level
     let case = slab_case(
         &dir,
@@ -718,6 +731,7 @@ fn singular_systems_are_found_before_solving() {
         &solve(&case, &out),
         &["temperature of the body", "not fixed"],
     );
+    checked_alike(&case, &["temperature of the body", "not fixed"]);
     // a group without elements
     let good = dir.join("slab.msh");
     common::mesh_cli("geo/slab.geo", &good);
@@ -737,6 +751,7 @@ fn singular_systems_are_found_before_solving() {
         &solve(&p, &out),
         &["ghost.toml:", "group \"ghost\" has no elements"],
     );
+    checked_alike(&p, &["ghost.toml:", "group \"ghost\" has no elements"]);
     assert!(
         !out.exists(),
         "runs that fail on their input leave no folder behind"
@@ -924,15 +939,14 @@ fn bad_friction_is_named_by_file_line_and_key() {
         1,
     );
     std::fs::write(&case, text).unwrap();
-    let e = fails_with(
-        &solve(&case, &out),
-        &[
-            "no-solid.toml:13",
-            "region[1] (\"medium\")",
-            "`friction.normal = \"auto\"`",
-            "no solid region borders a medium region",
-        ],
-    );
+    let words = [
+        "no-solid.toml:13",
+        "region[1] (\"medium\")",
+        "`friction.normal = \"auto\"`",
+        "no solid region borders a medium region",
+    ];
+    let e = fails_with(&solve(&case, &out), &words);
+    checked_alike(&case, &words);
     assert!(!out.join("step_0000.vtu").exists(), "nothing written: {e}");
 }
 
