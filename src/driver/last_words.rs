@@ -32,25 +32,6 @@ pub(super) struct Words {
     pub said: String,
 }
 
-impl Words {
-    /// The words of a recorded state: on the rank that writes the run's files its summary
-    /// (where, what) and its folder; on the others nothing but `said`.
-    pub fn at(folder: Option<(Option<(PathBuf, String)>, Leaving)>, said: String) -> Words {
-        match folder {
-            Some((summary, folder)) => Words {
-                summary,
-                folder: Some(folder),
-                said,
-            },
-            None => Words {
-                summary: None,
-                folder: None,
-                said,
-            },
-        }
-    }
-}
-
 static WORDS: Mutex<Option<Words>> = Mutex::new(None);
 
 /// Set by SIGTERM.
@@ -113,7 +94,11 @@ fn leave_setup_words(folder: &RunFolder, said: String) {
 /// run's files takes back what the step under way had written, and speaks.
 pub(super) fn on_another_rank() {
     if wanted() {
-        *hold() = Some(Words::at(None, String::new()));
+        *hold() = Some(Words {
+            summary: None,
+            folder: None,
+            said: String::new(),
+        });
     }
 }
 

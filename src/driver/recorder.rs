@@ -198,7 +198,7 @@ impl<'a> Recorder<'a> {
         });
         let mark = row.as_ref().map_or(self.history.mark(), |r| r.mark);
         let checkpoint = self.stage_checkpoint(st, totals, mark)?;
-        let words = said.map(|said| self.words(st, totals, said));
+        let words = said.map(|said| (self.words(st, totals, &said), said));
         if let Some(delay) = records_delay() {
             std::thread::sleep(delay);
         }
@@ -218,9 +218,12 @@ impl<'a> Recorder<'a> {
             }
         }
         if let Some((summary, said)) = words {
-            // the folder as it now stands (settled above)
-            let folder = (self.folder.as_ref()).map(|f| (summary, f.leaving()));
-            *held = Some(Words::at(folder, said));
+            *held = Some(Words {
+                summary,
+                // the folder as it now stands (settled above)
+                folder: self.folder.as_ref().map(RunFolder::leaving),
+                said,
+            });
         }
         crate::files::placed();
         Ok(())
@@ -471,22 +474,15 @@ impl<'a> Recorder<'a> {
 
     /// Under a launcher that kills its ranks soon after a signal (`mpirun`): the summary
     /// this run would write if stopped at the stepper's state, saying `said`, for
-    /// `last_words.rs` to write should the launcher kill the run before it can (where, what;
-    /// on the rank that writes the run's files). Every rank takes part (the summary gathers
-    /// the ranks' memory).
-    #[allow(clippy::type_complexity)]
-    fn words(
-        &self,
-        st: &Stepper,
-        totals: &Totals,
-        said: String,
-    ) -> (Option<(PathBuf, String)>, String) {
+    /// `last_words.rs` to write should the launcher kill the run before it can: where and
+    /// what, on the rank that writes the run's files. Every rank takes part (the summary
+    /// gathers the ranks' memory).
+    fn words(&self, st: &Stepper, totals: &Totals, said: &str) -> Option<(PathBuf, String)> {
         let summary = self.summary_at(st, totals, false, format!("interrupted: {said}"));
-        let json = self.folder.as_ref().map(|_| {
+        self.folder.as_ref().map(|_| {
             let json = serde_json::to_string_pretty(&summary).expect("serialisable");
             (self.out_dir.join("summary.json"), json)
-        });
-        (json, said)
+        })
     }
 
     /// The summary of the stepper's state, with `converged` and `message` (on several ranks
@@ -567,7 +563,6 @@ impl<'a> Recorder<'a> {
     }
 }
 
-/// The progress bar over the run's (pseudo-)time, hidden with `--quiet`.
 /// For the tests of what a launcher's kill leaves (`last_words.rs`): how long each state's
 /// records wait after their new files are written, before they are put in place, as on a
 /// disk that takes that long; `TMC_RECORDS_DELAY_MS`, unset in any real run.
@@ -579,6 +574,7 @@ fn records_delay() -> Option<std::time::Duration> {
     })
 }
 
+/// The progress bar over the run's (pseudo-)time, hidden with `--quiet`.
 fn progress_bar(quiet: bool) -> indicatif::ProgressBar {
     if quiet {
         return indicatif::ProgressBar::hidden();

@@ -732,44 +732,30 @@ mod tests {
 
     #[test]
     fn a_balance_beyond_its_tolerance_is_open_and_one_not_checked_is_not() {
-        let b = Balances::judged(
+        let judged = |force, heat, moved, tol| Balances::judged(force, heat, moved, None, tol);
+        let b = judged(
             Some(3e-6),
             Some(1e-9),
             Some(0.5),
-            None,
             Balances::tolerance_for(1e-9),
         );
         assert_eq!(
             (b.tolerance, b.open.clone()),
             (1e-6, vec!["force".to_string()])
         );
-        let b = Balances::judged(
-            None,
-            Some(f64::NAN),
-            None,
-            None,
-            Balances::tolerance_for(1e-6),
-        );
+        let b = judged(None, Some(f64::NAN), None, Balances::tolerance_for(1e-6));
         assert_eq!((b.tolerance, b.open), (1e-3, vec!["heat".to_string()]));
-        // a node beyond the scene
-        let b = Balances::judged(
-            Some(1e-9),
-            None,
-            Some(2.5),
-            None,
-            Balances::tolerance_for(1e-9),
+        // a node beyond the scene; a solid past the end of its layer
+        let open = |moved, past: Option<&str>| {
+            let tol = Balances::tolerance_for(1e-9);
+            Balances::judged(Some(1e-9), None, moved, past.map(String::from), tol).open
+        };
+        assert_eq!(open(Some(2.5), None), vec!["moved".to_string()]);
+        assert_eq!(
+            open(Some(0.5), Some("node 7")),
+            vec!["unsupported".to_string()]
         );
-        assert_eq!(b.open, vec!["moved".to_string()]);
-        // a solid past the end of its layer
-        let past = Some("node 7".to_string());
-        let b = Balances::judged(
-            Some(1e-9),
-            None,
-            Some(0.5),
-            past,
-            Balances::tolerance_for(1e-9),
-        );
-        assert_eq!(b.open, vec!["unsupported".to_string()]);
+        assert!(open(Some(1.0), None).is_empty());
     }
 
     fn flows(rows: &[(&str, &[(&str, f64)])]) -> Reactions {
