@@ -4,14 +4,15 @@
 //   slider    the lower half of a ball of radius R = 0.4 centred at (0, 0, 1), cut at y = 0:
 //             its flat top is the face z = 1, its lowest point (0, 0, 0.6) is 0.1 above the plate
 //   medium    the rest of the box above the plate, up to z = 1
-// The plate reaches 1.4 so that a drag of one radius ends 0.6 from its end.
+// The plate reaches x1 = 1.4 so that a drag of one radius ends 0.6 from its end (x1 = 2.2 for
+// a drag of three radii).
 // Groups: volumes "plate", "slider", "medium"; surfaces "bottom" (z = 0), "slider_top"
 // (the slider's flat top), "y0" (the symmetry plane, all bodies).
 // Mesh: tet4 of size h, h/2 in a box around the slider's path.
 SetFactory("OpenCASCADE");
-DefineConstant[ h = 0.15 ];
+DefineConstant[ h = 0.15, x1 = 1.4 ];
 R = 0.4;
-x0 = -0.6; x1 = 1.4; w = 0.7;
+x0 = -0.6; w = 0.7;
 Box(1) = {x0, 0, 0, x1 - x0, w, 0.5};
 Box(2) = {x0, 0, 0.5, x1 - x0, w, 0.5};
 Sphere(3) = {0, 0, 1, R};

@@ -37,6 +37,46 @@ pub fn sides(kind: CellKind) -> &'static [&'static [usize]] {
     }
 }
 
+/// The triangles `faces` (indices) in sets joined by their edges, where `join(i, j)` lets
+/// triangle `j` join triangle `i`'s set across the edge they share.
+pub fn joined_by_edges(
+    faces: &[[usize; 3]],
+    join: impl Fn(usize, usize) -> bool,
+) -> Vec<Vec<usize>> {
+    let mut by_edge: HashMap<(usize, usize), Vec<usize>> = HashMap::new();
+    for (i, f) in faces.iter().enumerate() {
+        for e in 0..3 {
+            let (a, b) = (f[e], f[(e + 1) % 3]);
+            by_edge.entry((a.min(b), a.max(b))).or_default().push(i);
+        }
+    }
+    let mut placed = vec![false; faces.len()];
+    let mut sets = Vec::new();
+    for start in 0..faces.len() {
+        if placed[start] {
+            continue;
+        }
+        let mut members = vec![start];
+        placed[start] = true;
+        let mut k = 0;
+        while k < members.len() {
+            let i = members[k];
+            k += 1;
+            for e in 0..3 {
+                let (a, b) = (faces[i][e], faces[i][(e + 1) % 3]);
+                for &j in &by_edge[&(a.min(b), a.max(b))] {
+                    if !placed[j] && join(i, j) {
+                        placed[j] = true;
+                        members.push(j);
+                    }
+                }
+            }
+        }
+        sets.push(members);
+    }
+    sets
+}
+
 /// A face shared by two cells, each named by its mesh block and its index there.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Side {

@@ -7,6 +7,7 @@ pub mod geo_text;
 pub mod gmsh;
 pub mod msh;
 pub mod partition;
+pub mod plane_faces;
 pub mod remesh;
 pub mod strip;
 

@@ -1,12 +1,15 @@
 //! The medium's cells made again between the bodies as they are: each medium region's cells
-//! are replaced by triangles of a constrained Delaunay triangulation of the region they cover
-//! at the nodes' current places, between the region's boundary nodes, which stay the nodes they
-//! are (the solids' faces, the medium's outer faces), refined inside where it is open. This is
-//! topology and geometry only: what the new cells carry is `model/remake.rs`'s.
+//! are replaced by new ones covering the region at the nodes' current places, between the
+//! region's boundary nodes, which stay the nodes they are (the solids' faces, the medium's
+//! outer faces), refined inside where it is open. This is topology and geometry only: what
+//! the new cells carry is `model/remake.rs`'s.
 //!
-//! The triangulation is spade's, in this process: gmsh, forked for each remake, took 10–25 ms
-//! of a remake's 16–45 ms on the sliding cylinder, the triangulation takes about 1 ms
-//! (docs/notes/2026-12-02-remake-cost.md).
+//! In 2D the new cells are the triangles of a constrained Delaunay triangulation, spade's, in
+//! this process: gmsh, forked for each remake, took 10–25 ms of a remake's 16–45 ms on the
+//! sliding cylinder, the triangulation takes about 1 ms (docs/notes/2026-12-02-remake-cost.md).
+//! In 3D they are gmsh's tetrahedra between the region's boundary triangles, each closed
+//! shell a discrete surface gmsh keeps as it is; the medium's own plane faces (a symmetry
+//! plane) are triangulated again first (`plane_faces.rs`).
 
 use super::{Block, CellKind, Mesh};
 use std::collections::HashMap;
@@ -72,22 +75,44 @@ fn boundary_loops(mesh: &Mesh, blocks: &[usize]) -> Result<Vec<Vec<usize>>, Stri
 }
 
 /// The mesh `mesh` with the cells of its medium blocks `medium` made again at the nodes'
-/// places `x`: the blocks of each set of physical groups triangulated together as one region,
-/// between their boundary nodes. 2D, linear cells only (a caller checks first with
-/// [`supported`]).
+/// places `x`: the blocks of each set of physical groups meshed together as one region,
+/// between their boundary nodes; triangles in 2D (spade, in this process), tetrahedra in 3D
+/// (gmsh, between the region's boundary triangles). Linear cells only (a caller checks first
+/// with [`supported`]).
 pub fn remesh(mesh: &Mesh, x: &[[f64; 3]], medium: &[usize]) -> Result<Remeshed, String> {
     let regions = regions_of(mesh, medium);
-    let loops: Vec<Vec<Vec<usize>>> = (regions.iter())
-        .map(|r| boundary_loops(mesh, &r.1))
-        .collect::<Result<_, _>>()?;
-    let made = triangulate_between(&loops, x)?;
-    // the boundary nodes, found again by their places
-    let on_boundary: Vec<usize> = {
-        let mut b: Vec<usize> = loops.iter().flatten().flatten().copied().collect();
-        b.sort_unstable();
-        b.dedup();
-        b
+    let mut given = Vec::new();
+    let mut facets = mesh.facets.clone();
+    let (made, mut on_boundary, kind) = match mesh.dim {
+        3 => {
+            let mut faces = Vec::with_capacity(regions.len());
+            for r in &regions {
+                let own = boundary_faces(mesh, &r.1)?;
+                faces.push(super::plane_faces::own_planes_again(
+                    mesh,
+                    medium,
+                    own,
+                    &mut facets,
+                    x,
+                ));
+            }
+            let made = tetrahedralize_between(&faces, x)?;
+            let nodes: Vec<usize> = faces.iter().flatten().flatten().copied().collect();
+            given = faces;
+            (made, nodes, CellKind::Tet4)
+        }
+        _ => {
+            let loops: Vec<Vec<Vec<usize>>> = (regions.iter())
+                .map(|r| boundary_loops(mesh, &r.1))
+                .collect::<Result<_, _>>()?;
+            let made = triangulate_between(&loops, x)?;
+            let nodes: Vec<usize> = loops.iter().flatten().flatten().copied().collect();
+            (made, nodes, CellKind::Tri3)
+        }
     };
+    // the boundary nodes, found again by their places
+    on_boundary.sort_unstable();
+    on_boundary.dedup();
     let find = finder(x, &on_boundary);
     let (new_of, mut old_of, mut coords) = kept_nodes(mesh, medium, &on_boundary);
     // the made mesh's nodes: a boundary node is the old one, any other is new
@@ -119,19 +144,29 @@ pub fn remesh(mesh: &Mesh, x: &[[f64; 3]], medium: &[usize]) -> Result<Remeshed,
             .ok_or("no cells were made in a medium region")?;
         let mut conn = Vec::new();
         for blk in made.cells.iter().filter(|b| b.groups.contains(&g)) {
+            if blk.kind != kind {
+                return Err(format!(
+                    "{} cells were made, not {}",
+                    blk.kind.name(),
+                    kind.name()
+                ));
+            }
             conn.extend(blk.conn.iter().map(|&n| made_to_new[n]));
         }
         if conn.contains(&usize::MAX) {
             return Err("a boundary node of the medium was not kept".into());
         }
+        if let Some(faces) = given.get(r) {
+            same_boundary(faces, &conn, &new_of)?;
+        }
         new_medium.push(cells.len());
         cells.push(Block {
-            kind: CellKind::Tri3,
+            kind,
             groups: groups.clone(),
             conn,
         });
     }
-    let facets = mesh.facets.iter().map(remap).collect();
+    let facets = facets.iter().map(remap).collect();
     let new = Mesh {
         dim: mesh.dim,
         coords,
@@ -285,20 +320,195 @@ fn triangulate_between(loops: &[Vec<Vec<usize>>], x: &[[f64; 3]]) -> Result<Mesh
     })
 }
 
+/// A 3D region's boundary: the faces of its tetrahedra that no other of them shares, turned
+/// as its cells turn them.
+fn boundary_faces(mesh: &Mesh, blocks: &[usize]) -> Result<Vec<[usize; 3]>, String> {
+    let mut faces: HashMap<[usize; 3], ([usize; 3], usize)> = HashMap::new();
+    for &b in blocks {
+        let blk = &mesh.cells[b];
+        if blk.kind != CellKind::Tet4 {
+            return Err(format!("has {} cells, not tet4", blk.kind.name()));
+        }
+        for c in 0..blk.n_cells() {
+            let cell = blk.cell(c);
+            for f in super::faces::sides(CellKind::Tet4) {
+                let face = [0, 1, 2].map(|i| cell[f[i]]);
+                let mut key = face;
+                key.sort_unstable();
+                faces.entry(key).or_insert((face, 0)).1 += 1;
+            }
+        }
+    }
+    let mut out: Vec<[usize; 3]> = (faces.into_values())
+        .filter(|&(_, count)| count == 1)
+        .map(|(face, _)| face)
+        .collect();
+    out.sort_unstable();
+    Ok(out)
+}
+
+/// Whether the tetrahedra `conn` (new node numbers) have the boundary `faces` (old node
+/// numbers, `new_of` the new number of each): a mesher that split a boundary face would leave
+/// the solid beside it joined to the medium by nothing.
+fn same_boundary(faces: &[[usize; 3]], conn: &[usize], new_of: &[usize]) -> Result<(), String> {
+    let tets = Mesh::of_cells(
+        3,
+        Vec::new(),
+        vec![Block {
+            kind: CellKind::Tet4,
+            groups: Vec::new(),
+            conn: conn.to_vec(),
+        }],
+    );
+    let key = |f: [usize; 3]| {
+        let mut k = f;
+        k.sort_unstable();
+        k
+    };
+    let mut made: Vec<[usize; 3]> = boundary_faces(&tets, &[0])?.into_iter().map(key).collect();
+    let mut wanted: Vec<[usize; 3]> = faces.iter().map(|f| key(f.map(|n| new_of[n]))).collect();
+    made.sort_unstable();
+    wanted.sort_unstable();
+    match made == wanted {
+        true => Ok(()),
+        false => Err(format!(
+            "the new tetrahedra do not keep the medium's boundary ({} faces of {} kept)",
+            made.iter()
+                .filter(|f| wanted.binary_search(f).is_ok())
+                .count(),
+            wanted.len()
+        )),
+    }
+}
+
+/// The closed shells of the triangles `faces`: those joined by their edges.
+fn shells_of(faces: &[[usize; 3]]) -> Vec<Vec<[usize; 3]>> {
+    (super::faces::joined_by_edges(faces, |_, _| true).into_iter())
+        .map(|members| members.into_iter().map(|i| faces[i]).collect())
+        .collect()
+}
+
+/// Six times the volume the triangle `f` (at the places `x`) closes with the origin: summed
+/// over a closed shell turned outward, six times the volume it holds.
+fn held_volume(x: &[[f64; 3]], f: [usize; 3]) -> f64 {
+    let [a, b, c] = f.map(|n| x[n]);
+    a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
+        + a[2] * (b[0] * c[1] - b[1] * c[0])
+}
+
+/// A folder for one remake's files, removed with what is in it when dropped.
+struct Scratch(std::path::PathBuf);
+
+impl Scratch {
+    fn new() -> Result<Scratch, String> {
+        static COUNT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+        let n = COUNT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let dir = std::env::temp_dir().join(format!("tmc-remake-{}-{n}", std::process::id()));
+        std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+        Ok(Scratch(dir))
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// The tetrahedra gmsh makes between the boundary triangles `faces` of each region (nodes at
+/// their places `x`), which it keeps as they are (a discrete surface is not meshed again): the
+/// region is what they enclose, its cells in group `medium{r}`. gmsh runs in a child process
+/// (`mesh::gmsh::mesh_geo`), on files in a folder of its own.
+fn tetrahedralize_between(faces: &[Vec<[usize; 3]>], x: &[[f64; 3]]) -> Result<Mesh, String> {
+    use std::fmt::Write;
+    let mut number: HashMap<usize, usize> = HashMap::new();
+    let mut nodes = String::new();
+    for &n in faces.iter().flatten().flatten() {
+        if !number.contains_key(&n) {
+            number.insert(n, number.len() + 1);
+            let p = x[n];
+            let _ = writeln!(nodes, "{} {:e} {:e} {:e}", number.len(), p[0], p[1], p[2]);
+        }
+    }
+    // each closed shell of a region's boundary a surface of its own: gmsh tells the medium
+    // from the holes in it (the bodies) by its surface loops
+    let mut elements = String::new();
+    let (mut count, mut surface) = (0, 0);
+    let mut loops = String::from("Merge \"boundary.msh\";\n");
+    for (r, region) in faces.iter().enumerate() {
+        if region.is_empty() {
+            return Err("a medium region has no boundary".into());
+        }
+        let mut shells = shells_of(region);
+        // the outer shell first: its faces turn outward from what it holds (a positive
+        // volume), a hole's inward
+        let held = |s: &Vec<[usize; 3]>| -> f64 { s.iter().map(|f| held_volume(x, *f)).sum() };
+        shells.sort_by(|a, b| held(b).total_cmp(&held(a)));
+        let first = surface + 1;
+        for shell in &shells {
+            surface += 1;
+            for f in shell {
+                count += 1;
+                let [a, b, c] = f.map(|n| number[&n]);
+                let _ = writeln!(elements, "{count} 2 2 0 {surface} {a} {b} {c}");
+            }
+            let _ = writeln!(loops, "Surface Loop({surface}) = {{{surface}}};");
+        }
+        let all: Vec<String> = (first..=surface).map(|s| s.to_string()).collect();
+        let _ = writeln!(
+            loops,
+            "Volume({v}) = {{{}}};\nPhysical Volume(\"medium{r}\") = {{{v}}};",
+            all.join(", "),
+            v = r + 1
+        );
+    }
+    let msh = format!(
+        "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n{}\n{nodes}$EndNodes\n\
+         $Elements\n{count}\n{elements}$EndElements\n",
+        number.len()
+    );
+    let dir = Scratch::new()?;
+    let write = |name: &str, text: &str| {
+        let path = dir.0.join(name);
+        std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))
+    };
+    write("boundary.msh", &msh)?;
+    let options = super::gmsh::MeshOptions {
+        order: 1,
+        ..Default::default()
+    };
+    // gmsh's Delaunay, then, where it leaves a flat tetrahedron (where a thin layer meets a
+    // plane face), HXT; one thread, so that a run and its restart make the same cells
+    let mut failed = Vec::new();
+    for algorithm in [1, 10] {
+        let geo = format!("Mesh.Algorithm3D = {algorithm};\nGeneral.NumThreads = 1;\n{loops}");
+        write("medium.geo", &geo)?;
+        match super::gmsh::mesh_geo(
+            &dir.0.join("medium.geo"),
+            &dir.0.join("medium.msh"),
+            &options,
+        ) {
+            Ok(made) => return Ok(made.mesh),
+            Err(e) => failed.push(e.to_string()),
+        }
+    }
+    Err(failed.join("; and with HXT: "))
+}
+
 /// The node of `nodes` standing at a place (to 1e-9 of the extent of `x`), if any.
 fn finder(x: &[[f64; 3]], nodes: &[usize]) -> impl Fn([f64; 3]) -> Option<usize> {
     let scale = super::extent_of(x).max(f64::MIN_POSITIVE);
     let tol = 1e-9 * scale;
-    let key = move |p: [f64; 3]| ((p[0] / tol).round() as i64, (p[1] / tol).round() as i64);
-    let mut at: HashMap<(i64, i64), usize> = HashMap::new();
+    let key = move |p: [f64; 3]| p.map(|v| (v / tol).round() as i64);
+    let mut at: HashMap<[i64; 3], usize> = HashMap::new();
     for &n in nodes {
         at.insert(key(x[n]), n);
     }
     move |p: [f64; 3]| {
-        let (i, j) = key(p);
+        let [i, j, k] = key(p);
         (-1..=1)
-            .flat_map(|a| (-1..=1).map(move |b| (i + a, j + b)))
-            .find_map(|k| at.get(&k).copied())
+            .flat_map(|a| (-1..=1).flat_map(move |b| (-1..=1).map(move |c| [i + a, j + b, k + c])))
+            .find_map(|q| at.get(&q).copied())
     }
 }
 
@@ -335,14 +545,18 @@ fn kept_nodes(
 
 /// Whether the medium blocks `medium` of `mesh` can be made again, and if not, why.
 pub fn supported(mesh: &Mesh, medium: &[usize]) -> Result<(), String> {
-    if mesh.dim != 2 {
-        return Err("works in 2D only so far; this mesh is 3D".into());
-    }
     for &b in medium {
         let kind = mesh.cells[b].kind;
         if kind.order() != 1 {
             return Err(format!(
                 "works with linear cells only so far; this medium has {} cells",
+                kind.name()
+            ));
+        }
+        if mesh.dim == 3 && kind != CellKind::Tet4 {
+            return Err(format!(
+                "works in 3D with tetrahedra (tet4) only so far; this medium has {} cells \
+                 (mesh the medium with tetrahedra: no Recombine on its volumes)",
                 kind.name()
             ));
         }
@@ -554,5 +768,140 @@ mod tests {
         x[2] = x[1];
         let e = triangulate_between(&[lp], &x).unwrap_err();
         assert!(e.contains("stand at one place"), "{e}");
+    }
+}
+
+#[cfg(test)]
+mod tests3 {
+    use super::*;
+
+    /// A cube [0, 4]³ of 4³ cubes cut into six tetrahedra each (Kuhn's triangulation, the same
+    /// in every cube, so conforming): the medium, with a solid of the middle 2³ cubes, its own
+    /// block.
+    fn box_around_a_block() -> Mesh {
+        let id = |i: usize, j: usize, k: usize| (k * 5 + j) * 5 + i;
+        let mut coords = Vec::new();
+        for k in 0..5 {
+            for j in 0..5 {
+                for i in 0..5 {
+                    coords.push([i as f64, j as f64, k as f64]);
+                }
+            }
+        }
+        let (mut medium, mut solid) = (Vec::new(), Vec::new());
+        let paths = [
+            [0, 1, 2],
+            [0, 2, 1],
+            [1, 0, 2],
+            [1, 2, 0],
+            [2, 0, 1],
+            [2, 1, 0],
+        ];
+        for k in 0..4 {
+            for j in 0..4 {
+                for i in 0..4 {
+                    let inner = [i, j, k].iter().all(|&c| (1..3).contains(&c));
+                    for path in paths {
+                        let mut at = [i, j, k];
+                        let mut tet = vec![id(i, j, k)];
+                        for axis in path {
+                            at[axis] += 1;
+                            tet.push(id(at[0], at[1], at[2]));
+                        }
+                        // positive volume: an odd permutation of the axes turns it over
+                        if matches!(path, [0, 2, 1] | [1, 0, 2] | [2, 1, 0]) {
+                            tet.swap(2, 3);
+                        }
+                        match inner {
+                            true => solid.extend(tet),
+                            false => medium.extend(tet),
+                        }
+                    }
+                }
+            }
+        }
+        let block = |groups: Vec<usize>, conn: Vec<usize>| Block {
+            kind: CellKind::Tet4,
+            groups,
+            conn,
+        };
+        let mut mesh = Mesh::of_cells(
+            3,
+            coords,
+            vec![block(vec![0], medium), block(vec![1], solid)],
+        );
+        for (tag, name) in [(1, "medium"), (2, "solid")] {
+            mesh.groups.push(crate::mesh::PhysicalGroup {
+                name: name.into(),
+                dim: 3,
+                tag,
+            });
+        }
+        mesh
+    }
+
+    fn volume(x: &[[f64; 3]], t: &[usize]) -> f64 {
+        let d = |a: usize| [0, 1, 2].map(|i| x[t[a]][i] - x[t[0]][i]);
+        let (u, v, w) = (d(1), d(2), d(3));
+        (u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0])
+            + u[2] * (v[0] * w[1] - v[1] * w[0]))
+            / 6.0
+    }
+
+    #[test]
+    fn a_3d_medium_made_again_keeps_its_boundary_and_fills_its_volume() {
+        let mesh = box_around_a_block();
+        assert!(
+            mesh.cells
+                .iter()
+                .all(|b| (0..b.n_cells()).all(|c| volume(&mesh.coords, b.cell(c)) > 0.0))
+        );
+        // the solid block slid 0.3 along x, its neighbours in the medium with it halfway
+        let x: Vec<[f64; 3]> = (mesh.coords.iter())
+            .map(|p| {
+                let inside = p.iter().all(|&c| (1.0..=3.0).contains(&c));
+                [p[0] + if inside { 0.3 } else { 0.0 }, p[1], p[2]]
+            })
+            .collect();
+        let faces = boundary_faces(&mesh, &[0]).unwrap();
+        // the box's 6 × 32 faces and the block's 6 × 8
+        assert_eq!(faces.len(), 6 * 32 + 6 * 8);
+        let r = remesh(&mesh, &x, &[0]).unwrap();
+        assert_eq!(r.medium.len(), 1);
+        let here = |n: usize| match r.old_of[n] {
+            Some(o) => x[o],
+            None => r.mesh.coords[n],
+        };
+        let placed: Vec<[f64; 3]> = (0..r.mesh.coords.len()).map(here).collect();
+        let new = &r.mesh.cells[r.medium[0]];
+        assert_eq!(new.kind, CellKind::Tet4);
+        let vols: Vec<f64> = (0..new.n_cells())
+            .map(|c| volume(&placed, new.cell(c)))
+            .collect();
+        // every new cell turned one way, and together the box less the block
+        let total: f64 = vols.iter().map(|v| v.abs()).sum();
+        assert!((total - (64.0 - 8.0)).abs() < 1e-9, "{total}");
+        let sign = vols[0].signum();
+        assert!(
+            vols.iter().all(|v| v * sign > 1e-6),
+            "a flat or turned cell"
+        );
+        // the solid's cells and nodes as they were
+        let solid = r.mesh.cells.iter().find(|b| b.groups == vec![1]).unwrap();
+        assert_eq!(solid.n_cells(), 8 * 6);
+        for c in 0..solid.n_cells() {
+            for &n in solid.cell(c) {
+                assert!(r.old_of[n].is_some());
+            }
+        }
+    }
+
+    #[test]
+    fn a_hexahedral_medium_in_3d_is_refused_with_what_to_do() {
+        let mut mesh = box_around_a_block();
+        mesh.cells[0].kind = CellKind::Hex8;
+        let why = supported(&mesh, &[0]).unwrap_err();
+        assert!(why.contains("tetrahedra") && why.contains("hex8"), "{why}");
+        assert!(supported(&box_around_a_block(), &[0]).is_ok());
     }
 }

@@ -2,9 +2,11 @@
 //! between bodies that slide past each other is sheared without end: ahead of a body it is
 //! ploughed, and a closed layer drags the faces it joins. The medium is fictitious, so nothing
 //! physical is lost when its cells and its reference are renewed. The medium's cells are made
-//! again between the bodies as they are (`mesh/remesh.rs`) once any of its cells'
-//! faces have slid [`SLID`] of a cell past each other, or a sliver's node (a layer one cell
-//! across) would pass the end of the edge across from it in the next step. Each new cell
+//! again between the bodies as they are (`mesh/remesh.rs`: triangles in 2D, tetrahedra in 3D)
+//! once any of its cells' faces have slid [`SLID`] of a cell past each other, or a sliver's
+//! node (a layer one cell across) would pass the end of the edge across from it in the next
+//! step (in 3D, a thin tetrahedron's corner the face across it, or its edge the edge across
+//! it: [`ThinTet`]). Each new cell
 //! starts from a reference of its own (as a reconnected layer's cells do,
 //! `assembly/reference.rs`):
 //!
@@ -32,7 +34,7 @@ use crate::element::{RefElement, centre, local_coords, physical_gradients};
 use crate::kernel::friction::HISTORY_PER_POINT;
 use crate::mesh::Mesh;
 use crate::mesh::remesh::{remesh, supported};
-use nalgebra::{Matrix2, Matrix3, SymmetricEigen, Vector2};
+use nalgebra::{Matrix2, Matrix3, SymmetricEigen, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
 
 /// How far (in cell sizes, see [`Medium::slid_cells`]) a medium cell's faces may slide past
@@ -67,6 +69,9 @@ pub struct Medium {
     /// looked at): their block and cell, the nodes (local) of their longest edge and of the
     /// node across it, and where along that edge the node stood at the last accepted state.
     slivers: Vec<Sliver>,
+    /// The slivers among its tetrahedra, in 3D.
+    #[serde(default)]
+    thin: Vec<ThinTet>,
     /// The pseudo-time of the last accepted state, and how fast (length per unit of it) a
     /// sliver's node moved along its edge at most over the last step.
     t: f64,
@@ -83,6 +88,84 @@ struct Sliver {
     at: f64,
 }
 
+/// A thin tetrahedron (a layer one cell across): three corners on one face and one across,
+/// or two and two, as its corners stand along its thinnest direction when it was first
+/// looked at. Each stays such while the numbers [`ThinTet::standing`] gives stay positive.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+struct ThinTet {
+    block: usize,
+    cell: usize,
+    /// Its corners (local), the first `first` (1 or 2) on one side.
+    corners: [usize; 4],
+    first: usize,
+    /// What [`ThinTet::standing`] gave at the last accepted state.
+    room: Vec<f64>,
+}
+
+impl ThinTet {
+    /// The thin tetrahedron `c` of block `b` with corners at `p`, if it is one.
+    fn of(b: usize, c: usize, p: &[[f64; 3]]) -> Option<ThinTet> {
+        if slenderness3(p) >= THINNEST {
+            return None;
+        }
+        let q: Vec<Vector3<f64>> = p.iter().map(|c| Vector3::new(c[0], c[1], c[2])).collect();
+        let (corners, first) = split(&q);
+        Some(ThinTet {
+            block: b,
+            cell: c,
+            corners,
+            first,
+            room: Vec::new(),
+        })
+    }
+
+    /// Where its corners stand on each other at the state `x`: for one corner across three,
+    /// the barycentric coordinates of the one's foot on the three's plane; for two and two,
+    /// where along each edge its point nearest the other edge is (s, 1 − s, u, 1 − u). Each
+    /// is positive while the sliver spans the faces it was made across; also its longest edge.
+    fn standing(&self, model: &Model, x: &[f64]) -> (Vec<f64>, f64) {
+        let nodes = model.mesh.cells[self.block].cell(self.cell);
+        let q = self.corners.map(|i| {
+            let p = model.placed(nodes[i], x);
+            Vector3::new(p[0], p[1], p[2])
+        });
+        let mut longest = 0.0f64;
+        for i in 0..4 {
+            for j in i + 1..4 {
+                longest = longest.max((q[i] - q[j]).norm());
+            }
+        }
+        (standing_of(q, self.first), longest)
+    }
+}
+
+/// [`ThinTet::standing`] of a tetrahedron with corners at `q`, the first `first` on one side.
+fn standing_of(q: [Vector3<f64>; 4], first: usize) -> Vec<f64> {
+    {
+        match first {
+            1 => {
+                let (k, a) = (q[0], q[1]);
+                let (v0, v1, v2) = (q[2] - a, q[3] - a, k - a);
+                let (d00, d01, d11) = (v0.dot(&v0), v0.dot(&v1), v1.dot(&v1));
+                let (d20, d21) = (v2.dot(&v0), v2.dot(&v1));
+                let den = (d00 * d11 - d01 * d01).max(f64::MIN_POSITIVE);
+                let lb = (d11 * d20 - d01 * d21) / den;
+                let lc = (d00 * d21 - d01 * d20) / den;
+                vec![1.0 - lb - lc, lb, lc]
+            }
+            _ => {
+                let (d1, d2, r) = (q[1] - q[0], q[3] - q[2], q[0] - q[2]);
+                let (a, e, b) = (d1.dot(&d1), d2.dot(&d2), d1.dot(&d2));
+                let (c, f) = (d1.dot(&r), d2.dot(&r));
+                let den = (a * e - b * b).max(f64::MIN_POSITIVE);
+                let s = (b * f - c * e) / den;
+                let u = (a * f - b * c) / den;
+                vec![s, 1.0 - s, u, 1.0 - u]
+            }
+        }
+    }
+}
+
 /// A medium made again: the new mesh, the new medium cells' references, and what the new
 /// nodes carry.
 pub struct Remade {
@@ -96,16 +179,16 @@ pub struct Remade {
     theta: Vec<f64>,
 }
 
-/// The deformation gradient of the 2D cell `s` at ξ.
+/// The deformation gradient of the cell `s` at ξ (a 2D cell's as a plane strain's, F₃₃ = 1).
 fn cell_F<const N: usize, const D: usize, E: RefElement<N, D>>(
     s: &CellState<N>,
     xi: &[f64; D],
-) -> Option<Matrix2<f64>> {
+) -> Option<Matrix3<f64>> {
     let (g, _) = physical_gradients::<N, D>(&E::grad(xi), &s.X)?;
-    let mut F = Matrix2::identity();
+    let mut F = Matrix3::identity();
     for I in 0..N {
-        for i in 0..2 {
-            for j in 0..D.min(2) {
+        for i in 0..D {
+            for j in 0..D {
                 F[(i, j)] += s.u[I][i] * g[I][j];
             }
         }
@@ -162,6 +245,83 @@ pub fn shear(F: &Matrix2<f64>) -> f64 {
     ((l2 - 1.0) * (1.0 - l1)).max(0.0).sqrt()
 }
 
+/// [`shear`] in 3D: λ₁ and λ₂ the smallest and the largest eigenvalue of F Fᵀ.
+pub fn shear3(F: &Matrix3<f64>) -> f64 {
+    let e = SymmetricEigen::new(F * F.transpose()).eigenvalues;
+    let (l1, l2) = (e.min(), e.max());
+    ((l2 - 1.0) * (1.0 - l1)).max(0.0).sqrt()
+}
+
+/// The plane part of a 2D cell's deformation gradient (see [`cell_F`]).
+fn plane(F: &Matrix3<f64>) -> Matrix2<f64> {
+    F.fixed_view::<2, 2>(0, 0).into_owned()
+}
+
+/// A 2D map as the 3D one that leaves the third axis alone.
+fn embed(m: Matrix2<f64>) -> Matrix3<f64> {
+    let mut e = Matrix3::identity();
+    e.fixed_view_mut::<2, 2>(0, 0).copy_from(&m);
+    e
+}
+
+/// J of a cell's deformation gradient `F` in `dim` dimensions.
+fn volume_ratio(F: &Matrix3<f64>, dim: usize) -> f64 {
+    match dim {
+        2 => plane(F).determinant(),
+        _ => F.determinant(),
+    }
+}
+
+/// A tetrahedron's thinnest direction and its thickness along it. Its corners `p` are split
+/// in two where they stand farthest apart along the direction they spread least (the smallest
+/// principal axis of their scatter): one across three, whose height over the three's plane it
+/// is, or two and two, the distance between the lines of their edges.
+fn thinnest(p: &[[f64; 3]]) -> (f64, Vector3<f64>) {
+    let q: Vec<Vector3<f64>> = p.iter().map(|c| Vector3::new(c[0], c[1], c[2])).collect();
+    let (order, first) = split(&q);
+    let [a, b, c, d] = order.map(|i| q[i]);
+    let n = match first {
+        1 => (c - b).cross(&(d - b)),
+        _ => (b - a).cross(&(d - c)),
+    };
+    let n = n.try_normalize(0.0).unwrap_or_else(Vector3::z);
+    (n.dot(&(a - c)).abs(), n)
+}
+
+/// A tetrahedron's corners `q` in order along the direction they spread least, split where
+/// they stand farthest apart: the order (the first `first` on one side; one corner alone
+/// first) and `first` (1 or 2).
+fn split(q: &[Vector3<f64>]) -> ([usize; 4], usize) {
+    let m = q.iter().sum::<Vector3<f64>>() / q.len() as f64;
+    let scatter: Matrix3<f64> = q.iter().map(|c| (c - m) * (c - m).transpose()).sum();
+    let e = SymmetricEigen::new(scatter);
+    let n: Vector3<f64> = e.eigenvectors.column(e.eigenvalues.imin()).into();
+    let mut order = [0, 1, 2, 3];
+    order.sort_by(|&i, &j| n.dot(&q[i]).total_cmp(&n.dot(&q[j])));
+    let gap = |i: usize| n.dot(&q[order[i]]) - n.dot(&q[order[i - 1]]);
+    let first = (1..4)
+        .max_by(|&a, &b| gap(a).total_cmp(&gap(b)))
+        .unwrap_or(1);
+    match first {
+        3 => ([order[3], order[0], order[1], order[2]], 1),
+        f => (order, f),
+    }
+}
+
+/// A tetrahedron's thickness (see [`thinnest`]) over its longest edge: about 0.7–0.8 for a
+/// regular one, small for a sliver (three corners on one face and one on a face close to it,
+/// or two and two).
+fn slenderness3(p: &[[f64; 3]]) -> f64 {
+    let mut longest = 0.0f64;
+    for i in 0..p.len() {
+        for j in i + 1..p.len() {
+            let l2: f64 = (0..3).map(|k| (p[i][k] - p[j][k]).powi(2)).sum();
+            longest = longest.max(l2);
+        }
+    }
+    (thinnest(p).0 / longest.sqrt().max(f64::MIN_POSITIVE)).min(1.0)
+}
+
 impl Model {
     /// Cell `c` of mesh block `block` at the state `x`, measured from its own reference where
     /// it has one.
@@ -172,6 +332,20 @@ impl Model {
             rebase(&mut s, &r[c * N..(c + 1) * N]);
         }
         s
+    }
+
+    /// Per node, whether it is a node of a solid's cell (not of the medium's alone).
+    pub(crate) fn on_solids(&self) -> Vec<bool> {
+        let mut on = vec![false; self.mesh.coords.len()];
+        for b in &self.blocks {
+            if self.regions[b.region].1 != RegionKind::Medium {
+                self.mesh.cells[b.block]
+                    .conn
+                    .iter()
+                    .for_each(|&n| on[n] = true);
+            }
+        }
+        on
     }
 
     /// Node `n`'s place at the state `x`.
@@ -193,14 +367,16 @@ struct Locator<'a> {
     x: &'a [f64],
     /// (block, cell) of every medium cell, and its nodes' places.
     cells: Vec<(usize, usize, Vec<[f64; 3]>)>,
-    lo: [f64; 2],
+    lo: [f64; 3],
     size: f64,
-    dims: [usize; 2],
+    /// The buckets along each axis (one along the third in 2D).
+    dims: [usize; 3],
     buckets: Vec<Vec<usize>>,
 }
 
 impl<'a> Locator<'a> {
     fn new(model: &'a Model, blocks: &[usize], x: &'a [f64]) -> Locator<'a> {
+        let dim = model.mesh.dim;
         let mut cells = Vec::new();
         for &b in blocks {
             let blk = &model.mesh.cells[b];
@@ -209,24 +385,37 @@ impl<'a> Locator<'a> {
                 cells.push((b, c, p));
             }
         }
-        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        let (mut lo, mut hi) = ([0.0; 3], [0.0; 3]);
+        lo[..dim].fill(f64::INFINITY);
+        hi[..dim].fill(f64::NEG_INFINITY);
         let mut diam = 0.0;
         for (_, _, p) in &cells {
-            let (mut clo, mut chi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+            let (mut clo, mut chi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
             for q in p {
-                for i in 0..2 {
+                for i in 0..dim {
                     clo[i] = clo[i].min(q[i]);
                     chi[i] = chi[i].max(q[i]);
                 }
             }
-            for i in 0..2 {
+            for i in 0..dim {
                 lo[i] = lo[i].min(clo[i]);
                 hi[i] = hi[i].max(chi[i]);
             }
-            diam += (chi[0] - clo[0]).max(chi[1] - clo[1]);
+            diam += (0..dim)
+                .map(|i| chi[i] - clo[i])
+                .fold(f64::NEG_INFINITY, f64::max);
         }
-        let size = (diam / cells.len().max(1) as f64).max(1e-12 * (hi[0] - lo[0]).abs());
-        let dims = [0, 1].map(|i| (((hi[i] - lo[i]) / size).ceil() as usize).clamp(1, 4096));
+        let n = cells.len().max(1) as f64;
+        let mut size = (diam / n).max(1e-12 * (hi[0] - lo[0]).abs());
+        if dim == 3 {
+            // no more buckets than about eight per cell
+            let volume: f64 = (0..3).map(|i| (hi[i] - lo[i]).max(0.0)).product();
+            size = size.max((volume / (8.0 * n)).cbrt());
+        }
+        let dims = [0, 1, 2].map(|i| match i < dim {
+            true => (((hi[i] - lo[i]) / size).ceil() as usize).clamp(1, 4096),
+            false => 1,
+        });
         let mut loc = Locator {
             model,
             x,
@@ -234,20 +423,23 @@ impl<'a> Locator<'a> {
             lo,
             size,
             dims,
-            buckets: vec![Vec::new(); dims[0] * dims[1]],
+            buckets: vec![Vec::new(); dims[0] * dims[1] * dims[2]],
         };
         for (k, (_, _, p)) in cells.iter().enumerate() {
-            let (mut a, mut z) = ([usize::MAX; 2], [0; 2]);
+            let (mut a, mut z) = ([usize::MAX; 3], [0; 3]);
             for q in p {
-                let ij = loc.bucket_of(q);
-                for i in 0..2 {
-                    a[i] = a[i].min(ij[i]);
-                    z[i] = z[i].max(ij[i]);
+                let ijk = loc.bucket_of(q);
+                for i in 0..3 {
+                    a[i] = a[i].min(ijk[i]);
+                    z[i] = z[i].max(ijk[i]);
                 }
             }
-            for i in a[0]..=z[0] {
+            for l in a[2]..=z[2] {
                 for j in a[1]..=z[1] {
-                    loc.buckets[j * dims[0] + i].push(k);
+                    for i in a[0]..=z[0] {
+                        let at = loc.index([i, j, l]);
+                        loc.buckets[at].push(k);
+                    }
                 }
             }
         }
@@ -255,19 +447,22 @@ impl<'a> Locator<'a> {
         loc
     }
 
-    fn bucket_of(&self, p: &[f64; 3]) -> [usize; 2] {
-        [0, 1].map(|i| {
+    fn bucket_of(&self, p: &[f64; 3]) -> [usize; 3] {
+        [0, 1, 2].map(|i| {
             (((p[i] - self.lo[i]) / self.size).floor().max(0.0) as usize).min(self.dims[i] - 1)
         })
+    }
+
+    fn index(&self, [i, j, l]: [usize; 3]) -> usize {
+        (l * self.dims[1] + j) * self.dims[0] + i
     }
 
     /// The old cell that holds `p` (or, past the medium's edge by round-off, the nearest one
     /// around it), and a value of its state there: what `at` computes from the cell's state
     /// and the point's ξ.
     fn value<T>(&self, p: &[f64; 3], at: impl Fn(&dyn CellAt) -> Option<T>) -> Option<T> {
-        let [i, j] = self.bucket_of(p);
         let mut best: Option<(f64, usize)> = None;
-        for &k in &self.buckets[j * self.dims[0] + i] {
+        for &k in &self.buckets[self.index(self.bucket_of(p))] {
             let kind = self.model.mesh.cells[self.cells[k].0].kind;
             let out = crate::with_cell!(kind, |N, D, E| outside::<N, D, E>(&self.cells[k].2, p));
             if best.is_none_or(|(o, _)| out < o) {
@@ -324,7 +519,7 @@ fn outside<const N: usize, const D: usize, E: RefElement<N, D>>(
 /// An old cell at a point: its deformation gradient and its interpolated temperature there,
 /// the cell (block and index) and its quadrature point nearest the point.
 trait CellAt {
-    fn F(&self) -> Option<Matrix2<f64>>;
+    fn F(&self) -> Option<Matrix3<f64>>;
     fn theta(&self) -> f64;
     fn cell(&self) -> (usize, usize);
     fn nearest_point(&self) -> usize;
@@ -342,7 +537,7 @@ struct At<'a, const N: usize, const D: usize, E> {
 }
 
 impl<const N: usize, const D: usize, E: RefElement<N, D>> CellAt for At<'_, N, D, E> {
-    fn F(&self) -> Option<Matrix2<f64>> {
+    fn F(&self) -> Option<Matrix3<f64>> {
         cell_F::<N, D, E>(&self.s, &self.xi)
     }
     fn cell(&self) -> (usize, usize) {
@@ -413,6 +608,7 @@ impl Medium {
         Ok(Some(Medium {
             blocks,
             slivers: Vec::new(),
+            thin: Vec::new(),
             t: 0.0,
             rate: 0.0,
         }))
@@ -431,7 +627,10 @@ impl Medium {
                 for c in 0..blk.n_cells() {
                     let s = model.cell_state::<N>(b, c, x);
                     if let Some(F) = cell_F::<N, D, E>(&s, &xi) {
-                        most = most.max(shear(&F) * slenderness(&s.X, E::SIMPLEX));
+                        most = most.max(match D {
+                            2 => shear(&plane(&F)) * slenderness(&s.X, E::SIMPLEX),
+                            _ => shear3(&F) * slenderness3(&s.X),
+                        });
                     }
                 }
             });
@@ -446,9 +645,13 @@ impl Medium {
             .iter()
             .map(|&b| model.mesh.cells[b].n_cells())
             .sum();
+        let new = match model.mesh.dim {
+            3 => "tetrahedra (gmsh's, between the medium's faces)",
+            _ => "triangles",
+        };
         format!(
-            "medium made again as the bodies move: its {cells} cells replaced by new \
-             triangles once any cell's faces have slid {SLID} of a cell past each other"
+            "medium made again as the bodies move: its {cells} cells replaced by new {new} \
+             once any cell's faces have slid {SLID} of a cell past each other"
         )
     }
 
@@ -471,6 +674,15 @@ impl Medium {
             rate = rate.max(speed.abs() * length);
             s.at = at;
         }
+        for s in &mut self.thin {
+            let (now, length) = s.standing(model, x);
+            for (v, before) in now.iter().zip(&s.room) {
+                let speed = if dt > 0.0 { (v - before) / dt } else { 0.0 };
+                passing |= *v < 0.0 || v + speed * (target - t) < 0.0;
+                rate = rate.max(speed.abs() * length);
+            }
+            s.room = now;
+        }
         self.t = t;
         self.rate = rate;
         passing || self.slid_cells(model, x) >= SLID
@@ -482,11 +694,33 @@ impl Medium {
     /// pseudo-time) that takes none of them past an end at that speed.
     pub fn start(&mut self, model: &Model, x: &[f64], t: f64, rate: f64) -> f64 {
         self.slivers.clear();
+        self.thin.clear();
         self.t = t;
         self.rate = rate;
         let mut room = f64::INFINITY;
+        let on_solid = model.on_solids();
         for &b in &self.blocks {
             let blk = &model.mesh.cells[b];
+            if blk.kind == crate::mesh::CellKind::Tet4 {
+                // the thin tetrahedra across a gap between solids' faces, as made
+                for c in 0..blk.n_cells() {
+                    let nodes = blk.cell(c);
+                    if !nodes.iter().all(|&n| on_solid[n]) {
+                        continue;
+                    }
+                    let p: Vec<[f64; 3]> = nodes.iter().map(|&n| model.placed(n, x)).collect();
+                    let Some(mut s) = ThinTet::of(b, c, &p) else {
+                        continue;
+                    };
+                    let (now, length) = s.standing(model, x);
+                    let least = now.iter().fold(f64::INFINITY, |a, &v| a.min(v));
+                    if least > 0.0 {
+                        room = room.min(least * length);
+                        s.room = now;
+                        self.thin.push(s);
+                    }
+                }
+            }
             if blk.kind != crate::mesh::CellKind::Tri3 {
                 continue;
             }
@@ -536,6 +770,7 @@ impl Medium {
                 NewCell { b, c, p, mid, F }
             })
             .collect();
+        let dim = r.mesh.dim;
         let layers = Layers::of(&r.mesh, &r.medium, &cells);
         let mut reference: Vec<Option<Vec<[f64; 3]>>> = vec![None; r.mesh.cells.len()];
         for &b in &r.medium {
@@ -546,13 +781,21 @@ impl Medium {
             let stretch = match layers.carried(k, p) {
                 Some(back) => back,
                 // beside a closed layer the medium is open: its old squeeze is what ploughs
-                None if layers.closed() => opened(p),
-                None => carried_stretch(&cell.F).unwrap_or_else(|| opened(p)),
+                None if layers.closed() => opened(p, dim),
+                None => carried_stretch(&cell.F, dim).unwrap_or_else(|| opened(p, dim)),
             };
             let refs = reference[cell.b].as_mut().expect("a medium block");
             for q in p {
-                let X = stretch * Vector2::new(q[0] - mid[0], q[1] - mid[1]);
-                refs.push([mid[0] + X[0], mid[1] + X[1], 0.0]);
+                refs.push(match dim {
+                    2 => {
+                        let X = plane(&stretch) * Vector2::new(q[0] - mid[0], q[1] - mid[1]);
+                        [mid[0] + X[0], mid[1] + X[1], 0.0]
+                    }
+                    _ => {
+                        let X = stretch * Vector3::new(q[0] - mid[0], q[1] - mid[1], q[2] - mid[2]);
+                        [mid[0] + X[0], mid[1] + X[1], mid[2] + X[2]]
+                    }
+                });
             }
         }
         let theta = (0..r.mesh.coords.len())
@@ -600,18 +843,7 @@ pub fn carried_friction(
                 let ofb = &old.friction_blocks[k];
                 let width = old_slabs[k].len() / old.mesh.cells[b].n_cells();
                 let q = width * c + cell.nearest_point() * HISTORY_PER_POINT;
-                let f = cell.F()?;
-                let F = Matrix3::new(
-                    f[(0, 0)],
-                    f[(0, 1)],
-                    0.0,
-                    f[(1, 0)],
-                    f[(1, 1)],
-                    0.0,
-                    0.0,
-                    0.0,
-                    1.0,
-                );
+                let F = cell.F()?;
                 let h = &old_slabs[k][q..q + HISTORY_PER_POINT];
                 Some(transmitted(&ofb.mat, ofb.normals.of(c), &F, h))
             })
@@ -663,13 +895,19 @@ fn along_edge(model: &Model, s: &Sliver, x: &[f64]) -> (f64, f64) {
 }
 
 /// F₀⁻¹ of a new cell whose centre stood where the old medium's deformation gradient was
-/// `F`: a closed layer (J < [`CLOSED`]) stretched back by 1/J along the direction F squeezed
-/// most; the identity elsewhere.
-fn carried_stretch(F: &Matrix2<f64>) -> Option<Matrix2<f64>> {
-    let J = F.determinant();
+/// `F` (in `dim` dimensions): a closed layer (J < [`CLOSED`]) stretched back by 1/J along the
+/// direction F squeezed most; the identity elsewhere.
+fn carried_stretch(F: &Matrix3<f64>, dim: usize) -> Option<Matrix3<f64>> {
+    let J = volume_ratio(F, dim);
     if !(J > 0.0 && J < CLOSED) {
         return None;
     }
+    if dim == 3 {
+        let e = SymmetricEigen::new(F * F.transpose());
+        let n: Vector3<f64> = e.eigenvectors.column(e.eigenvalues.imin()).into();
+        return Some(Matrix3::identity() + (1.0 / J - 1.0) * n * n.transpose());
+    }
+    let F = plane(F);
     let e = SymmetricEigen::new(F * F.transpose());
     let i = if e.eigenvalues[0] <= e.eigenvalues[1] {
         0
@@ -677,7 +915,9 @@ fn carried_stretch(F: &Matrix2<f64>) -> Option<Matrix2<f64>> {
         1
     };
     let n: Vector2<f64> = e.eigenvectors.column(i).into();
-    Some(Matrix2::identity() + (1.0 / J - 1.0) * n * n.transpose())
+    Some(embed(
+        Matrix2::identity() + (1.0 / J - 1.0) * n * n.transpose(),
+    ))
 }
 
 /// A new medium cell: its block and number, its nodes' places and their mean, and the old
@@ -687,20 +927,21 @@ struct NewCell {
     c: usize,
     p: Vec<[f64; 3]>,
     mid: [f64; 3],
-    F: Matrix2<f64>,
+    F: Matrix3<f64>,
 }
 
 /// The old medium's most squeezed state over a new cell with nodes at `p` and centre `mid`
 /// (the smallest J there and half way to each node): a closed layer's cell that has just
 /// opened beside others still closed does not speak for the layer.
-fn squeezed(find: &Locator, p: &[[f64; 3]], mid: [f64; 3]) -> Matrix2<f64> {
+fn squeezed(find: &Locator, p: &[[f64; 3]], mid: [f64; 3]) -> Matrix3<f64> {
+    let dim = find.model.mesh.dim;
     (std::iter::once(mid).chain(
         p.iter()
             .map(|q| std::array::from_fn(|i| 0.5 * (mid[i] + q[i]))),
     ))
     .filter_map(|at| find.value(&at, |cell| cell.F()))
-    .min_by(|a, b| a.determinant().total_cmp(&b.determinant()))
-    .unwrap_or_else(Matrix2::identity)
+    .min_by(|a, b| volume_ratio(a, dim).total_cmp(&volume_ratio(b, dim)))
+    .unwrap_or_else(Matrix3::identity)
 }
 
 /// The new medium's layers one cell across: triangles whose three nodes are on solids, so
@@ -715,13 +956,15 @@ fn squeezed(find: &Locator, p: &[[f64; 3]], mid: [f64; 3]) -> Matrix2<f64> {
 struct Layers {
     /// Per new cell: its height and the normal to its longest edge, if it spans a gap, and
     /// the layer it belongs to.
-    across: Vec<Option<(f64, Vector2<f64>, usize)>>,
+    across: Vec<Option<(f64, Vector3<f64>, usize)>>,
     /// Per layer, its thickness of reference (none where it was nowhere closed).
     thickness: Vec<Option<f64>>,
+    dim: usize,
 }
 
 impl Layers {
     fn of(mesh: &Mesh, medium: &[usize], cells: &[NewCell]) -> Layers {
+        let dim = mesh.dim;
         let mut on_solid = vec![false; mesh.coords.len()];
         for (b, blk) in mesh.cells.iter().enumerate() {
             if !medium.contains(&b) {
@@ -741,10 +984,16 @@ impl Layers {
         let mut height = vec![None; cells.len()];
         for (k, cell) in cells.iter().enumerate() {
             let nodes = mesh.cells[cell.b].cell(cell.c);
-            if nodes.len() != 3 || !nodes.iter().all(|&n| on_solid[n]) {
+            if nodes.len() != dim + 1 || !nodes.iter().all(|&n| on_solid[n]) {
                 continue;
             }
-            height[k] = Some(height_across(&cell.p));
+            height[k] = Some(match dim {
+                2 => {
+                    let (t, n) = height_across(&cell.p);
+                    (t, Vector3::new(n[0], n[1], 0.0))
+                }
+                _ => thinnest(&cell.p),
+            });
             for &n in nodes {
                 let j = *first_at.entry(n).or_insert(k);
                 let (a, b) = (top(&mut root, j), top(&mut root, k));
@@ -762,7 +1011,7 @@ impl Layers {
                 before.len() - 1
             });
             layer_of[k] = l;
-            let J = cells[k].F.determinant();
+            let J = volume_ratio(&cells[k].F, dim);
             if J > 0.0 && J < CLOSED {
                 before[l].push(t / J);
             }
@@ -776,7 +1025,11 @@ impl Layers {
         let across = (height.into_iter().zip(layer_of))
             .map(|(h, l)| h.map(|(t, n)| (t, n, l)))
             .collect();
-        Layers { across, thickness }
+        Layers {
+            across,
+            thickness,
+            dim,
+        }
     }
 
     /// Whether any layer was closed.
@@ -787,12 +1040,16 @@ impl Layers {
     /// F₀⁻¹ of new cell `k` if it is a cell across a layer that was closed: its current shape
     /// stretched across the layer to the layer's thickness of reference where it is thinner
     /// (the identity, or a sliver opened, where it is not); `None` for any other cell.
-    fn carried(&self, k: usize, p: &[[f64; 3]]) -> Option<Matrix2<f64>> {
+    fn carried(&self, k: usize, p: &[[f64; 3]]) -> Option<Matrix3<f64>> {
         let (t, n, l) = self.across[k]?;
         let g = self.thickness[l]?;
         Some(match t > 0.0 && t < g {
-            true => Matrix2::identity() + (g / t - 1.0) * n * n.transpose(),
-            false => opened(p),
+            true if self.dim == 2 => {
+                let n = Vector2::new(n[0], n[1]);
+                embed(Matrix2::identity() + (g / t - 1.0) * n * n.transpose())
+            }
+            true => Matrix3::identity() + (g / t - 1.0) * n * n.transpose(),
+            false => opened(p, self.dim),
         })
     }
 }
@@ -814,14 +1071,24 @@ pub const THINNEST: f64 = 0.2;
 /// s < [`THINNEST`]) a stretch by THINNEST / s across its longest edge, so that no reference is
 /// thinner than that: a sliver measured from itself would be a stiff cell, its faces unable
 /// to move along each other.
-fn opened(p: &[[f64; 3]]) -> Matrix2<f64> {
+/// In 3D (`dim`), a tetrahedron is opened along its thinnest direction ([`thinnest`],
+/// [`slenderness3`]).
+fn opened(p: &[[f64; 3]], dim: usize) -> Matrix3<f64> {
     let k = p.len();
+    if dim == 3 {
+        let s = slenderness3(p);
+        if s >= THINNEST || s <= 0.0 {
+            return Matrix3::identity();
+        }
+        let n = thinnest(p).1;
+        return Matrix3::identity() + (THINNEST / s - 1.0) * n * n.transpose();
+    }
     let s = slenderness(p, k == 3);
     if s >= THINNEST || s <= 0.0 {
-        return Matrix2::identity();
+        return Matrix3::identity();
     }
     let n = normal_to(edge(p, k, longest_edge(p, k).0));
-    Matrix2::identity() + (THINNEST / s - 1.0) * n * n.transpose()
+    embed(Matrix2::identity() + (THINNEST / s - 1.0) * n * n.transpose())
 }
 
 impl Remade {
@@ -885,9 +1152,9 @@ mod tests {
     fn a_closed_layer_is_stretched_back_across_itself_and_keeps_no_shear() {
         // a layer normal to y, squeezed to J = 0.05 and sheared by 2 along x
         let F = Matrix2::new(1.0, 2.0 * 0.05, 0.0, 0.05);
-        let back = carried_stretch(&F).unwrap();
+        let back = carried_stretch(&embed(F), 2).unwrap();
         // the new cell's F₀ = back⁻¹: J as before, symmetric, no shear
-        let F0 = back.try_inverse().unwrap();
+        let F0 = plane(&back.try_inverse().unwrap());
         assert!((F0.determinant() - F.determinant()).abs() < 1e-12);
         assert!((F0 - F0.transpose()).norm() < 1e-12);
         assert!(shear(&F0) < 1e-7);
@@ -896,7 +1163,7 @@ mod tests {
         assert!(((F0 * n).norm() - 0.05).abs() < 0.01);
         // an open cell starts stress-free
         let open = Matrix2::new(1.0, 0.8, 0.0, 0.7);
-        assert_eq!(carried_stretch(&open), None);
+        assert_eq!(carried_stretch(&embed(open), 2), None);
     }
 
     /// Two solids (a triangle below, one above) facing each other across a layer of four
@@ -931,7 +1198,7 @@ mod tests {
                     .map(|&n| mesh.coords[n])
                     .collect(),
                 mid: [0.0; 3],
-                F: Matrix2::new(1.0, 0.0, 0.0, old_J[c]),
+                F: embed(Matrix2::new(1.0, 0.0, 0.0, old_J[c])),
             })
             .collect();
         (mesh, cells)
@@ -946,13 +1213,13 @@ mod tests {
         assert_eq!(layers.thickness.len(), 1, "one layer");
         let g = layers.thickness[0].unwrap();
         let before: Vec<f64> = (0..4)
-            .map(|k| height_across(&cells[k].p).0 / cells[k].F.determinant())
+            .map(|k| height_across(&cells[k].p).0 / plane(&cells[k].F).determinant())
             .collect();
         let mut sorted = before.clone();
         sorted.sort_by(f64::total_cmp);
         assert_eq!(g, sorted[2], "the median of {before:?}");
         for (k, cell) in cells.iter().enumerate() {
-            let F0 = layers.carried(k, &cell.p).unwrap().try_inverse().unwrap();
+            let F0 = plane(&layers.carried(k, &cell.p).unwrap().try_inverse().unwrap());
             // squeezed from the layer's thickness to the cell's height, without shear
             let (t, n) = height_across(&cell.p);
             assert!((F0.determinant() - t / g).abs() < 1e-9 * t / g, "cell {k}");
@@ -974,7 +1241,7 @@ mod tests {
         let at = |x: f64, y: f64| [c * x - s * y, s * x + c * y, 0.0];
         let p = [at(0.0, 0.0), at(1.0, 0.0), at(0.3, 0.01)];
         assert!((slenderness(&p, true) - 0.01).abs() < 1e-12);
-        let back = opened(&p);
+        let back = plane(&opened(&p, 2));
         let mid: Vector2<f64> = p
             .iter()
             .map(|q| Vector2::new(q[0], q[1]))
@@ -991,6 +1258,100 @@ mod tests {
         let len = |a: [f64; 3], b: [f64; 3]| ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt();
         assert!((len(r[0], r[1]) - 1.0).abs() < 1e-12);
         let fine = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.5, 0.8, 0.0]];
-        assert_eq!(opened(&fine), Matrix2::identity());
+        assert_eq!(opened(&fine, 2), Matrix3::identity());
+    }
+
+    #[test]
+    fn in_3d_the_shear_measure_and_the_carried_squeeze_are_those_of_the_plane() {
+        // a simple shear γ of a layer normal to z, squeezed to 0.05: about γ
+        for g in [0.5, 1.0, 3.0] {
+            let F = Matrix3::new(1.0, 0.0, g, 0.0, 1.0, 0.0, 0.0, 0.0, 0.05);
+            assert!((shear3(&F) - g).abs() < 0.05 * g);
+        }
+        // a rotation has none
+        let (c, s) = (0.6, 0.8);
+        assert!(shear3(&Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0)) < 1e-12);
+        // squeezed to J = 0.05 and sheared by 2: stretched back along (about) z, no shear
+        let F = Matrix3::new(1.0, 0.0, 0.1, 0.0, 1.0, 0.0, 0.0, 0.0, 0.05);
+        let F0 = carried_stretch(&F, 3).unwrap().try_inverse().unwrap();
+        assert!((F0.determinant() - 0.05).abs() < 1e-12);
+        assert!((F0 - F0.transpose()).norm() < 1e-12 && shear3(&F0) < 1e-7);
+        assert!(((F0 * Vector3::z()).norm() - 0.05).abs() < 0.01);
+        assert_eq!(carried_stretch(&Matrix3::identity(), 3), None);
+    }
+
+    #[test]
+    fn a_thin_tetrahedron_is_opened_across_itself_and_followed_until_it_passes() {
+        // three corners on z = 0, one 0.01 above, inside the three
+        let p = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.3, 0.3, 0.01],
+        ];
+        // its height over the three, along z
+        let (t, n) = thinnest(&p);
+        assert!(
+            (t - 0.01).abs() < 1e-15 && (n.z.abs() - 1.0).abs() < 1e-15,
+            "{t} {n:?}"
+        );
+        assert!((slenderness3(&p) - 0.01 / 2f64.sqrt()).abs() < 1e-15);
+        let back = opened(&p, 3);
+        let r: Vec<[f64; 3]> = p
+            .iter()
+            .map(|q| {
+                let X = back * Vector3::new(q[0], q[1], q[2]);
+                [X[0], X[1], X[2]]
+            })
+            .collect();
+        assert!(
+            (slenderness3(&r) - THINNEST).abs() < 1e-12,
+            "{}",
+            slenderness3(&r)
+        );
+        let regular = [
+            [1.0, 1.0, 1.0],
+            [1.0, -1.0, -1.0],
+            [-1.0, 1.0, -1.0],
+            [-1.0, -1.0, 1.0],
+        ];
+        assert!(slenderness3(&regular) > 0.7);
+        assert_eq!(opened(&regular, 3), Matrix3::identity());
+        // the one across three: its foot's barycentric coordinates
+        let s = ThinTet::of(0, 0, &p).unwrap();
+        assert_eq!((s.corners[0], s.first), (3, 1));
+        // two and two: an edge along x on z = 0, one along y 0.01 above, crossing it
+        let q = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.4, -0.5, 0.01],
+            [0.4, 0.5, 0.01],
+        ];
+        let s = ThinTet::of(0, 0, &q).unwrap();
+        assert_eq!(s.first, 2);
+        assert!((thinnest(&q).0 - 0.01).abs() < 1e-15);
+        // followed: positive while the one stands over the three, the edges across each other
+        let v = |c: [[f64; 3]; 4], order: [usize; 4], first| {
+            standing_of(
+                order.map(|i| Vector3::new(c[i][0], c[i][1], c[i][2])),
+                first,
+            )
+        };
+        let over = v(p, [3, 0, 1, 2], 1);
+        assert!(over.iter().all(|&x| x > 0.0) && (over.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+        let mut passed = p;
+        passed[3][0] = -0.1;
+        assert!(v(passed, [3, 0, 1, 2], 1).iter().any(|&x| x < 0.0));
+        // where each edge passes the other (the edges in either order)
+        let mut at = v(q, s.corners, 2);
+        at.sort_by(f64::total_cmp);
+        assert!(
+            (0..4).all(|i| (at[i] - [0.4, 0.5, 0.5, 0.6][i]).abs() < 1e-12),
+            "{at:?}"
+        );
+        let mut slid = q;
+        slid[2][0] = 1.2;
+        slid[3][0] = 1.2;
+        assert!(v(slid, s.corners, 2).iter().any(|&x| x < 0.0));
     }
 }

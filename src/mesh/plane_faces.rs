@@ -1,0 +1,282 @@
+//! The medium's own plane faces made again in 3D. A medium made again keeps its boundary
+//! triangles, but those that are no solid's face (a symmetry plane, the box around the bodies)
+//! would then stay Lagrangian: where a thin layer between two bodies meets a symmetry plane,
+//! its triangles on that plane are sheared without end as the bodies slide. Each plane patch
+//! of such faces is triangulated again between its own nodes at their current places (a
+//! constrained Delaunay triangulation of the patch, no node added or dropped), and the facets
+//! that carried its boundary conditions with it.
+
+use super::faces::{joined_by_edges, sides};
+use super::{Block, CellKind, Mesh};
+use nalgebra::Vector3;
+use std::collections::{HashMap, HashSet};
+
+/// A triangle's nodes in order, as a key that does not depend on how it turns.
+fn key(f: [usize; 3]) -> [usize; 3] {
+    let mut k = f;
+    k.sort_unstable();
+    k
+}
+
+/// The faces of the tetrahedra of every block but `medium`.
+fn solid_faces(mesh: &Mesh, medium: &[usize]) -> HashSet<[usize; 3]> {
+    let mut faces = HashSet::new();
+    for (b, blk) in mesh.cells.iter().enumerate() {
+        if medium.contains(&b) || blk.kind != CellKind::Tet4 {
+            continue;
+        }
+        for c in 0..blk.n_cells() {
+            let cell = blk.cell(c);
+            faces.extend(
+                sides(CellKind::Tet4)
+                    .iter()
+                    .map(|f| key([0, 1, 2].map(|i| cell[f[i]]))),
+            );
+        }
+    }
+    faces
+}
+
+fn at(x: &[[f64; 3]], n: usize) -> Vector3<f64> {
+    Vector3::new(x[n][0], x[n][1], x[n][2])
+}
+
+/// The unit normal of triangle `f` at the places `x` (zero for a flat one).
+fn normal(x: &[[f64; 3]], f: [usize; 3]) -> Vector3<f64> {
+    let n = (at(x, f[1]) - at(x, f[0])).cross(&(at(x, f[2]) - at(x, f[0])));
+    n.try_normalize(0.0).unwrap_or_else(Vector3::zeros)
+}
+
+/// The boundary triangles `faces` of a medium region (turned outward, blocks `medium`) with
+/// each plane patch of its own faces triangulated again at the places `x`; the facets of a
+/// patch (in `facets`) replaced by its new triangles. A patch whose facets lie in several
+/// blocks, or which cannot be triangulated again, is kept as it is.
+pub fn own_planes_again(
+    mesh: &Mesh,
+    medium: &[usize],
+    faces: Vec<[usize; 3]>,
+    facets: &mut [Block],
+    x: &[[f64; 3]],
+) -> Vec<[usize; 3]> {
+    let solid = solid_faces(mesh, medium);
+    let own: Vec<[usize; 3]> = (faces.iter())
+        .filter(|&&f| !solid.contains(&key(f)))
+        .copied()
+        .collect();
+    let tol = 1e-9 * super::extent_of(x).max(f64::MIN_POSITIVE);
+    // a patch: own faces on one plane, joined by their edges
+    let coplanar = |i: usize, j: usize| {
+        let n = normal(x, own[i]);
+        let d = n.dot(&at(x, own[i][0]));
+        normal(x, own[j]).dot(&n) > 1.0 - 1e-10
+            && own[j].iter().all(|&m| (n.dot(&at(x, m)) - d).abs() < tol)
+    };
+    let mut out: Vec<[usize; 3]> = Vec::with_capacity(faces.len());
+    let mut again_made = HashSet::new();
+    for patch in joined_by_edges(&own, coplanar) {
+        if patch.len() < 2 {
+            continue;
+        }
+        let old: Vec<[usize; 3]> = patch.iter().map(|&i| own[i]).collect();
+        if let Some(new) = again(&old, normal(x, old[0]), x)
+            && replace_facets(facets, &old, &new)
+        {
+            again_made.extend(old.iter().map(|&f| key(f)));
+            out.extend(new);
+        }
+    }
+    out.extend(faces.into_iter().filter(|&f| !again_made.contains(&key(f))));
+    out
+}
+
+/// The triangles of a constrained Delaunay triangulation of the plane patch `old` (normal
+/// `n`, turned as its triangles are) between its own nodes at the places `x`, turned as
+/// `old`'s; `None` where they do not cover the same area.
+fn again(old: &[[usize; 3]], n: Vector3<f64>, x: &[[f64; 3]]) -> Option<Vec<[usize; 3]>> {
+    use spade::{
+        AngleLimit, ConstrainedDelaunayTriangulation, Point2, RefinementParameters, Triangulation,
+    };
+    let seed = if n.x.abs() < 0.9 {
+        Vector3::x()
+    } else {
+        Vector3::y()
+    };
+    let e1 = n.cross(&seed).normalize();
+    let e2 = n.cross(&e1);
+    let flat = |m: usize| Point2::new(e1.dot(&at(x, m)), e2.dot(&at(x, m)));
+    let area = |t: [usize; 3]| {
+        let (a, b, c) = (flat(t[0]), flat(t[1]), flat(t[2]));
+        0.5 * ((b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y))
+    };
+    let mut cdt = ConstrainedDelaunayTriangulation::<Point2<f64>>::new();
+    let mut handle = HashMap::new();
+    let mut node_of = HashMap::new();
+    for &m in old.iter().flatten() {
+        if handle.contains_key(&m) {
+            continue;
+        }
+        let before = cdt.num_vertices();
+        let v = cdt.insert(flat(m)).ok()?;
+        if cdt.num_vertices() == before {
+            return None;
+        }
+        handle.insert(m, v);
+        node_of.insert(v, m);
+    }
+    // the patch's boundary: the edges of one of its triangles only
+    let mut directed = HashSet::new();
+    for t in old {
+        for e in 0..3 {
+            directed.insert((t[e], t[(e + 1) % 3]));
+        }
+    }
+    for &(a, b) in &directed {
+        if !directed.contains(&(b, a)) {
+            let (va, vb) = (handle[&a], handle[&b]);
+            if !cdt.can_add_constraint(va, vb) {
+                return None;
+            }
+            cdt.add_constraint(va, vb);
+        }
+    }
+    let params = RefinementParameters::<f64>::new()
+        .exclude_outer_faces(true)
+        .keep_constraint_edges()
+        .with_angle_limit(AngleLimit::from_deg(0.0))
+        .with_max_additional_vertices(0);
+    let refined = cdt.refine(params);
+    if cdt.num_vertices() != handle.len() {
+        return None;
+    }
+    let outer: HashSet<_> = refined.excluded_faces.into_iter().collect();
+    let turn = old.iter().map(|&t| area(t)).sum::<f64>().signum();
+    let mut new = Vec::new();
+    for f in cdt.inner_faces().filter(|f| !outer.contains(&f.fix())) {
+        let [a, b, c] = f.vertices().map(|v| node_of[&v.fix()]);
+        new.push(if area([a, b, c]) * turn > 0.0 {
+            [a, b, c]
+        } else {
+            [a, c, b]
+        });
+    }
+    let (was, is): (f64, f64) = (
+        old.iter().map(|&t| area(t).abs()).sum(),
+        new.iter().map(|&t| area(t).abs()).sum(),
+    );
+    ((was - is).abs() <= 1e-9 * was).then_some(new)
+}
+
+/// The facets `old` (a plane patch's triangles) replaced by `new` in the facet block that holds
+/// them; false (nothing changed) where they lie in several blocks or only some are facets.
+fn replace_facets(facets: &mut [Block], old: &[[usize; 3]], new: &[[usize; 3]]) -> bool {
+    let keys: HashSet<[usize; 3]> = old.iter().map(|&f| key(f)).collect();
+    let holders: Vec<usize> = (0..facets.len())
+        .filter(|&b| facets[b].kind == CellKind::Tri3)
+        .filter(|&b| {
+            let blk = &facets[b];
+            (0..blk.n_cells()).any(|c| keys.contains(&key([0, 1, 2].map(|i| blk.cell(c)[i]))))
+        })
+        .collect();
+    let Some(&b) = holders.first() else {
+        return true;
+    };
+    let blk = &facets[b];
+    let held = (0..blk.n_cells())
+        .filter(|&c| keys.contains(&key([0, 1, 2].map(|i| blk.cell(c)[i]))))
+        .count();
+    if holders.len() > 1 || held != keys.len() {
+        return false;
+    }
+    let mut conn = Vec::with_capacity(blk.conn.len() - 3 * held + 3 * new.len());
+    for c in 0..blk.n_cells() {
+        let t = blk.cell(c);
+        if !keys.contains(&key([t[0], t[1], t[2]])) {
+            conn.extend_from_slice(t);
+        }
+    }
+    new.iter().for_each(|t| conn.extend_from_slice(t));
+    facets[b].conn = conn;
+    true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_plane_face_of_the_medium_is_triangulated_again_with_its_facets() {
+        // a unit cube of medium, six tetrahedra about its diagonal from 0 to 7; its bottom's
+        // two triangles a facet block (a boundary condition's group)
+        let coords: Vec<[f64; 3]> = (0..8)
+            .map(|n| [(n & 1) as f64, ((n >> 1) & 1) as f64, ((n >> 2) & 1) as f64])
+            .collect();
+        let mut conn = Vec::new();
+        for path in [
+            [1, 2, 4],
+            [1, 4, 2],
+            [2, 1, 4],
+            [2, 4, 1],
+            [4, 1, 2],
+            [4, 2, 1],
+        ] {
+            let (a, b) = (path[0], path[0] + path[1]);
+            let mut t = [0, a, b, 7];
+            if matches!(path, [1, 4, 2] | [2, 1, 4] | [4, 2, 1]) {
+                t.swap(2, 3);
+            }
+            conn.extend(t);
+        }
+        let tets = Block {
+            kind: CellKind::Tet4,
+            groups: vec![0],
+            conn,
+        };
+        let mut mesh = Mesh::of_cells(3, coords, vec![tets]);
+        // its boundary: the faces of one tetrahedron only, turned outward
+        let mut count: HashMap<[usize; 3], ([usize; 3], usize)> = HashMap::new();
+        for c in 0..mesh.cells[0].n_cells() {
+            let cell = mesh.cells[0].cell(c);
+            for f in sides(CellKind::Tet4) {
+                let face = [0, 1, 2].map(|i| cell[f[i]]);
+                count.entry(key(face)).or_insert((face, 0)).1 += 1;
+            }
+        }
+        let faces: Vec<[usize; 3]> = (count.into_values())
+            .filter(|&(_, n)| n == 1)
+            .map(|(f, _)| f)
+            .collect();
+        assert_eq!(faces.len(), 12);
+        let bottom: Vec<usize> = (faces.iter())
+            .filter(|f| f.iter().all(|&n| n & 4 == 0))
+            .flat_map(|f| f.iter().copied())
+            .collect();
+        assert_eq!(bottom.len(), 6);
+        mesh.facets.push(Block {
+            kind: CellKind::Tri3,
+            groups: vec![1],
+            conn: bottom,
+        });
+        // the bottom's corner 1 moved along it, past where the other diagonal is Delaunay's
+        let mut x = mesh.coords.clone();
+        x[1] = [0.8, 0.7, 0.0];
+        let mut facets = mesh.facets.clone();
+        let again = own_planes_again(&mesh, &[0], faces.clone(), &mut facets, &x);
+        assert_eq!(again.len(), 12);
+        let on_bottom: HashSet<[usize; 3]> = (again.iter())
+            .filter(|f| f.iter().all(|&n| n & 4 == 0))
+            .map(|&f| key(f))
+            .collect();
+        let held: HashSet<[usize; 3]> = (0..2)
+            .map(|c| key([0, 1, 2].map(|i| facets[0].cell(c)[i])))
+            .collect();
+        assert_eq!(on_bottom, held, "the facets follow the faces");
+        // the other diagonal (1–2, not 0–3), turned outward (down) as before
+        assert!(
+            held.contains(&[0, 1, 2]) && held.contains(&[1, 2, 3]),
+            "{held:?}"
+        );
+        for f in again.iter().filter(|f| f.iter().all(|&n| n & 4 == 0)) {
+            assert!(normal(&x, *f).z < -0.99);
+        }
+    }
+}
