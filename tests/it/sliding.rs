@@ -348,6 +348,12 @@ fn the_sphere_slides_on_a_medium_of_tetrahedra_made_again_with_no_drag() {
         "params = { h = 0.25 }",
         &body,
     );
+    let o = tmc(&["check", case.to_str().unwrap()]);
+    let text = String::from_utf8_lossy(&o.stdout).to_string() + &stderr(&o);
+    assert!(
+        o.status.success() && text.contains("replaced by new tetrahedra"),
+        "{text}"
+    );
     let out = case.with_file_name("out");
     let o = solve_cli(&case, &out, &[]);
     assert!(o.status.success(), "{}", stderr(&o));
