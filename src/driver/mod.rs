@@ -489,6 +489,8 @@ fn solve_model(
     // the groups' flows before a remake, to measure what it changed
     let mut before_remake = None;
     let mut stuck = Stuck::default();
+    // the remakes in a row the mesher failed
+    let mut mesher_failed = 0;
     loop {
         let mut run = Run::new(
             case,
@@ -541,27 +543,21 @@ fn solve_model(
         let mut made = None;
         if let (Change::Remake, Some(m)) = (&change, &medium) {
             let since = Instant::now();
-            match m.remake(&model, run.state()) {
-                Ok(new) => made = Some(new),
-                Err(e) => return Err(run.cannot_change("the medium could not be made again", &e)),
+            (run, made) = remade_or_kept(run, m, &model, &mut mesher_failed)?;
+            if made.is_some() {
+                before_remake = Some((run.flows_at_rest()?, since));
             }
-            before_remake = Some((run.flows_at_rest()?, since));
         }
         let (mut cp, mut kept) = run.end_to_rejoin();
-        let (new, placed) = changed_model(case, &model, change, &mut layer, made, &mut cp, opts)?;
-        model = new;
-        if let Some(placed) = placed {
-            probes = placed;
-        }
-        if let Some(rate) = medium.as_ref().map(|m| m.rate) {
-            medium = remake::Medium::find(&model, remaking(case))?;
-            if let Some(m) = medium.as_mut() {
-                restart_medium(case, &model, m, &mut cp, rate);
-            }
-            if let Some(folder) = kept.as_mut() {
-                write_remade(folder, &model, &cp)?;
+        if made.is_some() || !matches!(change, Change::Remake) {
+            let (new, placed) =
+                changed_model(case, &model, change, &mut layer, made, &mut cp, opts)?;
+            model = new;
+            if let Some(placed) = placed {
+                probes = placed;
             }
         }
+        medium_again(case, &model, &mut medium, &mut cp, kept.as_mut())?;
         folder = kept;
         // the run's clock goes on through the change: the time it took (gmsh, the new model)
         // is the run's too
@@ -615,6 +611,59 @@ fn write_remade(
     remade.write(folder.dir())?;
     Ok(())
 }
+
+/// After a change at the checkpoint `cp`, the medium of `model` (the new one) watched from
+/// its state, and its mesh in the run's folder for a restart.
+fn medium_again(
+    case: &Case,
+    model: &Model,
+    medium: &mut Option<remake::Medium>,
+    cp: &mut checkpoint::Checkpoint,
+    folder: Option<&mut RunFolder>,
+) -> Result<(), SolveError> {
+    let Some(rate) = medium.as_ref().map(|m| m.rate) else {
+        return Ok(());
+    };
+    *medium = remake::Medium::find(model, remaking(case))?;
+    if let Some(m) = medium.as_mut() {
+        restart_medium(case, model, m, cp, rate);
+    }
+    if let Some(folder) = folder {
+        write_remade(folder, model, cp)?;
+    }
+    Ok(())
+}
+
+/// The medium `m` of `model` made again at the run's state; `None` where the mesher failed
+/// (told, and counted in `failed`, the failures in a row) and the run may go on a step with
+/// the medium it has; an error, with the run's summary written, where it may not.
+fn remade_or_kept<'a>(
+    run: Run<'a>,
+    m: &remake::Medium,
+    model: &Model,
+    failed: &mut usize,
+) -> Result<(Run<'a>, Option<remake::Remade>), SolveError> {
+    match m.remake(model, run.state()) {
+        Ok(new) => {
+            *failed = 0;
+            Ok((run, Some(new)))
+        }
+        Err(e) if e.mesher && *failed < MESHER_TRIES => {
+            *failed += 1;
+            crate::note!(
+                "  the medium could not be made again at t = {}: {e}; going on with it as it \
+                 is, to make it again after the next step",
+                run.next_step().0
+            );
+            Ok((run, None))
+        }
+        Err(e) => Err(run.cannot_change("the medium could not be made again", &e.to_string())),
+    }
+}
+
+/// How many remakes in a row the mesher may fail before the run ends (each time the run goes
+/// on a step with the medium it has).
+const MESHER_TRIES: usize = 3;
 
 /// The attempts that failed from the last accepted state: when a step fails there twice (the
 /// cut step too), the medium is made again at that state, once (its cells may be what stops

@@ -14,6 +14,40 @@
 use super::{Block, CellKind, Mesh};
 use std::collections::HashMap;
 
+/// Why a medium could not be made again: its shape (its boundary crosses itself, a body
+/// passed the end of its base) or the mesher, which may mesh the next state (`mesher`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct RemeshError {
+    pub why: String,
+    pub mesher: bool,
+}
+
+impl RemeshError {
+    fn mesher(why: String) -> RemeshError {
+        RemeshError { why, mesher: true }
+    }
+}
+
+impl From<String> for RemeshError {
+    fn from(why: String) -> RemeshError {
+        RemeshError { why, mesher: false }
+    }
+}
+
+impl From<&str> for RemeshError {
+    fn from(why: &str) -> RemeshError {
+        RemeshError::from(why.to_owned())
+    }
+}
+
+impl std::fmt::Display for RemeshError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.why)
+    }
+}
+
+impl std::error::Error for RemeshError {}
+
 /// A mesh whose medium regions were made again.
 pub struct Remeshed {
     pub mesh: Mesh,
@@ -79,7 +113,7 @@ fn boundary_loops(mesh: &Mesh, blocks: &[usize]) -> Result<Vec<Vec<usize>>, Stri
 /// between their boundary nodes; triangles in 2D (spade, in this process), tetrahedra in 3D
 /// (gmsh, between the region's boundary triangles). Linear cells only (a caller checks first
 /// with [`supported`]).
-pub fn remesh(mesh: &Mesh, x: &[[f64; 3]], medium: &[usize]) -> Result<Remeshed, String> {
+pub fn remesh(mesh: &Mesh, x: &[[f64; 3]], medium: &[usize]) -> Result<Remeshed, RemeshError> {
     let regions = regions_of(mesh, medium);
     let mut given = Vec::new();
     let mut facets = mesh.facets.clone();
@@ -96,7 +130,7 @@ pub fn remesh(mesh: &Mesh, x: &[[f64; 3]], medium: &[usize]) -> Result<Remeshed,
                     x,
                 ));
             }
-            let made = tetrahedralize_between(&faces, x)?;
+            let made = tetrahedralize_between(&faces, x).map_err(RemeshError::mesher)?;
             let nodes: Vec<usize> = faces.iter().flatten().flatten().copied().collect();
             given = faces;
             (made, nodes, CellKind::Tet4)
@@ -145,11 +179,11 @@ pub fn remesh(mesh: &Mesh, x: &[[f64; 3]], medium: &[usize]) -> Result<Remeshed,
         let mut conn = Vec::new();
         for blk in made.cells.iter().filter(|b| b.groups.contains(&g)) {
             if blk.kind != kind {
-                return Err(format!(
+                return Err(RemeshError::mesher(format!(
                     "{} cells were made, not {}",
                     blk.kind.name(),
                     kind.name()
-                ));
+                )));
             }
             conn.extend(blk.conn.iter().map(|&n| made_to_new[n]));
         }
@@ -157,7 +191,7 @@ pub fn remesh(mesh: &Mesh, x: &[[f64; 3]], medium: &[usize]) -> Result<Remeshed,
             return Err("a boundary node of the medium was not kept".into());
         }
         if let Some(faces) = given.get(r) {
-            same_boundary(faces, &conn, &new_of)?;
+            same_boundary(faces, &conn, &new_of).map_err(RemeshError::mesher)?;
         }
         new_medium.push(cells.len());
         cells.push(Block {
@@ -477,6 +511,9 @@ fn tetrahedralize_between(faces: &[Vec<[usize; 3]>], x: &[[f64; 3]]) -> Result<M
         order: 1,
         ..Default::default()
     };
+    if failing_by_request() {
+        return Err("gmsh was asked to fail (TMC_TEST_MESHER_FAILS)".into());
+    }
     // gmsh's Delaunay, then, where it leaves a flat tetrahedron (where a thin layer meets a
     // plane face), HXT; one thread, so that a run and its restart make the same cells
     let mut failed = Vec::new();
@@ -493,6 +530,18 @@ fn tetrahedralize_between(faces: &[Vec<[usize; 3]>], x: &[[f64; 3]]) -> Result<M
         }
     }
     Err(failed.join("; and with HXT: "))
+}
+
+/// For the tests of a remake the mesher fails (`tests/it/sliding.rs`): whether this call of
+/// the 3D mesher is one of those `TMC_TEST_MESHER_FAILS` lists (from 1, by commas), unset in
+/// any real run.
+fn failing_by_request() -> bool {
+    static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let Ok(list) = std::env::var("TMC_TEST_MESHER_FAILS") else {
+        return false;
+    };
+    let call = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+    list.split(',').any(|n| n.trim().parse() == Ok(call))
 }
 
 /// The node of `nodes` standing at a place (to 1e-9 of the extent of `x`), if any.

@@ -33,7 +33,7 @@ use crate::dofs::{CellState, Field, NONE, gather, rebase};
 use crate::element::{RefElement, centre, local_coords, physical_gradients};
 use crate::kernel::friction::HISTORY_PER_POINT;
 use crate::mesh::Mesh;
-use crate::mesh::remesh::{remesh, supported};
+use crate::mesh::remesh::{RemeshError, remesh, supported};
 use nalgebra::{Matrix2, Matrix3, SymmetricEigen, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
 
@@ -750,7 +750,7 @@ impl Medium {
     }
 
     /// The medium made again at the accepted state `x` of `model`.
-    pub fn remake(&self, model: &Model, x: &[f64]) -> Result<Remade, String> {
+    pub fn remake(&self, model: &Model, x: &[f64]) -> Result<Remade, RemeshError> {
         let placed: Vec<[f64; 3]> = (0..model.mesh.coords.len())
             .map(|n| model.placed(n, x))
             .collect();

@@ -329,25 +329,26 @@ fn what_remake_cannot_do_yet_check_and_solve_refuse_alike() {
     }
 }
 
+/// `sphere-drag` without friction, its medium made again, dragged `ux` on a coarse mesh
+/// (h = 0.25): the case file, in a scratch folder named `name`.
+fn sphere_slide(name: &str, ux: &str) -> std::path::PathBuf {
+    let body = (case_body("sphere-drag"))
+        .replace(
+            "friction = { mu = 0.3, normal = \"auto\" }",
+            "remake = true",
+        )
+        .replace("ux = 0.4\n", &format!("ux = {ux}\n"));
+    assert!(body.contains("remake = true\n") && body.contains(&format!("ux = {ux}\n")));
+    case_file(name, "sphere-plate.geo", "params = { h = 0.25 }", &body)
+}
+
 /// The hemisphere of `sphere-drag` without friction, its medium of tetrahedra made again as it
 /// moves, pressed and dragged half its radius on a coarse mesh: it keeps the normal force of
 /// its press and meets no drag, where the Lagrangian medium's drag was 0.44 of the normal
 /// force at μ = 0 (issue 68).
 #[test]
 fn the_sphere_slides_on_a_medium_of_tetrahedra_made_again_with_no_drag() {
-    let body = (case_body("sphere-drag"))
-        .replace(
-            "friction = { mu = 0.3, normal = \"auto\" }",
-            "remake = true",
-        )
-        .replace("ux = 0.4\n", "ux = 0.2\n");
-    assert!(body.contains("remake = true\n") && body.contains("ux = 0.2\n"));
-    let case = case_file(
-        "sphere-slide",
-        "sphere-plate.geo",
-        "params = { h = 0.25 }",
-        &body,
-    );
+    let case = sphere_slide("sphere-slide", "0.2");
     let o = tmc(&["check", case.to_str().unwrap()]);
     let text = String::from_utf8_lossy(&o.stdout).to_string() + &stderr(&o);
     assert!(
@@ -393,6 +394,46 @@ fn the_sphere_slides_on_a_medium_of_tetrahedra_made_again_with_no_drag() {
             -r[fz]
         );
     }
+}
+
+/// Where gmsh cannot fill the medium at a state (a flat tetrahedron where a closed layer is
+/// thinnest), the run goes on a step with the medium it has and makes it again after it, up
+/// to three times in a row; a fourth ends the run with its steps kept. The mesher's failures
+/// are asked for (`TMC_TEST_MESHER_FAILS`, its calls counted from 1).
+#[test]
+fn a_medium_gmsh_cannot_fill_is_kept_a_step_and_made_again_after_it() {
+    let case = sphere_slide("sphere-slide-mesher-fails", "0.05");
+    let (tries, ends) = (case.with_file_name("tries"), case.with_file_name("ends"));
+    let solve = |out: &Path, fails: &str| {
+        let args = [
+            "solve",
+            case.to_str().unwrap(),
+            "-q",
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        tmc_with(&args, &[("TMC_TEST_MESHER_FAILS", fails)])
+    };
+    let o = solve(&tries, "2,3,4");
+    let e = stderr(&o);
+    assert!(o.status.success(), "{e}");
+    assert_eq!(e.matches("going on with it as it is").count(), 3, "{e}");
+    let s = summary(&tries);
+    assert_eq!(s["converged"], true);
+    assert!(s["medium_remade"].as_u64().unwrap() > 2, "made again after");
+    let o = solve(&ends, "2,3,4,5");
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    assert!(
+        e.contains("the medium could not be made again at t = ")
+            && e.contains("asked to fail")
+            && e.contains("converged steps up to"),
+        "{e}"
+    );
+    let s = summary(&ends);
+    assert_eq!(s["converged"], false);
+    let steps = s["load_steps"].as_u64().unwrap() as usize;
+    assert_eq!(history(&ends).1.len(), steps + 1);
 }
 
 /// `case` solved into `stopped` and interrupted by Ctrl-C once step `step` is written: the
