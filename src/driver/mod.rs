@@ -549,6 +549,7 @@ fn solve_model(
             }
         }
         let (mut cp, mut kept) = run.end_to_rejoin();
+        // a medium the mesher could not make again goes on as it is, watched as it was
         if made.is_some() || !matches!(change, Change::Remake) {
             let (new, placed) =
                 changed_model(case, &model, change, &mut layer, made, &mut cp, opts)?;
@@ -556,8 +557,8 @@ fn solve_model(
             if let Some(placed) = placed {
                 probes = placed;
             }
+            medium_again(case, &model, &mut medium, &mut cp, kept.as_mut())?;
         }
-        medium_again(case, &model, &mut medium, &mut cp, kept.as_mut())?;
         folder = kept;
         // the run's clock goes on through the change: the time it took (gmsh, the new model)
         // is the run's too

@@ -37,6 +37,38 @@ pub fn sides(kind: CellKind) -> &'static [&'static [usize]] {
     }
 }
 
+/// A triangle's nodes in order: a key that does not depend on how it turns.
+pub fn triangle_key(f: [usize; 3]) -> [usize; 3] {
+    let mut k = f;
+    k.sort_unstable();
+    k
+}
+
+/// The boundary of the tetrahedra of the blocks `blocks`: the faces that no other of them
+/// shares, turned as their cells turn them (an error names another kind of cell).
+pub fn outer_triangles(mesh: &Mesh, blocks: &[usize]) -> Result<Vec<[usize; 3]>, String> {
+    let mut faces: HashMap<[usize; 3], ([usize; 3], usize)> = HashMap::new();
+    for &b in blocks {
+        let blk = &mesh.cells[b];
+        if blk.kind != CellKind::Tet4 {
+            return Err(format!("has {} cells, not tet4", blk.kind.name()));
+        }
+        for c in 0..blk.n_cells() {
+            let cell = blk.cell(c);
+            for f in sides(CellKind::Tet4) {
+                let face = [0, 1, 2].map(|i| cell[f[i]]);
+                faces.entry(triangle_key(face)).or_insert((face, 0)).1 += 1;
+            }
+        }
+    }
+    let mut out: Vec<[usize; 3]> = (faces.into_values())
+        .filter(|&(_, count)| count == 1)
+        .map(|(face, _)| face)
+        .collect();
+    out.sort_unstable();
+    Ok(out)
+}
+
 /// The triangles `faces` (indices) in sets joined by their edges, where `join(i, j)` lets
 /// triangle `j` join triangle `i`'s set across the edge they share.
 pub fn joined_by_edges(

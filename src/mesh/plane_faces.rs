@@ -6,17 +6,10 @@
 //! constrained Delaunay triangulation of the patch, no node added or dropped), and the facets
 //! that carried its boundary conditions with it.
 
-use super::faces::{joined_by_edges, sides};
+use super::faces::{joined_by_edges, sides, triangle_key as key};
 use super::{Block, CellKind, Mesh};
 use nalgebra::Vector3;
 use std::collections::{HashMap, HashSet};
-
-/// A triangle's nodes in order, as a key that does not depend on how it turns.
-fn key(f: [usize; 3]) -> [usize; 3] {
-    let mut k = f;
-    k.sort_unstable();
-    k
-}
 
 /// The faces of the tetrahedra of every block but `medium`.
 fn solid_faces(mesh: &Mesh, medium: &[usize]) -> HashSet<[usize; 3]> {
@@ -64,11 +57,12 @@ pub fn own_planes_again(
         .copied()
         .collect();
     let tol = 1e-9 * super::extent_of(x).max(f64::MIN_POSITIVE);
+    let normals: Vec<Vector3<f64>> = own.iter().map(|&f| normal(x, f)).collect();
     // a patch: own faces on one plane, joined by their edges
     let coplanar = |i: usize, j: usize| {
-        let n = normal(x, own[i]);
+        let n = normals[i];
         let d = n.dot(&at(x, own[i][0]));
-        normal(x, own[j]).dot(&n) > 1.0 - 1e-10
+        normals[j].dot(&n) > 1.0 - 1e-10
             && own[j].iter().all(|&m| (n.dot(&at(x, m)) - d).abs() < tol)
     };
     let mut out: Vec<[usize; 3]> = Vec::with_capacity(faces.len());
@@ -78,7 +72,7 @@ pub fn own_planes_again(
             continue;
         }
         let old: Vec<[usize; 3]> = patch.iter().map(|&i| own[i]).collect();
-        if let Some(new) = again(&old, normal(x, old[0]), x)
+        if let Some(new) = again(&old, normals[patch[0]], x)
             && replace_facets(facets, &old, &new)
         {
             again_made.extend(old.iter().map(|&f| key(f)));
@@ -170,29 +164,23 @@ fn again(old: &[[usize; 3]], n: Vector3<f64>, x: &[[f64; 3]]) -> Option<Vec<[usi
 /// them; false (nothing changed) where they lie in several blocks or only some are facets.
 fn replace_facets(facets: &mut [Block], old: &[[usize; 3]], new: &[[usize; 3]]) -> bool {
     let keys: HashSet<[usize; 3]> = old.iter().map(|&f| key(f)).collect();
-    let holders: Vec<usize> = (0..facets.len())
-        .filter(|&b| facets[b].kind == CellKind::Tri3)
-        .filter(|&b| {
-            let blk = &facets[b];
-            (0..blk.n_cells()).any(|c| keys.contains(&key([0, 1, 2].map(|i| blk.cell(c)[i]))))
-        })
+    let held = |blk: &Block, c: usize| keys.contains(&key([0, 1, 2].map(|i| blk.cell(c)[i])));
+    // per facet block of triangles, how many of the patch's it holds
+    let holders: Vec<(usize, usize)> = (facets.iter().enumerate())
+        .filter(|(_, blk)| blk.kind == CellKind::Tri3)
+        .map(|(b, blk)| (b, (0..blk.n_cells()).filter(|&c| held(blk, c)).count()))
+        .filter(|&(_, n)| n > 0)
         .collect();
-    let Some(&b) = holders.first() else {
-        return true;
+    let &[(b, n)] = holders.as_slice() else {
+        return holders.is_empty();
     };
-    let blk = &facets[b];
-    let held = (0..blk.n_cells())
-        .filter(|&c| keys.contains(&key([0, 1, 2].map(|i| blk.cell(c)[i]))))
-        .count();
-    if holders.len() > 1 || held != keys.len() {
+    if n != keys.len() {
         return false;
     }
-    let mut conn = Vec::with_capacity(blk.conn.len() - 3 * held + 3 * new.len());
-    for c in 0..blk.n_cells() {
-        let t = blk.cell(c);
-        if !keys.contains(&key([t[0], t[1], t[2]])) {
-            conn.extend_from_slice(t);
-        }
+    let blk = &facets[b];
+    let mut conn = Vec::with_capacity(blk.conn.len() - 3 * n + 3 * new.len());
+    for c in (0..blk.n_cells()).filter(|&c| !held(blk, c)) {
+        conn.extend_from_slice(blk.cell(c));
     }
     new.iter().for_each(|t| conn.extend_from_slice(t));
     facets[b].conn = conn;
@@ -232,19 +220,7 @@ mod tests {
             conn,
         };
         let mut mesh = Mesh::of_cells(3, coords, vec![tets]);
-        // its boundary: the faces of one tetrahedron only, turned outward
-        let mut count: HashMap<[usize; 3], ([usize; 3], usize)> = HashMap::new();
-        for c in 0..mesh.cells[0].n_cells() {
-            let cell = mesh.cells[0].cell(c);
-            for f in sides(CellKind::Tet4) {
-                let face = [0, 1, 2].map(|i| cell[f[i]]);
-                count.entry(key(face)).or_insert((face, 0)).1 += 1;
-            }
-        }
-        let faces: Vec<[usize; 3]> = (count.into_values())
-            .filter(|&(_, n)| n == 1)
-            .map(|(f, _)| f)
-            .collect();
+        let faces = crate::mesh::faces::outer_triangles(&mesh, &[0]).unwrap();
         assert_eq!(faces.len(), 12);
         let bottom: Vec<usize> = (faces.iter())
             .filter(|f| f.iter().all(|&n| n & 4 == 0))

@@ -121,7 +121,7 @@ pub fn remesh(mesh: &Mesh, x: &[[f64; 3]], medium: &[usize]) -> Result<Remeshed,
         3 => {
             let mut faces = Vec::with_capacity(regions.len());
             for r in &regions {
-                let own = boundary_faces(mesh, &r.1)?;
+                let own = super::faces::outer_triangles(mesh, &r.1)?;
                 faces.push(super::plane_faces::own_planes_again(
                     mesh,
                     medium,
@@ -354,33 +354,6 @@ fn triangulate_between(loops: &[Vec<Vec<usize>>], x: &[[f64; 3]]) -> Result<Mesh
     })
 }
 
-/// A 3D region's boundary: the faces of its tetrahedra that no other of them shares, turned
-/// as its cells turn them.
-fn boundary_faces(mesh: &Mesh, blocks: &[usize]) -> Result<Vec<[usize; 3]>, String> {
-    let mut faces: HashMap<[usize; 3], ([usize; 3], usize)> = HashMap::new();
-    for &b in blocks {
-        let blk = &mesh.cells[b];
-        if blk.kind != CellKind::Tet4 {
-            return Err(format!("has {} cells, not tet4", blk.kind.name()));
-        }
-        for c in 0..blk.n_cells() {
-            let cell = blk.cell(c);
-            for f in super::faces::sides(CellKind::Tet4) {
-                let face = [0, 1, 2].map(|i| cell[f[i]]);
-                let mut key = face;
-                key.sort_unstable();
-                faces.entry(key).or_insert((face, 0)).1 += 1;
-            }
-        }
-    }
-    let mut out: Vec<[usize; 3]> = (faces.into_values())
-        .filter(|&(_, count)| count == 1)
-        .map(|(face, _)| face)
-        .collect();
-    out.sort_unstable();
-    Ok(out)
-}
-
 /// Whether the tetrahedra `conn` (new node numbers) have the boundary `faces` (old node
 /// numbers, `new_of` the new number of each): a mesher that split a boundary face would leave
 /// the solid beside it joined to the medium by nothing.
@@ -394,12 +367,11 @@ fn same_boundary(faces: &[[usize; 3]], conn: &[usize], new_of: &[usize]) -> Resu
             conn: conn.to_vec(),
         }],
     );
-    let key = |f: [usize; 3]| {
-        let mut k = f;
-        k.sort_unstable();
-        k
-    };
-    let mut made: Vec<[usize; 3]> = boundary_faces(&tets, &[0])?.into_iter().map(key).collect();
+    let key = super::faces::triangle_key;
+    let mut made: Vec<[usize; 3]> = super::faces::outer_triangles(&tets, &[0])?
+        .into_iter()
+        .map(key)
+        .collect();
     let mut wanted: Vec<[usize; 3]> = faces.iter().map(|f| key(f.map(|n| new_of[n]))).collect();
     made.sort_unstable();
     wanted.sort_unstable();
@@ -912,7 +884,7 @@ mod tests3 {
                 [p[0] + if inside { 0.3 } else { 0.0 }, p[1], p[2]]
             })
             .collect();
-        let faces = boundary_faces(&mesh, &[0]).unwrap();
+        let faces = crate::mesh::faces::outer_triangles(&mesh, &[0]).unwrap();
         // the box's 6 × 32 faces and the block's 6 × 8
         assert_eq!(faces.len(), 6 * 32 + 6 * 8);
         let r = remesh(&mesh, &x, &[0]).unwrap();

@@ -129,39 +129,32 @@ impl ThinTet {
             let p = model.placed(nodes[i], x);
             Vector3::new(p[0], p[1], p[2])
         });
-        let mut longest = 0.0f64;
-        for i in 0..4 {
-            for j in i + 1..4 {
-                longest = longest.max((q[i] - q[j]).norm());
-            }
-        }
-        (standing_of(q, self.first), longest)
+        let p = q.map(|v| [v.x, v.y, v.z]);
+        (standing_of(q, self.first), longest_edge3(&p))
     }
 }
 
 /// [`ThinTet::standing`] of a tetrahedron with corners at `q`, the first `first` on one side.
 fn standing_of(q: [Vector3<f64>; 4], first: usize) -> Vec<f64> {
-    {
-        match first {
-            1 => {
-                let (k, a) = (q[0], q[1]);
-                let (v0, v1, v2) = (q[2] - a, q[3] - a, k - a);
-                let (d00, d01, d11) = (v0.dot(&v0), v0.dot(&v1), v1.dot(&v1));
-                let (d20, d21) = (v2.dot(&v0), v2.dot(&v1));
-                let den = (d00 * d11 - d01 * d01).max(f64::MIN_POSITIVE);
-                let lb = (d11 * d20 - d01 * d21) / den;
-                let lc = (d00 * d21 - d01 * d20) / den;
-                vec![1.0 - lb - lc, lb, lc]
-            }
-            _ => {
-                let (d1, d2, r) = (q[1] - q[0], q[3] - q[2], q[0] - q[2]);
-                let (a, e, b) = (d1.dot(&d1), d2.dot(&d2), d1.dot(&d2));
-                let (c, f) = (d1.dot(&r), d2.dot(&r));
-                let den = (a * e - b * b).max(f64::MIN_POSITIVE);
-                let s = (b * f - c * e) / den;
-                let u = (a * f - b * c) / den;
-                vec![s, 1.0 - s, u, 1.0 - u]
-            }
+    match first {
+        1 => {
+            let (k, a) = (q[0], q[1]);
+            let (v0, v1, v2) = (q[2] - a, q[3] - a, k - a);
+            let (d00, d01, d11) = (v0.dot(&v0), v0.dot(&v1), v1.dot(&v1));
+            let (d20, d21) = (v2.dot(&v0), v2.dot(&v1));
+            let den = (d00 * d11 - d01 * d01).max(f64::MIN_POSITIVE);
+            let lb = (d11 * d20 - d01 * d21) / den;
+            let lc = (d00 * d21 - d01 * d20) / den;
+            vec![1.0 - lb - lc, lb, lc]
+        }
+        _ => {
+            let (d1, d2, r) = (q[1] - q[0], q[3] - q[2], q[0] - q[2]);
+            let (a, e, b) = (d1.dot(&d1), d2.dot(&d2), d1.dot(&d2));
+            let (c, f) = (d1.dot(&r), d2.dot(&r));
+            let den = (a * e - b * b).max(f64::MIN_POSITIVE);
+            let s = (b * f - c * e) / den;
+            let u = (a * f - b * c) / den;
+            vec![s, 1.0 - s, u, 1.0 - u]
         }
     }
 }
@@ -312,6 +305,11 @@ fn split(q: &[Vector3<f64>]) -> ([usize; 4], usize) {
 /// regular one, small for a sliver (three corners on one face and one on a face close to it,
 /// or two and two).
 fn slenderness3(p: &[[f64; 3]]) -> f64 {
+    (thinnest(p).0 / longest_edge3(p).max(f64::MIN_POSITIVE)).min(1.0)
+}
+
+/// The length of the longest edge between the corners `p` of a cell.
+fn longest_edge3(p: &[[f64; 3]]) -> f64 {
     let mut longest = 0.0f64;
     for i in 0..p.len() {
         for j in i + 1..p.len() {
@@ -319,7 +317,7 @@ fn slenderness3(p: &[[f64; 3]]) -> f64 {
             longest = longest.max(l2);
         }
     }
-    (thinnest(p).0 / longest.sqrt().max(f64::MIN_POSITIVE)).min(1.0)
+    longest.sqrt()
 }
 
 impl Model {
