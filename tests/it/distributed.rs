@@ -962,6 +962,16 @@ fn same_history(full: &Path, out: &Path, label: &str) {
     }
 }
 
+/// `cases/friction-heating.toml` in steps twice as long (39 steps, against 79), written into
+/// `dir`: a stop and a restart, and what they must give, are the same in any steps.
+fn friction_heating_in_longer_steps(dir: &Path) -> PathBuf {
+    let text = common::shipped_case("friction-heating");
+    assert_eq!(text.matches("dt = 0.025\n").count(), 1);
+    let case = dir.join("case.toml");
+    std::fs::write(&case, text.replace("dt = 0.025\n", "dt = 0.05\n")).unwrap();
+    case
+}
+
 #[test]
 fn a_distributed_run_restarts_on_as_many_ranks_or_on_others() {
     // friction with its heat: history per point in two kinds of blocks (the stored θ and the
@@ -970,7 +980,7 @@ fn a_distributed_run_restarts_on_as_many_ranks_or_on_others() {
     // iterations, every physical column to 1e-10 of its largest value (the residuals and
     // Krylov counts are the engines' own)
     let dir = scratch("distributed-restart");
-    let case = root().join("cases/friction-heating.toml");
+    let case = friction_heating_in_longer_steps(&dir);
     let full = dir.join("full");
     let o = mpirun(2, &case, &full, &[]);
     assert!(o.status.success(), "{}", stderr(&o));
@@ -1068,7 +1078,9 @@ fn a_drag_with_inertia_is_the_same_on_two_ranks_and_restarts_across_them() {
     // which passes its slip event only with a mass, dragged 0.5: on two ranks the serial
     // run's steps, iterations, state and kinetic energy; stopped by Ctrl-C on two ranks and
     // continued on two and on one, the uninterrupted two-rank history
-    let text = crate::friction::with_mass(&crate::friction::pad_case(Some(0.5), 0.5), 1e-4);
+    // (a `.vtu` every step: the run is stopped once a step's is written)
+    let text = crate::friction::with_mass(&crate::friction::pad_case(Some(0.5), 0.5), 1e-4)
+        .replace(common::ENDS_ONLY, "");
     let options = "params = { n = 16, m = 8, l = 1 }";
     let case = common::case_file("distributed-inertia", "pad.geo", options, &text);
     let dir = case.parent().unwrap();
@@ -1149,7 +1161,7 @@ fn a_rank_killed_mid_run_leaves_every_file_whole_and_the_run_restarts() {
     // kill -9 of one rank after step 20 (mpirun then ends the job): no file of the results
     // cut short under its own name, and --restart on two ranks gives the uninterrupted history
     let dir = scratch("distributed-kill");
-    let case = root().join("cases/friction-heating.toml");
+    let case = friction_heating_in_longer_steps(&dir);
     let full = dir.join("full");
     assert!(mpirun(2, &case, &full, &[]).status.success());
     for victim in ["0", "1"] {

@@ -125,10 +125,11 @@ fn the_cylinder_slides_on_a_medium_made_again_with_the_force_of_its_press_and_no
 /// 0.12.
 /// `cases/cylinder-slide.toml` slid 0.5 instead of 0.3, its mesh's `[mesh_options]` line
 /// `params`, solved in the scratch folder `name`: the run reaches the slide's end (t = 2).
-/// Its output folder.
+/// Its output folder (a `.vtu` of the first and the last state only).
 fn slid_half(name: &str, params: &str) -> std::path::PathBuf {
     let body = case_body("cylinder-slide").replace("ux = 0.3\n", "ux = 0.5\n");
     assert!(body.contains("ux = 0.5"));
+    let body = body + common::ENDS_ONLY;
     let case = case_file(name, "cylinder-plate.geo", params, &body);
     let out = case.with_file_name("out");
     let o = solve_cli(&case, &out, &[]);
@@ -330,7 +331,8 @@ fn what_remake_cannot_do_yet_check_and_solve_refuse_alike() {
 }
 
 /// `sphere-drag` without friction, its medium made again, dragged `ux` on a coarse mesh
-/// (h = 0.25): the case file, in a scratch folder named `name`.
+/// (h = 0.25): the case file, in a scratch folder named `name` (a `.vtu` of the first and the
+/// last state only).
 fn sphere_slide(name: &str, ux: &str) -> std::path::PathBuf {
     let body = (case_body("sphere-drag"))
         .replace(
@@ -339,6 +341,7 @@ fn sphere_slide(name: &str, ux: &str) -> std::path::PathBuf {
         )
         .replace("ux = 0.4\n", &format!("ux = {ux}\n"));
     assert!(body.contains("remake = true\n") && body.contains(&format!("ux = {ux}\n")));
+    let body = body + common::ENDS_ONLY;
     case_file(name, "sphere-plate.geo", "params = { h = 0.25 }", &body)
 }
 

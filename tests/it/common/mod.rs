@@ -177,6 +177,11 @@ pub fn solve_text(tag: &str, geo: &str, params: &str, case_text: &str) -> (Summa
     solve_text_opts(tag, geo, &format!("params = {{ {params} }}"), case_text)
 }
 
+/// An `[output]` table for a case whose test reads its history, its summary and its last
+/// state only: a `.vtu` of the first and the last state (on a mesh of a few hundred nodes,
+/// a `.vtu` per step is 40 % of a run's time).
+pub const ENDS_ONLY: &str = "\n[output]\nevery = 1000000\n";
+
 /// `case.toml` in the scratch folder `tag`: `case_text` on `geo/GEO` meshed with the whole
 /// `[mesh_options]` body `options`. Its results go to `out` beside it.
 pub fn case_file(tag: &str, geo: &str, options: &str, case_text: &str) -> PathBuf {
