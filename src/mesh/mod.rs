@@ -569,3 +569,46 @@ fn coincident_nodes(mesh: &Mesh, h: f64) -> Option<String> {
         mesh.coords[first]
     ))
 }
+
+/// A tetrahedron of [`kuhn_tetrahedra`]: the cube (i, j, k) it is in, and its four nodes.
+#[cfg(test)]
+pub(crate) type CubeTet = ([usize; 3], [usize; 4]);
+
+/// For the tests: the cube [0, n]³ of n³ unit cubes, each cut into six tetrahedra about its
+/// diagonal (Kuhn's triangulation, the same in every cube, so conforming). The grid's nodes,
+/// numbered x fastest (node i + (n + 1)(j + (n + 1)k) at (i, j, k)), and each tetrahedron
+/// (of positive volume) with the cube (i, j, k) it is in.
+#[cfg(test)]
+pub(crate) fn kuhn_tetrahedra(n: usize) -> (Vec<[f64; 3]>, Vec<CubeTet>) {
+    let id = |[i, j, k]: [usize; 3]| (k * (n + 1) + j) * (n + 1) + i;
+    let grid = |m: usize| {
+        (0..m).flat_map(move |k| (0..m).flat_map(move |j| (0..m).map(move |i| [i, j, k])))
+    };
+    let coords = grid(n + 1).map(|p| p.map(|c| c as f64)).collect();
+    let paths = [
+        [0, 1, 2],
+        [0, 2, 1],
+        [1, 0, 2],
+        [1, 2, 0],
+        [2, 0, 1],
+        [2, 1, 0],
+    ];
+    let mut tets = Vec::new();
+    for cube in grid(n) {
+        for path in paths {
+            // from the cube's first corner to its last, one axis at a time
+            let mut at = cube;
+            let mut tet = [id(cube); 4];
+            for (v, axis) in path.into_iter().enumerate() {
+                at[axis] += 1;
+                tet[v + 1] = id(at);
+            }
+            // positive volume: an odd permutation of the axes turns it over
+            if matches!(path, [0, 2, 1] | [1, 0, 2] | [2, 1, 0]) {
+                tet.swap(2, 3);
+            }
+            tets.push((cube, tet));
+        }
+    }
+    (coords, tets)
+}

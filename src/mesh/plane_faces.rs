@@ -195,25 +195,8 @@ mod tests {
     fn a_plane_face_of_the_medium_is_triangulated_again_with_its_facets() {
         // a unit cube of medium, six tetrahedra about its diagonal from 0 to 7; its bottom's
         // two triangles a facet block (a boundary condition's group)
-        let coords: Vec<[f64; 3]> = (0..8)
-            .map(|n| [(n & 1) as f64, ((n >> 1) & 1) as f64, ((n >> 2) & 1) as f64])
-            .collect();
-        let mut conn = Vec::new();
-        for path in [
-            [1, 2, 4],
-            [1, 4, 2],
-            [2, 1, 4],
-            [2, 4, 1],
-            [4, 1, 2],
-            [4, 2, 1],
-        ] {
-            let (a, b) = (path[0], path[0] + path[1]);
-            let mut t = [0, a, b, 7];
-            if matches!(path, [1, 4, 2] | [2, 1, 4] | [4, 2, 1]) {
-                t.swap(2, 3);
-            }
-            conn.extend(t);
-        }
+        let (coords, tets) = crate::mesh::kuhn_tetrahedra(1);
+        let conn = tets.into_iter().flat_map(|(_, t)| t).collect();
         let tets = Block {
             kind: CellKind::Tet4,
             groups: vec![0],

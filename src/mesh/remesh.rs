@@ -796,49 +796,15 @@ mod tests {
 mod tests3 {
     use super::*;
 
-    /// A cube [0, 4]³ of 4³ cubes cut into six tetrahedra each (Kuhn's triangulation, the same
-    /// in every cube, so conforming): the medium, with a solid of the middle 2³ cubes, its own
-    /// block.
+    /// A cube [0, 4]³ of 4³ cubes cut into six tetrahedra each ([`crate::mesh::kuhn_tetrahedra`]):
+    /// the medium, with a solid of the middle 2³ cubes, its own block.
     fn box_around_a_block() -> Mesh {
-        let id = |i: usize, j: usize, k: usize| (k * 5 + j) * 5 + i;
-        let mut coords = Vec::new();
-        for k in 0..5 {
-            for j in 0..5 {
-                for i in 0..5 {
-                    coords.push([i as f64, j as f64, k as f64]);
-                }
-            }
-        }
+        let (coords, tets) = crate::mesh::kuhn_tetrahedra(4);
         let (mut medium, mut solid) = (Vec::new(), Vec::new());
-        let paths = [
-            [0, 1, 2],
-            [0, 2, 1],
-            [1, 0, 2],
-            [1, 2, 0],
-            [2, 0, 1],
-            [2, 1, 0],
-        ];
-        for k in 0..4 {
-            for j in 0..4 {
-                for i in 0..4 {
-                    let inner = [i, j, k].iter().all(|&c| (1..3).contains(&c));
-                    for path in paths {
-                        let mut at = [i, j, k];
-                        let mut tet = vec![id(i, j, k)];
-                        for axis in path {
-                            at[axis] += 1;
-                            tet.push(id(at[0], at[1], at[2]));
-                        }
-                        // positive volume: an odd permutation of the axes turns it over
-                        if matches!(path, [0, 2, 1] | [1, 0, 2] | [2, 1, 0]) {
-                            tet.swap(2, 3);
-                        }
-                        match inner {
-                            true => solid.extend(tet),
-                            false => medium.extend(tet),
-                        }
-                    }
-                }
+        for (cube, tet) in tets {
+            match cube.iter().all(|&c| (1..3).contains(&c)) {
+                true => solid.extend(tet),
+                false => medium.extend(tet),
             }
         }
         let block = |groups: Vec<usize>, conn: Vec<usize>| Block {

@@ -135,13 +135,7 @@ fn a_bad_idle_threads_setting_is_refused_and_the_good_ones_run() {
     let (o, p) = case_with("idle", |t| t.to_string());
     assert!(o.status.success(), "unset: {}", stderr(&o));
     let out = p.parent().unwrap().join("out");
-    let args = [
-        "solve",
-        p.to_str().unwrap(),
-        "-q",
-        "-o",
-        out.to_str().unwrap(),
-    ];
+    let args = common::solve_args(&p, &out);
     let with = |v: &str| tmc_with(&args, &[("TMC_IDLE_THREADS", v)]);
     let o = with("nap");
     assert!(!o.status.success());

@@ -408,14 +408,7 @@ fn a_medium_gmsh_cannot_fill_is_kept_a_step_and_made_again_after_it() {
     let case = sphere_slide("sphere-slide-mesher-fails", "0.05");
     let (tries, ends) = (case.with_file_name("tries"), case.with_file_name("ends"));
     let solve = |out: &Path, fails: &str| {
-        let args = [
-            "solve",
-            case.to_str().unwrap(),
-            "-q",
-            "-o",
-            out.to_str().unwrap(),
-        ];
-        tmc_with(&args, &[("TMC_TEST_MESHER_FAILS", fails)])
+        tmc_with(&solve_args(&case, out), &[("TMC_TEST_MESHER_FAILS", fails)])
     };
     let o = solve(&tries, "2,3,4");
     let e = stderr(&o);

@@ -44,7 +44,7 @@ pub fn tmc_with(args: &[&str], vars: &[(&str, &str)]) -> std::process::Output {
 }
 
 /// The arguments of `tmc solve CASE -q -o OUT`.
-fn solve_args<'a>(case: &'a Path, out: &'a Path) -> Vec<&'a str> {
+pub fn solve_args<'a>(case: &'a Path, out: &'a Path) -> Vec<&'a str> {
     vec![
         "solve",
         case.to_str().unwrap(),
