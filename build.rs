@@ -1,6 +1,7 @@
-//! With the `petsc` feature: link PETSc (found by pkg-config) and check that its build matches
-//! the declarations in `src/parallel/ffi.rs`: real double-precision scalars and 32-bit
-//! `PetscInt` (Debian's `petsc-dev`), or 64-bit indices, which set the `petsc_int64` cfg.
+//! With the `petsc` feature: find PETSc's library (by pkg-config), for tmc to open when a run
+//! starts it, and check that its build matches the declarations in `src/parallel/ffi.rs`: real
+//! double-precision scalars and 32-bit `PetscInt` (Debian's `petsc-dev`), or 64-bit indices,
+//! which set the `petsc_int64` cfg.
 use std::process::Command;
 
 fn main() {
@@ -39,12 +40,25 @@ fn main() {
     if defined("PETSC_USE_64BIT_INDICES") {
         println!("cargo::rustc-cfg=petsc_int64");
     }
+    // PETSc is opened when a run first starts it (src/dynamic.rs), not linked: its hundred
+    // libraries would cost every start of tmc their symbol lookups
+    let mut dirs = Vec::new();
+    let mut library = None;
     for flag in pc("--libs").split_whitespace() {
         if let Some(dir) = flag.strip_prefix("-L") {
-            println!("cargo::rustc-link-search=native={dir}");
-            println!("cargo::rustc-link-arg=-Wl,-rpath,{dir}");
-        } else if let Some(lib) = flag.strip_prefix("-l") {
-            println!("cargo::rustc-link-lib={lib}");
+            dirs.push(std::path::PathBuf::from(dir));
+        } else if let Some(lib) = flag.strip_prefix("-l")
+            && lib.starts_with("petsc")
+            && library.is_none()
+        {
+            library = Some(format!("lib{lib}.so"));
         }
     }
+    let library = library.expect("`pkg-config --libs petsc` names PETSc's library (-lpetsc…)");
+    let path = dirs
+        .iter()
+        .map(|d| d.join(&library))
+        .find(|p| p.exists())
+        .unwrap_or_else(|| panic!("{library} is in none of pkg-config's folders {dirs:?}"));
+    println!("cargo::rustc-env=TMC_PETSC_LIBRARY={}", path.display());
 }

@@ -9,7 +9,8 @@
 //! (what an accepted state holds: heat, works, slips) → [`solver`] (linear, Newton, stepping) →
 //! [`output`] (VTU, history, probes) → [`driver`] (`tmc solve`) → [`study`] and [`plot`]. Under
 //! them all, [`files`]: writing a file under a temporary name, [`console`]: lines on the
-//! terminal that a closed pipe silences, and [`threads`]: how many threads tmc computes with.
+//! terminal that a closed pipe silences, [`threads`]: how many threads tmc computes with, and
+//! [`dynamic`]: gmsh and PETSc opened when a run first needs them.
 //! See docs/ARCHITECTURE.md.
 
 #![allow(non_snake_case)]
@@ -22,6 +23,7 @@ pub mod case;
 pub mod console;
 pub mod dofs;
 pub mod driver;
+pub mod dynamic;
 pub mod element;
 pub mod files;
 pub mod kernel;

@@ -1,8 +1,11 @@
-//! Meshing a `.geo` with gmsh through its C API (gmsh-sys, linked to Debian's libgmsh 4.8).
+//! Meshing a `.geo` with gmsh through its C API (`gmshc.rs`: Debian's libgmsh 4.8, opened on
+//! first use).
 //!
 //! Every function called here was checked against `/usr/include/gmshc.h` of gmsh 4.8.4: the
 //! crate binds the 4.4.1 API, whose signatures for these calls are unchanged.
 
+use super::gmshc;
+use crate::dynamic::LoadError;
 use crate::files::TempFile;
 use std::ffi::{CStr, CString};
 use std::os::raw::{c_char, c_int};
@@ -20,6 +23,8 @@ pub enum GmshError {
         what: &'static str,
         hint: &'static str,
     },
+    #[error("{0}; tmc meshes with gmsh's library: install Debian's libgmsh-dev (make deps)")]
+    Library(LoadError),
     #[error("gmsh failed on {path}: {msg}")]
     Failed { path: PathBuf, msg: String },
     #[error(
@@ -145,6 +150,9 @@ fn paths_usable(geo: &Path, out: &Path, opts: &MeshOptions) -> Result<(), GmshEr
 /// complete new mesh or untouched.
 pub fn mesh_geo(geo: &Path, out: &Path, opts: &MeshOptions) -> Result<MeshReport, GmshError> {
     paths_usable(geo, out, opts)?;
+    // opened here, before the fork, so that each child (a remake meshes once a step) finds
+    // gmsh loaded rather than loading it again
+    gmshc::load().map_err(|e| GmshError::Library(e.clone()))?;
     // .geo parameters: not gmsh's `-setnumber`, whose values stay in a process-wide table that
     // every later `open` re-applies; instead a wrapper defines them before including the file,
     // and `DefineConstant` keeps an existing definition.
@@ -231,9 +239,9 @@ fn mesh_in_process(open_path: &Path, tmp: &Path, opts: &MeshOptions) -> Outcome 
     };
     let run = || -> Result<Outcome, String> {
         session.set_number("General.Terminal", if opts.verbose { 1.0 } else { 0.0 });
-        session.call(|e| unsafe { gmsh_sys::gmshLoggerStart(e) })?;
+        session.call(|e| unsafe { gmshc::gmshLoggerStart(e) })?;
         let cgeo = cstring(&open_path.to_string_lossy());
-        let opened = session.call(|e| unsafe { gmsh_sys::gmshOpen(cgeo.as_ptr(), e) });
+        let opened = session.call(|e| unsafe { gmshc::gmshOpen(cgeo.as_ptr(), e) });
         let errors = session.errors();
         if opened.is_err() || !errors.is_empty() {
             return Err(if errors.is_empty() {
@@ -242,7 +250,7 @@ fn mesh_in_process(open_path: &Path, tmp: &Path, opts: &MeshOptions) -> Outcome 
                 errors.join("; ")
             });
         }
-        let dim = session.call(|e| unsafe { gmsh_sys::gmshModelGetDimension(e) })?;
+        let dim = session.call(|e| unsafe { gmshc::gmshModelGetDimension(e) })?;
         if dim < 2 {
             return Err(format!(
                 "the geometry has dimension {dim}; tmc needs 2D surfaces or 3D volumes"
@@ -261,18 +269,18 @@ fn mesh_in_process(open_path: &Path, tmp: &Path, opts: &MeshOptions) -> Outcome 
                 if opts.incomplete { 1.0 } else { 0.0 },
             );
         }
-        let generated = session.call(|e| unsafe { gmsh_sys::gmshModelMeshGenerate(dim, e) });
+        let generated = session.call(|e| unsafe { gmshc::gmshModelMeshGenerate(dim, e) });
         let errors = session.errors();
         if generated.is_err() || !errors.is_empty() {
             return Err(format!("meshing failed: {}", errors.join("; ")));
         }
         if opts.order == 2 {
             session
-                .call(|e| unsafe { gmsh_sys::gmshModelMeshSetOrder(2, e) })
+                .call(|e| unsafe { gmshc::gmshModelMeshSetOrder(2, e) })
                 .map_err(|m| format!("second-order meshing failed: {m}"))?;
         }
         let ctmp = cstring(&tmp.to_string_lossy());
-        let written = session.call(|e| unsafe { gmsh_sys::gmshWrite(ctmp.as_ptr(), e) });
+        let written = session.call(|e| unsafe { gmshc::gmshWrite(ctmp.as_ptr(), e) });
         if written.is_err() || !tmp.is_file() {
             return Err(format!("could not write {}", tmp.display()));
         }
@@ -459,7 +467,7 @@ impl Session {
         let args = [cstring("tmc")];
         let mut argv: Vec<*mut c_char> = args.iter().map(|a| a.as_ptr() as *mut c_char).collect();
         let mut ierr: c_int = 0;
-        unsafe { gmsh_sys::gmshInitialize(argv.len() as c_int, argv.as_mut_ptr(), 0, &mut ierr) };
+        unsafe { gmshc::gmshInitialize(argv.len() as c_int, argv.as_mut_ptr(), 0, &mut ierr) };
         if ierr != 0 {
             return Err("gmsh could not be initialised".into());
         }
@@ -485,7 +493,7 @@ impl Session {
     fn set_number(&self, name: &str, value: f64) {
         let c = cstring(name);
         let mut ierr: c_int = 0;
-        unsafe { gmsh_sys::gmshOptionSetNumber(c.as_ptr(), value, &mut ierr) };
+        unsafe { gmshc::gmshOptionSetNumber(c.as_ptr(), value, &mut ierr) };
     }
 
     /// Drain gmsh's logger into our buffer.
@@ -493,7 +501,7 @@ impl Session {
         let mut log: *mut *mut c_char = std::ptr::null_mut();
         let mut n: usize = 0;
         let mut ierr: c_int = 0;
-        unsafe { gmsh_sys::gmshLoggerGet(&mut log, &mut n, &mut ierr) };
+        unsafe { gmshc::gmshLoggerGet(&mut log, &mut n, &mut ierr) };
         if ierr != 0 || log.is_null() {
             return;
         }
@@ -504,11 +512,11 @@ impl Session {
                 let p = *log.add(i);
                 if !p.is_null() {
                     buf.push(CStr::from_ptr(p).to_string_lossy().into_owned());
-                    gmsh_sys::gmshFree(p as *mut _);
+                    gmshc::gmshFree(p as *mut _);
                 }
             }
         }
-        unsafe { gmsh_sys::gmshFree(log as *mut _) };
+        unsafe { gmshc::gmshFree(log as *mut _) };
     }
 
     fn errors(&self) -> Vec<String> {
@@ -541,23 +549,21 @@ impl Session {
         let mut dim_tags: *mut c_int = std::ptr::null_mut();
         let mut n: usize = 0;
         let mut ierr: c_int = 0;
-        unsafe { gmsh_sys::gmshModelGetEntities(&mut dim_tags, &mut n, dim, &mut ierr) };
+        unsafe { gmshc::gmshModelGetEntities(&mut dim_tags, &mut n, dim, &mut ierr) };
         if ierr != 0 || dim_tags.is_null() {
             return Vec::new();
         }
         let pairs: Vec<c_int> = unsafe { std::slice::from_raw_parts(dim_tags, n) }.to_vec();
-        unsafe { gmsh_sys::gmshFree(dim_tags as *mut _) };
+        unsafe { gmshc::gmshFree(dim_tags as *mut _) };
         let mut out = Vec::new();
         for p in pairs.chunks_exact(2) {
             let mut tags: *mut c_int = std::ptr::null_mut();
             let mut m: usize = 0;
             unsafe {
-                gmsh_sys::gmshModelGetPhysicalGroupsForEntity(
-                    p[0], p[1], &mut tags, &mut m, &mut ierr,
-                )
+                gmshc::gmshModelGetPhysicalGroupsForEntity(p[0], p[1], &mut tags, &mut m, &mut ierr)
             };
             if !tags.is_null() {
-                unsafe { gmsh_sys::gmshFree(tags as *mut _) };
+                unsafe { gmshc::gmshFree(tags as *mut _) };
             }
             if ierr == 0 && m == 0 {
                 out.push(p[1]);
@@ -570,9 +576,9 @@ impl Session {
         let mut tags: *mut c_int = std::ptr::null_mut();
         let mut n: usize = 0;
         let mut ierr: c_int = 0;
-        unsafe { gmsh_sys::gmshModelGetPhysicalGroups(&mut tags, &mut n, -1, &mut ierr) };
+        unsafe { gmshc::gmshModelGetPhysicalGroups(&mut tags, &mut n, -1, &mut ierr) };
         if !tags.is_null() {
-            unsafe { gmsh_sys::gmshFree(tags as *mut _) };
+            unsafe { gmshc::gmshFree(tags as *mut _) };
         }
         n / 2
     }
@@ -582,8 +588,8 @@ impl Drop for Session {
     fn drop(&mut self) {
         let mut ierr: c_int = 0;
         unsafe {
-            gmsh_sys::gmshLoggerStop(&mut ierr);
-            gmsh_sys::gmshFinalize(&mut ierr);
+            gmshc::gmshLoggerStop(&mut ierr);
+            gmshc::gmshFinalize(&mut ierr);
         }
     }
 }

@@ -5,6 +5,7 @@
 pub mod faces;
 pub mod geo_text;
 pub mod gmsh;
+mod gmshc;
 pub mod msh;
 pub mod partition;
 pub mod plane_faces;

@@ -1,6 +1,8 @@
 //! The PETSc calls tmc makes, declared by hand against the installed headers (PETSc 3.18,
 //! `petscsys.h`, `petscvec.h`, `petscmat.h`, `petscksp.h`, `petscpc.h`,
-//! `petscoptions.h`, `petscerror.h`); only those, so that each is used. `build.rs` checks the scalar and index sizes assumed here.
+//! `petscoptions.h`, `petscerror.h`); only those, so that each is used. `build.rs` checks the
+//! scalar and index sizes assumed here and finds the library, which is opened when a run first
+//! starts PETSc ([`load`]), not with tmc.
 #![allow(non_camel_case_types)]
 
 use mpi::ffi::MPI_Comm;
@@ -57,54 +59,51 @@ pub type ErrorHandler = unsafe extern "C" fn(
     *mut c_void,
 ) -> PetscErrorCode;
 
-unsafe extern "C" {
-    pub fn PetscInitializeNoArguments() -> PetscErrorCode;
-    pub fn PetscFinalize() -> PetscErrorCode;
-    pub fn PetscErrorMessage(
+crate::dynamic_api! {
+    "PETSc" from [env!("TMC_PETSC_LIBRARY")];
+    fn PetscInitializeNoArguments() -> PetscErrorCode;
+    fn PetscFinalize() -> PetscErrorCode;
+    fn PetscErrorMessage(
         code: c_int,
         text: *mut *const c_char,
         specific: *mut *mut c_char,
     ) -> PetscErrorCode;
-    pub fn PetscPushErrorHandler(handler: ErrorHandler, ctx: *mut c_void) -> PetscErrorCode;
+    fn PetscPushErrorHandler(handler: ErrorHandler, ctx: *mut c_void) -> PetscErrorCode;
 
-    pub fn PetscOptionsInsertString(options: PetscOptions, s: *const c_char) -> PetscErrorCode;
-    pub fn PetscLogDefaultBegin() -> PetscErrorCode;
-    /// The names of KSPConvergedReason, indexed by the reason itself (PETSc shifts the
-    /// pointer so that negative reasons index it too): `KSPConvergedReasons[-3]` is
-    /// "DIVERGED_ITS".
-    pub static KSPConvergedReasons: *const *const c_char;
-    pub fn PetscOptionsLeftGet(
+    fn PetscOptionsInsertString(options: PetscOptions, s: *const c_char) -> PetscErrorCode;
+    fn PetscLogDefaultBegin() -> PetscErrorCode;
+    fn PetscOptionsLeftGet(
         options: PetscOptions,
         n: *mut PetscInt,
         names: *mut *mut *mut c_char,
         values: *mut *mut *mut c_char,
     ) -> PetscErrorCode;
-    pub fn PetscOptionsLeftRestore(
+    fn PetscOptionsLeftRestore(
         options: PetscOptions,
         n: *mut PetscInt,
         names: *mut *mut *mut c_char,
         values: *mut *mut *mut c_char,
     ) -> PetscErrorCode;
 
-    pub fn MatCreate(comm: MPI_Comm, m: *mut Mat) -> PetscErrorCode;
-    pub fn MatSetSizes(
+    fn MatCreate(comm: MPI_Comm, m: *mut Mat) -> PetscErrorCode;
+    fn MatSetSizes(
         m: Mat,
         rl: PetscInt,
         cl: PetscInt,
         r: PetscInt,
         c: PetscInt,
     ) -> PetscErrorCode;
-    pub fn MatSetType(m: Mat, t: *const c_char) -> PetscErrorCode;
-    pub fn MatSeqAIJSetPreallocation(m: Mat, nz: PetscInt, nnz: *const PetscInt) -> PetscErrorCode;
-    pub fn MatMPIAIJSetPreallocation(
+    fn MatSetType(m: Mat, t: *const c_char) -> PetscErrorCode;
+    fn MatSeqAIJSetPreallocation(m: Mat, nz: PetscInt, nnz: *const PetscInt) -> PetscErrorCode;
+    fn MatMPIAIJSetPreallocation(
         m: Mat,
         d_nz: PetscInt,
         d_nnz: *const PetscInt,
         o_nz: PetscInt,
         o_nnz: *const PetscInt,
     ) -> PetscErrorCode;
-    pub fn MatSetOption(m: Mat, op: c_int, flg: PetscBool) -> PetscErrorCode;
-    pub fn MatSetValues(
+    fn MatSetOption(m: Mat, op: c_int, flg: PetscBool) -> PetscErrorCode;
+    fn MatSetValues(
         m: Mat,
         nr: PetscInt,
         rows: *const PetscInt,
@@ -113,89 +112,102 @@ unsafe extern "C" {
         v: *const PetscScalar,
         mode: c_int,
     ) -> PetscErrorCode;
-    pub fn MatZeroEntries(m: Mat) -> PetscErrorCode;
-    pub fn MatAssemblyBegin(m: Mat, t: c_int) -> PetscErrorCode;
-    pub fn MatAssemblyEnd(m: Mat, t: c_int) -> PetscErrorCode;
-    pub fn MatCreateVecs(m: Mat, right: *mut Vec, left: *mut Vec) -> PetscErrorCode;
-    pub fn MatDestroy(m: *mut Mat) -> PetscErrorCode;
+    fn MatZeroEntries(m: Mat) -> PetscErrorCode;
+    fn MatAssemblyBegin(m: Mat, t: c_int) -> PetscErrorCode;
+    fn MatAssemblyEnd(m: Mat, t: c_int) -> PetscErrorCode;
+    fn MatCreateVecs(m: Mat, right: *mut Vec, left: *mut Vec) -> PetscErrorCode;
+    fn MatDestroy(m: *mut Mat) -> PetscErrorCode;
 
-    pub fn VecGetArray(v: Vec, a: *mut *mut PetscScalar) -> PetscErrorCode;
-    pub fn VecRestoreArray(v: Vec, a: *mut *mut PetscScalar) -> PetscErrorCode;
-    pub fn VecGetArrayRead(v: Vec, a: *mut *const PetscScalar) -> PetscErrorCode;
-    pub fn VecRestoreArrayRead(v: Vec, a: *mut *const PetscScalar) -> PetscErrorCode;
-    pub fn VecScatterCreateToAll(v: Vec, ctx: *mut VecScatter, all: *mut Vec) -> PetscErrorCode;
-    pub fn VecScatterBegin(
+    fn VecGetArray(v: Vec, a: *mut *mut PetscScalar) -> PetscErrorCode;
+    fn VecRestoreArray(v: Vec, a: *mut *mut PetscScalar) -> PetscErrorCode;
+    fn VecGetArrayRead(v: Vec, a: *mut *const PetscScalar) -> PetscErrorCode;
+    fn VecRestoreArrayRead(v: Vec, a: *mut *const PetscScalar) -> PetscErrorCode;
+    fn VecScatterCreateToAll(v: Vec, ctx: *mut VecScatter, all: *mut Vec) -> PetscErrorCode;
+    fn VecScatterBegin(
         ctx: VecScatter,
         x: Vec,
         y: Vec,
         mode: c_int,
         smode: c_int,
     ) -> PetscErrorCode;
-    pub fn VecScatterEnd(
+    fn VecScatterEnd(
         ctx: VecScatter,
         x: Vec,
         y: Vec,
         mode: c_int,
         smode: c_int,
     ) -> PetscErrorCode;
-    pub fn VecScatterDestroy(ctx: *mut VecScatter) -> PetscErrorCode;
-    pub fn VecDestroy(v: *mut Vec) -> PetscErrorCode;
+    fn VecScatterDestroy(ctx: *mut VecScatter) -> PetscErrorCode;
+    fn VecDestroy(v: *mut Vec) -> PetscErrorCode;
 
-    pub fn KSPCreate(comm: MPI_Comm, ksp: *mut KSP) -> PetscErrorCode;
-    pub fn KSPSetOperators(ksp: KSP, a: Mat, p: Mat) -> PetscErrorCode;
-    pub fn KSPSetType(ksp: KSP, t: *const c_char) -> PetscErrorCode;
-    pub fn KSPGetType(ksp: KSP, t: *mut *const c_char) -> PetscErrorCode;
-    pub fn KSPSetTolerances(
+    fn KSPCreate(comm: MPI_Comm, ksp: *mut KSP) -> PetscErrorCode;
+    fn KSPSetOperators(ksp: KSP, a: Mat, p: Mat) -> PetscErrorCode;
+    fn KSPSetType(ksp: KSP, t: *const c_char) -> PetscErrorCode;
+    fn KSPGetType(ksp: KSP, t: *mut *const c_char) -> PetscErrorCode;
+    fn KSPSetTolerances(
         ksp: KSP,
         rtol: PetscReal,
         abstol: PetscReal,
         dtol: PetscReal,
         maxits: PetscInt,
     ) -> PetscErrorCode;
-    pub fn KSPSetFromOptions(ksp: KSP) -> PetscErrorCode;
-    pub fn KSPSolve(ksp: KSP, b: Vec, x: Vec) -> PetscErrorCode;
-    pub fn KSPGetIterationNumber(ksp: KSP, its: *mut PetscInt) -> PetscErrorCode;
-    pub fn KSPGetConvergedReason(ksp: KSP, reason: *mut c_int) -> PetscErrorCode;
-    pub fn KSPGetPC(ksp: KSP, pc: *mut PC) -> PetscErrorCode;
-    pub fn KSPDestroy(ksp: *mut KSP) -> PetscErrorCode;
-    pub fn PCSetType(pc: PC, t: *const c_char) -> PetscErrorCode;
-    pub fn PCGetType(pc: PC, t: *mut *const c_char) -> PetscErrorCode;
-    pub fn PCFactorSetMatSolverType(pc: PC, t: *const c_char) -> PetscErrorCode;
-    pub fn PCFieldSplitSetIS(pc: PC, name: *const c_char, is: IS) -> PetscErrorCode;
-    pub fn KSPSetReusePreconditioner(ksp: KSP, flag: PetscBool) -> PetscErrorCode;
+    fn KSPSetFromOptions(ksp: KSP) -> PetscErrorCode;
+    fn KSPSolve(ksp: KSP, b: Vec, x: Vec) -> PetscErrorCode;
+    fn KSPGetIterationNumber(ksp: KSP, its: *mut PetscInt) -> PetscErrorCode;
+    fn KSPGetConvergedReason(ksp: KSP, reason: *mut c_int) -> PetscErrorCode;
+    fn KSPGetPC(ksp: KSP, pc: *mut PC) -> PetscErrorCode;
+    fn KSPDestroy(ksp: *mut KSP) -> PetscErrorCode;
+    fn PCSetType(pc: PC, t: *const c_char) -> PetscErrorCode;
+    fn PCGetType(pc: PC, t: *mut *const c_char) -> PetscErrorCode;
+    fn PCFactorSetMatSolverType(pc: PC, t: *const c_char) -> PetscErrorCode;
+    fn PCFieldSplitSetIS(pc: PC, name: *const c_char, is: IS) -> PetscErrorCode;
+    fn KSPSetReusePreconditioner(ksp: KSP, flag: PetscBool) -> PetscErrorCode;
 
-    pub fn ISCreateGeneral(
+    fn ISCreateGeneral(
         comm: MPI_Comm,
         n: PetscInt,
         idx: *const PetscInt,
         mode: c_int,
         is: *mut IS,
     ) -> PetscErrorCode;
-    pub fn ISDestroy(is: *mut IS) -> PetscErrorCode;
-    pub fn VecCreateMPI(comm: MPI_Comm, n: PetscInt, nn: PetscInt, v: *mut Vec) -> PetscErrorCode;
-    pub fn MatNullSpaceCreate(
+    fn ISDestroy(is: *mut IS) -> PetscErrorCode;
+    fn VecCreateMPI(comm: MPI_Comm, n: PetscInt, nn: PetscInt, v: *mut Vec) -> PetscErrorCode;
+    fn MatNullSpaceCreate(
         comm: MPI_Comm,
         has_cnst: PetscBool,
         n: PetscInt,
         vecs: *const Vec,
         sp: *mut MatNullSpace,
     ) -> PetscErrorCode;
-    pub fn MatNullSpaceDestroy(sp: *mut MatNullSpace) -> PetscErrorCode;
-    pub fn MatSetNearNullSpace(m: Mat, sp: MatNullSpace) -> PetscErrorCode;
-    pub fn PetscObjectCompose(
+    fn MatNullSpaceDestroy(sp: *mut MatNullSpace) -> PetscErrorCode;
+    fn MatSetNearNullSpace(m: Mat, sp: MatNullSpace) -> PetscErrorCode;
+    fn PetscObjectCompose(
         obj: PetscObject,
         name: *const c_char,
         other: PetscObject,
     ) -> PetscErrorCode;
-    pub fn PetscOptionsHasName(
+    fn PetscOptionsHasName(
         options: PetscOptions,
         prefix: *const c_char,
         name: *const c_char,
         set: *mut PetscBool,
     ) -> PetscErrorCode;
-    pub fn PetscOptionsSetValue(
+    fn PetscOptionsSetValue(
         options: PetscOptions,
         name: *const c_char,
         value: *const c_char,
     ) -> PetscErrorCode;
+}
+
+/// PETSc's names of KSPConvergedReason (`KSPConvergedReasons`), indexed by the reason itself
+/// (PETSc shifts the pointer so that negative reasons index it too): `reasons[-3]` is
+/// "DIVERGED_ITS". PETSc is loaded by then.
+pub fn KSPConvergedReasons() -> *const *const c_char {
+    let api = load().expect("PETSc is loaded before its first call");
+    let table = api
+        .library
+        .symbol("PETSc", "KSPConvergedReasons")
+        .expect("PETSc 3.18 exports KSPConvergedReasons");
+    // SAFETY: the symbol is a `const char *const *` variable
+    unsafe { *(table.as_ptr() as *const *const *const c_char) }
 }

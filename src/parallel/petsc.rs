@@ -108,7 +108,7 @@ pub fn reason_name(reason: i32) -> String {
     // KSP_DIVERGED_PC_FAILED (−11) … KSP_CONVERGED_ATOL_NORMAL (9) in PETSc 3.18
     if (-11..=9).contains(&reason) && reason != -1 {
         // SAFETY: PETSc's table holds a name (or NULL) for every reason in that range
-        let name = unsafe { *ffi::KSPConvergedReasons.offset(reason as isize) };
+        let name = unsafe { *ffi::KSPConvergedReasons().offset(reason as isize) };
         if !name.is_null() {
             return unsafe { CStr::from_ptr(name) }
                 .to_string_lossy()
@@ -141,6 +141,11 @@ pub fn start() -> Result<Ranks, PetscError> {
     let mut engine = ENGINE.lock().expect("engine lock");
     let Engine { petsc, .. } = engine.as_mut().expect("MPI is running");
     if !*petsc {
+        ffi::load().map_err(|e| PetscError {
+            call: "loading PETSc",
+            code: -1,
+            message: format!("{e}; rebuild tmc (make build) if PETSc was upgraded or removed"),
+        })?;
         unsafe {
             check("PetscInitialize", ffi::PetscInitializeNoArguments())?;
             check(

@@ -1068,3 +1068,51 @@ fn a_3d_run_gives_the_same_answers_at_one_and_two_threads_and_the_same_history_t
         }
     }
 }
+
+/// gmsh (with OpenCASCADE) and PETSc are opened when a run needs them, not when tmc starts:
+/// linked, their libraries cost every start a quarter of a second of symbol lookups.
+#[test]
+fn gmsh_is_loaded_only_to_mesh_and_petsc_only_for_its_engine() {
+    let dir = scratch("loaded-when-needed");
+    let loaded = |o: &Output, lib: &str| {
+        // glibc's loader names each library it opens under LD_DEBUG=files, by path or name
+        stderr(o)
+            .lines()
+            .any(|l| l.contains("file=") && l.contains(lib))
+    };
+    let debug = [("LD_DEBUG", "files")];
+    let o = tmc_with(&["--version"], &debug);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(loaded(&o, "libmpi"), "LD_DEBUG names what is loaded");
+    assert!(!loaded(&o, "libgmsh"), "{}", stderr(&o));
+    assert!(!loaded(&o, "libpetsc"), "{}", stderr(&o));
+    let msh = dir.join("plate-hole.msh");
+    let msh_arg = msh.to_str().unwrap();
+    let o = tmc_with(&["mesh", "geo/plate-hole.geo", "-o", msh_arg], &debug);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(loaded(&o, "libgmsh"), "meshing loads gmsh");
+    assert!(!loaded(&o, "libpetsc"));
+    let case = dir.join("plate-hole.toml");
+    let geo = root().join("geo/plate-hole.geo");
+    let text = shipped_case("plate-hole").replace(
+        &format!("mesh = {:?}", geo.to_str().unwrap()),
+        &format!("mesh = {msh_arg:?}"),
+    );
+    assert!(text.contains(msh_arg));
+    std::fs::write(&case, text).unwrap();
+    let out = dir.join("out");
+    let o = tmc_with(&solve_args(&case, &out), &debug);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!loaded(&o, "libgmsh"), "a run on a .msh meshes nothing");
+    assert!(!loaded(&o, "libpetsc"), "a run with faer needs no PETSc");
+    assert_eq!(summary(&out)["converged"], true);
+    if cfg!(feature = "petsc") {
+        let mut args = solve_args(&case, &out);
+        args.extend(["--set", "solver.engine=\"petsc\""]);
+        let o = tmc_with(&args, &debug);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(loaded(&o, "libpetsc"), "the PETSc engine loads PETSc");
+        assert!(!loaded(&o, "libgmsh"));
+        assert_eq!(summary(&out)["engine"], "petsc");
+    }
+}
