@@ -56,6 +56,7 @@ bench: deps
 	$(CARGO) bench --bench output
 	$(CARGO) bench --bench sliding
 	$(CARGO) bench --features petsc --bench distributed
+	$(CARGO) bench --features petsc --bench start
 	$(CARGO) build --release
 	scripts/threads-table.sh -b $(TMC) -n 16
 
