@@ -19,10 +19,11 @@ pub enum Isolation {
     Os(std::io::Error),
 }
 
-/// A pipe: (read end, write end).
+/// A pipe: (read end, write end), closed in any program this process or a child executes
+/// (MPI's daemon, started after a meshing child, must not hold that child's pipe open).
 fn pipe() -> Result<(c_int, c_int), Isolation> {
     let mut fds = [0 as c_int; 2];
-    if unsafe { libc::pipe(fds.as_mut_ptr()) } != 0 {
+    if unsafe { libc::pipe2(fds.as_mut_ptr(), libc::O_CLOEXEC) } != 0 {
         return Err(Isolation::Os(std::io::Error::last_os_error()));
     }
     Ok((fds[0], fds[1]))
@@ -167,9 +168,11 @@ impl Served {
 
 impl Drop for Served {
     fn drop(&mut self) {
-        // the pipe's end tells the child to exit
+        // the pipe's end tells the child to exit; it waits for a request, idle, so it is also
+        // ended outright, lest a process that inherited the pipe keep it from ever seeing the end
         self.to = None;
         if self.pid > 0 {
+            unsafe { libc::kill(self.pid, libc::SIGKILL) };
             reaped(self.pid);
         }
     }
