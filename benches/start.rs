@@ -10,6 +10,9 @@ use common::{case_text, root};
 use std::process::Command;
 use std::time::Instant;
 
+/// Rounds of every command, one after another.
+const ROUNDS: usize = 7;
+
 fn main() {
     let dir = root().join("target/bench/start");
     std::fs::create_dir_all(&dir).unwrap();
@@ -60,7 +63,7 @@ fn main() {
         ));
     }
     let mut times = vec![Vec::new(); commands.len()];
-    for _ in 0..7 {
+    for _ in 0..ROUNDS {
         for ((_, args), t) in commands.iter().zip(&mut times) {
             let start = Instant::now();
             let run = Command::new(tmc).args(args).output().unwrap();
@@ -68,7 +71,7 @@ fn main() {
             assert!(run.status.success(), "{args:?}: {run:?}");
         }
     }
-    println!("What a start costs (the block, {} rounds interleaved)\n", 7);
+    println!("What a start costs (the block, {ROUNDS} rounds interleaved)\n");
     println!("| command | median wall ms | libraries loaded | gmsh | PETSc |");
     println!("|---|---|---|---|---|");
     for ((label, args), t) in commands.iter().zip(&mut times) {
@@ -84,9 +87,12 @@ fn main() {
             .filter_map(|l| l.split("file=").nth(1))
             .filter_map(|rest| rest.split_whitespace().next())
             .collect();
-        let has = |lib: &str| match opened.iter().any(|f| f.contains(lib)) {
-            true => "yes",
-            false => "no",
+        let has = |lib: &str| {
+            if opened.iter().any(|f| f.contains(lib)) {
+                "yes"
+            } else {
+                "no"
+            }
         };
         println!(
             "| {label} | {:.1} | {} | {} | {} |",

@@ -2,7 +2,7 @@
 //!
 //! gmsh (with OpenCASCADE) and PETSc (with MUMPS, hypre, BLAS …) bring about 180 shared
 //! libraries. Linked into the executable, the dynamic loader resolves their 100 000 symbols
-//! before `main` on every start: 0.26 s for `tmc --version`, against 0.01 s without them. Most
+//! before `main` on every start: 0.21 s for `tmc --version`, against 3 ms without them. Most
 //! starts need neither (`tmc check`, `tmc solve` on one process with no remake, `tmc plot`), so
 //! each library is opened on first use and kept open for the life of the process.
 //! [`dynamic_api!`](crate::dynamic_api) declares a library's functions once and gives each a

@@ -73,20 +73,13 @@ fn reaped(pid: libc::pid_t) -> Isolation {
     })
 }
 
-/// `value` as JSON to `fd`, its length first (8 bytes, little-endian); false if the pipe broke.
-fn send<T: Serialize>(fd: c_int, value: &T) -> bool {
+/// `value` as JSON to the pipe written as `file`, its length first (8 bytes, little-endian);
+/// false if the pipe broke.
+fn send<T: Serialize>(file: &mut std::fs::File, value: &T) -> bool {
     let body = serde_json::to_vec(value).unwrap_or_default();
-    let mut message = (body.len() as u64).to_le_bytes().to_vec();
-    message.extend_from_slice(&body);
-    let mut rest: &[u8] = &message;
-    while !rest.is_empty() {
-        let n = unsafe { libc::write(fd, rest.as_ptr().cast(), rest.len()) };
-        if n <= 0 {
-            return false;
-        }
-        rest = &rest[n as usize..];
-    }
-    true
+    file.write_all(&(body.len() as u64).to_le_bytes())
+        .and_then(|_| file.write_all(&body))
+        .is_ok()
 }
 
 /// The next value [`send`] wrote to the pipe read as `file`; `None` at its end.
@@ -101,9 +94,9 @@ fn receive<T: DeserializeOwned>(file: &mut std::fs::File) -> Option<T> {
 /// A child forked once that answers requests with `work`, one after another, until the pipe
 /// to it closes (when this value is dropped, or the process ends). The child does nothing but
 /// the work and its answers, and `_exit`s, so it runs no destructor or handler of this
-/// process. A request it dies or exits on is reported (how it ended), and the child is gone: the next request needs a
-/// new one. The child closes every file it inherited but its two pipes, so that a child made
-/// later does not hold another's pipe open.
+/// process. A request it dies or exits on is reported (how it ended), and the child is gone:
+/// the next request needs a new one. The child closes every file it inherited but its two
+/// pipes, so that a child made later does not hold another's pipe open.
 pub struct Served {
     pid: libc::pid_t,
     to: Option<std::fs::File>,
@@ -128,10 +121,11 @@ impl Served {
         if pid == 0 {
             close_all_but(&[0, 1, 2, request_read, answer_write]);
             let mut requests = unsafe { std::fs::File::from_raw_fd(request_read) };
+            let mut answers = unsafe { std::fs::File::from_raw_fd(answer_write) };
             while let Some(request) = receive::<Q>(&mut requests) {
                 let answer =
                     std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| work(request)));
-                if !answer.is_ok_and(|a| send(answer_write, &a)) {
+                if !answer.is_ok_and(|a| send(&mut answers, &a)) {
                     break;
                 }
             }
@@ -145,18 +139,16 @@ impl Served {
     }
 
     /// The child's answer to `request`; where it gave none, how it ended (the child is then
-    /// reaped, and this value spent).
+    /// reaped, and this value spent: asked again, it answers that the child had ended).
     pub fn ask<Q: Serialize, A: DeserializeOwned>(&mut self, request: &Q) -> Result<A, Isolation> {
-        let sent = match self.to.as_mut() {
-            Some(to) => {
-                let body = serde_json::to_vec(request).unwrap_or_default();
-                to.write_all(&(body.len() as u64).to_le_bytes())
-                    .and_then(|_| to.write_all(&body))
-                    .is_ok()
-            }
-            None => false,
+        let Some(to) = self.to.as_mut() else {
+            return Err(Isolation::Ended(
+                "it had ended at an earlier request".into(),
+            ));
         };
-        if sent && let Some(answer) = receive(&mut self.from) {
+        if send(to, request)
+            && let Some(answer) = receive(&mut self.from)
+        {
             return Ok(answer);
         }
         self.to = None;
@@ -219,9 +211,10 @@ mod tests {
             matches!(&crashed, Err(Isolation::Crashed(s)) if s == "aborted"),
             "{crashed:?}"
         );
+        let spent = b.ask::<i64, i64>(&2);
         assert!(
-            b.ask::<i64, i64>(&2).is_err(),
-            "a spent child answers no more"
+            matches!(&spent, Err(Isolation::Ended(s)) if s == "it had ended at an earlier request"),
+            "{spent:?}"
         );
         let mut c = Served::start(work).unwrap();
         let ended = c.ask::<i64, i64>(&-2);

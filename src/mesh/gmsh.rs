@@ -1,8 +1,8 @@
 //! Meshing a `.geo` with gmsh through its C API (`gmshc.rs`: Debian's libgmsh 4.8, opened on
 //! first use).
 //!
-//! Every function called here was checked against `/usr/include/gmshc.h` of gmsh 4.8.4: the
-//! crate binds the 4.4.1 API, whose signatures for these calls are unchanged.
+//! Every function called here is declared in `gmshc.rs` against `/usr/include/gmshc.h` of gmsh
+//! 4.8.4.
 
 use super::child::{Isolation, Served};
 use super::gmshc;
@@ -151,8 +151,8 @@ fn paths_usable(geo: &Path, out: &Path, opts: &MeshOptions) -> Result<(), GmshEr
 /// complete new mesh or untouched.
 pub fn mesh_geo(geo: &Path, out: &Path, opts: &MeshOptions) -> Result<MeshReport, GmshError> {
     paths_usable(geo, out, opts)?;
-    // opened here, before the fork, so that each child (a remake meshes once a step) finds
-    // gmsh loaded rather than loading it again
+    // opened here, in tmc, so that a meshing child, forked from it, finds gmsh loaded (and a
+    // missing library is told before any child is made)
     gmshc::load().map_err(|e| GmshError::Library(e.clone()))?;
     // .geo parameters: not gmsh's `-setnumber`, whose values stay in a process-wide table that
     // every later `open` re-applies; instead a wrapper defines them before including the file,
