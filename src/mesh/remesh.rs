@@ -246,7 +246,8 @@ fn signed_area(lp: &[usize], x: &[[f64; 3]]) -> f64 {
 /// where the boundary allows it, none larger than an equilateral triangle on the median
 /// boundary edge (the longest would follow the medium's free faces as they are stretched,
 /// remake after remake); triangles smaller than one on a tenth of the shortest edge are left as
-/// they are (a closed layer's, one cell across between the bodies' faces). One region per
+/// they are (a closed layer's, one cell across between the bodies' faces); a body's corner
+/// pressed onto another's face is joined over that face's edges (`fans`). One region per
 /// entry of `loops`, its cells in group `medium{r}`, counter-clockwise.
 fn triangulate_between(loops: &[Vec<Vec<usize>>], x: &[[f64; 3]]) -> Result<Mesh, String> {
     use spade::{
@@ -314,6 +315,13 @@ fn triangulate_between(loops: &[Vec<Vec<usize>>], x: &[[f64; 3]]) -> Result<Mesh
             .with_min_required_area(equilateral * (0.1 * shortest).powi(2))
             .with_max_additional_vertices(10 * vertex.len() + inside);
         let refined = cdt.refine(params);
+        let walls: std::collections::HashSet<(usize, usize)> = (region.iter())
+            .flat_map(|lp| (0..lp.len()).map(move |i| (lp[i], lp[(i + 1) % lp.len()])))
+            .map(|(a, b)| {
+                let (i, j) = (vertex[&a].index(), vertex[&b].index());
+                (i.min(j), i.max(j))
+            })
+            .collect();
         if !refined.refinement_complete {
             return Err(format!(
                 "its triangles' refinement stopped at {} nodes, the most it may add to the {} \
@@ -322,14 +330,20 @@ fn triangulate_between(loops: &[Vec<Vec<usize>>], x: &[[f64; 3]]) -> Result<Mesh
                 vertex.len()
             ));
         }
-        let outer: std::collections::HashSet<_> = refined.excluded_faces.into_iter().collect();
+        for (n, m) in fans(region, x) {
+            let (vn, vm) = (vertex[&n], vertex[&m]);
+            if cdt.can_add_constraint(vn, vm) {
+                cdt.add_constraint(vn, vm);
+            }
+        }
+        let inside = inside_faces(&cdt, &walls);
         let first = coords.len();
         coords.extend(
             cdt.vertices()
                 .map(|v| [v.position().x, v.position().y, 0.0]),
         );
         let mut conn = Vec::new();
-        for f in cdt.inner_faces().filter(|f| !outer.contains(&f.fix())) {
+        for f in cdt.inner_faces().filter(|f| inside[f.fix().index()]) {
             conn.extend(f.vertices().map(|v| first + v.fix().index()));
         }
         groups.push(super::PhysicalGroup {
@@ -352,6 +366,111 @@ fn triangulate_between(loops: &[Vec<Vec<usize>>], x: &[[f64; 3]]) -> Result<Mesh
         source: std::path::PathBuf::from("medium"),
         warnings: Vec::new(),
     })
+}
+
+/// Which faces of `cdt` (by index) lie inside the region whose boundary edges are `walls`
+/// (pairs of vertex indices, the smaller first): reached from the outside, a face is inside
+/// after crossing an odd number of them. Other constraint edges (`fans`) do not count.
+fn inside_faces<T: spade::Triangulation>(
+    cdt: &T,
+    walls: &std::collections::HashSet<(usize, usize)>,
+) -> Vec<bool> {
+    let n = cdt.num_all_faces();
+    let mut inside: Vec<Option<bool>> = vec![None; n];
+    let mut across: Vec<Vec<(usize, bool)>> = vec![Vec::new(); n];
+    let mut stack = Vec::new();
+    for f in cdt.inner_faces() {
+        let i = f.fix().index();
+        for e in f.adjacent_edges() {
+            let (a, b) = (e.from().fix().index(), e.to().fix().index());
+            let wall = walls.contains(&(a.min(b), a.max(b)));
+            match e.rev().face().as_inner() {
+                Some(g) => across[i].push((g.fix().index(), wall)),
+                None if inside[i].is_none() => {
+                    inside[i] = Some(wall);
+                    stack.push(i);
+                }
+                None => {}
+            }
+        }
+    }
+    while let Some(i) = stack.pop() {
+        let here = inside[i].expect("set before pushed");
+        for &(g, wall) in &across[i] {
+            if inside[g].is_none() {
+                inside[g] = Some(here ^ wall);
+                stack.push(g);
+            }
+        }
+    }
+    inside.into_iter().map(|v| v.unwrap_or(false)).collect()
+}
+
+/// The medium-side angle of a boundary loop's corner at `v` (from the edge to its next node
+/// turning counter-clockwise to the edge from its last, the region on the loop's left).
+fn medium_angle(prev: [f64; 3], v: [f64; 3], next: [f64; 3]) -> f64 {
+    let a = (next[1] - v[1]).atan2(next[0] - v[0]);
+    let b = (prev[1] - v[1]).atan2(prev[0] - v[0]);
+    (b - a).rem_euclid(std::f64::consts::TAU)
+}
+
+/// Twice the signed area of the triangle (a, b, c).
+fn orient(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
+    (b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1])
+}
+
+/// How much larger a corner's medium-side angle is than that of the node it is pressed on
+/// for it to be joined over that node's edges (`fans`): a body's corner (a right angle's
+/// 270° on a face's 180°), not the facets of a curved face (a few degrees apart).
+const SHARPER: f64 = std::f64::consts::FRAC_PI_4;
+
+/// Where two boundary nodes of a region stand closer than a quarter of the edges at one of
+/// them (`m`), the other (`n`, a body's corner pressed onto a face) is joined to `m` and to
+/// both of `m`'s neighbours, so that the cells at the contact are a node over the face, which
+/// stay whole as the node slides along it, and not a sliver between the corner's own faces
+/// and `m`, which a slide turns inside out. Of two such nodes the one whose medium-side angle
+/// is the larger (the sharper corner of its body) is the one joined over the other's edges.
+fn fans(region: &[Vec<usize>], x: &[[f64; 3]]) -> Vec<(usize, usize)> {
+    let dist = |a: usize, b: usize| (x[a][0] - x[b][0]).hypot(x[a][1] - x[b][1]);
+    let mut corner = Vec::new();
+    for lp in region {
+        let k = lp.len();
+        for i in 0..k {
+            let (p, v, q) = (lp[(i + k - 1) % k], lp[i], lp[(i + 1) % k]);
+            let reach = 0.25 * dist(p, v).min(dist(v, q));
+            corner.push((p, v, q, reach, medium_angle(x[p], x[v], x[q])));
+        }
+    }
+    // the corners by squares as wide as the farthest reach, to look only at the next ones
+    let side = corner
+        .iter()
+        .fold(0.0f64, |r, c| r.max(c.3))
+        .max(f64::MIN_POSITIVE);
+    let square = |n: usize| {
+        [
+            (x[n][0] / side).floor() as i64,
+            (x[n][1] / side).floor() as i64,
+        ]
+    };
+    let mut by_square: HashMap<[i64; 2], Vec<usize>> = HashMap::new();
+    for (k, c) in corner.iter().enumerate() {
+        by_square.entry(square(c.1)).or_default().push(k);
+    }
+    let mut out = Vec::new();
+    for &(p, m, q, reach, angle) in &corner {
+        let [i, j] = square(m);
+        let near = (-1..=1).flat_map(|a| (-1..=1).map(move |b| [i + a, j + b]));
+        for k in near.flat_map(|s| by_square.get(&s).into_iter().flatten()) {
+            let (_, n, _, _, other) = corner[*k];
+            if n == m || n == p || n == q || dist(n, m) >= reach || other <= angle + SHARPER {
+                continue;
+            }
+            if orient(x[p], x[m], x[n]) > 0.0 && orient(x[m], x[q], x[n]) > 0.0 {
+                out.extend([(n, p), (n, m), (n, q)]);
+            }
+        }
+    }
+    out
 }
 
 /// Whether the tetrahedra `conn` (new node numbers) have the boundary `faces` (old node
@@ -483,9 +602,6 @@ fn tetrahedralize_between(faces: &[Vec<[usize; 3]>], x: &[[f64; 3]]) -> Result<M
         order: 1,
         ..Default::default()
     };
-    if failing_by_request() {
-        return Err("gmsh was asked to fail (TMC_TEST_MESHER_FAILS)".into());
-    }
     // gmsh's Delaunay, then, where it leaves a flat tetrahedron (where a thin layer meets a
     // plane face), HXT; one thread, so that a run and its restart make the same cells
     let mut failed = Vec::new();
@@ -504,16 +620,25 @@ fn tetrahedralize_between(faces: &[Vec<[usize; 3]>], x: &[[f64; 3]]) -> Result<M
     Err(failed.join("; and with HXT: "))
 }
 
-/// For the tests of a remake the mesher fails (`tests/it/sliding.rs`): whether this call of
-/// the 3D mesher is one of those `TMC_TEST_MESHER_FAILS` lists (from 1, by commas), unset in
-/// any real run.
-fn failing_by_request() -> bool {
+/// For the tests of a remake that fails (`tests/it/sliding.rs`): whether this remake (from 1)
+/// is one of those `TMC_TEST_REMAKE_FAILS` lists, by commas, and how: `N` as the mesher
+/// fails (the run may go on a step), `N!` as a medium whose boundary crosses itself (it may
+/// not). Unset in any real run.
+pub fn failing_by_request() -> Result<(), RemeshError> {
     static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
-    let Ok(list) = std::env::var("TMC_TEST_MESHER_FAILS") else {
-        return false;
+    let Ok(list) = std::env::var("TMC_TEST_REMAKE_FAILS") else {
+        return Ok(());
     };
-    let call = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-    list.split(',').any(|n| n.trim().parse() == Ok(call))
+    let call = (CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1).to_string();
+    let why = "the remake was asked to fail (TMC_TEST_REMAKE_FAILS)".to_string();
+    for item in list.split(',').map(str::trim) {
+        match item.strip_suffix('!') {
+            Some(n) if n == call => return Err(RemeshError { why, mesher: false }),
+            None if item == call => return Err(RemeshError::mesher(why)),
+            _ => {}
+        }
+    }
+    Ok(())
 }
 
 /// The node of `nodes` standing at a place (to 1e-9 of the extent of `x`), if any.
@@ -781,6 +906,50 @@ mod tests {
             .collect();
         let made = triangulate_between(&[vec![(0..400).collect()]], &x).unwrap();
         assert!(made.coords.len() > 4400, "{} nodes", made.coords.len());
+    }
+
+    #[test]
+    fn a_corner_pressed_past_a_face_s_node_is_joined_over_that_face() {
+        // a plate's face (y = 0, nodes every 0.1) under a square pad whose bottom right corner
+        // C stands 5e-4 over it, just past the plate's node B at x = 0.5: the cells at the
+        // corner are C over the plate's edges beside B, and none joins B to the corner's own
+        // faces (a sliver the slide turns inside out)
+        let mut x: Vec<[f64; 3]> = (0..=10).map(|i| [i as f64 * 0.1, 0.0, 0.0]).collect();
+        x.extend([[1.0, 0.5, 0.0], [0.0, 0.5, 0.0]]);
+        let outer: Vec<usize> = (0..x.len()).collect();
+        let g = 5e-4;
+        let pad = [
+            [0.2, g],
+            [0.2, 0.3],
+            [0.505, 0.3],
+            [0.505, 0.1],
+            [0.505, g],
+            [0.4, g],
+            [0.3, g],
+        ];
+        let first = x.len();
+        x.extend(pad.iter().map(|p| [p[0], p[1], 0.0]));
+        let hole: Vec<usize> = (first..x.len()).collect();
+        let (b, c) = (5, first + 4);
+        let made = triangulate_between(&[vec![outer, hole]], &x).unwrap();
+        let at = |n: usize| made.coords.iter().position(|p| *p == x[n]).unwrap();
+        let blk = &made.cells[0];
+        let cells: Vec<Vec<usize>> = (0..blk.n_cells()).map(|k| blk.cell(k).to_vec()).collect();
+        let with = |n: &[usize]| -> Vec<&Vec<usize>> {
+            let n: Vec<usize> = n.iter().map(|&k| at(k)).collect();
+            cells
+                .iter()
+                .filter(|q| n.iter().all(|k| q.contains(k)))
+                .collect()
+        };
+        assert_eq!(with(&[c, b, 4]).len(), 1, "C over the edge behind B");
+        assert_eq!(with(&[c, b, 6]).len(), 1, "C over the edge ahead of B");
+        assert_eq!(with(&[c, b]).len(), 2);
+        // every cell counter-clockwise
+        for q in &cells {
+            let p: Vec<[f64; 3]> = q.iter().map(|&k| made.coords[k]).collect();
+            assert!(orient(p[0], p[1], p[2]) > 0.0, "{p:?}");
+        }
     }
 
     #[test]

@@ -36,6 +36,7 @@ use crate::mesh::Mesh;
 use crate::mesh::remesh::{RemeshError, remesh, supported};
 use nalgebra::{Matrix2, Matrix3, SymmetricEigen, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
+use std::collections::HashMap;
 
 /// How far (in cell sizes, see [`Medium::slid_cells`]) a medium cell's faces may slide past
 /// each other before the medium is made again.
@@ -170,6 +171,9 @@ pub struct Remade {
     old_of: Vec<Option<usize>>,
     /// Per node of the new mesh, its temperature where it is new.
     theta: Vec<f64>,
+    /// Per node of the new mesh, where it is one of the medium's own kept nodes, its new
+    /// displacement (`Medium::own_places`).
+    own: Vec<Option<[f64; 3]>>,
 }
 
 /// The deformation gradient of the cell `s` at ξ (a 2D cell's as a plane strain's, F₃₃ = 1).
@@ -636,6 +640,99 @@ impl Medium {
         most
     }
 
+    /// The places the medium's own boundary nodes (of its cells and of no solid's, on its
+    /// outer faces: those a remake keeps) take at a remake, at the state `x`: the displacement
+    /// of the solids' nodes on that boundary spread over it, each own node at the mean of its
+    /// neighbours along the boundary (what a condition prescribes kept), and where no solid
+    /// touches a part of it, that part where the mesh put it. The medium is fictitious: its
+    /// outer faces, followed as the bodies drag what is around them, carried the box a user
+    /// drew along with a body (a pad slid 2.5 of its widths pulled its box's top 1.6 above
+    /// where it was drawn, and the run stopped there). Other nodes: `None`.
+    fn own_places(&self, model: &Model, x: &[f64]) -> Result<Vec<Option<[f64; 3]>>, String> {
+        let on_solid = model.on_solids();
+        let mesh = &model.mesh;
+        // the boundary's edges: a 2D region's edges of one cell, a 3D one's faces' edges
+        let mut edges: Vec<[usize; 2]> = Vec::new();
+        if mesh.dim == 3 {
+            for f in crate::mesh::faces::outer_triangles(mesh, &self.blocks)? {
+                edges.extend([[f[0], f[1]], [f[1], f[2]], [f[2], f[0]]]);
+            }
+        } else {
+            let mut count: HashMap<[usize; 2], usize> = HashMap::new();
+            for &b in &self.blocks {
+                let blk = &mesh.cells[b];
+                let k = blk.kind.corners();
+                for c in 0..blk.n_cells() {
+                    let cell = &blk.cell(c)[..k];
+                    for i in 0..k {
+                        let (a, b) = (cell[i], cell[(i + 1) % k]);
+                        *count.entry([a.min(b), a.max(b)]).or_default() += 1;
+                    }
+                }
+            }
+            edges.extend(count.into_iter().filter(|(_, c)| *c == 1).map(|(e, _)| e));
+        }
+        // in one order, so that a run and its restart place them alike to the bit
+        edges.sort_unstable();
+        let mut next: HashMap<usize, Vec<usize>> = HashMap::new();
+        for [a, b] in edges {
+            for (p, q) in [(a, b), (b, a)] {
+                let list = next.entry(p).or_default();
+                if !list.contains(&q) {
+                    list.push(q);
+                }
+            }
+        }
+        let d = model.dofs.dim;
+        let u_of = |n: usize, i: usize| model.dofs.u.get(n * d + i).map(|&u| u as usize);
+        let mut places = vec![None; mesh.coords.len()];
+        let mut own: Vec<usize> = (next.keys().copied()).filter(|&n| !on_solid[n]).collect();
+        own.sort_unstable();
+        for i in 0..d {
+            // per component: the solids' nodes and what is prescribed hold; the rest is the
+            // mean of its neighbours, a little held to where the mesh put it (so that a part
+            // no solid touches stays there)
+            let held = |n: usize| {
+                on_solid[n] || u_of(n, i).is_some_and(|u| model.cons.prescribed[u].is_some())
+            };
+            let value = |n: usize| u_of(n, i).map_or(0.0, |u| x[u]);
+            let free: Vec<usize> = own.iter().copied().filter(|&n| !held(n)).collect();
+            let at: HashMap<usize, usize> = free.iter().enumerate().map(|(k, &n)| (n, k)).collect();
+            let weight = |n: usize| next[&n].len() as f64 * (1.0 + 1e-9);
+            let rhs: Vec<f64> = (free.iter())
+                .map(|&n| {
+                    next[&n]
+                        .iter()
+                        .filter(|&&m| held(m))
+                        .map(|&m| value(m))
+                        .sum()
+                })
+                .collect();
+            let apply = |v: &[f64], out: &mut [f64]| {
+                for (k, &n) in free.iter().enumerate() {
+                    let around: f64 = next[&n]
+                        .iter()
+                        .filter_map(|m| at.get(m))
+                        .map(|&j| v[j])
+                        .sum();
+                    out[k] = weight(n) * v[k] - around;
+                }
+            };
+            let diagonal: Vec<f64> = free.iter().map(|&n| weight(n)).collect();
+            let u = mean_of_neighbours(apply, &diagonal, &rhs)
+                .ok_or("the medium's outer faces could not be placed")?;
+            for (k, &n) in free.iter().enumerate() {
+                let p = places[n].get_or_insert(mesh.coords[n]);
+                p[i] += u[k];
+            }
+            for &n in own.iter().filter(|&&n| held(n)) {
+                let p = places[n].get_or_insert(mesh.coords[n]);
+                p[i] += value(n);
+            }
+        }
+        Ok(places)
+    }
+
     /// The medium in words, for `tmc check`.
     pub fn describe(&self, model: &Model) -> String {
         let cells: usize = self
@@ -748,9 +845,31 @@ impl Medium {
     }
 
     /// The medium made again at the accepted state `x` of `model`.
+    ///
+    /// The medium's own outer faces are placed anew (`own_places`) where the new medium can
+    /// be made between them and the solids; where it cannot (they would cross a body that
+    /// left the box drawn around it), they stay where they are.
     pub fn remake(&self, model: &Model, x: &[f64]) -> Result<Remade, RemeshError> {
+        crate::mesh::remesh::failing_by_request()?;
+        let here = vec![None; model.mesh.coords.len()];
+        match self.own_places(model, x) {
+            Ok(own) => self
+                .remake_at(model, x, &own)
+                .or_else(|_| self.remake_at(model, x, &here)),
+            Err(_) => self.remake_at(model, x, &here),
+        }
+    }
+
+    /// The medium made again at the accepted state `x` of `model`, its own outer nodes at
+    /// `own`'s places where given.
+    fn remake_at(
+        &self,
+        model: &Model,
+        x: &[f64],
+        own: &[Option<[f64; 3]>],
+    ) -> Result<Remade, RemeshError> {
         let placed: Vec<[f64; 3]> = (0..model.mesh.coords.len())
-            .map(|n| model.placed(n, x))
+            .map(|n| own[n].unwrap_or_else(|| model.placed(n, x)))
             .collect();
         let r = remesh(&model.mesh, &placed, &self.blocks)?;
         let find = Locator::new(model, &self.blocks, x);
@@ -802,13 +921,57 @@ impl Medium {
                 None => find.value(&here(n), |at| Some(at.theta())).unwrap_or(0.0),
             })
             .collect();
+        let own = (r.old_of.iter())
+            .map(|o| {
+                let c = model.mesh.coords[(*o)?];
+                own[(*o)?].map(|p| [p[0] - c[0], p[1] - c[1], p[2] - c[2]])
+            })
+            .collect();
         Ok(Remade {
             mesh: r.mesh,
             reference,
             old_of: r.old_of,
             theta,
+            own,
         })
     }
+}
+
+/// The solution v of A v = b, A symmetric positive definite given by its product `apply`
+/// and its diagonal (the medium's outer faces' graph Laplacian, `Medium::own_places`), by
+/// conjugate gradients preconditioned by the diagonal, to 1e-12 of b; `None` if that was not
+/// reached in as many iterations as unknowns and a hundred more.
+fn mean_of_neighbours(
+    apply: impl Fn(&[f64], &mut [f64]),
+    diagonal: &[f64],
+    b: &[f64],
+) -> Option<Vec<f64>> {
+    let n = b.len();
+    let dot = |p: &[f64], q: &[f64]| p.iter().zip(q).map(|(a, b)| a * b).sum::<f64>();
+    let mut v = vec![0.0; n];
+    let mut r = b.to_vec();
+    let tol = 1e-12 * dot(b, b).sqrt();
+    let mut z: Vec<f64> = r.iter().zip(diagonal).map(|(r, d)| r / d).collect();
+    let mut p = z.clone();
+    let mut rz = dot(&r, &z);
+    let mut ap = vec![0.0; n];
+    for _ in 0..n + 100 {
+        if dot(&r, &r).sqrt() <= tol {
+            return Some(v);
+        }
+        apply(&p, &mut ap);
+        let alpha = rz / dot(&p, &ap);
+        v.iter_mut().zip(&p).for_each(|(v, p)| *v += alpha * p);
+        r.iter_mut().zip(&ap).for_each(|(r, a)| *r -= alpha * a);
+        z.iter_mut()
+            .zip(r.iter().zip(diagonal))
+            .for_each(|(z, (r, d))| *z = r / d);
+        let next = dot(&r, &z);
+        let beta = next / rz;
+        rz = next;
+        p.iter_mut().zip(&z).for_each(|(p, z)| *p = z + beta * *p);
+    }
+    (dot(&r, &r).sqrt() <= tol).then_some(v)
 }
 
 /// The friction history of every friction block of `new`, the model of a medium made again,
@@ -1116,6 +1279,14 @@ impl Remade {
         let mut y: Vec<f64> = (from.iter())
             .map(|&f| if f == NONE { 0.0 } else { x[f as usize] })
             .collect();
+        if !new.dofs.u.is_empty() {
+            let d = new.dofs.dim;
+            for (n, u) in self.own.iter().enumerate() {
+                for (i, v) in u.iter().flat_map(|u| u.iter().take(d).enumerate()) {
+                    y[new.dofs.u[n * d + i] as usize] = *v;
+                }
+            }
+        }
         if new.dofs.has(Field::Theta) {
             for (n, o) in self.old_of.iter().enumerate() {
                 if o.is_none() && new.dofs.theta[n] != NONE {

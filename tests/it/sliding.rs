@@ -185,31 +185,28 @@ fn a_cylinder_twice_as_large_slides_its_whole_way_when_the_medium_is_made_again_
     assert!(most < 0.0625, "F_t/F_n {most} at most");
 }
 
-/// Dragged 1.2, the cylinder runs off the plate's end (x = 2) and the medium's boundary
-/// there crosses itself: the medium cannot be made again. The run ends as at a step that
-/// fails: its error says so and where, `summary.json` is written with it (before, a failed
-/// remake left no summary), and the converged steps are kept. Steps of up to 0.1: with the
-/// shipped 0.05 the steps that squeeze the medium against the box's end come so close to the
-/// crossing that on one thread, at round-off from two, a step stalled first (at t = 1.829,
-/// against the crossing found at t = 1.916 on two); with 0.1 both find it at t = 1.805.
+/// A medium that cannot be made again for its shape (its boundary crossing itself; asked for
+/// at the fifth remake, `TMC_TEST_REMAKE_FAILS`) ends the run as at a step that fails: its
+/// error says so and where, `summary.json` is written with it (before, a failed remake left
+/// no summary), and the converged steps are kept. (The scene this test ran before, the
+/// cylinder dragged 1.2 off the plate's end, now stalls at a slide of 0.84 as the cylinder
+/// presses the medium against the end of its box, which stays where it was drawn.)
 #[test]
 fn a_medium_that_cannot_be_made_again_ends_the_run_with_its_summary() {
-    let body = (case_body("cylinder-slide").replace("ux = 0.3\n", "ux = 1.2\n"))
-        .replace("max = 0.05\n", "max = 0.1\n");
-    assert!(body.contains("ux = 1.2") && body.contains("max = 0.1\n"));
     let case = case_file(
-        "cylinder-slide-off-the-end",
+        "cylinder-slide-cannot-be-made-again",
         "cylinder-plate.geo",
         "params = { h = 0.1 }",
-        &body,
+        &case_body("cylinder-slide"),
     );
     let out = case.with_file_name("out");
-    let o = solve_cli(&case, &out, &[]);
+    let o = tmc_with(&solve_args(&case, &out), &[("TMC_TEST_REMAKE_FAILS", "5!")]);
     let e = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{e}");
     assert!(
         e.contains("the medium could not be made again at t = ")
-            && e.contains("the medium's boundary crosses itself")
+            && e.contains("asked to fail")
+            && !e.contains("going on with it as it is")
             && e.contains("converged steps up to"),
         "{e}"
     );
@@ -219,7 +216,7 @@ fn a_medium_that_cannot_be_made_again_ends_the_run_with_its_summary() {
     assert!(e.contains(message), "{message} / {e}");
     // every converged step is in the history and has its file
     let steps = s["load_steps"].as_u64().unwrap() as usize;
-    assert!(steps > 40, "{steps} steps");
+    assert!(steps > 20, "{steps} steps");
     assert_eq!(history(&out).1.len(), steps + 1);
     assert!(out.join(format!("step_{steps:04}.vtu")).exists());
 }
@@ -402,13 +399,13 @@ fn the_sphere_slides_on_a_medium_of_tetrahedra_made_again_with_no_drag() {
 /// Where gmsh cannot fill the medium at a state (a flat tetrahedron where a closed layer is
 /// thinnest), the run goes on a step with the medium it has and makes it again after it, up
 /// to three times in a row; a fourth ends the run with its steps kept. The mesher's failures
-/// are asked for (`TMC_TEST_MESHER_FAILS`, its calls counted from 1).
+/// are asked for (`TMC_TEST_REMAKE_FAILS`, the remakes counted from 1).
 #[test]
 fn a_medium_gmsh_cannot_fill_is_kept_a_step_and_made_again_after_it() {
     let case = sphere_slide("sphere-slide-mesher-fails", "0.05");
     let (tries, ends) = (case.with_file_name("tries"), case.with_file_name("ends"));
     let solve = |out: &Path, fails: &str| {
-        tmc_with(&solve_args(&case, out), &[("TMC_TEST_MESHER_FAILS", fails)])
+        tmc_with(&solve_args(&case, out), &[("TMC_TEST_REMAKE_FAILS", fails)])
     };
     let o = solve(&tries, "2,3,4");
     let e = stderr(&o);
@@ -581,4 +578,68 @@ fn friction_and_its_heat_carry_across_a_medium_made_again() {
     ] {
         assert_eq!(s[key], again[key], "{key}");
     }
+}
+
+/// `cases/pad-box-slide.toml` (the pad in a box of medium drawn as a user draws it, dragged
+/// one pad width) on triangles of h = 0.2, in the scratch folder `name`, with `body` changed
+/// by `edit`: per accepted step of the drag, the drive's slide, F_t/F_n and F_n, and F_n at
+/// the press's end.
+fn pad_in_a_box(name: &str, edit: impl Fn(String) -> String) -> (Vec<[f64; 3]>, f64) {
+    let body = edit(case_body("pad-box-slide")) + common::ENDS_ONLY;
+    let case = case_file(name, "pad-box.geo", "params = { h = 0.2 }", &body);
+    let out = case.with_file_name("out");
+    let o = solve_cli(&case, &out, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = summary(&out);
+    assert!(s["medium_remade"].as_u64().unwrap() > 5, "made again");
+    let (cols, rows) = history(&out);
+    let col = |name: &str| cols.iter().position(|c| c == name).unwrap();
+    let (t, ux, fx, fy) = (col("time"), col("U_top_x"), col("R_top_x"), col("R_top_y"));
+    let pressed = -rows.iter().find(|r| r[t] == 1.0).expect("the press's end")[fy];
+    let drag: Vec<[f64; 3]> = (rows.iter().filter(|r| r[t] > 1.0))
+        .map(|r| [r[ux], r[fx] / -r[fy], -r[fy]])
+        .collect();
+    assert!(
+        (drag.last().unwrap()[0] - 1.0).abs() < 1e-12,
+        "the whole drag"
+    );
+    (drag, pressed)
+}
+
+/// Issue 68's pad drawn as users draw it: the medium a box around the pad, default triangles,
+/// no layer of its own and no expert key. Before its corner was joined over the plate's face
+/// at a remake (`mesh::remesh::fans`) and the box's own faces were placed anew
+/// (`model::remake::Medium::own_places`), it stalled at a drag of 0.11 frictionless and 0.19
+/// at μ = 0.3 (on h = 0.1), its leading corner's cells turned inside out.
+#[test]
+fn a_pad_in_a_box_of_medium_slides_its_width_frictionless_and_at_mu() {
+    let (drag, pressed) = pad_in_a_box("pad-box-frictionless", |b| {
+        let b = b.replace("friction = { mu = 0.3, normal = \"auto\" }\n", "");
+        assert!(!b.contains("friction"));
+        b
+    });
+    // measured: F_t/F_n 0.005 on average, 0.014 at most; F_n 1.0 % below to 0.9 % above the
+    // press's (on h = 0.1: 0.043 at most, and dragged five widths 0.0024 on average)
+    let mean = drag.iter().map(|d| d[1]).sum::<f64>() / drag.len() as f64;
+    let most = drag.iter().fold(0.0f64, |m, d| m.max(d[1].abs()));
+    assert!(mean.abs() < 0.01 && most < 0.02, "F_t/F_n {mean}, {most}");
+    for d in &drag {
+        assert!(
+            (d[2] / pressed - 1.0).abs() < 0.02,
+            "F_n {} of {pressed}",
+            d[2]
+        );
+    }
+    // at μ = 0.3, once the pad slips (a slide of 0.05): measured 0.344 on average, 0.296 to
+    // 0.495 (on h = 0.1: 0.313, 0.294 to 0.369; issue 68 asks within 3 % of μ, not met)
+    let (drag, _) = pad_in_a_box("pad-box-mu", |b| b);
+    let slipping: Vec<f64> = (drag.iter().filter(|d| d[0] > 0.05))
+        .map(|d| d[1])
+        .collect();
+    let mean = slipping.iter().sum::<f64>() / slipping.len() as f64;
+    let (lo, hi) = (slipping.iter()).fold((f64::MAX, 0.0f64), |(l, h), r| (l.min(*r), h.max(*r)));
+    assert!(
+        (0.29..0.36).contains(&mean) && lo > 0.28 && hi < 0.52,
+        "F_t/F_n {mean} on average, {lo} to {hi}"
+    );
 }
