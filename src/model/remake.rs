@@ -648,30 +648,27 @@ impl Medium {
     /// outer faces, followed as the bodies drag what is around them, carried the box a user
     /// drew along with a body (a pad slid 2.5 of its widths pulled its box's top 1.6 above
     /// where it was drawn, and the run stopped there). Other nodes: `None`.
+    /// In 2D (`remake` says why not in 3D).
     fn own_places(&self, model: &Model, x: &[f64]) -> Result<Vec<Option<[f64; 3]>>, String> {
         let on_solid = model.on_solids();
         let mesh = &model.mesh;
-        // the boundary's edges: a 2D region's edges of one cell, a 3D one's faces' edges
-        let mut edges: Vec<[usize; 2]> = Vec::new();
-        if mesh.dim == 3 {
-            for f in crate::mesh::faces::outer_triangles(mesh, &self.blocks)? {
-                edges.extend([[f[0], f[1]], [f[1], f[2]], [f[2], f[0]]]);
-            }
-        } else {
-            let mut count: HashMap<[usize; 2], usize> = HashMap::new();
-            for &b in &self.blocks {
-                let blk = &mesh.cells[b];
-                let k = blk.kind.corners();
-                for c in 0..blk.n_cells() {
-                    let cell = &blk.cell(c)[..k];
-                    for i in 0..k {
-                        let (a, b) = (cell[i], cell[(i + 1) % k]);
-                        *count.entry([a.min(b), a.max(b)]).or_default() += 1;
-                    }
+        // the boundary's edges: the edges of one cell (2D)
+        let mut count: HashMap<[usize; 2], usize> = HashMap::new();
+        for &b in &self.blocks {
+            let blk = &mesh.cells[b];
+            let k = blk.kind.corners();
+            for c in 0..blk.n_cells() {
+                let cell = &blk.cell(c)[..k];
+                for i in 0..k {
+                    let (a, b) = (cell[i], cell[(i + 1) % k]);
+                    *count.entry([a.min(b), a.max(b)]).or_default() += 1;
                 }
             }
-            edges.extend(count.into_iter().filter(|(_, c)| *c == 1).map(|(e, _)| e));
         }
+        let mut edges: Vec<[usize; 2]> = (count.into_iter())
+            .filter(|(_, c)| *c == 1)
+            .map(|(e, _)| e)
+            .collect();
         // in one order, so that a run and its restart place them alike to the bit
         edges.sort_unstable();
         let mut next: HashMap<usize, Vec<usize>> = HashMap::new();
@@ -689,18 +686,11 @@ impl Medium {
         let mut own: Vec<usize> = (next.keys().copied()).filter(|&n| !on_solid[n]).collect();
         own.sort_unstable();
         for i in 0..d {
-            // per component: the solids' nodes, in 3D their neighbours, and what is prescribed
-            // hold; the rest is the mean of its neighbours, a little held to where the mesh
-            // put it (so that a part no solid touches stays there). In 3D a neighbour moved to
-            // a mean crossed a body where a thin gap meets a symmetry plane, gmsh refused the
-            // faces and the remake meshed again (the sphere's slide: remakes 12.9 s against
-            // 10.3 s held); in 2D the triangulation finds a crossing at once, and holding
-            // them left a kink beside a body (a remake changed the large cylinder's
-            // reaction by 4 %, against 0.9 %)
+            // per component: the solids' nodes and what is prescribed hold; the rest is the
+            // mean of its neighbours, a little held to where the mesh put it (so that a part
+            // no solid touches stays there)
             let held = |n: usize| {
-                on_solid[n]
-                    || (mesh.dim == 3 && next[&n].iter().any(|&m| on_solid[m]))
-                    || u_of(n, i).is_some_and(|u| model.cons.prescribed[u].is_some())
+                on_solid[n] || u_of(n, i).is_some_and(|u| model.cons.prescribed[u].is_some())
             };
             let value = |n: usize| u_of(n, i).map_or(0.0, |u| x[u]);
             let free: Vec<usize> = own.iter().copied().filter(|&n| !held(n)).collect();
@@ -853,12 +843,18 @@ impl Medium {
 
     /// The medium made again at the accepted state `x` of `model`.
     ///
-    /// The medium's own outer faces are placed anew (`own_places`) where the new medium can
-    /// be made between them and the solids; where it cannot (they would cross a body that
-    /// left the box drawn around it), they stay where they are.
+    /// In 2D the medium's own outer faces are placed anew (`own_places`) where the new medium
+    /// can be made between them and the solids; where it cannot (they would cross a body that
+    /// left the box drawn around it), they stay where they are. In 3D they stay where they
+    /// are: placed anew (all, or but those beside a solid), the sphere dragged three radii
+    /// stopped at a slide of 0.46 on a tetrahedron gmsh made inside out between faces that
+    /// crossed, where it had stopped at 0.55 (docs/notes/2026-12-03-a-pad-in-a-box-slides.md).
     pub fn remake(&self, model: &Model, x: &[f64]) -> Result<Remade, RemeshError> {
         crate::mesh::remesh::failing_by_request()?;
         let here = vec![None; model.mesh.coords.len()];
+        if model.mesh.dim == 3 {
+            return self.remake_at(model, x, &here);
+        }
         match self.own_places(model, x) {
             Ok(own) => self
                 .remake_at(model, x, &own)
