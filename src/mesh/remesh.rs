@@ -250,55 +250,13 @@ fn signed_area(lp: &[usize], x: &[[f64; 3]]) -> f64 {
 /// pressed onto another's face is joined over that face's edges (`fans`). One region per
 /// entry of `loops`, its cells in group `medium{r}`, counter-clockwise.
 fn triangulate_between(loops: &[Vec<Vec<usize>>], x: &[[f64; 3]]) -> Result<Mesh, String> {
-    use spade::{
-        AngleLimit, ConstrainedDelaunayTriangulation, Point2, RefinementParameters, Triangulation,
-    };
+    use spade::{AngleLimit, RefinementParameters, Triangulation};
     let mut coords: Vec<[f64; 3]> = Vec::new();
     let mut cells = Vec::new();
     let mut groups = Vec::new();
     let equilateral = 3f64.sqrt() / 4.0;
     for (r, region) in loops.iter().enumerate() {
-        let mut cdt = ConstrainedDelaunayTriangulation::<Point2<f64>>::new();
-        let mut vertex: HashMap<usize, spade::handles::FixedVertexHandle> = HashMap::new();
-        let mut lengths = Vec::new();
-        for lp in region {
-            for &n in lp {
-                if vertex.contains_key(&n) {
-                    continue;
-                }
-                let before = cdt.num_vertices();
-                let v = (cdt.insert(Point2::new(x[n][0], x[n][1])))
-                    .map_err(|e| format!("node {n} at {:?}: {e:?}", x[n]))?;
-                if cdt.num_vertices() == before {
-                    return Err(format!(
-                        "two of the medium's boundary nodes stand at one place, {:?}",
-                        x[n]
-                    ));
-                }
-                vertex.insert(n, v);
-            }
-        }
-        for lp in region {
-            for i in 0..lp.len() {
-                let (a, b) = (lp[i], lp[(i + 1) % lp.len()]);
-                let l = (0..2).map(|k| (x[a][k] - x[b][k]).powi(2)).sum::<f64>();
-                lengths.push(l.sqrt());
-                let (va, vb) = (vertex[&a], vertex[&b]);
-                if !cdt.can_add_constraint(va, vb) {
-                    return Err(format!(
-                        "the medium's boundary crosses itself at its edge from {:?} to {:?}",
-                        x[a], x[b]
-                    ));
-                }
-                cdt.add_constraint(va, vb);
-                if cdt.get_edge_from_neighbors(va, vb).is_none() {
-                    return Err(format!(
-                        "a node stands on the medium's boundary edge from {:?} to {:?}",
-                        x[a], x[b]
-                    ));
-                }
-            }
-        }
+        let (mut cdt, vertex, mut lengths) = boundary_of(region, x)?;
         lengths.sort_by(f64::total_cmp);
         let (shortest, median) = (lengths[0], lengths[lengths.len() / 2]);
         let largest = equilateral * median * median;
@@ -315,13 +273,6 @@ fn triangulate_between(loops: &[Vec<Vec<usize>>], x: &[[f64; 3]]) -> Result<Mesh
             .with_min_required_area(equilateral * (0.1 * shortest).powi(2))
             .with_max_additional_vertices(10 * vertex.len() + inside);
         let refined = cdt.refine(params);
-        let walls: std::collections::HashSet<(usize, usize)> = (region.iter())
-            .flat_map(|lp| (0..lp.len()).map(move |i| (lp[i], lp[(i + 1) % lp.len()])))
-            .map(|(a, b)| {
-                let (i, j) = (vertex[&a].index(), vertex[&b].index());
-                (i.min(j), i.max(j))
-            })
-            .collect();
         if !refined.refinement_complete {
             return Err(format!(
                 "its triangles' refinement stopped at {} nodes, the most it may add to the {} \
@@ -330,13 +281,7 @@ fn triangulate_between(loops: &[Vec<Vec<usize>>], x: &[[f64; 3]]) -> Result<Mesh
                 vertex.len()
             ));
         }
-        for (n, m) in fans(region, x) {
-            let (vn, vm) = (vertex[&n], vertex[&m]);
-            if cdt.can_add_constraint(vn, vm) {
-                cdt.add_constraint(vn, vm);
-            }
-        }
-        let inside = inside_faces(&cdt, &walls);
+        let inside = fanned_inside(&mut cdt, region, &vertex, x);
         let first = coords.len();
         coords.extend(
             cdt.vertices()
@@ -366,6 +311,92 @@ fn triangulate_between(loops: &[Vec<Vec<usize>>], x: &[[f64; 3]]) -> Result<Mesh
         source: std::path::PathBuf::from("medium"),
         warnings: Vec::new(),
     })
+}
+
+/// The constrained Delaunay triangulation of a region's boundary `region` (closed loops of
+/// nodes at their places `x`): the triangulation, its vertex of each node, and the lengths of
+/// the boundary's edges; an error where two nodes stand at one place, the boundary crosses
+/// itself or a node stands on one of its edges.
+#[allow(clippy::type_complexity)]
+fn boundary_of(
+    region: &[Vec<usize>],
+    x: &[[f64; 3]],
+) -> Result<
+    (
+        spade::ConstrainedDelaunayTriangulation<spade::Point2<f64>>,
+        HashMap<usize, spade::handles::FixedVertexHandle>,
+        Vec<f64>,
+    ),
+    String,
+> {
+    use spade::{ConstrainedDelaunayTriangulation, Point2, Triangulation};
+    let mut cdt = ConstrainedDelaunayTriangulation::<Point2<f64>>::new();
+    let mut vertex: HashMap<usize, spade::handles::FixedVertexHandle> = HashMap::new();
+    let mut lengths = Vec::new();
+    for lp in region {
+        for &n in lp {
+            if vertex.contains_key(&n) {
+                continue;
+            }
+            let before = cdt.num_vertices();
+            let v = (cdt.insert(Point2::new(x[n][0], x[n][1])))
+                .map_err(|e| format!("node {n} at {:?}: {e:?}", x[n]))?;
+            if cdt.num_vertices() == before {
+                return Err(format!(
+                    "two of the medium's boundary nodes stand at one place, {:?}",
+                    x[n]
+                ));
+            }
+            vertex.insert(n, v);
+        }
+    }
+    for lp in region {
+        for i in 0..lp.len() {
+            let (a, b) = (lp[i], lp[(i + 1) % lp.len()]);
+            let l = (0..2).map(|k| (x[a][k] - x[b][k]).powi(2)).sum::<f64>();
+            lengths.push(l.sqrt());
+            let (va, vb) = (vertex[&a], vertex[&b]);
+            if !cdt.can_add_constraint(va, vb) {
+                return Err(format!(
+                    "the medium's boundary crosses itself at its edge from {:?} to {:?}",
+                    x[a], x[b]
+                ));
+            }
+            cdt.add_constraint(va, vb);
+            if cdt.get_edge_from_neighbors(va, vb).is_none() {
+                return Err(format!(
+                    "a node stands on the medium's boundary edge from {:?} to {:?}",
+                    x[a], x[b]
+                ));
+            }
+        }
+    }
+    Ok((cdt, vertex, lengths))
+}
+
+/// The region's corners pressed on faces joined over them in `cdt` (`fans`; `vertex` the
+/// triangulation's vertex of each boundary node), then which of its faces lie inside the
+/// region the loops `region` bound (`inside_faces`).
+fn fanned_inside(
+    cdt: &mut spade::ConstrainedDelaunayTriangulation<spade::Point2<f64>>,
+    region: &[Vec<usize>],
+    vertex: &HashMap<usize, spade::handles::FixedVertexHandle>,
+    x: &[[f64; 3]],
+) -> Vec<bool> {
+    let walls: std::collections::HashSet<(usize, usize)> = (region.iter())
+        .flat_map(|lp| (0..lp.len()).map(move |i| (lp[i], lp[(i + 1) % lp.len()])))
+        .map(|(a, b)| {
+            let (i, j) = (vertex[&a].index(), vertex[&b].index());
+            (i.min(j), i.max(j))
+        })
+        .collect();
+    for (n, m) in fans(region, x) {
+        let (vn, vm) = (vertex[&n], vertex[&m]);
+        if cdt.can_add_constraint(vn, vm) {
+            cdt.add_constraint(vn, vm);
+        }
+    }
+    inside_faces(cdt, &walls)
 }
 
 /// Which faces of `cdt` (by index) lie inside the region whose boundary edges are `walls`
