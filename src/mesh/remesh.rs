@@ -60,7 +60,7 @@ pub struct Remeshed {
 
 /// A region's boundary edges (corner nodes, the region on their left in the current places),
 /// and the closed loops they make; an error says why they make none.
-fn boundary_loops(mesh: &Mesh, blocks: &[usize]) -> Result<Vec<Vec<usize>>, String> {
+pub fn boundary_loops(mesh: &Mesh, blocks: &[usize]) -> Result<Vec<Vec<usize>>, String> {
     let mut edges: HashMap<(usize, usize), (usize, usize, usize)> = HashMap::new();
     for &b in blocks {
         let blk = &mesh.cells[b];
@@ -649,27 +649,6 @@ fn tetrahedralize_between(faces: &[Vec<[usize; 3]>], x: &[[f64; 3]]) -> Result<M
         }
     }
     Err(failed.join("; and with HXT: "))
-}
-
-/// For the tests of a remake that fails (`tests/it/sliding.rs`): whether this remake (from 1)
-/// is one of those `TMC_TEST_REMAKE_FAILS` lists, by commas, and how: `N` as the mesher
-/// fails (the run may go on a step), `N!` as a medium whose boundary crosses itself (it may
-/// not). Unset in any real run.
-pub fn failing_by_request() -> Result<(), RemeshError> {
-    static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
-    let Ok(list) = std::env::var("TMC_TEST_REMAKE_FAILS") else {
-        return Ok(());
-    };
-    let call = (CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1).to_string();
-    let why = "the remake was asked to fail (TMC_TEST_REMAKE_FAILS)".to_string();
-    for item in list.split(',').map(str::trim) {
-        match item.strip_suffix('!') {
-            Some(n) if n == call => return Err(RemeshError { why, mesher: false }),
-            None if item == call => return Err(RemeshError::mesher(why)),
-            _ => {}
-        }
-    }
-    Ok(())
 }
 
 /// The node of `nodes` standing at a place (to 1e-9 of the extent of `x`), if any.
