@@ -7,13 +7,16 @@
 //! plane, its reference place across it, and the slip shifted so that every point's elastic
 //! shear stays what it was), and the re-joined cells then start from the state as it is
 //! ([`References::reset`]). Cells need not agree on a shared node's reference, as with a
-//! plastic deformation per cell.
+//! plastic deformation per cell. A medium made again as the bodies move (`remake`) measures
+//! its cells from their own references too, and its closed layers take their slide into them
+//! at every accepted step ([`References::absorb_below`]), the way a layer does before it is
+//! joined again.
 #![allow(non_snake_case)]
 
 use super::history::Slab;
 use crate::dofs::{CellState, gather, rebase};
 use crate::element::RefElement;
-use crate::kernel::friction::{HISTORY_PER_POINT, plane_shear, shift_slip};
+use crate::kernel::friction::{HISTORY_PER_POINT, plane_shear, shift_slip, volume_ratio};
 use crate::material::friction::along_plane;
 use crate::mesh::Block;
 use crate::model::{FrictionBlock, Model};
@@ -70,13 +73,36 @@ impl References {
     /// history `slab` (committed and trial) is shifted by what that takes off the plane's
     /// shear, so that every point's elastic shear stays what it was.
     pub fn absorb(&mut self, model: &Model, fb: &FrictionBlock, slab: &mut Slab, x: &[f64]) {
+        self.absorb_below(model, fb, slab, x, f64::INFINITY);
+    }
+
+    /// As [`References::absorb`], for the cells whose volume ratio J is below `closed` (a
+    /// closed layer) alone.
+    pub fn absorb_below(
+        &mut self,
+        model: &Model,
+        fb: &FrictionBlock,
+        slab: &mut Slab,
+        x: &[f64],
+        closed: f64,
+    ) {
         let Some(reference) = self.blocks[fb.block].as_mut() else {
             return;
         };
         let blk = &model.mesh.cells[fb.block];
         crate::with_cell!(blk.kind, |N, D, E| absorb_block::<N, D, E>(
-            model, fb, blk, reference, slab, x
+            model, fb, blk, reference, slab, x, closed
         ));
+    }
+
+    /// Every block's reference node coordinates per cell, where it has its own.
+    pub fn blocks(&self) -> &[Option<Vec<[f64; 3]>>] {
+        &self.blocks
+    }
+
+    /// Take `blocks` (as [`References::blocks`] gave them) as the blocks' own references.
+    pub fn set_blocks(&mut self, blocks: Vec<Option<Vec<[f64; 3]>>>) {
+        self.blocks = blocks;
     }
 
     /// Every reconnected cell's reference at the state `x` along its plane (X' = X + P u from
@@ -140,12 +166,16 @@ fn absorb_block<const N: usize, const D: usize, E: RefElement<N, D>>(
     reference: &mut [[f64; 3]],
     slab: &mut Slab,
     x: &[f64],
+    closed: f64,
 ) {
     let points = E::quadrature().len();
     let w = HISTORY_PER_POINT * points;
     let (mut before, mut after) = (vec![0.0; 3 * points], vec![0.0; 3 * points]);
     for c in 0..blk.n_cells() {
         let mut s = cell_state::<N>(model, blk.cell(c), Some(reference), c, x);
+        if !volume_ratio::<N, D, E>(&fb.layout, &s).is_ok_and(|J| J < closed) {
+            continue;
+        }
         let moved = slid_along(fb, c, &s);
         let normal = fb.normals.of(c);
         // an accepted state inverts no cell, and the move keeps each node's place across the

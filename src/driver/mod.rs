@@ -527,7 +527,7 @@ fn solve_model(
             }
             (None, Some(medium)) => {
                 let (t, target) = run.next_step();
-                let due = medium.due(&model, run.state(), t, target);
+                let due = medium.due(&model, run.references(), run.state(), t, target);
                 // the watch after this state, for the next step's checkpoint
                 run.keep_medium(medium);
                 (due || stuck.after(run.rejected(), t)).then_some(Change::Remake)
@@ -644,7 +644,7 @@ fn remade_or_kept<'a>(
     model: &Model,
     failed: &mut usize,
 ) -> Result<(Run<'a>, Option<remake::Remade>), SolveError> {
-    match m.remake(model, run.state()) {
+    match m.remake(model, run.references(), run.state()) {
         Ok(new) => {
             *failed = 0;
             Ok((run, Some(new)))
@@ -764,6 +764,8 @@ fn remade(
     new.cell_reference = made.reference.clone();
     let from = made.old_dofs(model, &new);
     let old_state = std::mem::take(&mut cp.state.x);
+    // the old cells as the run left them; the new ones start from the remake's references
+    let old_reference = cp.state.references.take();
     cp.state.x = made.state(model, &old_state, &new);
     // the forces the work is counted from, per displacement dof in dof order: a new node's
     // are nil (no load acts inside the medium)
@@ -792,8 +794,15 @@ fn remade(
         .collect();
     let mut friction = match new.friction_blocks.is_empty() {
         true => Vec::new(),
-        false => remake::carried_friction(model, &old_state, &old_friction, &new, &cp.state.x)
-            .map_err(|e| SolveError::Setup(format!("the medium could not be made again: {e}")))?,
+        false => remake::carried_friction(
+            model,
+            old_reference.as_deref().unwrap_or(&model.cell_reference),
+            &old_state,
+            &old_friction,
+            &new,
+            &cp.state.x,
+        )
+        .map_err(|e| SolveError::Setup(format!("the medium could not be made again: {e}")))?,
     }
     .into_iter();
     cp.state.point_history = (crate::assembly::history_terms(&new).into_iter())

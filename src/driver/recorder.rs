@@ -251,6 +251,7 @@ impl<'a> Recorder<'a> {
             state: RunState {
                 x: st.x.clone(),
                 point_history: st.asm.whole_history(st.model),
+                references: (st.asm.absorbs(st.model)).then(|| st.asm.reference.blocks().to_vec()),
                 clock: st.ctl.clock(),
                 newton: st.newton.tally(),
                 totals: totals.clone(),

@@ -176,6 +176,8 @@ impl<'a> Run<'a> {
         let dlambda = model.path.lambda(target) - model.path.lambda(self.st.ctl.t);
         let (step, x_last) = self.st.advance(target, trial, rep.iterations);
         let warning = self.accounts.step(&mut self.st, &step, &x_last, &rep)?;
+        // what the next step starts from, written to the checkpoint below
+        (self.st.asm).absorb_closed_layers(self.st.model, &self.st.x);
         self.take_point_totals();
         if let Some(warning) = warning.filter(|_| !self.opts.quiet) {
             self.rec.say(&warning);
@@ -323,6 +325,12 @@ impl<'a> Run<'a> {
         &self.st.x
     }
 
+    /// The cells' own references as the run has them (a medium's closed layers take their
+    /// slide into them at each accepted step).
+    pub(super) fn references(&self) -> &crate::model::remake::CellReferences {
+        self.st.asm.reference.blocks()
+    }
+
     /// Continue from a checkpoint instead of recording the initial state: the run goes on as
     /// if it had never stopped.
     pub(super) fn resume(&mut self, cp: Checkpoint) -> Result<(), SolveError> {
@@ -344,6 +352,9 @@ impl<'a> Run<'a> {
         }
         st.x = state.x;
         st.asm.resume(&state.point_history);
+        if let Some(blocks) = state.references {
+            st.asm.reference.set_blocks(blocks);
+        }
         st.ctl.set_clock(state.clock);
         st.newton.resume(state.newton);
         self.accounts.totals = state.totals;

@@ -13,6 +13,10 @@ pub struct RunState {
     /// The last accepted state, and the assembler's committed history per block of points.
     pub x: Vec<f64>,
     pub point_history: Vec<Vec<f64>>,
+    /// The cells' own references where a medium made again has closed layers that take their
+    /// slide into them ([`crate::assembly::Assembler::absorb_closed_layers`]), per mesh block.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub references: Option<Vec<Option<Vec<[f64; 3]>>>>,
     /// The step controller: time reached, next increment, accepted and rejected steps.
     #[serde(flatten)]
     pub clock: Clock,
@@ -145,6 +149,7 @@ mod tests {
         let state = RunState {
             x: vec![0.1, -1.0 / 3.0, 1e-300],
             point_history: vec![vec![], vec![2.0_f64.sqrt()]],
+            references: Some(vec![None, Some(vec![[0.1, 1.0 / 3.0, -0.0]])]),
             clock: Clock {
                 t: 0.3,
                 dt: 0.0125,
@@ -183,5 +188,10 @@ mod tests {
         assert_eq!(back.clock, state.clock);
         assert_eq!(back.totals.heat_in, state.totals.heat_in);
         assert_eq!(back.files.seconds, state.files.seconds);
+        let place = |s: &RunState| s.references.as_ref().unwrap()[1].as_ref().unwrap()[0];
+        assert_eq!(
+            place(&back).map(f64::to_bits),
+            place(&state).map(f64::to_bits)
+        );
     }
 }

@@ -97,6 +97,15 @@ pub fn plane_shear<const N: usize, const D: usize, E: RefElement<N, D>>(
     Ok(())
 }
 
+/// The cell's volume ratio J at its first quadrature point.
+pub fn volume_ratio<const N: usize, const D: usize, E: RefElement<N, D>>(
+    lay: &Layout,
+    s: &CellState<N>,
+) -> Result<f64, KernelError> {
+    let (xi, w) = &E::quadrature()[0];
+    Ok(point::<N, D, E>(xi, *w, lay, s, 0.0)?.F.determinant())
+}
+
 /// Shift the slip of one cell's history (`HISTORY_PER_POINT` values per point) by `shift`
 /// (3 values per point): a cell whose reference configuration moves measures the plane's
 /// shear from elsewhere, and its elastic shear γ − g must stay what it was.

@@ -45,6 +45,11 @@ pub const SLID: f64 = 0.5;
 /// The J below which a medium cell is a closed layer, whose compression a new cell carries.
 pub const CLOSED: f64 = 0.5;
 
+/// Per mesh block, its cells' own reference node coordinates (N per cell, in cell order), or
+/// `None` for a block measured from the mesh: a model's as made ([`Model::cell_reference`]),
+/// or a run's, whose closed layers have taken their slide into them since.
+pub type CellReferences = [Option<Vec<[f64; 3]>>];
+
 /// A medium region whose `remake` cannot be done, and why.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RemakeError {
@@ -328,9 +333,22 @@ impl Model {
     /// Cell `c` of mesh block `block` at the state `x`, measured from its own reference where
     /// it has one.
     pub fn cell_state<const N: usize>(&self, block: usize, c: usize, x: &[f64]) -> CellState<N> {
+        self.cell_state_in::<N>(&self.cell_reference, block, c, x)
+    }
+
+    /// As [`Model::cell_state`], the cells measured from `reference` (per block, its own
+    /// reference node coordinates per cell, where it has them) instead of the model's: those
+    /// a run's closed layers have moved since ([`CellReferences`]).
+    pub fn cell_state_in<const N: usize>(
+        &self,
+        reference: &CellReferences,
+        block: usize,
+        c: usize,
+        x: &[f64],
+    ) -> CellState<N> {
         let nodes = self.mesh.cells[block].cell(c);
         let mut s = gather::<N>(&self.mesh.coords, &self.dofs, nodes, x);
-        if let Some(r) = &self.cell_reference[block] {
+        if let Some(r) = &reference[block] {
             rebase(&mut s, &r[c * N..(c + 1) * N]);
         }
         s
@@ -366,6 +384,7 @@ impl Model {
 /// The old medium's cells where they are, to find which one holds a point.
 struct Locator<'a> {
     model: &'a Model,
+    reference: &'a CellReferences,
     x: &'a [f64],
     /// (block, cell) of every medium cell, and its nodes' places.
     cells: Vec<(usize, usize, Vec<[f64; 3]>)>,
@@ -377,7 +396,12 @@ struct Locator<'a> {
 }
 
 impl<'a> Locator<'a> {
-    fn new(model: &'a Model, blocks: &[usize], x: &'a [f64]) -> Locator<'a> {
+    fn new(
+        model: &'a Model,
+        reference: &'a CellReferences,
+        blocks: &[usize],
+        x: &'a [f64],
+    ) -> Locator<'a> {
         let dim = model.mesh.dim;
         let mut cells = Vec::new();
         for &b in blocks {
@@ -420,6 +444,7 @@ impl<'a> Locator<'a> {
         });
         let mut loc = Locator {
             model,
+            reference,
             x,
             cells: Vec::new(),
             lo,
@@ -480,7 +505,7 @@ impl<'a> Locator<'a> {
         crate::with_cell!(kind, |N, D, E| {
             let X: [[f64; 3]; N] = std::array::from_fn(|I| places[I]);
             let xi = local_coords::<N, D, E>(&X, p)?;
-            let s = self.model.cell_state::<N>(*b, *c, self.x);
+            let s = (self.model).cell_state_in::<N>(self.reference, *b, *c, self.x);
             let nodes = self.model.mesh.cells[*b].cell(*c);
             at(&At::<N, D, E> {
                 s,
@@ -620,14 +645,14 @@ impl Medium {
     /// over its cells of the shear (see [`shear`]) times the cell's height over its length
     /// in its reference (a layer of height H and length L sheared by γ has slid γ H, or
     /// γ H / L cells).
-    pub fn slid_cells(&self, model: &Model, x: &[f64]) -> f64 {
+    pub fn slid_cells(&self, model: &Model, reference: &CellReferences, x: &[f64]) -> f64 {
         let mut most = 0.0f64;
         for &b in &self.blocks {
             let blk = &model.mesh.cells[b];
             crate::with_cell!(blk.kind, |N, D, E| {
                 let xi = centre::<N, D, E>();
                 for c in 0..blk.n_cells() {
-                    let s = model.cell_state::<N>(b, c, x);
+                    let s = model.cell_state_in::<N>(reference, b, c, x);
                     if let Some(F) = cell_F::<N, D, E>(&s, &xi) {
                         most = most.max(match D {
                             2 => shear(&plane(&F)) * slenderness(&s.X, E::SIMPLEX),
@@ -734,7 +759,14 @@ impl Medium {
     /// opens (or inverts). Each sliver's node is followed from one accepted state (at `t`) to
     /// the next; once the next step (to `target`), at the speed of the last, would take it
     /// past an end, it is due.
-    pub fn due(&mut self, model: &Model, x: &[f64], t: f64, target: f64) -> bool {
+    pub fn due(
+        &mut self,
+        model: &Model,
+        reference: &CellReferences,
+        x: &[f64],
+        t: f64,
+        target: f64,
+    ) -> bool {
         let mut passing = false;
         let dt = t - self.t;
         let mut rate = 0.0f64;
@@ -757,7 +789,7 @@ impl Medium {
         }
         self.t = t;
         self.rate = rate;
-        passing || self.slid_cells(model, x) >= SLID
+        passing || self.slid_cells(model, reference, x) >= SLID
     }
 
     /// Start following the medium's slivers at the state `x` at `t` (the initial state, or the
@@ -829,17 +861,22 @@ impl Medium {
     /// are: placed anew (all, or but those beside a solid), the sphere dragged three radii
     /// stopped at a slide of 0.46 on a tetrahedron gmsh made inside out between faces that
     /// crossed, where it had stopped at 0.55 (docs/notes/2026-12-03-a-pad-in-a-box-slides.md).
-    pub fn remake(&self, model: &Model, x: &[f64]) -> Result<Remade, RemeshError> {
+    pub fn remake(
+        &self,
+        model: &Model,
+        reference: &CellReferences,
+        x: &[f64],
+    ) -> Result<Remade, RemeshError> {
         failing_by_request()?;
         let here = vec![None; model.mesh.coords.len()];
         if model.mesh.dim == 3 {
-            return self.remake_at(model, x, &here);
+            return self.remake_at(model, reference, x, &here);
         }
         match self.own_places(model, x) {
             Ok(own) => self
-                .remake_at(model, x, &own)
-                .or_else(|_| self.remake_at(model, x, &here)),
-            Err(_) => self.remake_at(model, x, &here),
+                .remake_at(model, reference, x, &own)
+                .or_else(|_| self.remake_at(model, reference, x, &here)),
+            Err(_) => self.remake_at(model, reference, x, &here),
         }
     }
 
@@ -848,6 +885,7 @@ impl Medium {
     fn remake_at(
         &self,
         model: &Model,
+        reference: &CellReferences,
         x: &[f64],
         own: &[Option<[f64; 3]>],
     ) -> Result<Remade, RemeshError> {
@@ -855,7 +893,7 @@ impl Medium {
             .map(|n| own[n].unwrap_or_else(|| model.placed(n, x)))
             .collect();
         let r = remesh(&model.mesh, &placed, &self.blocks)?;
-        let find = Locator::new(model, &self.blocks, x);
+        let find = Locator::new(model, reference, &self.blocks, x);
         let here = |n: usize| match r.old_of[n] {
             Some(o) => placed[o],
             None => r.mesh.coords[n],
@@ -980,13 +1018,15 @@ fn mean_of_neighbours(
 
 /// The friction history of every friction block of `new`, the model of a medium made again,
 /// at its state `x` (one slab per block, in the order of `new.friction_blocks`): each new point
-/// carries on what the old medium (`old` at the state `old_x`, the committed history
-/// `old_slabs` per friction block of `old`) transmitted where it stands, the share of its
+/// carries on what the old medium (`old` at the state `old_x`, its cells measured from
+/// `old_reference`, the committed history `old_slabs` per friction block of `old`)
+/// transmitted where it stands, the share of its
 /// Coulomb limit and its traction's direction (`kernel::friction::carried_cell`). The work a
 /// region's old cells dissipated is shared among its new points by their volume, so that the
 /// run's friction work and heat go on whole.
 pub fn carried_friction(
     old: &Model,
+    old_reference: &CellReferences,
     old_x: &[f64],
     old_slabs: &[&[f64]],
     new: &Model,
@@ -1000,7 +1040,7 @@ pub fn carried_friction(
             .filter(|&k| old.friction_blocks[k].region == fb.region)
             .collect();
         let blocks: Vec<usize> = olds.iter().map(|&k| old.friction_blocks[k].block).collect();
-        let find = Locator::new(old, &blocks, old_x);
+        let find = Locator::new(old, old_reference, &blocks, old_x);
         let at = |y: &[f64; 3]| {
             find.value(y, |cell| {
                 let (b, c) = cell.cell();
