@@ -16,7 +16,7 @@ use super::{Active, KernelError};
 use crate::dofs::{CellState, Layout};
 use crate::element::RefElement;
 use crate::material::friction::{
-    Friction, MediumStress, plane_pair, plane_shear as shear_of, shear_modulus,
+    Friction, MediumStress, plane_shear as shear_of, plane_stress, shear_modulus,
 };
 use crate::material::{SolidLaw, Tensor4};
 use nalgebra::{Matrix3, Vector3};
@@ -54,6 +54,9 @@ pub struct FrictionMaterial {
     /// this kernel adds the difference (P(F A) Aᵀ − P(F), and its exact derivative in F), and
     /// the plane's normal traction is taken from P(F A) Aᵀ.
     pub forget_slip: bool,
+    /// The plane carries its traction alone, P = F τ ⊗ N
+    /// ([`crate::material::friction::plane_stress`]): a medium made again.
+    pub traction_only: bool,
 }
 
 /// The medium's own stress at the elastic part F A of the deformation F (A = I − slip⊗N),
@@ -263,6 +266,7 @@ pub fn friction<const N: usize, const D: usize, E: RefElement<N, D>>(
             normal: *normal,
             rate: mat.viscosity * inv_dt,
             lagged: mat.lagged.then_some(h[P_N]).filter(|&p| p > 0.0),
+            traction_only: mat.traction_only,
         };
         let medium = MediumStress {
             P: mP,
@@ -398,7 +402,7 @@ pub fn slip_fields<const N: usize, const D: usize, E: RefElement<N, D>>(
         let slip = Vector3::new(h[0], h[1], h[2]);
         let (G, _) = shear_modulus(mat.c_f, mat.medium.bulk_modulus(), J);
         let tau = (shear_of(&F, normal) - slip) * G;
-        stress += F * plane_pair(normal, &tau) * F.transpose() / J * dV;
+        stress += F * plane_stress(normal, &tau, mat.traction_only) * F.transpose() / J * dV;
         if mat.forget_slip {
             // the accepted state's slip is this history's: the law's stress at that F_e, less
             // the bulk's at F, as a Cauchy stress
@@ -447,6 +451,7 @@ mod tests {
         viscosity: 0.0,
         lagged: false,
         forget_slip: false,
+        traction_only: false,
     };
 
     /// 1/Δt of the checks' step (the slip viscosity acts over it).
@@ -518,7 +523,10 @@ mod tests {
                 let F = sent[q].2;
                 let (G, _) = shear_modulus(mat.c_f, mat.medium.bulk_modulus(), F.determinant());
                 let stress = |n: &Vector3<f64>, g: &[f64]| {
-                    plane_pair(n, &((shear_of(&F, n) - Vector3::new(g[0], g[1], g[2])) * G))
+                    crate::material::friction::plane_pair(
+                        n,
+                        &((shear_of(&F, n) - Vector3::new(g[0], g[1], g[2])) * G),
+                    )
                 };
                 let (was, is) = (stress(&NORMAL, h), stress(&normal, c));
                 assert!(
@@ -765,17 +773,25 @@ mod tests {
         check::<3, 2, Tri3>(&stuck, false);
         check::<4, 2, Quad4>(&stuck, false);
         check::<8, 3, Hex8>(&stuck, false);
-        // the medium's law at the elastic part F (I − gₙ⊗N), in slip and in stick
+        // the medium's law at the elastic part F (I − gₙ⊗N), and the plane's traction alone
+        // (a medium made again), in slip and in stick
         for mat in [MATERIAL, stuck, viscous] {
-            let forgetting = FrictionMaterial {
-                forget_slip: true,
-                ..mat
-            };
             let slips = mat.mu < 1.0;
-            check::<3, 2, Tri3>(&forgetting, slips);
-            check::<4, 2, Quad4>(&forgetting, slips);
-            check::<4, 3, Tet4>(&forgetting, slips);
-            check::<8, 3, Hex8>(&forgetting, slips);
+            for variant in [
+                FrictionMaterial {
+                    forget_slip: true,
+                    ..mat
+                },
+                FrictionMaterial {
+                    traction_only: true,
+                    ..mat
+                },
+            ] {
+                check::<3, 2, Tri3>(&variant, slips);
+                check::<4, 2, Quad4>(&variant, slips);
+                check::<4, 3, Tet4>(&variant, slips);
+                check::<8, 3, Hex8>(&variant, slips);
+            }
         }
     }
 

@@ -47,6 +47,9 @@ pub struct Friction {
     /// The normal traction the limit takes, when it is the last accepted step's (the limit
     /// then does not move within the step: Tresca's); `None`: the current one.
     pub lagged: Option<f64>,
+    /// The plane carries its traction alone, P = F τ ⊗ N, as an interface does, instead of
+    /// P = F (N⊗τ + τ⊗N) ([`plane_stress`]).
+    pub traction_only: bool,
 }
 
 /// The medium's own first Piola–Kirchhoff stress at the point and its derivatives: the normal
@@ -109,6 +112,21 @@ pub fn along_plane(N: &Vector3<f64>) -> Matrix3<f64> {
 /// (the virtual work τ · δγ), or of its derivative in a scalar where τ is that derivative.
 pub fn plane_pair(N: &Vector3<f64>, tau: &Vector3<f64>) -> Matrix3<f64> {
     N * tau.transpose() + tau * N.transpose()
+}
+
+/// The slip plane's second Piola stress for a shear τ on the plane of unit normal `N` (or its
+/// derivative in a scalar where τ is that derivative): N⊗τ + τ⊗N ([`plane_pair`]), or with
+/// `traction_only` τ⊗N, whose P = F τ ⊗ N carries the traction F τ across the plane and
+/// nothing across any other. The first is the work conjugate of γ; on a layer sheared by s
+/// since its reference it also carries F N τ across planes normal to τ, whose part along the
+/// layer, s τ, pushes the bodies at the layer's ends (δ τ per end for a slide δ, whatever the
+/// layer's thickness). The second drops it: its couple, τ times the layer's current
+/// thickness, vanishes as the layer closes. A medium made again takes the second.
+pub fn plane_stress(N: &Vector3<f64>, tau: &Vector3<f64>, traction_only: bool) -> Matrix3<f64> {
+    match traction_only {
+        true => tau * N.transpose(),
+        false => plane_pair(N, tau),
+    }
 }
 
 /// The plane's shear per reference thickness at `F`, γ = P C N (C = FᵀF), for the slip
@@ -207,8 +225,10 @@ impl Friction {
         } else {
             (Matrix3::zeros(), 0.0)
         };
-        let S = plane_pair(&N, &tau);
-        // A_iJkL = δ_ik S_LJ + (F N)_i dτ_J/dF_kL + (F dτ/dF)_i,kL N_J
+        let S = plane_stress(&N, &tau, self.traction_only);
+        // A_iJkL = δ_ik S_LJ + (F N)_i dτ_J/dF_kL + (F dτ/dF)_i,kL N_J (the second term not
+        // where the plane carries its traction alone)
+        let pair = if self.traction_only { 0.0 } else { 1.0 };
         let Fdtau = F * dtau;
         let mut A = Tensor4::zeros();
         for (i, Jc, k, L) in
@@ -216,9 +236,9 @@ impl Friction {
         {
             let d = if i == k { S[(L, Jc)] } else { 0.0 };
             A[(3 * i + Jc, 3 * k + L)] =
-                d + FN[i] * dtau[(Jc, 3 * k + L)] + Fdtau[(i, 3 * k + L)] * N[Jc];
+                d + pair * FN[i] * dtau[(Jc, 3 * k + L)] + Fdtau[(i, 3 * k + L)] * N[Jc];
         }
-        let S_theta = plane_pair(&N, &dtau_dtheta);
+        let S_theta = plane_stress(&N, &dtau_dtheta, self.traction_only);
         Some(FrictionResponse {
             P: F * S,
             dP_dF: A,
@@ -341,6 +361,7 @@ mod tests {
             normal,
             rate: 0.0,
             lagged: None,
+            traction_only: false,
         }
     }
 
@@ -395,19 +416,23 @@ mod tests {
 
     #[test]
     fn the_tangent_is_the_derivative_of_the_stress_in_stick_and_in_slip() {
-        // rate-independent, viscous, and with the limit's p_n lagged (a value near the
-        // layer's own, 0.9)
-        for (dim, rate, lagged) in [
-            (2, 0.0, None),
-            (3, 0.0, None),
-            (2, 5.0, None),
-            (3, 5.0, None),
-            (2, 0.0, Some(0.9)),
-            (3, 5.0, Some(0.9)),
+        // rate-independent, viscous, with the limit's p_n lagged (a value near the layer's
+        // own, 0.9), and carrying the plane's traction alone
+        for (dim, rate, lagged, traction_only) in [
+            (2, 0.0, None, false),
+            (3, 0.0, None, false),
+            (2, 5.0, None, false),
+            (3, 5.0, None, false),
+            (2, 0.0, Some(0.9), false),
+            (3, 5.0, Some(0.9), false),
+            (2, 0.0, None, true),
+            (3, 0.0, None, true),
+            (3, 5.0, Some(0.9), true),
         ] {
             let law = Friction {
                 rate,
                 lagged,
+                traction_only,
                 ..plane(dim)
             };
             // a plane shortened along the slide, as under a leading corner
@@ -470,6 +495,40 @@ mod tests {
                 );
                 assert_eq!(r.dissipated > 0.0, slips);
             }
+        }
+    }
+
+    /// A layer sheared by a slide of 0.4 across its closed thickness 0.05, slipping: both
+    /// stresses carry the same traction across the plane; the symmetric one also carries s τ
+    /// along the layer across planes normal to the slide (what pushes at the layer's ends),
+    /// the traction alone nothing.
+    #[test]
+    fn a_sheared_layer_pushes_along_itself_unless_its_plane_carries_its_traction_alone() {
+        for dim in [2, 3] {
+            let pair = plane(dim);
+            let alone = Friction {
+                traction_only: true,
+                ..pair
+            };
+            let N = pair.normal;
+            let T = along(N);
+            let s = 0.4;
+            let F = layer(N, 0.05, s, 0.0, 0.0);
+            let (a, b) = (
+                respond(&pair, &F, &Vector3::zeros()),
+                respond(&alone, &F, &Vector3::zeros()),
+            );
+            assert!(a.slipping && b.slipping);
+            assert!((a.P * N - b.P * N).amax() < 1e-14 * (a.P * N).amax());
+            let tau = a.tau.norm();
+            let across = |r: &FrictionResponse| T.dot(&(r.P * T));
+            assert!(
+                (across(&a) - s * tau).abs() < 1e-9 * tau,
+                "{dim}D: {} against s τ = {}",
+                across(&a),
+                s * tau
+            );
+            assert!(across(&b).abs() < 1e-15, "{dim}D: {}", across(&b));
         }
     }
 

@@ -702,6 +702,7 @@ fn friction_blocks(
                 viscosity: fr.viscosity(),
                 lagged: fr.lagged_limit(),
                 forget_slip: fr.forget_slip(),
+                traction_only: region.remakes(),
             },
             normals,
             reconnect: fr.reconnect(),

@@ -630,10 +630,10 @@ fn a_pad_in_a_box_of_medium_slides_its_width_frictionless_and_at_mu() {
             d[2]
         );
     }
-    // at μ = 0.3, once the pad slips (a slide of 0.05): measured 0.319 on average, 0.296 to
-    // 0.366 (on h = 0.1: 0.309, 0.293 to 0.323; issue 68 asks within 3 % of μ, not met);
-    // before the closed layers took their slide into their references at every step, 0.344
-    // and 0.296 to 0.495 (h = 0.1: 0.313, 0.294 to 0.369)
+    // at μ = 0.3, once the pad slips (a slide of 0.05): measured 0.3175 on average, 0.302 to
+    // 0.357 (on h = 0.1: 0.308, 0.297 to 0.318; issue 68 asks within 3 % of μ, not met).
+    // With the plane's stress F (N⊗τ + τ⊗N) 0.319, 0.296 to 0.366; before the closed layers
+    // took their slide into their references at every step, 0.344, 0.296 to 0.495
     let (drag, _) = pad_in_a_box("pad-box-mu", |b| b);
     let slipping: Vec<f64> = (drag.iter().filter(|d| d[0] > 0.05))
         .map(|d| d[1])
@@ -641,7 +641,7 @@ fn a_pad_in_a_box_of_medium_slides_its_width_frictionless_and_at_mu() {
     let mean = slipping.iter().sum::<f64>() / slipping.len() as f64;
     let (lo, hi) = (slipping.iter()).fold((f64::MAX, 0.0f64), |(l, h), r| (l.min(*r), h.max(*r)));
     assert!(
-        (0.29..0.33).contains(&mean) && lo > 0.28 && hi < 0.40,
+        (0.29..0.33).contains(&mean) && lo > 0.29 && hi < 0.37,
         "F_t/F_n {mean} on average, {lo} to {hi}"
     );
 }
