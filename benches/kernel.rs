@@ -51,7 +51,7 @@ const MEDIUM: CellMaterial = CellMaterial {
         beta1: 1.0,
         beta2: 1e-2,
         d: 0.05,
-        per_current_volume: false,
+        volume_power: 0,
     }),
     reg_direct: None,
 };

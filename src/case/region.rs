@@ -270,7 +270,7 @@ impl MediumMaterial {
             beta1: self.beta1,
             beta2: self.beta2,
             d,
-            per_current_volume: remade,
+            volume_power: if remade { 2 } else { 0 },
         }
     }
 

@@ -362,7 +362,7 @@ pub(super) mod tests {
             beta1: 1.0,
             beta2: 0.3,
             d: 1.7,
-            per_current_volume: false,
+            volume_power: 0,
         }),
         reg_direct: None,
     };
@@ -550,22 +550,24 @@ pub(super) mod tests {
         check::<8, 3, Hex8>(&MEDIUM);
     }
 
-    /// A remade medium's penalty per current volume: the exact tangent, and the energy the
-    /// reference-volume penalty's times J on a cell of uniform F.
+    /// A remade medium's penalty weighed by J^k (k = 1 and k = 2): the exact tangent, and the
+    /// energy the reference-volume penalty's times J^k on a cell of uniform F.
     #[test]
-    fn medium_with_regularization_per_current_volume_tangent_and_energy() {
+    fn medium_with_regularization_weighed_by_the_volume_ratio_tangent_and_energy() {
         let reg = MEDIUM.reg.unwrap();
-        let current = CellMaterial {
+        let weighed = |volume_power| CellMaterial {
             reg: Some(Regularization {
-                per_current_volume: true,
+                volume_power,
                 ..reg
             }),
             ..MEDIUM
         };
-        check::<3, 2, Tri3>(&current);
-        check::<4, 2, Quad4>(&current);
-        check::<4, 3, Tet4>(&current);
-        check::<8, 3, Hex8>(&current);
+        for k in [1, 2] {
+            check::<3, 2, Tri3>(&weighed(k));
+            check::<4, 2, Quad4>(&weighed(k));
+            check::<4, 3, Tet4>(&weighed(k));
+            check::<8, 3, Hex8>(&weighed(k));
+        }
         // a triangle squeezed to J = 0.04 and sheared, its p fields off the rotation
         let mut s = CellState::<3>::zero();
         for (I, xi) in Tri3::nodes().iter().enumerate() {
@@ -590,13 +592,16 @@ pub(super) mod tests {
             reg: None,
             ..MEDIUM
         };
-        let (e0, e_ref, e_cur) = (energy(&bare, 0), energy(&MEDIUM, 1), energy(&current, 1));
-        let (psi_ref, psi_cur) = (e_ref - e0, e_cur - e0);
+        let (e0, e_ref) = (energy(&bare, 0), energy(&MEDIUM, 1));
+        let psi_ref = e_ref - e0;
         assert!(psi_ref > 1e-3, "the penalty is there: {psi_ref}");
-        assert!(
-            (psi_cur - 0.04 * psi_ref).abs() < 1e-12 * psi_ref,
-            "per current volume {psi_cur} against J × per reference volume {}",
-            0.04 * psi_ref
-        );
+        for (k, J_k) in [(1, 0.04), (2, 0.04 * 0.04)] {
+            let psi = energy(&weighed(k), 1) - e0;
+            assert!(
+                (psi - J_k * psi_ref).abs() < 1e-12 * psi_ref,
+                "weighed by J^{k}: {psi} against J^{k} × per reference volume {}",
+                J_k * psi_ref
+            );
+        }
     }
 }

@@ -139,7 +139,7 @@ impl LaneBlock {
     pub fn new(mat: &CellMaterial, lay: &Layout, act: Active) -> Option<LaneBlock> {
         let ok = lay.has_u
             && (lay.np == 0
-                || (mat.reg.is_some_and(|r| !r.per_current_volume)
+                || (mat.reg.is_some_and(|r| r.volume_power == 0)
                     && lay.np == lay.dim * (lay.dim - 1) / 2))
             && mat.reg_direct.is_none()
             && act.mechanics
@@ -933,7 +933,7 @@ mod tests {
                 beta1: 0.7,
                 beta2: 0.3,
                 d: 1.7,
-                per_current_volume: false,
+                volume_power: 0,
             }),
             medium: true,
             ..material(medium)

@@ -10,7 +10,8 @@ use nalgebra::Matrix3;
 
 /// Regularization of a linear medium cell at one quadrature point, eq. (20): adds
 /// ∂Ψ_Rf/∂(u, p) dV to `r` and its exact derivative (symmetric) to `k`; returns Ψ_Rf dV.
-/// Per current volume ([`Regularization::per_current_volume`]) the same with Ψ_Rf J dV.
+/// Weighed by the volume ratio ([`Regularization::volume_power`] k > 0) the same with
+/// Ψ_Rf J^k dV.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(super) fn regularization<const N: usize, const D: usize, M: MulAdd>(
@@ -24,9 +25,9 @@ pub(super) fn regularization<const N: usize, const D: usize, M: MulAdd>(
     r: &mut [f64],
     tangent: Option<(&mut UuBlocks<N>, &mut PBlocks<N>)>,
 ) -> Result<f64, KernelError> {
-    // per current volume: J and h_I = F⁻ᵀ ∇_X N_I (∂J/∂u(I,a) = J h_Ia); the terms below are
-    // then weighed by J dV, and Ψ ∂J with its derivatives is added after them
-    let current = if reg.per_current_volume {
+    // weighed by J^k: J and h_I = F⁻ᵀ ∇_X N_I (∂J/∂u(I,a) = J h_Ia); the terms below are
+    // then weighed by J^k dV, and Ψ ∂(J^k) with its derivatives is added after them
+    let current = if reg.volume_power > 0 {
         let inv = F
             .try_inverse()
             .ok_or(KernelError::Inverted { J: F.determinant() })?;
@@ -37,7 +38,8 @@ pub(super) fn regularization<const N: usize, const D: usize, M: MulAdd>(
     } else {
         None
     };
-    let dV = current.map_or(dV, |(J, _)| J * dV);
+    let k = reg.volume_power as f64;
+    let dV = current.map_or(dV, |(J, _)| J.powf(k) * dV);
     let mut parts = Parts::<N> {
         psi: 0.0,
         du: [[0.0; N]; 3],
@@ -65,7 +67,7 @@ pub(super) fn regularization<const N: usize, const D: usize, M: MulAdd>(
                 Bf[a][I] += rm.grad[q] * g[I][J];
             }
         }
-        // per current volume, Ψ and its first derivatives are kept without dV as well
+        // weighed by J^k, Ψ and its first derivatives are kept without dV as well
         let keep = current.is_some();
         if keep {
             parts.psi += psi + 0.5 * reg.beta2 * gp2;
@@ -130,7 +132,7 @@ pub(super) fn regularization<const N: usize, const D: usize, M: MulAdd>(
         }
     }
     if let Some((_, h)) = current {
-        add_volume_terms::<N, D>(lay, &h, &parts, dV, r, tangent);
+        add_volume_terms::<N, D>(lay, &h, &parts, k, dV, r, tangent);
     }
     Ok(energy)
 }
@@ -142,20 +144,22 @@ struct Parts<const N: usize> {
     dp: [[f64; N]; 3],
 }
 
-/// The terms of Ψ J beyond J times those of Ψ: Ψ ∂J in the residual, and the sum of
-/// ∂J ⊗ ∂Ψ, ∂Ψ ⊗ ∂J and Ψ ∂²J in the tangent, with ∂J/∂u(I,a) = J h_Ia and
-/// ∂²J/∂u(I,a)∂u(K,b) = J (h_Ia h_Kb − h_Ib h_Ka); `JdV` is J dV.
+/// The terms of Ψ J^k beyond J^k times those of Ψ: Ψ ∂(J^k) = k Ψ J^k h in the residual,
+/// and k J^k (h ⊗ ∂Ψ + ∂Ψ ⊗ h) + Ψ ∂²(J^k) in the tangent, with ∂J/∂u(I,a) = J h_Ia,
+/// ∂²J/∂u(I,a)∂u(K,b) = J (h_Ia h_Kb − h_Ib h_Ka), hence
+/// ∂²(J^k) = J^k (k² h_Ia h_Kb − k h_Ib h_Ka); `JdV` is J^k dV.
 fn add_volume_terms<const N: usize, const D: usize>(
     lay: &Layout,
     h: &[[f64; D]; N],
     parts: &Parts<N>,
+    k: f64,
     JdV: f64,
     r: &mut [f64],
     tangent: Option<(&mut UuBlocks<N>, &mut PBlocks<N>)>,
 ) {
     for I in 0..N {
         for a in 0..D {
-            r[lay.u(I, a)] += parts.psi * h[I][a] * JdV;
+            r[lay.u(I, a)] += k * parts.psi * h[I][a] * JdV;
         }
     }
     let Some((uu, pb)) = tangent else {
@@ -165,9 +169,8 @@ fn add_volume_terms<const N: usize, const D: usize>(
         for b in a..D {
             for I in 0..N {
                 for K in 0..N {
-                    let v = h[I][a] * parts.du[b][K]
-                        + parts.du[a][I] * h[K][b]
-                        + parts.psi * (h[I][a] * h[K][b] - h[I][b] * h[K][a]);
+                    let v = k * (h[I][a] * parts.du[b][K] + parts.du[a][I] * h[K][b])
+                        + parts.psi * k * (k * h[I][a] * h[K][b] - h[I][b] * h[K][a]);
                     uu[a][b][I][K] += v * JdV;
                 }
             }
@@ -175,7 +178,7 @@ fn add_volume_terms<const N: usize, const D: usize>(
         for c in 0..lay.np {
             for I in 0..N {
                 for K in 0..N {
-                    pb.up[a][c][I][K] += h[I][a] * parts.dp[c][K] * JdV;
+                    pb.up[a][c][I][K] += k * h[I][a] * parts.dp[c][K] * JdV;
                 }
             }
         }

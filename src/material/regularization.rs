@@ -98,12 +98,13 @@ pub struct Regularization {
     pub beta1: f64,
     pub beta2: f64,
     pub d: f64,
-    /// Ψ_Rf integrated over the current volume (∫ Ψ_Rf J dV) instead of the reference one: a
-    /// medium made again as the bodies move (`remake`), whose reference is renewed at every
-    /// remake, so that the penalty does not depend on which reference it was given, and a
-    /// layer closed between the bodies (J → 0) does not hold their slide through the
-    /// rotation its shear reads as.
-    pub per_current_volume: bool,
+    /// k of Ψ_Rf weighed by the volume ratio, ∫ Ψ_Rf J^k dV (0: eq. 20 as written). k = 2 for
+    /// a medium made again as the bodies move (`remake`), whose reference is renewed at every
+    /// remake: the penalty does not depend on which reference it was given, and a layer
+    /// closed between the bodies (J → 0) neither holds their slide through the rotation its
+    /// shear reads as (∂Ψ J^k → 0) nor pulls them together by it (Ψ ∂J^k/∂J → 0; with k = 1
+    /// the pull is Ψ per area whatever the squeeze).
+    pub volume_power: u32,
 }
 
 impl Regularization {
@@ -212,7 +213,7 @@ mod tests {
             beta1: 1.3,
             beta2: 1e-2,
             d: 2.5,
-            per_current_volume: false,
+            volume_power: 0,
         };
         let (f, p) = (0.2, -0.4);
         let (_, g, hess) = reg.penalty(f, p);

@@ -618,8 +618,8 @@ fn a_pad_in_a_box_of_medium_slides_its_width_frictionless_and_at_mu() {
         assert!(!b.contains("friction"));
         b
     });
-    // measured: F_t/F_n 0.005 on average, 0.014 at most; F_n 1.0 % below to 0.9 % above the
-    // press's (on h = 0.1: 0.043 at most, and dragged five widths 0.0024 on average)
+    // measured: F_t/F_n 0.003 on average, 0.007 at most (0.005 and 0.014 with the rotation
+    // penalty per current volume); F_n within 2 % of the press's
     let mean = drag.iter().map(|d| d[1]).sum::<f64>() / drag.len() as f64;
     let most = drag.iter().fold(0.0f64, |m, d| m.max(d[1].abs()));
     assert!(mean.abs() < 0.01 && most < 0.02, "F_t/F_n {mean}, {most}");
@@ -630,10 +630,11 @@ fn a_pad_in_a_box_of_medium_slides_its_width_frictionless_and_at_mu() {
             d[2]
         );
     }
-    // at μ = 0.3, once the pad slips (a slide of 0.05): measured 0.3175 on average, 0.302 to
-    // 0.357 (on h = 0.1: 0.308, 0.297 to 0.318; issue 68 asks within 3 % of μ, not met).
-    // With the plane's stress F (N⊗τ + τ⊗N) 0.319, 0.296 to 0.366; before the closed layers
-    // took their slide into their references at every step, 0.344, 0.296 to 0.495
+    // at μ = 0.3, once the pad slips (a slide of 0.05): measured 0.3051 on average, 0.290 to
+    // 0.312 (on h = 0.1: 0.3033, 0.2964 to 0.3071, every step within 3 % of μ). With the
+    // rotation penalty per current volume (a closed layer's pull) 0.3175, 0.302 to 0.357;
+    // with the plane's stress F (N⊗τ + τ⊗N) too 0.319, 0.296 to 0.366; before the closed
+    // layers took their slide into their references at every step, 0.344, 0.296 to 0.495
     let (drag, _) = pad_in_a_box("pad-box-mu", |b| b);
     let slipping: Vec<f64> = (drag.iter().filter(|d| d[0] > 0.05))
         .map(|d| d[1])
@@ -641,7 +642,7 @@ fn a_pad_in_a_box_of_medium_slides_its_width_frictionless_and_at_mu() {
     let mean = slipping.iter().sum::<f64>() / slipping.len() as f64;
     let (lo, hi) = (slipping.iter()).fold((f64::MAX, 0.0f64), |(l, h), r| (l.min(*r), h.max(*r)));
     assert!(
-        (0.29..0.33).contains(&mean) && lo > 0.29 && hi < 0.37,
+        (0.295..0.315).contains(&mean) && lo > 0.285 && hi < 0.32,
         "F_t/F_n {mean} on average, {lo} to {hi}"
     );
 }
