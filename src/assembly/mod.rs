@@ -404,38 +404,41 @@ impl Assembler {
     }
 
     /// Before the reconnected layers are joined again at the accepted state `x`: every
-    /// reconnected cell takes its slide into its reference ([`References::absorb`]).
+    /// reconnected cell takes its slide into its reference ([`References::absorb`]); a medium
+    /// made again keeps its cells' references as they are.
     pub fn absorb_slide(&mut self, model: &Model, x: &[f64]) {
-        for (t, slab) in self.terms.iter().zip(&self.slab_of) {
-            if let (Term::Friction(f), Some(i)) = (t, slab) {
-                let fb = &model.friction_blocks[*f];
-                // a medium made again keeps its cells' references as they are
-                if !fb.reconnect {
-                    continue;
-                }
-                self.reference
-                    .absorb(model, fb, &mut self.history.slabs[*i], x);
-            }
-        }
+        self.absorb_where(model, x, f64::INFINITY, |fb| fb.reconnect);
     }
 
     /// At an accepted state `x`, before the next step: the closed layers (J below
     /// [`crate::model::remake::CLOSED`]) of a medium made again as the bodies move take their
     /// slide into their references, their slip shifted to keep each point's elastic shear
-    /// ([`References::absorb_below`]). Between remakes a closed layer would otherwise be
-    /// sheared by the whole slide since the last: its friction stress, P = F (N⊗τ + τ⊗N),
-    /// then pushes along the layer by the shear times τ and the layer's ends push the bodies
-    /// (the pad in a box at μ = 0.3 met 0.3133 on average, up to 0.3686), and the rotation
-    /// penalty reads the shear as a rotation.
+    /// ([`References::absorb`]). Between remakes a closed layer would otherwise be sheared by
+    /// the whole slide since the last: its friction stress, P = F (N⊗τ + τ⊗N), then pushes
+    /// along the layer by the shear times τ and the layer's ends push the bodies (the pad in
+    /// a box at μ = 0.3 met 0.3133 on average, up to 0.3686), and the rotation penalty reads
+    /// the shear as a rotation.
     pub fn absorb_closed_layers(&mut self, model: &Model, x: &[f64]) {
+        let closed = crate::model::remake::CLOSED;
+        self.absorb_where(model, x, closed, |fb| absorbing(model, fb));
+    }
+
+    /// The friction blocks `which` picks take the slide at `x` into the references of their
+    /// cells whose J is below `closed` ([`References::absorb`]).
+    fn absorb_where(
+        &mut self,
+        model: &Model,
+        x: &[f64],
+        closed: f64,
+        which: impl Fn(&FrictionBlock) -> bool,
+    ) {
         for (t, slab) in self.terms.iter().zip(&self.slab_of) {
             if let (Term::Friction(f), Some(i)) = (t, slab) {
                 let fb = &model.friction_blocks[*f];
-                if !absorbing(model, fb) {
-                    continue;
+                if which(fb) {
+                    let slab = &mut self.history.slabs[*i];
+                    self.reference.absorb(model, fb, slab, x, closed);
                 }
-                let slab = &mut self.history.slabs[*i];
-                (self.reference).absorb_below(model, fb, slab, x, crate::model::remake::CLOSED);
             }
         }
     }
@@ -606,7 +609,6 @@ impl Assembler {
     }
 }
 
-/// Statistics of two parts together.
 /// Whether the friction block `fb` is one of a medium made again (its cells measured from
 /// their own references, not a reconnected layer's), whose closed layers take their slide
 /// into their references.
@@ -614,6 +616,7 @@ fn absorbing(model: &Model, fb: &FrictionBlock) -> bool {
     !fb.reconnect && model.cell_reference[fb.block].is_some()
 }
 
+/// Statistics of two parts together.
 fn combine(a: AssemblyStats, b: AssemblyStats) -> AssemblyStats {
     AssemblyStats {
         min_J_solid: a.min_J_solid.min(b.min_J_solid),

@@ -9,7 +9,7 @@
 //! ([`References::reset`]). Cells need not agree on a shared node's reference, as with a
 //! plastic deformation per cell. A medium made again as the bodies move (`remake`) measures
 //! its cells from their own references too, and its closed layers take their slide into them
-//! at every accepted step ([`References::absorb_below`]), the way a layer does before it is
+//! at every accepted step ([`References::absorb`]), the way a layer does before it is
 //! joined again.
 #![allow(non_snake_case)]
 
@@ -68,17 +68,13 @@ impl References {
         }
     }
 
-    /// Friction block `fb`'s cells take the slide at the accepted state `x` into their
-    /// reference (each node at its place along the plane, X' = X + P u), and the slip in its
-    /// history `slab` (committed and trial) is shifted by what that takes off the plane's
-    /// shear, so that every point's elastic shear stays what it was.
-    pub fn absorb(&mut self, model: &Model, fb: &FrictionBlock, slab: &mut Slab, x: &[f64]) {
-        self.absorb_below(model, fb, slab, x, f64::INFINITY);
-    }
-
-    /// As [`References::absorb`], for the cells whose volume ratio J is below `closed` (a
-    /// closed layer) alone.
-    pub fn absorb_below(
+    /// Friction block `fb`'s cells whose volume ratio J is below `closed` (every cell for
+    /// `f64::INFINITY`; a closed layer for [`crate::model::remake::CLOSED`]) take the slide at
+    /// the accepted state `x` into their reference (each node at its place along the plane,
+    /// X' = X + P u), and the slip in its history `slab` (committed and trial) is shifted by
+    /// what that takes off the plane's shear, so that every point's elastic shear stays what
+    /// it was.
+    pub fn absorb(
         &mut self,
         model: &Model,
         fb: &FrictionBlock,
