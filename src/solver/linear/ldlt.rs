@@ -8,8 +8,10 @@ use super::tree::TreeLdlt;
 use super::{Factorization, LinearError, PARALLEL_FACTOR_NNZ};
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::perm::PermRef;
+use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::linalg::cholesky::{
-    LdltRef, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky,
+    CholeskySymbolicParams, LdltRef, SymbolicCholesky, SymmetricOrdering,
+    factorize_symbolic_cholesky,
 };
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::traits::ComplexField;
@@ -81,7 +83,14 @@ impl SymFactor {
             sub.pattern.as_ref(),
             Side::Lower,
             SymmetricOrdering::Custom(perm),
-            Default::default(),
+            // supernodal at every size: faer's own choice, simplicial below 40 flops per
+            // entry of L (2D meshes up to some 10⁴ unknowns), factors column by column with
+            // no dense kernel and 1.4 to 3.7 times slower (docs/notes/2026-12-03-supernodal-
+            // at-every-size.md); and the tree's threads work only on a supernodal analysis
+            CholeskySymbolicParams {
+                supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
+                ..Default::default()
+            },
         )
         .map_err(|e| LinearError::Symbolic(format!("{e:?}")))?;
         // threads pay only for large dense fronts: below this, their synchronisation costs
