@@ -534,11 +534,7 @@ fn frictional_heat_is_shared_between_two_bodies_as_their_conductances() {
     let out = common::scratch("friction-partition").join("out");
     let s = tmc::driver::run(
         &common::root().join("cases/friction-partition.toml"),
-        &tmc::driver::SolveOptions {
-            out_dir: Some(out.clone()),
-            quiet: true,
-            ..Default::default()
-        },
+        &common::quiet(Some(out.clone())),
     )
     .unwrap();
     assert!(s.converged && s.physics.frictional_heating);

@@ -505,10 +505,8 @@ fn the_block_preconditioner_takes_as_many_iterations_on_a_finer_mesh() {
         let s = run(
             &root().join("cases/block-plate-3d-tm1.toml"),
             &SolveOptions {
-                out_dir: Some(out),
-                quiet: true,
                 sets: vec![("mesh_options.params".into(), params)],
-                ..Default::default()
+                ..common::quiet(Some(out))
             },
         )
         .unwrap_or_else(|e| panic!("{tag}: {e}"));

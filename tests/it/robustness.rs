@@ -365,11 +365,7 @@ fn mutated_case_files_never_panic() {
                 .join("\n");
             let case = dir.join(format!("{name}-solve.toml"));
             std::fs::write(&case, own).unwrap();
-            let opts = tmc::driver::SolveOptions {
-                out_dir: Some(dir.join(format!("{name}-out"))),
-                quiet: true,
-                ..Default::default()
-            };
+            let opts = common::quiet(Some(dir.join(format!("{name}-out"))));
             let _ = tmc::driver::run(&case, &opts);
         };
         for (k, m) in case_mutations(&text, &mut rng, 700).into_iter().enumerate() {

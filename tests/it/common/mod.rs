@@ -9,6 +9,7 @@ use tmc::driver::{SolveOptions, Summary, run};
 use tmc::mesh::gmsh::{MeshOptions, mesh_geo};
 use tmc::mesh::msh::read_msh;
 use tmc::model::{Model, build};
+use tmc::solver::idle::IdleThreads;
 
 /// Every `.rs` file under `src/`, as paths relative to it.
 pub fn source_files() -> Vec<PathBuf> {
@@ -118,17 +119,29 @@ pub fn scratch(name: &str) -> PathBuf {
     d
 }
 
+/// The options of a quiet solve into `out`, in this process. Its pool's idle threads do what
+/// `TMC_IDLE_THREADS` says, as `tmc solve` reads it: `make test` sets it to `sleep`, as it
+/// runs more tests at once than there are CPUs, where a thread spinning for its solve's next
+/// parallel work would take the CPU another test's solve is waiting for.
+pub fn quiet(out: Option<PathBuf>) -> SolveOptions {
+    let idle_threads = match std::env::var(IdleThreads::VAR) {
+        Ok(v) => IdleThreads::parse(&v).unwrap_or_else(|e| panic!("{e}")),
+        Err(_) => IdleThreads::default(),
+    };
+    SolveOptions {
+        out_dir: out,
+        quiet: true,
+        idle_threads,
+        ..Default::default()
+    }
+}
+
 /// Solve `cases/NAME.toml` into a scratch folder.
 pub fn solve_case(name: &str) -> (Summary, PathBuf) {
     let out = scratch(name);
     let s = run(
         &root().join("cases").join(format!("{name}.toml")),
-        &SolveOptions {
-            out_dir: Some(out.clone()),
-            quiet: true,
-            verbose: false,
-            ..Default::default()
-        },
+        &quiet(Some(out.clone())),
     )
     .unwrap_or_else(|e| panic!("{name}: {e}"));
     (s, out)
@@ -198,16 +211,7 @@ pub fn case_file(tag: &str, geo: &str, options: &str, case_text: &str) -> PathBu
 pub fn solve_text_opts(tag: &str, geo: &str, options: &str, case_text: &str) -> (Summary, PathBuf) {
     let path = case_file(tag, geo, options, case_text);
     let out = path.with_file_name("out");
-    let s = run(
-        &path,
-        &SolveOptions {
-            out_dir: Some(out.clone()),
-            quiet: true,
-            verbose: false,
-            ..Default::default()
-        },
-    )
-    .unwrap_or_else(|e| panic!("{tag}: {e}"));
+    let s = run(&path, &quiet(Some(out.clone()))).unwrap_or_else(|e| panic!("{tag}: {e}"));
     (s, out)
 }
 
