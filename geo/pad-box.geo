@@ -2,9 +2,10 @@
 // 0.5 thick, a pad w wide and 0.5 high a gap g above it, and the third medium filling a box
 // 0.9 above the gap around the pad (OpenCASCADE, default triangles of size h). Groups: the
 // solids "plate" and "pad", the medium "medium", the plate's held underside "bottom" and
-// the pad's driven top "top".
+// the pad's driven top "top". quads = 1 meshes quadrilaterals (gmsh's recombination)
+// instead of triangles.
 SetFactory("OpenCASCADE");
-DefineConstant[ h = 0.1, L = 7, w = 1, g = 0.1 ];
+DefineConstant[ h = 0.1, L = 7, w = 1, g = 0.1, quads = 0 ];
 Rectangle(1) = {0, 0, 0, L, 0.5};
 Rectangle(2) = {0, 0.5, 0, L, g + 0.9};
 Rectangle(3) = {0.5, 0.5 + g, 0, w, 0.5};
@@ -20,3 +21,6 @@ Physical Surface("medium") -= {plate[], pad[]};
 Physical Curve("bottom") = Curve In BoundingBox{-e, -e, -e, L + e, e, e};
 Physical Curve("top") = Curve In BoundingBox{0.5 - e, 1 + g - e, -e, 0.5 + w + e, 1 + g + e, e};
 Mesh.MeshSizeMax = h;
+If (quads)
+  Mesh.RecombineAll = 1;
+EndIf

@@ -806,7 +806,24 @@ impl Medium {
         }
         self.t = t;
         self.rate = rate;
-        passing || self.slid_cells(model, reference, x) >= SLID
+        passing || self.slid_cells(model, reference, x) >= SLID || self.thin_quadrilateral(model, x)
+    }
+
+    /// Whether one of the medium's quadrilaterals has become thin at the state `x` (its
+    /// slenderness below [`THINNEST`], as a layer closing makes it). Its faces' nodes then
+    /// pass each other inside one cell, which no sliver's watch follows: a pad's corner went
+    /// through the plate's face inside one before the first remake was due (a slide of 0.02).
+    /// A medium made again is of triangles, whose slivers are followed.
+    fn thin_quadrilateral(&self, model: &Model, x: &[f64]) -> bool {
+        self.blocks.iter().any(|&b| {
+            let blk = &model.mesh.cells[b];
+            blk.kind == crate::mesh::CellKind::Quad4
+                && (0..blk.n_cells()).any(|c| {
+                    let p: Vec<[f64; 3]> =
+                        blk.cell(c).iter().map(|&n| model.placed(n, x)).collect();
+                    slenderness(&p, false) < THINNEST
+                })
+        })
     }
 
     /// Start following the medium's slivers at the state `x` at `t` (the initial state, or the
