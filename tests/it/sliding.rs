@@ -616,6 +616,17 @@ fn pad_in_a_box_on(
     (drag, pressed)
 }
 
+/// F_t/F_n at each step of a pad in a box's `drag` (as [`pad_in_a_box`] gives it) once the
+/// pad slips (a slide of 0.05 on), with its mean, least and largest.
+fn slipping(drag: &[[f64; 3]]) -> (Vec<f64>, f64, f64, f64) {
+    let ratios: Vec<f64> = (drag.iter().filter(|d| d[0] > 0.05))
+        .map(|d| d[1])
+        .collect();
+    let mean = ratios.iter().sum::<f64>() / ratios.len() as f64;
+    let (lo, hi) = (ratios.iter()).fold((f64::MAX, 0.0f64), |(l, h), r| (l.min(*r), h.max(*r)));
+    (ratios, mean, lo, hi)
+}
+
 /// Issue 68's pad drawn as users draw it: the medium a box around the pad, default triangles,
 /// no layer of its own and no expert key. Before its corner was joined over the plate's face
 /// at a remake (`mesh::remesh::fans`) and the box's own faces were placed anew
@@ -646,11 +657,7 @@ fn a_pad_in_a_box_of_medium_slides_its_width_frictionless_and_at_mu() {
     // with the plane's stress F (N⊗τ + τ⊗N) too 0.319, 0.296 to 0.366; before the closed
     // layers took their slide into their references at every step, 0.344, 0.296 to 0.495
     let (drag, _) = pad_in_a_box("pad-box-mu", |b| b);
-    let slipping: Vec<f64> = (drag.iter().filter(|d| d[0] > 0.05))
-        .map(|d| d[1])
-        .collect();
-    let mean = slipping.iter().sum::<f64>() / slipping.len() as f64;
-    let (lo, hi) = (slipping.iter()).fold((f64::MAX, 0.0f64), |(l, h), r| (l.min(*r), h.max(*r)));
+    let (_, mean, lo, hi) = slipping(&drag);
     assert!(
         (0.295..0.315).contains(&mean) && lo > 0.285 && hi < 0.32,
         "F_t/F_n {mean} on average, {lo} to {hi}"
@@ -668,11 +675,7 @@ fn a_pad_in_a_box_of_quadrilaterals_slides_its_width_at_mu() {
     let (drag, pressed) =
         pad_in_a_box_on("pad-box-quads", "params = { h = 0.1, quads = 1 }", |b| b);
     assert!(pressed > 0.0);
-    let slipping: Vec<f64> = (drag.iter().filter(|d| d[0] > 0.05))
-        .map(|d| d[1])
-        .collect();
-    let mean = slipping.iter().sum::<f64>() / slipping.len() as f64;
-    let (lo, hi) = (slipping.iter()).fold((f64::MAX, 0.0f64), |(l, h), r| (l.min(*r), h.max(*r)));
+    let (slipping, mean, lo, hi) = slipping(&drag);
     let outside = slipping
         .iter()
         .filter(|r| (*r / 0.3 - 1.0).abs() > 0.03)
