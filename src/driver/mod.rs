@@ -410,6 +410,7 @@ fn run_ranks(
         }
     };
     let mut run = Run::new(case, &model, &probes, folder, out_dir, opts, start)?;
+    run.announce();
     match from {
         Some(cp) => run.resume(cp)?,
         None => run.record_initial()?,
@@ -501,6 +502,9 @@ fn solve_model(
             opts,
             start,
         )?;
+        if !changed {
+            run.announce();
+        }
         match from.take() {
             Some(cp) => run.resume(cp)?,
             None => run.record_initial()?,

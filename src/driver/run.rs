@@ -30,10 +30,12 @@ pub(super) struct Run<'a> {
     rec: Recorder<'a>,
     /// Non-zero values held at full value from the start, as `uy = -0.2 on "top"`.
     held_in_full: Vec<String>,
+    /// What the run solves and how, and the plan's note, for [`Run::announce`].
+    plan_said: Vec<String>,
 }
 
 impl<'a> Run<'a> {
-    /// Choose strategy and solvers, and set up the records; nothing is written yet.
+    /// Choose strategy and solvers, and set up the records; nothing is written or said yet.
     pub(super) fn new(
         case: &'a Case,
         model: &'a Model,
@@ -44,12 +46,9 @@ impl<'a> Run<'a> {
         start: Instant,
     ) -> Result<Run<'a>, SolveError> {
         let plan = Plan::new(case, model, opts)?;
-        if !opts.quiet {
-            crate::note!("{}", describe(&model.physics, plan.strategy));
-            if let Some(note) = &plan.note {
-                crate::note!("{note}");
-            }
-        }
+        let plan_said = std::iter::once(describe(&model.physics, plan.strategy))
+            .chain(plan.note.clone())
+            .collect();
         let strategy = plan.strategy;
         let st = Stepper::new(case, model, plan);
         let rec = Recorder::new(
@@ -66,7 +65,18 @@ impl<'a> Run<'a> {
                 .iter()
                 .flat_map(|bc| bc.held_in_full())
                 .collect(),
+            plan_said,
         })
+    }
+
+    /// Say (unless quiet) what the run solves and how: once a run, not again on each mesh
+    /// it goes on with after a layer is joined or the medium made again.
+    pub(super) fn announce(&self) {
+        if !self.opts.quiet {
+            for line in &self.plan_said {
+                crate::note!("{line}");
+            }
+        }
     }
 
     /// Record the initial state: step 0 of the series and of the history, and the forces the

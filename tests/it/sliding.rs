@@ -269,6 +269,19 @@ fn check_says_the_medium_will_be_made_again() {
     );
 }
 
+/// The console says what a run solves once, not again each time the medium is made again
+/// (it said it before each of the README cylinder's 40-odd remakes).
+#[test]
+fn a_run_whose_medium_is_made_again_says_what_it_solves_once() {
+    let out = scratch("out");
+    let case = root().join("cases/cylinder-slide.toml");
+    let o = tmc(&["solve", case.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(summary(&out)["medium_remade"].as_u64().unwrap() > 10);
+    let text = String::from_utf8_lossy(&o.stdout).to_string() + &stderr(&o);
+    assert_eq!(text.matches("physics: ").count(), 1, "{text}");
+}
+
 #[test]
 fn what_remake_cannot_do_yet_check_and_solve_refuse_alike() {
     let body = case_body("cylinder-slide");
