@@ -137,22 +137,11 @@ pub fn quiet(out: Option<PathBuf>) -> SolveOptions {
 }
 
 /// Solve `cases/NAME.toml` into a scratch folder, a `.vtu` of its first and its last state
-/// only (as [`ENDS_ONLY`]); [`solve_case_every_step`] writes them all.
+/// only (as [`ENDS_ONLY`]: none of the tests reads the steps between).
 pub fn solve_case(name: &str) -> (Summary, PathBuf) {
-    solve_case_with(name, &[("output.every", "1000000")])
-}
-
-/// Solve `cases/NAME.toml` into a scratch folder, a `.vtu` of each step its `[output]` asks.
-pub fn solve_case_every_step(name: &str) -> (Summary, PathBuf) {
-    solve_case_with(name, &[])
-}
-
-fn solve_case_with(name: &str, sets: &[(&str, &str)]) -> (Summary, PathBuf) {
     let out = scratch(name);
     let opts = SolveOptions {
-        sets: (sets.iter())
-            .map(|(k, v)| (k.to_string(), v.to_string()))
-            .collect(),
+        sets: vec![("output.every".into(), "1000000".into())],
         ..quiet(Some(out.clone()))
     };
     let s = run(&root().join("cases").join(format!("{name}.toml")), &opts)
