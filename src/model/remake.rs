@@ -689,17 +689,46 @@ impl Medium {
     /// touches a part of it, that part where the mesh put it. The medium is fictitious: its
     /// outer faces, followed as the bodies drag what is around them, carried the box a user
     /// drew along with a body (a pad slid 2.5 of its widths pulled its box's top 1.6 above
-    /// where it was drawn, and the run stopped there). Other nodes: `None`.
-    /// In 2D (`remake` says why not in 3D).
+    /// where it was drawn, and the run stopped there). In 3D the own nodes that share a cell
+    /// with a solid's node stay where they are: placed too, the sphere dragged three radii
+    /// stopped at a slide of 0.91 on a cell turned inside out behind it; kept where the run
+    /// left them all, a free corner of the box ran away (4.5 times the mesh's extent by the
+    /// end; docs/notes/2026-12-03-the-sphere-dragged-three-radii.md). Other nodes: `None`.
     fn own_places(&self, model: &Model, x: &[f64]) -> Result<Vec<Option<[f64; 3]>>, String> {
         let on_solid = model.on_solids();
         let mesh = &model.mesh;
-        // each boundary node's two neighbours along its loop
-        let mut next: HashMap<usize, [usize; 2]> = HashMap::new();
-        for lp in boundary_loops(mesh, &self.blocks)? {
-            let k = lp.len();
-            for i in 0..k {
-                next.insert(lp[i], [lp[(i + k - 1) % k], lp[(i + 1) % k]]);
+        // each boundary node's neighbours: along its loop in 2D, across the edges of the
+        // outer triangles in 3D
+        let mut next: HashMap<usize, Vec<usize>> = HashMap::new();
+        // in 3D, the own nodes that share a cell with a solid's node stay where they are
+        let mut beside = vec![false; mesh.coords.len()];
+        if mesh.dim == 3 {
+            for f in crate::mesh::faces::outer_triangles(mesh, &self.blocks)? {
+                for i in 0..3 {
+                    let (a, b) = (f[i], f[(i + 1) % 3]);
+                    next.entry(a).or_default().push(b);
+                    next.entry(b).or_default().push(a);
+                }
+            }
+            for around in next.values_mut() {
+                around.sort_unstable();
+                around.dedup();
+            }
+            for &b in &self.blocks {
+                let blk = &mesh.cells[b];
+                for c in 0..blk.n_cells() {
+                    let cell = blk.cell(c);
+                    if cell.iter().any(|&n| on_solid[n]) {
+                        cell.iter().for_each(|&n| beside[n] = true);
+                    }
+                }
+            }
+        } else {
+            for lp in boundary_loops(mesh, &self.blocks)? {
+                let k = lp.len();
+                for i in 0..k {
+                    next.insert(lp[i], vec![lp[(i + k - 1) % k], lp[(i + 1) % k]]);
+                }
             }
         }
         let d = model.dofs.dim;
@@ -712,7 +741,9 @@ impl Medium {
             // mean of its neighbours, a little held to where the mesh put it (so that a part
             // no solid touches stays there)
             let held = |n: usize| {
-                on_solid[n] || u_of(n, i).is_some_and(|u| model.cons.prescribed[u].is_some())
+                on_solid[n]
+                    || beside[n]
+                    || u_of(n, i).is_some_and(|u| model.cons.prescribed[u].is_some())
             };
             let value = |n: usize| u_of(n, i).map_or(0.0, |u| x[u]);
             let free: Vec<usize> = own.iter().copied().filter(|&n| !held(n)).collect();
@@ -889,12 +920,9 @@ impl Medium {
 
     /// The medium made again at the accepted state `x` of `model`.
     ///
-    /// In 2D the medium's own outer faces are placed anew (`own_places`) where the new medium
-    /// can be made between them and the solids; where it cannot (they would cross a body that
-    /// left the box drawn around it), they stay where they are. In 3D they stay where they
-    /// are: placed anew (all, or but those beside a solid), the sphere dragged three radii
-    /// stopped at a slide of 0.46 on a tetrahedron gmsh made inside out between faces that
-    /// crossed, where it had stopped at 0.55 (docs/notes/2026-12-03-a-pad-in-a-box-slides.md).
+    /// The medium's own outer faces are placed anew (`own_places`) where the new medium can be
+    /// made between them and the solids; where it cannot (they would cross a body that left
+    /// the box drawn around it), they stay where they are.
     pub fn remake(
         &self,
         model: &Model,
@@ -903,9 +931,6 @@ impl Medium {
     ) -> Result<Remade, RemeshError> {
         failing_by_request()?;
         let here = vec![None; model.mesh.coords.len()];
-        if model.mesh.dim == 3 {
-            return self.remake_at(model, reference, x, &here);
-        }
         match self.own_places(model, x) {
             Ok(own) => self
                 .remake_at(model, reference, x, &own)
