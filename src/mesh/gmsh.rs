@@ -257,6 +257,35 @@ fn meshed_in_child(open_path: &Path, tmp: &Path, opts: &MeshOptions) -> Result<O
     })
 }
 
+/// Whether this process (a meshing child) writes to its standard output or to /dev/null.
+/// gmsh's 3D mesher (TetGen) prints to standard output whatever `General.Terminal` says: a
+/// medium made again in 3D whose first try fails (its outer faces placed where they cross)
+/// printed "Found two exactly self-intersecting facets" 129 times into a quiet run.
+fn standard_output_shown(shown: bool) {
+    static SAVED: std::sync::OnceLock<c_int> = std::sync::OnceLock::new();
+    // SAFETY: dup and dup2 on this process's own descriptors; a failure leaves them as they are
+    let saved = *SAVED.get_or_init(|| unsafe { libc::dup(1) });
+    if saved < 0 {
+        return;
+    }
+    let target = match shown {
+        true => saved,
+        false => {
+            let null = CString::new("/dev/null").expect("no NUL");
+            // SAFETY: a valid C string; the descriptor is closed below once duplicated
+            unsafe { libc::open(null.as_ptr(), libc::O_WRONLY) }
+        }
+    };
+    if target >= 0 {
+        // SAFETY: both descriptors are open
+        unsafe { libc::dup2(target, 1) };
+        if !shown {
+            // SAFETY: `target` was opened above and is not used again
+            unsafe { libc::close(target) };
+        }
+    }
+}
+
 /// A meshing child's answer to one request.
 fn serve((open_path, tmp, opts): (PathBuf, PathBuf, MeshOptions)) -> Outcome {
     mesh_in_process(&open_path, &tmp, &opts)
@@ -264,6 +293,7 @@ fn serve((open_path, tmp, opts): (PathBuf, PathBuf, MeshOptions)) -> Outcome {
 
 /// Mesh in this process (the child): open, generate, write `tmp`.
 fn mesh_in_process(open_path: &Path, tmp: &Path, opts: &MeshOptions) -> Outcome {
+    standard_output_shown(opts.verbose);
     let session = match Session::start() {
         Ok(s) => s,
         Err(e) => return Outcome::Failed(e),
