@@ -864,14 +864,15 @@ fn a_pad_dragged_over_a_conducting_plate_reaches_jaeger_s_flash_temperature() {
         (ours / jaeger - 1.0).abs() < 0.05,
         "the flash temperature {ours} against Jaeger's {jaeger}"
     );
-    let hottest = xs
-        .iter()
-        .copied()
-        .max_by(|a, b| at_x(*a).total_cmp(&at_x(*b)));
-    let peak = xs.iter().map(|&x| jaeger_band(x, band)).fold(0.0, f64::max);
+    let hottest = (xs.iter().copied())
+        .max_by(|a, b| at_x(*a).total_cmp(&at_x(*b)))
+        .unwrap();
+    let (hot, peak) = (
+        at_x(hottest),
+        xs.iter().map(|&x| jaeger_band(x, band)).fold(0.0, f64::max),
+    );
     assert!(
-        hottest.unwrap() < 0.0 && (at_x(hottest.unwrap()) / peak - 1.0).abs() < 0.12,
-        "the hottest point at {hottest:?} of the band, {} against Jaeger's {peak}",
-        at_x(hottest.unwrap())
+        hottest < 0.0 && (hot / peak - 1.0).abs() < 0.12,
+        "the hottest point at {hottest} of the band, {hot} against Jaeger's {peak}"
     );
 }
