@@ -124,14 +124,19 @@ fn again(old: &[[usize; 3]], n: Vector3<f64>, x: &[[f64; 3]]) -> Option<Vec<[usi
             directed.insert((t[e], t[(e + 1) % 3]));
         }
     }
-    for &(a, b) in &directed {
-        if !directed.contains(&(b, a)) {
-            let (va, vb) = (handle[&a], handle[&b]);
-            if !cdt.can_add_constraint(va, vb) {
-                return None;
-            }
-            cdt.add_constraint(va, vb);
+    // in the order of their nodes, not the set's (which differs from one process to the
+    // next): constraints added in another order may split the patch otherwise where its
+    // nodes stand on one circle, and a run and its rerun would then part
+    let mut boundary: Vec<(usize, usize)> = (directed.iter().copied())
+        .filter(|&(a, b)| !directed.contains(&(b, a)))
+        .collect();
+    boundary.sort_unstable();
+    for (a, b) in boundary {
+        let (va, vb) = (handle[&a], handle[&b]);
+        if !cdt.can_add_constraint(va, vb) {
+            return None;
         }
+        cdt.add_constraint(va, vb);
     }
     let params = RefinementParameters::<f64>::new()
         .exclude_outer_faces(true)
