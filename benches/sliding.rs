@@ -100,18 +100,8 @@ fn pad_row(hp: f64, mu: f64) {
     let dir = root().join(format!("target/bench-sliding/pad-3d-{hp}-{mu}"));
     let _ = std::fs::remove_dir_all(&dir);
     let (_, s) = solve(&dir, &text);
-    let history = std::fs::read_to_string(dir.join("out/history.csv")).unwrap();
-    let mut lines = history.lines();
-    let cols: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let at = |name: &str| cols.iter().position(|c| *c == name).unwrap();
+    let (at, rows) = history(&dir);
     let (t, fx, fz, ux) = (at("time"), at("R_top_x"), at("R_top_z"), at("U_top_x"));
-    let rows: Vec<Vec<f64>> = lines
-        .map(|l| {
-            l.split(',')
-                .map(|v| v.parse().unwrap_or(f64::NAN))
-                .collect()
-        })
-        .collect();
     let dragged = rows
         .last()
         .map_or(0.0, |r| if r[t] > 1.0 { r[ux] } else { 0.0 });
@@ -155,18 +145,8 @@ fn row(h: f64, slide: f64, remake: bool) {
     let dir = root().join(format!("target/bench-sliding/{h}-{slide}-{medium}"));
     let _ = std::fs::remove_dir_all(&dir);
     let (_, s) = solve(&dir, &text);
-    let history = std::fs::read_to_string(dir.join("out/history.csv")).unwrap();
-    let mut lines = history.lines();
-    let cols: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let at = |name: &str| cols.iter().position(|c| *c == name).unwrap();
+    let (at, rows) = history(&dir);
     let (t, fy, ratio, ux) = (at("time"), at("R_rim_y"), at("Ft_Fn_rim"), at("U_rim_x"));
-    let rows: Vec<Vec<f64>> = lines
-        .map(|l| {
-            l.split(',')
-                .map(|v| v.parse().unwrap_or(f64::NAN))
-                .collect()
-        })
-        .collect();
     let pressed = rows.iter().rfind(|r| r[t] <= 1.0 + 1e-12).unwrap()[fy].abs();
     let sliding: Vec<&Vec<f64>> = rows.iter().filter(|r| r[t] > 1.0 + 1e-12).collect();
     let slid = sliding.last().map_or(0.0, |r| r[ux]);
@@ -188,4 +168,12 @@ fn row(h: f64, slide: f64, remake: bool) {
         s["medium_remade"],
         remade.map_or("—".into(), |r| format!("{:.2}", r / wall)),
     );
+}
+
+/// The history of the run solved into `dir/out`: a column's index by its name, and the rows.
+fn history(dir: &std::path::Path) -> (impl Fn(&str) -> usize, Vec<Vec<f64>>) {
+    let h = tmc::plot::History::read(&dir.join("out/history.csv")).unwrap();
+    let columns = h.columns;
+    let at = move |name: &str| columns.iter().position(|c| c == name).unwrap();
+    (at, h.rows)
 }
