@@ -516,7 +516,7 @@ fn solve_model(
             run.keep_medium(m);
         }
         if changed {
-            run.rejoined();
+            run.rejoined(medium.is_some().then_some(remake::SETTLED));
         }
         if let Some((before, since)) = before_remake.take() {
             run.remade_from(&before, since)?;

@@ -271,15 +271,16 @@ impl<'a> Run<'a> {
     /// The next step starts from their mechanics settled at the same loads (a step of no
     /// length: no inertia), or from the state as joined where that does not converge. The
     /// points' history stays as joined: whatever the settling slipped is the next step's
-    /// slip, whose work that step makes heat over its length.
-    pub(super) fn rejoined(&mut self) {
+    /// slip, whose work that step makes heat over its length. A settling after a remake stops
+    /// at the relative residual `to` ([`crate::model::remake::SETTLED`]).
+    pub(super) fn rejoined(&mut self, to: Option<f64>) {
         let st = &mut self.st;
         st.asm.rejoined(st.model, &st.x);
         // the settling below keeps the temperature: the heat stored changes at the join only
         if let Some(stored) = joined_heat(&self.st) {
             *self.accounts.totals.heat_joined.get_or_insert(0.0) += stored;
         }
-        if let Some(rep) = self.st.settle_mechanics() {
+        if let Some(rep) = self.st.settle_mechanics(to) {
             self.accounts.count(&rep);
         }
     }

@@ -228,6 +228,10 @@ pub struct Tally {
 /// Newton state carried across steps: references for the per-field residual scale.
 pub struct Newton {
     pub tol: f64,
+    /// A settling (a step of no length from a state a remake left a little out of balance):
+    /// it ends at the first residual below `tol` (with no update if that is the first),
+    /// whatever its updates.
+    pub settling: bool,
     pub max_iter: usize,
     /// Totals over every step attempt so far, converged or not.
     pub spent: Spent,
@@ -312,6 +316,7 @@ impl Newton {
         update_floor[idx(Field::P)] = 1e-12 * model.d;
         Newton {
             tol,
+            settling: false,
             max_iter,
             spent: Spent::default(),
             run_ref: [0.0; 3],
@@ -426,6 +431,16 @@ impl Newton {
             let first = it == 0;
             let r = self.damped_residual(&mut st, model, asm, x, step, first, expect_converged)?;
             st.history.push(r.rel);
+            if r.converged && self.settling {
+                return Ok(StepReport {
+                    iterations: it,
+                    halvings: st.cuts,
+                    history: st.history,
+                    stats: r.stats,
+                    krylov: solver.take_krylov(),
+                    tangents_skipped: 0,
+                });
+            }
             let rel = worst(&r.rel);
             let limit = if rel <= NEAR_RESIDUAL && rel <= 0.1 * prev_rel {
                 self.max_iter + self.max_iter / TAIL_SHARE
@@ -919,6 +934,65 @@ mod tests {
         assert!(text.starts_with("no convergence in 1 iterations"), "{text}");
         // a failure a smaller step may mend
         assert!(failure.recoverable());
+    }
+
+    #[test]
+    fn a_settling_ends_at_its_own_tolerance_and_updates_nothing_where_the_state_is_in_balance() {
+        let model = block("settling");
+        let mut asm = Assembler::new(&model);
+        let structure = equation_structure(&model.dofs, &model.cons);
+        let mut solver = LinearSolver::new(LinearKind::Lu, &asm.pattern, &structure).unwrap();
+        let mut newton = Newton::new(&model, 1e-10, 30);
+        let mut x = model.initial_state();
+        let to = model.path.step(0.0, 0.05);
+        newton
+            .step(&model, &mut asm, &mut solver, &mut x, &to, Part::All)
+            .unwrap();
+        asm.commit();
+        let at_rest = model.path.step(0.05, 0.05);
+        let mut settle = |x: &mut Vec<f64>, to: Option<f64>| {
+            newton.settling = to.is_some();
+            newton.tol = to.unwrap_or(1e-10);
+            let rep = newton.step(&model, &mut asm, &mut solver, x, &at_rest, Part::All);
+            asm.restore();
+            rep.unwrap()
+        };
+        // in balance to 1e-10: the first residual ends it
+        let mut y = x.clone();
+        let rep = settle(&mut y, Some(1e-6));
+        assert_eq!((rep.iterations, rep.history.len()), (0, 1));
+        assert!(worst_history(&rep)[0] <= 1e-6);
+        assert_eq!(y, x);
+        // the free displacements short by a share: out of balance
+        let short = |share: f64| {
+            let mut y = x.clone();
+            for (d, &e) in model.cons.eq.iter().enumerate() {
+                if e != NONE {
+                    y[d] *= 1.0 - share;
+                }
+            }
+            y
+        };
+        // by 1 %: it ends at the first residual below 1e-6, a step at one below 1e-10
+        let (mut y, mut z) = (short(1e-2), short(1e-2));
+        let settled = worst_history(&settle(&mut y, Some(1e-6)));
+        let (last, before) = settled.split_last().unwrap();
+        assert!(*last <= 1e-6 && !before.is_empty(), "{settled:?}");
+        assert!(before.iter().all(|&r| r > 1e-6), "{settled:?}");
+        let full = worst_history(&settle(&mut z, None));
+        assert!(*full.last().unwrap() <= 1e-10, "{full:?}");
+        assert!(full.len() >= settled.len(), "{full:?} against {settled:?}");
+        // the settled state is the balanced one to about the residual's size
+        let gap = (y.iter().zip(&z)).fold(0.0f64, |a, (p, q)| a.max((p - q).abs()));
+        let size = z.iter().fold(0.0f64, |a, p| a.max(p.abs()));
+        assert!(gap <= 1e-4 * size, "{gap:e} of {size:e}");
+        // by 1e-7: settled already, where a step still updates
+        let (mut y, mut z) = (short(1e-7), short(1e-7));
+        let first = worst_history(&settle(&mut y, Some(1e-6)));
+        assert!(first.len() == 1 && first[0] > 1e-10, "{first:?}");
+        assert_eq!(y, short(1e-7));
+        let full = worst_history(&settle(&mut z, None));
+        assert!(full.len() > 1, "{full:?}");
     }
 
     #[test]
