@@ -432,14 +432,7 @@ impl Newton {
             let r = self.damped_residual(&mut st, model, asm, x, step, first, expect_converged)?;
             st.history.push(r.rel);
             if r.converged && self.settling {
-                return Ok(StepReport {
-                    iterations: it,
-                    halvings: st.cuts,
-                    history: st.history,
-                    stats: r.stats,
-                    krylov: solver.take_krylov(),
-                    tangents_skipped: 0,
-                });
+                return Ok(st.report(r, it, solver));
             }
             let rel = worst(&r.rel);
             let limit = if rel <= NEAR_RESIDUAL && rel <= 0.1 * prev_rel {
@@ -478,14 +471,7 @@ impl Newton {
                 done.then_some(it)
             };
             if let Some(iterations) = converged_after {
-                return Ok(StepReport {
-                    iterations,
-                    halvings: st.cuts,
-                    history: st.history,
-                    stats: r.stats,
-                    krylov: solver.take_krylov(),
-                    tangents_skipped: usize::from(!r.tangent),
-                });
+                return Ok(st.report(r, iterations, solver));
             }
             if it >= limit {
                 return Err(StepFailure::NotConverged {
@@ -793,6 +779,18 @@ struct Residual {
 }
 
 impl StepState {
+    /// The report of the step converged at the residual `r` in `iterations`.
+    fn report(self, r: Residual, iterations: usize, solver: &mut LinearSolver) -> StepReport {
+        StepReport {
+            iterations,
+            halvings: self.cuts,
+            history: self.history,
+            stats: r.stats,
+            krylov: solver.take_krylov(),
+            tangents_skipped: usize::from(!r.tangent),
+        }
+    }
+
     /// The norms per field of the step's prescribed increments (its first update).
     fn prescribed_norms(&self, model: &Model) -> FieldNorms {
         let mut n = [0.0; 3];
