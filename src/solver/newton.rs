@@ -872,12 +872,17 @@ mod tests {
         crate::model::build(&case, mesh).unwrap()
     }
 
+    /// The assembler, an LU solver and a Newton to 1e-10 in `max_iter` iterations for `model`.
+    fn solving(model: &Model, max_iter: usize) -> (Assembler, LinearSolver, Newton) {
+        let asm = Assembler::new(model);
+        let structure = equation_structure(&model.dofs, &model.cons);
+        let solver = LinearSolver::new(LinearKind::Lu, &asm.pattern, &structure).unwrap();
+        (asm, solver, Newton::new(model, 1e-10, max_iter))
+    }
+
     /// One step from the initial state to pseudo-time `t` with `max_iter` iterations.
     fn step(model: &Model, t: f64, max_iter: usize) -> Result<StepReport, StepFailure> {
-        let mut asm = Assembler::new(model);
-        let structure = equation_structure(&model.dofs, &model.cons);
-        let mut solver = LinearSolver::new(LinearKind::Lu, &asm.pattern, &structure).unwrap();
-        let mut newton = Newton::new(model, 1e-10, max_iter);
+        let (mut asm, mut solver, mut newton) = solving(model, max_iter);
         let mut x = model.initial_state();
         let context = model.path.step(0.0, t);
         newton.step(model, &mut asm, &mut solver, &mut x, &context, Part::All)
@@ -937,10 +942,7 @@ mod tests {
     #[test]
     fn a_settling_ends_at_its_own_tolerance_and_updates_nothing_where_the_state_is_in_balance() {
         let model = block("settling");
-        let mut asm = Assembler::new(&model);
-        let structure = equation_structure(&model.dofs, &model.cons);
-        let mut solver = LinearSolver::new(LinearKind::Lu, &asm.pattern, &structure).unwrap();
-        let mut newton = Newton::new(&model, 1e-10, 30);
+        let (mut asm, mut solver, mut newton) = solving(&model, 30);
         let mut x = model.initial_state();
         let to = model.path.step(0.0, 0.05);
         newton
