@@ -8,7 +8,53 @@ pub use crate::parallel::Partition;
 
 /// METIS keeps process-wide statics (its random generator and memory core): concurrent calls
 /// race, giving results that depend on other threads, or crash. Every call holds this.
-pub(crate) static METIS: std::sync::Mutex<()> = std::sync::Mutex::new(());
+static METIS: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+/// Make a METIS call, `call`, returning its status: one call at a time, and none loses a
+/// SIGTERM or changes its handler. While it works METIS puts its own handler on SIGTERM (and
+/// SIGABRT), puts the one it found back at its end as a handler that runs once, and a SIGTERM
+/// that comes meanwhile (`mpirun` passing on a Ctrl-C, a user's `kill`) ends the call with
+/// `METIS_ERROR`, never reaching the run's handler: the run would fail as if METIS could not
+/// cut its mesh, or go on with its ordering lost and its stop forgotten. So the handlers are
+/// put back as they were after each call, and a call that ends with `METIS_ERROR` is made
+/// once more: METIS's own errors come again from the same input (it is deterministic), so if
+/// that one succeeds, the first ended on a signal, which is raised again for the run's handler
+/// and the second call's result is kept.
+pub(crate) fn metis(mut call: impl FnMut() -> i32) -> i32 {
+    let _one_at_a_time = METIS.lock().unwrap_or_else(|e| e.into_inner());
+    let kept = |call: &mut dyn FnMut() -> i32| {
+        let signals = [libc::SIGTERM, libc::SIGABRT];
+        // SAFETY: reading the dispositions of two signals, and setting them back as they were
+        let mut was: [libc::sigaction; 2] = unsafe { std::mem::zeroed() };
+        for (s, w) in signals.iter().zip(&mut was) {
+            unsafe { libc::sigaction(*s, std::ptr::null(), w) };
+        }
+        let status = call();
+        for (s, w) in signals.iter().zip(&was) {
+            unsafe { libc::sigaction(*s, w, std::ptr::null_mut()) };
+        }
+        status
+    };
+    let status = kept(&mut call);
+    if status != metis_sys::rstatus_et_METIS_ERROR {
+        return status;
+    }
+    let again = kept(&mut call);
+    if again == metis_sys::rstatus_et_METIS_OK {
+        // SAFETY: METIS left its handler by a long jump, which would keep SIGTERM blocked on
+        // this thread were it installed to be blocked while it runs: unblocked, and raised
+        // here, the signal runs the handler in place now, the run's (or the default, which
+        // ends the process as the SIGTERM would have).
+        unsafe {
+            let mut term: libc::sigset_t = std::mem::zeroed();
+            libc::sigemptyset(&mut term);
+            libc::sigaddset(&mut term, libc::SIGTERM);
+            libc::pthread_sigmask(libc::SIG_UNBLOCK, &term, std::ptr::null_mut());
+            libc::raise(libc::SIGTERM);
+        }
+    }
+    again
+}
 
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum PartitionError {
@@ -56,8 +102,7 @@ pub fn cut(mesh: &Mesh, parts: usize) -> Result<Partition, PartitionError> {
     let mut nparts = parts as i32;
     let mut objval = 0i32;
     let mut options = [-1i32; metis_sys::METIS_NOPTIONS as usize];
-    let status = {
-        let _one_at_a_time = METIS.lock().unwrap_or_else(|e| e.into_inner());
+    let status = metis(|| {
         // SAFETY: eptr/eind describe `cells` cells over `nn` nodes; METIS writes `cells`
         // entries of epart and `nn` of npart; options are METIS's defaults.
         unsafe {
@@ -79,7 +124,7 @@ pub fn cut(mesh: &Mesh, parts: usize) -> Result<Partition, PartitionError> {
                 npart.as_mut_ptr(),
             )
         }
-    };
+    });
     if status != metis_sys::rstatus_et_METIS_OK {
         return Err(PartitionError::Metis { parts, status });
     }
@@ -159,5 +204,119 @@ mod tests {
             })
         );
         assert_eq!(cut(&mesh, 1).unwrap(), whole(&mesh));
+    }
+
+    mod signals {
+        use super::super::{METIS, metis};
+        use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering::SeqCst};
+
+        static HANDLED: AtomicUsize = AtomicUsize::new(0);
+        /// The worker is inside its METIS call (the lock held).
+        static INSIDE: AtomicBool = AtomicBool::new(false);
+        /// A signal is on its way to the worker, which holds the lock until it is handled.
+        static PENDING: AtomicBool = AtomicBool::new(false);
+        /// The last signal sent ended a METIS call (METIS caught it).
+        static CAUGHT: AtomicBool = AtomicBool::new(false);
+        /// The worker may stop.
+        static DONE: AtomicBool = AtomicBool::new(false);
+
+        extern "C" fn counted(_: libc::c_int) {
+            HANDLED.fetch_add(1, SeqCst);
+        }
+
+        /// METIS nested dissection of a k × k grid: tens of milliseconds at k = 200.
+        fn order(k: usize, spot: bool) -> (i32, Vec<i32>) {
+            let (mut xadj, mut adjncy) = (vec![0i32], Vec::new());
+            for v in 0..k * k {
+                let (x, y) = (v % k, v / k);
+                let near = [(x > 0, v.wrapping_sub(1)), (x + 1 < k, v + 1)];
+                let far = [(y > 0, v.wrapping_sub(k)), (y + 1 < k, v + k)];
+                adjncy.extend(near.iter().chain(&far).filter(|n| n.0).map(|n| n.1 as i32));
+                xadj.push(adjncy.len() as i32);
+            }
+            let mut nv = (k * k) as i32;
+            let (mut perm, mut iperm) = (vec![0i32; k * k], vec![0i32; k * k]);
+            let status = metis(|| {
+                INSIDE.store(spot, SeqCst);
+                // SAFETY: a valid CSR graph of nv vertices; METIS writes nv entries of each
+                // of perm and iperm
+                let status = unsafe {
+                    metis_sys::METIS_NodeND(
+                        &mut nv,
+                        xadj.as_mut_ptr(),
+                        adjncy.as_mut_ptr(),
+                        std::ptr::null_mut(),
+                        std::ptr::null_mut(),
+                        perm.as_mut_ptr(),
+                        iperm.as_mut_ptr(),
+                    )
+                };
+                INSIDE.store(false, SeqCst);
+                if status == metis_sys::rstatus_et_METIS_ERROR {
+                    CAUGHT.store(true, SeqCst);
+                }
+                // a signal sent while METIS ran and not caught by it is handled before the
+                // lock is let go, so none reaches a thread while another's METIS traps it
+                while PENDING.load(SeqCst) && !CAUGHT.load(SeqCst) {
+                    std::hint::spin_loop();
+                }
+                status
+            });
+            (status, perm)
+        }
+
+        #[test]
+        fn a_sigterm_that_comes_while_metis_works_reaches_the_run_and_the_result_stands() {
+            let k = 200;
+            let (status, alone) = order(k, false);
+            assert_eq!(status, metis_sys::rstatus_et_METIS_OK);
+            // put in place, and back, under METIS's lock: a METIS call on another thread puts
+            // back at its end the handler it found at its start
+            let handler = counted as extern "C" fn(libc::c_int) as libc::sighandler_t;
+            let under_lock = |h| {
+                let _one_at_a_time = METIS.lock().unwrap_or_else(|e| e.into_inner());
+                // SAFETY: the handler only counts (an atomic add)
+                unsafe { libc::signal(libc::SIGTERM, h) }
+            };
+            let before = under_lock(handler);
+            let sends = 4;
+            let worker = std::thread::spawn(move || {
+                let mut runs = vec![order(k, true)];
+                while !DONE.load(SeqCst) {
+                    runs.push(order(k, true));
+                }
+                runs
+            });
+            let id = {
+                use std::os::unix::thread::JoinHandleExt;
+                worker.as_pthread_t()
+            };
+            let mut caught = 0;
+            for sent in 1..=sends {
+                // Dekker's handshake with the worker's spin: sent only while it is inside
+                PENDING.store(true, SeqCst);
+                while !INSIDE.load(SeqCst) {
+                    std::hint::spin_loop();
+                }
+                std::thread::sleep(std::time::Duration::from_millis(2));
+                // SAFETY: the worker thread is alive: it spins until the signal is handled
+                unsafe { libc::pthread_kill(id, libc::SIGTERM) };
+                let waited = std::time::Instant::now();
+                while HANDLED.load(SeqCst) < sent && waited.elapsed().as_secs() < 10 {
+                    std::thread::yield_now();
+                }
+                caught += usize::from(CAUGHT.swap(false, SeqCst));
+                PENDING.store(false, SeqCst);
+            }
+            DONE.store(true, SeqCst);
+            let runs: Vec<(i32, Vec<i32>)> = worker.join().unwrap();
+            under_lock(before);
+            assert_eq!(HANDLED.load(SeqCst), sends, "a SIGTERM was lost");
+            assert!(caught >= 1, "no SIGTERM came while METIS worked");
+            for (status, perm) in runs {
+                assert_eq!(status, metis_sys::rstatus_et_METIS_OK);
+                assert!(perm == alone, "an interrupted ordering differs");
+            }
+        }
     }
 }

@@ -74,12 +74,9 @@ pub(super) fn nested_dissection_trying(
         } else {
             1
         });
-        let _one_at_a_time = crate::mesh::partition::METIS
-            .lock()
-            .unwrap_or_else(|e| e.into_inner());
         // SAFETY: METIS reads xadj/adjncy (a valid CSR graph without self loops) and writes
         // nv entries of perm and iperm; options is set to defaults (−1) before the call.
-        let status = unsafe {
+        let status = crate::mesh::partition::metis(|| unsafe {
             metis_sys::METIS_SetDefaultOptions(options.as_mut_ptr());
             options[metis_sys::moptions_et_METIS_OPTION_NUMBERING as usize] = 0;
             options[metis_sys::moptions_et_METIS_OPTION_NSEPS as usize] = separators;
@@ -92,7 +89,7 @@ pub(super) fn nested_dissection_trying(
                 perm.as_mut_ptr(),
                 iperm.as_mut_ptr(),
             )
-        };
+        });
         if status == metis_sys::rstatus_et_METIS_OK {
             perm.iter().map(|&v| v as usize).collect()
         } else {
