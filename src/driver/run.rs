@@ -408,20 +408,8 @@ impl<'a> Run<'a> {
             } else {
                 format!("Δλ = {dl:.3e}")
             };
-            // friction's drags stall where the full slide begins (THEORY.md, "Where drags
-            // stall"): the user's guide says how far they get
-            let physics = &st.model.physics;
-            let hint = if physics.friction && !physics.inertia {
-                "; with friction, drags stall where the full slide begins (docs/CASE.md, \
-                 \"How far friction slides\", says how far they get and what to mesh; a \
-                 small mass density `rho` on every region carries them through)"
-            } else if physics.friction {
-                "; with friction, drags stall where the full slide begins (docs/CASE.md, \
-                 \"How far friction slides\", says how far they get and what to mesh; a \
-                 larger mass density `rho` carries more of them through: finer cells need more)"
-            } else {
-                ""
-            };
+            let remade = self.accounts.totals.medium.is_some();
+            let hint = stall_hint(&st.model.physics, remade);
             let err = SolveError::StepTooSmall {
                 at: st.position(),
                 step,
@@ -523,5 +511,39 @@ impl<'a> Run<'a> {
     /// The summary written with the run's state.
     fn finish(&mut self, converged: bool, message: String) -> Result<(), SolveError> {
         (self.rec).finish(&self.st, &self.accounts.totals, converged, message)
+    }
+}
+
+/// What a run that cannot step says of friction: drags stall where the full slide begins
+/// (docs/notes/2026-11-29-friction-measurements.md, "Where drags stall"), or over a medium
+/// made again where a leading corner digs into the face it slides on; the user's guide says
+/// how far they get, and a mass density carries them through, or many of them: on every
+/// region, or where the medium is made again (which takes none) on the solids
+/// (docs/notes/2026-12-04-a-sigterm-in-metis-and-a-hint-taken.md).
+fn stall_hint(physics: &crate::model::Physics, remade: bool) -> &'static str {
+    match (physics.friction, physics.inertia, remade) {
+        (false, _, _) => "",
+        (true, false, false) => {
+            "; with friction, drags stall where the full slide begins (docs/CASE.md, \
+             \"How far friction slides\", says how far they get and what to mesh; a \
+             small mass density `rho` on every region carries them through)"
+        }
+        (true, true, false) => {
+            "; with friction, drags stall where the full slide begins (docs/CASE.md, \
+             \"How far friction slides\", says how far they get and what to mesh; a \
+             larger mass density `rho` carries more of them through: finer cells need more)"
+        }
+        (true, false, true) => {
+            "; with friction, a drag can stall where a body's leading corner digs into the \
+             face it slides on (docs/CASE.md, \"How far friction slides\"); a small mass \
+             density `rho` on every solid can carry it through (a medium made again takes \
+             none)"
+        }
+        (true, true, true) => {
+            "; with friction, a drag can stall where a body's leading corner digs into the \
+             face it slides on (docs/CASE.md, \"How far friction slides\"); a larger mass \
+             density `rho` on the solids can carry more of them through (a medium made again \
+             takes none)"
+        }
     }
 }

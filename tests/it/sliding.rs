@@ -687,6 +687,54 @@ fn a_pad_in_a_box_of_medium_slides_its_width_frictionless_and_at_mu() {
     );
 }
 
+/// The pad in a box at μ = 1 on triangles of h = 0.1 stalls at a slide of 0.15: its leading
+/// corner digs a dent in the plate it cannot climb out of (docs/notes/2026-12-03-mu-1-and-mu-
+/// 0.1-on-the-pad-in-a-box.md). The run says what carries it through, and what it says is
+/// taken: a mass density on the solids (measured with `rho = 1e-4` on both: the whole drag,
+/// 346 steps; the 3D pad at μ = 0.1 likewise, docs/notes/2026-12-04-a-sigterm-in-metis-and-
+/// a-hint-taken.md), not on every region, since a medium made again takes none (before, the
+/// hint asked for it on every region, and the case so changed was refused).
+#[test]
+fn a_stalled_drag_over_a_medium_made_again_names_a_mass_density_on_the_solids() {
+    let body = case_body("pad-box-slide").replace("mu = 0.3, normal", "mu = 1.0, normal");
+    assert!(body.contains("mu = 1.0, normal"));
+    let case = case_file(
+        "pad-box-stall",
+        "pad-box.geo",
+        "params = { h = 0.1 }",
+        &body,
+    );
+    let o = solve_cli(&case, &case.with_file_name("out"), &[]);
+    let e = stderr(&o);
+    assert!(!o.status.success(), "{e}");
+    assert!(
+        e.contains("leading corner digs into the face it slides on")
+            && e.contains("`rho` on every solid can carry it through")
+            && e.contains("a medium made again takes none"),
+        "{e}"
+    );
+    // as the hint says: taken on the solids, refused on the medium too
+    let with_rho = |groups: &[&str]| {
+        let mut text = std::fs::read_to_string(&case).unwrap();
+        for g in groups {
+            let group = format!("group = \"{g}\"\n");
+            assert!(text.contains(&group), "{g}");
+            text = text.replace(&group, &format!("{group}rho = 1e-4\n"));
+        }
+        let changed = case.with_file_name(format!("rho-{}.toml", groups.len()));
+        std::fs::write(&changed, text).unwrap();
+        tmc(&["check", changed.to_str().unwrap()])
+    };
+    let o = with_rho(&["plate", "pad"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = with_rho(&["plate", "pad", "medium"]);
+    assert!(
+        !o.status.success() && stderr(&o).contains("`rho`"),
+        "{}",
+        stderr(&o)
+    );
+}
+
 /// The pad in a box on quadrilaterals (`quads = 1`, h = 0.1), at μ = 0.3. Its medium is made
 /// again, into triangles, as soon as a quadrilateral has closed thin: before, the pad's
 /// leading corner went through the plate's face inside the one quadrilateral across the gap
