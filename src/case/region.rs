@@ -398,6 +398,13 @@ impl RegionKeys<'_> {
             &[("K", &r.K), ("mu", &r.mu), ("C10", &r.C10), ("C01", &r.C01)],
             "is a solid key; the medium's moduli are `gamma`",
         )?;
+        if r.remakes() {
+            self.refuse(
+                &[("rho", &r.rho), ("rho_c", &r.rho_c)],
+                "is not carried across a remake yet: a medium made again takes none (give \
+                 it to the solids)",
+            )?;
+        }
         if let Some(law) = &r.law {
             return self.fail(
                 law.span(),

@@ -628,15 +628,6 @@ impl Medium {
                  current shape, with nothing of the slip to forget; leave out `forget_slip`",
             );
         }
-        let with_history = (model.capacity_blocks.iter().map(|b| b.block))
-            .chain(model.inertia_blocks.iter().map(|b| b.block))
-            .any(|b| blocks.contains(&b));
-        if with_history {
-            return refuse(
-                "does not carry a medium's stored heat or mass across yet; leave out the \
-                 medium's `rho_c` and `rho`",
-            );
-        }
         if let Err(why) = supported(&model.mesh, &blocks) {
             return refuse(&why);
         }

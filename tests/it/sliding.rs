@@ -296,7 +296,14 @@ fn what_remake_cannot_do_yet_check_and_solve_refuse_alike() {
             "heavy-medium",
             "params = { h = 0.1 }",
             body.replace("remake = true\n", "remake = true\nrho = 1e-4\n"),
-            "does not carry a medium's stored heat or mass across yet",
+            "region[2] (\"medium\"): `rho` is not carried across a remake yet: a medium made \
+             again takes none (give it to the solids)",
+        ),
+        (
+            "warm-medium",
+            "params = { h = 0.1 }",
+            body.replace("remake = true\n", "remake = true\nrho_c = 1.0\n"),
+            "region[2] (\"medium\"): `rho_c` is not carried across a remake yet",
         ),
         (
             "quadratic",
