@@ -31,7 +31,13 @@ pub(crate) fn metis(mut call: impl FnMut() -> i32) -> i32 {
         }
         let status = call();
         for (s, w) in signals.iter().zip(&was) {
-            unsafe { libc::sigaction(*s, w, std::ptr::null_mut()) };
+            // the handler METIS put back, as it was; one the handler itself changed since
+            // (the run's, on a signal, to the default) stays
+            let mut now: libc::sigaction = unsafe { std::mem::zeroed() };
+            unsafe { libc::sigaction(*s, std::ptr::null(), &mut now) };
+            if now.sa_sigaction == w.sa_sigaction {
+                unsafe { libc::sigaction(*s, w, std::ptr::null_mut()) };
+            }
         }
         status
     };
