@@ -217,11 +217,15 @@ mod tests {
         use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering::SeqCst};
 
         static HANDLED: AtomicUsize = AtomicUsize::new(0);
-        /// The worker is inside its METIS call (the lock held).
-        static INSIDE: AtomicBool = AtomicBool::new(false);
-        /// A signal is on its way to the worker, which holds the lock until it is handled.
-        static PENDING: AtomicBool = AtomicBool::new(false);
-        /// The last signal sent ended a METIS call (METIS caught it).
+        /// Signals sent, or about to be: the last one is handled before its target call lets
+        /// go of the lock, so that none reaches a thread while another's METIS traps it.
+        static SENT: AtomicUsize = AtomicUsize::new(0);
+        /// The worker's calls: the one it is inside (0: none), and the one the next signal is
+        /// for (0: none).
+        static CALLS: AtomicUsize = AtomicUsize::new(0);
+        static INSIDE: AtomicUsize = AtomicUsize::new(0);
+        static TARGET: AtomicUsize = AtomicUsize::new(0);
+        /// A signal ended a METIS call (METIS caught it).
         static CAUGHT: AtomicBool = AtomicBool::new(false);
         /// The worker may stop.
         static DONE: AtomicBool = AtomicBool::new(false);
@@ -230,7 +234,17 @@ mod tests {
             HANDLED.fetch_add(1, SeqCst);
         }
 
-        /// METIS nested dissection of a k × k grid: tens of milliseconds at k = 200.
+        fn arm(handler: libc::sighandler_t) -> libc::sighandler_t {
+            // SAFETY: setting a disposition; the handler only counts (an atomic add)
+            unsafe { libc::signal(libc::SIGTERM, handler) }
+        }
+
+        fn counting() -> libc::sighandler_t {
+            counted as extern "C" fn(libc::c_int) as libc::sighandler_t
+        }
+
+        /// METIS nested dissection of a k × k grid (tens of milliseconds at k = 200), as
+        /// call after call of a worker that signals are sent to (`spot`).
         fn order(k: usize, spot: bool) -> (i32, Vec<i32>) {
             let (mut xadj, mut adjncy) = (vec![0i32], Vec::new());
             for v in 0..k * k {
@@ -243,7 +257,8 @@ mod tests {
             let mut nv = (k * k) as i32;
             let (mut perm, mut iperm) = (vec![0i32; k * k], vec![0i32; k * k]);
             let status = metis(|| {
-                INSIDE.store(spot, SeqCst);
+                let call = CALLS.fetch_add(1, SeqCst) + 1;
+                INSIDE.store(if spot { call } else { 0 }, SeqCst);
                 // SAFETY: a valid CSR graph of nv vertices; METIS writes nv entries of each
                 // of perm and iperm
                 let status = unsafe {
@@ -257,13 +272,21 @@ mod tests {
                         iperm.as_mut_ptr(),
                     )
                 };
-                INSIDE.store(false, SeqCst);
-                if status == metis_sys::rstatus_et_METIS_ERROR {
-                    CAUGHT.store(true, SeqCst);
+                INSIDE.store(0, SeqCst);
+                let caught = status == metis_sys::rstatus_et_METIS_ERROR;
+                CAUGHT.fetch_or(caught, SeqCst);
+                if !caught && TARGET.load(SeqCst) == call {
+                    // a signal sent late comes after METIS put back the handler as one that
+                    // runs once, and `metis` leaves the default that it then falls to (the
+                    // run's handler sets that itself): armed again for the next send
+                    arm(counting());
                 }
-                // a signal sent while METIS ran and not caught by it is handled before the
-                // lock is let go, so none reaches a thread while another's METIS traps it
-                while PENDING.load(SeqCst) && !CAUGHT.load(SeqCst) {
+                // the signal for this call, if METIS did not catch it, is handled before the
+                // lock is let go
+                while !caught
+                    && TARGET.load(SeqCst) == call
+                    && HANDLED.load(SeqCst) < SENT.load(SeqCst)
+                {
                     std::hint::spin_loop();
                 }
                 status
@@ -278,13 +301,11 @@ mod tests {
             assert_eq!(status, metis_sys::rstatus_et_METIS_OK);
             // put in place, and back, under METIS's lock: a METIS call on another thread puts
             // back at its end the handler it found at its start
-            let handler = counted as extern "C" fn(libc::c_int) as libc::sighandler_t;
             let under_lock = |h| {
                 let _one_at_a_time = METIS.lock().unwrap_or_else(|e| e.into_inner());
-                // SAFETY: the handler only counts (an atomic add)
-                unsafe { libc::signal(libc::SIGTERM, h) }
+                arm(h)
             };
-            let before = under_lock(handler);
+            let before = under_lock(counting());
             let sends = 4;
             let worker = std::thread::spawn(move || {
                 let mut runs = vec![order(k, true)];
@@ -299,9 +320,18 @@ mod tests {
             };
             let mut caught = 0;
             for sent in 1..=sends {
-                // Dekker's handshake with the worker's spin: sent only while it is inside
-                PENDING.store(true, SeqCst);
-                while !INSIDE.load(SeqCst) {
+                SENT.store(sent, SeqCst);
+                // a call to send it to, held by Dekker's handshake with the worker's spin:
+                // the target named, then the worker seen still inside it
+                loop {
+                    let call = INSIDE.load(SeqCst);
+                    if call != 0 {
+                        TARGET.store(call, SeqCst);
+                        if INSIDE.load(SeqCst) == call {
+                            break;
+                        }
+                        TARGET.store(0, SeqCst);
+                    }
                     std::hint::spin_loop();
                 }
                 std::thread::sleep(std::time::Duration::from_millis(2));
@@ -312,7 +342,7 @@ mod tests {
                     std::thread::yield_now();
                 }
                 caught += usize::from(CAUGHT.swap(false, SeqCst));
-                PENDING.store(false, SeqCst);
+                TARGET.store(0, SeqCst);
             }
             DONE.store(true, SeqCst);
             let runs: Vec<(i32, Vec<i32>)> = worker.join().unwrap();
