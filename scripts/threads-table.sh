@@ -10,7 +10,10 @@
 #   scripts/threads-table.sh [-b BINARY] [-n "16 32"] [-t "1 2 4 8 16"] [-r REPEATS]
 #
 # Defaults: target/release/tmc, the 16×16 row (20.5k unknowns; add 32 for the 147k row, which
-# takes minutes per run), one run per thread count. Runs go to target/threads-table/.
+# takes minutes per run), one run per thread count. Runs go to target/threads-table/; each
+# row is meshed once, to target/threads-table/h1-N.msh, and a mesh already there is used as
+# it is (so a machine without gmsh runs the table from meshes written elsewhere). A line per
+# run is printed as it ends, so a table cut short still says what it measured.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bin=target/release/tmc
@@ -40,22 +43,31 @@ echo "binary $bin, $cpus CPUs usable, threads:$threads, $repeats run(s) each"
 for n in $rows; do
     nb=$((n * 10 / 16)); nq=$((n * 6 / 16))
     case=$out/h1-$n.toml
-    sed -e "s#^mesh = .*#mesh = \"$geo\"#" \
-        -e "s#^params = .*#params = { n = $n, nb = $nb, nm = 1, nq = $nq }#" \
+    msh=$(pwd)/$out/h1-$n.msh
+    [ -s "$msh" ] || "$bin" mesh "$geo" -o "$msh" --set n=$n --set nb=$nb --set nm=1 --set nq=$nq >/dev/null
+    sed -e "s#^mesh = .*#mesh = \"$msh\"#" -e "/^params = /d" -e "/^\[mesh_options\]/d" \
         cases/block-plate-3d-tm1.toml >"$case"
     "$bin" check "$case" 2>&1 | grep -E "^(factorisation|solves):" >"$out/h1-$n-check.txt" || true
     for r in $(seq "$repeats"); do
         for t in $threads; do
             dir=$out/h1-$n-t$t-r$r
-            RAYON_NUM_THREADS=$t "$bin" solve "$case" -o "$dir" >"$dir.log" 2>&1 ||
+            if RAYON_NUM_THREADS=$t "$bin" solve "$case" -o "$dir" >"$dir.log" 2>&1; then
+                python3 -c 'import json, sys
+s = json.load(open(sys.argv[1]))
+w, so, a, nw, kr = (s[k] for k in ("wall_seconds", "solver_seconds", "assembly_seconds", "newton_iterations", "krylov_iterations"))
+g, f = s["probes"].get("gap", float("nan")), s.get("factorisations", "?")
+print(f"  {sys.argv[2]} threads, run {sys.argv[3]}: wall {w:.2f} s, solver {so:.2f} s, assembly {a:.2f} s, Newton {nw}, Krylov {kr}, factorisations {f}, gap {g:.12e}", flush=True)' \
+                    "$dir/summary.json" "$n×$n at $t" "$r"
+            else
                 echo "  $n×$n at $t threads, run $r: failed (see $dir.log)"
+            fi
         done
     done
     python3 - "$out" "$n" "$repeats" $threads <<'PY'
 import json, statistics, sys
 out, n, repeats, threads = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4:]
 rows = {}
-for t in threads:
+for t in sorted(threads, key=int):
     runs = []
     for r in range(1, repeats + 1):
         try:
@@ -67,25 +79,29 @@ for t in threads:
 if not rows:
     sys.exit(f"{n}×{n}: no run finished")
 med = lambda runs, k: statistics.median(s[k] for s in runs)
-base = rows.get("1")
-print(f"\n{n}×{n}, {next(iter(rows.values()))[0]['dofs']['free']} free unknowns")
-print("| threads | wall s | solver s | assembly s | output s | wall / 1 thread | solver / 1 thread | Newton its | Krylov its | gap |")
-print("|---|---|---|---|---|---|---|---|---|---|")
+# the ratios against the fewest threads that finished (one, where it did)
+fewest = next(iter(rows))
+base = rows[fewest]
+per = f"{fewest} thread" + ("s" if fewest != "1" else "")
+print(f"\n{n}×{n}, {base[0]['dofs']['free']} free unknowns")
+print(f"| threads | wall s | solver s | assembly s | output s | wall / {per} | solver / {per} | Newton its | Krylov its | factorisations | gap |")
+print("|---|---|---|---|---|---|---|---|---|---|---|")
 for t, runs in rows.items():
     w, s, a = med(runs, "wall_seconds"), med(runs, "solver_seconds"), med(runs, "assembly_seconds")
     o = med(runs, "output_seconds") if all("output_seconds" in x for x in runs) else float("nan")
-    rw = f"{w / med(base, 'wall_seconds'):.2f}" if base else "–"
-    rs = f"{s / med(base, 'solver_seconds'):.2f}" if base else "–"
+    rw = f"{w / med(base, 'wall_seconds'):.2f}"
+    rs = f"{s / med(base, 'solver_seconds'):.2f}"
     its = sorted({x["newton_iterations"] for x in runs})
     kry = sorted({x["krylov_iterations"] for x in runs})
+    fac = sorted({x.get("factorisations", -1) for x in runs})
     gaps = sorted({f"{x['probes'].get('gap', float('nan')):.12e}" for x in runs})
-    print(f"| {t} | {w:.2f} | {s:.2f} | {a:.2f} | {o:.2f} | {rw} | {rs} | {'/'.join(map(str, its))} | {'/'.join(map(str, kry))} | {' '.join(gaps)} |")
+    print(f"| {t} | {w:.2f} | {s:.2f} | {a:.2f} | {o:.2f} | {rw} | {rs} | {'/'.join(map(str, its))} | {'/'.join(map(str, kry))} | {'/'.join(map(str, fac))} | {' '.join(gaps)} |")
 try:
     print("\nthe elimination tree's bounds (tmc check):")
     print(open(f"{out}/h1-{n}-check.txt").read().rstrip())
 except OSError:
     pass
-two = rows.get("2")
+base, two = rows.get("1"), rows.get("2")
 if base and two and all("output_seconds" in x for x in base + two):
     # each part's seconds at p threads by Amdahl's law, its serial share read from 1 and 2
     parts = {"solver": "solver_seconds", "assembly": "assembly_seconds", "output": "output_seconds"}
