@@ -7,15 +7,19 @@ use super::ordering::nodes_of;
 use super::submatrix::SubMatrix;
 use super::{DAMPED_TOL, Factorization, GMRES_TOL, LinearError};
 use crate::dofs::{Pattern, Structure};
-use faer::Par;
 
 /// The GMRES iterations worth one factorisation of the block-triangular preconditioner's
 /// blocks (0: never lagged; [`Lag::priced`] caps the budget at [`LAG_MAX_ITS`]). The blocks
 /// factor side by side, so the price is the larger block's; an iteration applies both and
-/// multiplies by the whole matrix. A factor large enough to run on every core is cheaper by
-/// their number, its solves hardly. Priced so, Table 2 H1 (block-plate-3d-tm1) gets 4, 9 and
-/// 16.8 at 3k, 20.5k and 147k unknowns (dear from 12); measured at 20.5k and 147k, a
-/// factorisation costs 8 and 14.6–24 iterations (2.24 s against 0.095 s at 147k).
+/// multiplies by the whole matrix. Priced so, Table 2 H1 (block-plate-3d-tm1) gets 4, 9 and
+/// 33.6 at 3k, 20.5k and 147k unknowns (dear from 12); measured at 20.5k and 147k on one
+/// thread, a factorisation costs 8 and about 24 iterations.
+///
+/// The price is read from the factor alone, never from the threads: whether a factor is
+/// dear decides how Newton's damped updates are solved, so a price that fell with the
+/// threads changed Newton's path with them (on 16 cores, the 147k row took 81 Newton
+/// iterations from 4 threads on and 83 at 1 and 2). A factorisation on many threads is
+/// cheaper than its price says; the same iterations at every thread count are worth more.
 /// Friction's LU block (two-way scenes) is refactored at every factorisation, as before:
 /// its stick–slip switches move the tangent between any two iterations.
 pub(super) fn block_lag_price(
@@ -27,13 +31,8 @@ pub(super) fn block_lag_price(
         return 0.0;
     };
     let applied = m.apply_flops() + ft.map_or(0.0, SymFactor::apply_flops);
-    let cores = if m.par == Par::Seq {
-        1.0
-    } else {
-        rayon::current_num_threads() as f64
-    };
     let flops = m.flops().max(ft.map_or(0.0, SymFactor::flops));
-    factor_price(flops, applied, p.n, p.nnz(), cores)
+    factor_price(flops, applied, p.n, p.nnz())
 }
 
 impl Lagged for BlockTriangular {

@@ -25,29 +25,18 @@ pub(super) const FACTOR_SPEEDUP: f64 = 12.0;
 /// (0: a factor this cheap is never lagged).
 pub(super) fn lag_budget<T: Real>(lu: &StaticLu<T>, sub: &SubMatrix) -> usize {
     let (n, nnz) = (sub.pattern.nrows(), sub.values.len());
-    budget_of(factor_price(
-        lu.flops(),
-        2.0 * lu.entries() as f64,
-        n,
-        nnz,
-        1.0,
-    ))
+    budget_of(factor_price(lu.flops(), 2.0 * lu.entries() as f64, n, nnz))
 }
 
 /// The GMRES iterations on a matrix of `n` rows and `nnz` entries worth a factorisation of
-/// `factor_flops` operations run on `cores`, when applying the factor takes `apply_flops`
-/// (not capped: [`budget_of`] caps a lag's budget).
-pub(super) fn factor_price(
-    factor_flops: f64,
-    apply_flops: f64,
-    n: usize,
-    nnz: usize,
-    cores: f64,
-) -> f64 {
+/// `factor_flops` operations, when applying the factor takes `apply_flops` (not capped:
+/// [`budget_of`] caps a lag's budget). Both as on one thread: the price must not change with
+/// the threads ([`super::block::block_lag_price`]).
+pub(super) fn factor_price(factor_flops: f64, apply_flops: f64, n: usize, nnz: usize) -> f64 {
     // the factor's solves, a product with A, and the orthogonalisation of a restart's dozen
     // vectors
     let iteration = apply_flops + 2.0 * nnz as f64 + 30.0 * n as f64;
-    factor_flops / iteration / FACTOR_SPEEDUP / cores
+    factor_flops / iteration / FACTOR_SPEEDUP
 }
 
 /// A lag's budget for a factor worth `price` iterations: at most [`LAG_MAX_ITS`].
