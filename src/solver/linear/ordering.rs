@@ -1,4 +1,5 @@
-//! The fill-reducing ordering: METIS nested dissection of the mesh nodes' graph.
+//! The fill-reducing ordering: METIS nested dissection of the mesh nodes' graph, or faer's
+//! approximate minimum degree of it where METIS fails.
 
 use crate::dofs::Structure;
 use faer::sparse::SymbolicSparseColMat;
@@ -93,7 +94,9 @@ pub(super) fn nested_dissection_trying(
         if status == metis_sys::rstatus_et_METIS_OK {
             perm.iter().map(|&v| v as usize).collect()
         } else {
-            (0..nv).collect()
+            // METIS failed for itself (short of memory, say): the natural order would fill a
+            // 3D factor without bound, the minimum degree fills it about as little as METIS
+            minimum_degree(&xadj, &adjncy)
         }
     } else {
         (0..nv).collect()
@@ -109,4 +112,31 @@ pub(super) fn nested_dissection_trying(
         inv[old] = new;
     }
     (fwd, inv)
+}
+
+/// faer's approximate minimum degree ordering of the graph `xadj`/`adjncy` (CSR, sorted,
+/// without self loops): `order[new] = old`. The natural order where even that fails.
+fn minimum_degree(xadj: &[i32], adjncy: &[i32]) -> Vec<usize> {
+    use faer::dyn_stack::{MemBuffer, MemStack};
+    use faer::sparse::linalg::amd;
+    let nv = xadj.len() - 1;
+    let graph = SymbolicSparseColMat::new_checked(
+        nv,
+        nv,
+        xadj.iter().map(|&k| k as usize).collect(),
+        None,
+        adjncy.iter().map(|&v| v as usize).collect(),
+    );
+    let (mut perm, mut inv) = (vec![0usize; nv], vec![0usize; nv]);
+    let mut mem = MemBuffer::new(amd::order_scratch::<usize>(nv, adjncy.len()));
+    match amd::order(
+        &mut perm,
+        &mut inv,
+        graph.as_ref(),
+        amd::Control::default(),
+        MemStack::new(&mut mem),
+    ) {
+        Ok(_) => perm,
+        Err(_) => (0..nv).collect(),
+    }
 }

@@ -639,6 +639,48 @@ fn large_graphs_are_cut_by_the_best_of_several_separators() {
 }
 
 #[test]
+fn where_metis_fails_the_ordering_is_still_fill_reducing() {
+    // METIS refuses no separator per level (METIS_ERROR_INPUT): the ordering falls back to the
+    // minimum degree, not to the natural order, whose factor of a 3D grid fills its band
+    let k: usize = 12;
+    let at = |x: usize, y: usize, z: usize| x + k * (y + k * z);
+    let (mut col_ptr, mut row_idx) = (vec![0], Vec::new());
+    for z in 0..k {
+        for y in 0..k {
+            for x in 0..k {
+                let mut col = vec![at(x, y, z)];
+                for (d, step) in [(x, 1), (y, k), (z, k * k)] {
+                    if d > 0 {
+                        col.push(at(x, y, z) - step);
+                    }
+                    if d + 1 < k {
+                        col.push(at(x, y, z) + step);
+                    }
+                }
+                col.sort_unstable();
+                row_idx.extend(col);
+                col_ptr.push(row_idx.len());
+            }
+        }
+    }
+    let n = k * k * k;
+    let sp = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
+    let node: Vec<u32> = (0..n as u32).collect();
+    let entries = |(fwd, inv): (Vec<usize>, Vec<usize>)| analysed(&sp, &fwd, &inv).len_val();
+    let metis = entries(nested_dissection(&sp, &node));
+    let (fwd, inv) = nested_dissection_trying(&sp, &node, Some(0));
+    let mut seen = fwd.clone();
+    seen.sort_unstable();
+    assert_eq!(seen, (0..n).collect::<Vec<_>>());
+    let fallback = entries((fwd, inv));
+    let natural = entries(((0..n).collect(), (0..n).collect()));
+    assert!(
+        fallback < natural / 2 && fallback < 2 * metis,
+        "{fallback} entries; METIS {metis}, the natural order {natural}"
+    );
+}
+
+#[test]
 fn nested_dissection_keeps_node_unknowns_together() {
     let (p, _, node, _) = system(50, 0.1, 0.1);
     let sp = SymbolicSparseColMat::new_checked(p.n, p.n, p.col_ptr, None, p.row_idx);
