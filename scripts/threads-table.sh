@@ -7,27 +7,30 @@
 # check`), and each part of the run projected to 4, 16 and 64 threads from its 1- and
 # 2-thread seconds (Amdahl's law: the part that did not halve stays, the rest divides).
 #
-#   scripts/threads-table.sh [-b BINARY] [-n "16 32"] [-t "1 2 4 8 16"] [-r REPEATS]
+#   scripts/threads-table.sh [-b BINARY] [-n "16 32"] [-t "1 2 4 8 16"] [-r REPEATS] [-k]
 #
 # Defaults: target/release/tmc, the 16×16 row (20.5k unknowns; add 32 for the 147k row, which
 # takes minutes per run), one run per thread count. Runs go to target/threads-table/; each
-# row is meshed once, to target/threads-table/h1-N.msh, and a mesh already there is used as
-# it is (so a machine without gmsh runs the table from meshes written elsewhere). A line per
-# run is printed as it ends, so a table cut short still says what it measured.
+# row is meshed once, to target/threads-table/h1-N.msh (again where the .geo is newer); -k
+# keeps the meshes there as they are, so that a machine without gmsh runs the table from
+# meshes written elsewhere. A line per run is printed as it ends, so a table cut short still
+# says what it measured.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bin=target/release/tmc
 rows="16"
 repeats=1
+keep=0
 cpus=$(nproc)
 threads=""
-while getopts "b:n:t:r:" o; do
+while getopts "b:n:t:r:k" o; do
     case $o in
     b) bin=$OPTARG ;;
     n) rows=$OPTARG ;;
     t) threads=$OPTARG ;;
     r) repeats=$OPTARG ;;
-    *) sed -n '2,10p' "$0"; exit 2 ;;
+    k) keep=1 ;;
+    *) sed -n '2,16p' "$0"; exit 2 ;;
     esac
 done
 if [ -z "$threads" ]; then
@@ -44,7 +47,7 @@ for n in $rows; do
     nb=$((n * 10 / 16)); nq=$((n * 6 / 16))
     case=$out/h1-$n.toml
     msh=$(pwd)/$out/h1-$n.msh
-    [ -s "$msh" ] || "$bin" mesh "$geo" -o "$msh" --set n=$n --set nb=$nb --set nm=1 --set nq=$nq >/dev/null
+    { [ -s "$msh" ] && { [ $keep = 1 ] || [ "$msh" -nt "$geo" ]; }; } || "$bin" mesh "$geo" -o "$msh" --set n=$n --set nb=$nb --set nm=1 --set nq=$nq >/dev/null
     sed -e "s#^mesh = .*#mesh = \"$msh\"#" -e "/^params = /d" -e "/^\[mesh_options\]/d" \
         cases/block-plate-3d-tm1.toml >"$case"
     "$bin" check "$case" 2>&1 | grep -E "^(factorisation|solves):" >"$out/h1-$n-check.txt" || true
