@@ -2,18 +2,19 @@
 # The threads table: Table 2's H1 rows (block-plate-3d-tm1, one medium layer) solved by one
 # built binary at 1, 2, 4, 8, ... threads, up to the CPUs this process may use, the runs of
 # each thread count interleaved; a markdown table of the median wall, solver, assembly and
-# output seconds, each against one thread, and the counts that must not change with the
-# threads. Beside it, what the factor's elimination tree bounds the speed-ups at (`tmc
+# output seconds, each against the fewest threads run, and the counts that must not change
+# with the threads. Beside it, what the factor's elimination tree bounds the speed-ups at (`tmc
 # check`), and each part of the run projected to 4, 16 and 64 threads from its 1- and
 # 2-thread seconds (Amdahl's law: the part that did not halve stays, the rest divides).
 #
-#   scripts/threads-table.sh [-b BINARY] [-n "16 32"] [-t "1 2 4 8 16"] [-r REPEATS] [-k]
+#   scripts/threads-table.sh [-b BINARY] [-n "16 32"] [-t "1 2 4 8 16"] [-r REPEATS] [-k] [-M]
 #
 # Defaults: target/release/tmc, the 16×16 row (20.5k unknowns; add 32 for the 147k row, which
 # takes minutes per run), one run per thread count. Runs go to target/threads-table/; each
 # row is meshed once, to target/threads-table/h1-N.msh (again where the .geo is newer); -k
 # keeps the meshes there as they are, so that a machine without gmsh runs the table from
-# meshes written elsewhere. A line per run is printed as it ends, so a table cut short still
+# meshes written elsewhere (-M only writes them: copy target/threads-table/ and the binary
+# over, then run with -k). A line per run is printed as it ends, so a table cut short still
 # says what it measured.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -21,16 +22,18 @@ bin=target/release/tmc
 rows="16"
 repeats=1
 keep=0
+mesh_only=0
 cpus=$(nproc)
 threads=""
-while getopts "b:n:t:r:k" o; do
+while getopts "b:n:t:r:kM" o; do
     case $o in
     b) bin=$OPTARG ;;
     n) rows=$OPTARG ;;
     t) threads=$OPTARG ;;
     r) repeats=$OPTARG ;;
     k) keep=1 ;;
-    *) sed -n '2,16p' "$0"; exit 2 ;;
+    M) mesh_only=1 ;;
+    *) sed -n '2,18p' "$0"; exit 2 ;;
     esac
 done
 if [ -z "$threads" ]; then
@@ -50,6 +53,7 @@ for n in $rows; do
     { [ -s "$msh" ] && { [ $keep = 1 ] || [ "$msh" -nt "$geo" ]; }; } || "$bin" mesh "$geo" -o "$msh" --set n=$n --set nb=$nb --set nm=1 --set nq=$nq >/dev/null
     sed -e "s#^mesh = .*#mesh = \"$msh\"#" -e "/^params = /d" -e "/^\[mesh_options\]/d" \
         cases/block-plate-3d-tm1.toml >"$case"
+    [ $mesh_only = 1 ] && { echo "$n×$n: $msh"; continue; }
     "$bin" check "$case" 2>&1 | grep -E "^(factorisation|solves):" >"$out/h1-$n-check.txt" || true
     for r in $(seq "$repeats"); do
         for t in $threads; do
