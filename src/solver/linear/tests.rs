@@ -599,50 +599,8 @@ fn nested_dissection_is_the_same_from_concurrent_threads() {
     }
 }
 
-#[test]
-fn large_graphs_are_cut_by_the_best_of_several_separators() {
-    // a 7-point grid of 48³ = 110 592 nodes, one unknown each: past the size where the
-    // ordering tries several separators per level, and its factor is smaller for it
-    let k: usize = 48;
-    let at = |x: usize, y: usize, z: usize| x + k * (y + k * z);
-    let (mut col_ptr, mut row_idx) = (vec![0], Vec::new());
-    for z in 0..k {
-        for y in 0..k {
-            for x in 0..k {
-                let mut col = vec![at(x, y, z)];
-                for (d, c) in [(x, 0), (y, 1), (z, 2)] {
-                    let step = [1, k, k * k][c];
-                    if d > 0 {
-                        col.push(at(x, y, z) - step);
-                    }
-                    if d + 1 < k {
-                        col.push(at(x, y, z) + step);
-                    }
-                }
-                col.sort_unstable();
-                row_idx.extend(col);
-                col_ptr.push(row_idx.len());
-            }
-        }
-    }
-    let n = k * k * k;
-    assert!(n >= SEPARATOR_TRIES_FROM);
-    let sp = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
-    let node: Vec<u32> = (0..n as u32).collect();
-    let entries = |(fwd, inv): (Vec<usize>, Vec<usize>)| analysed(&sp, &fwd, &inv).len_val();
-    let tried = entries(nested_dissection(&sp, &node));
-    let first = entries(nested_dissection_trying(&sp, &node, Some(1)));
-    assert!(
-        tried < first,
-        "{tried} entries against {first} with one separator"
-    );
-}
-
-#[test]
-fn where_metis_fails_the_ordering_is_still_fill_reducing() {
-    // METIS refuses no separator per level (METIS_ERROR_INPUT): the ordering falls back to the
-    // minimum degree, not to the natural order, whose factor of a 3D grid fills its band
-    let k: usize = 12;
+/// The pattern of a 7-point grid of k³ nodes, one unknown each (x fastest), both triangles.
+fn grid_7_point(k: usize) -> SymbolicSparseColMat<usize> {
     let at = |x: usize, y: usize, z: usize| x + k * (y + k * z);
     let (mut col_ptr, mut row_idx) = (vec![0], Vec::new());
     for z in 0..k {
@@ -664,7 +622,34 @@ fn where_metis_fails_the_ordering_is_still_fill_reducing() {
         }
     }
     let n = k * k * k;
-    let sp = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
+    SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx)
+}
+
+#[test]
+fn large_graphs_are_cut_by_the_best_of_several_separators() {
+    // a 7-point grid of 48³ = 110 592 nodes, one unknown each: past the size where the
+    // ordering tries several separators per level, and its factor is smaller for it
+    let k: usize = 48;
+    let n = k * k * k;
+    assert!(n >= SEPARATOR_TRIES_FROM);
+    let sp = grid_7_point(k);
+    let node: Vec<u32> = (0..n as u32).collect();
+    let entries = |(fwd, inv): (Vec<usize>, Vec<usize>)| analysed(&sp, &fwd, &inv).len_val();
+    let tried = entries(nested_dissection(&sp, &node));
+    let first = entries(nested_dissection_trying(&sp, &node, Some(1)));
+    assert!(
+        tried < first,
+        "{tried} entries against {first} with one separator"
+    );
+}
+
+#[test]
+fn where_metis_fails_the_ordering_is_still_fill_reducing() {
+    // METIS refuses no separator per level (METIS_ERROR_INPUT): the ordering falls back to the
+    // minimum degree, not to the natural order, whose factor of a 3D grid fills its band
+    let k: usize = 12;
+    let n = k * k * k;
+    let sp = grid_7_point(k);
     let node: Vec<u32> = (0..n as u32).collect();
     let entries = |(fwd, inv): (Vec<usize>, Vec<usize>)| analysed(&sp, &fwd, &inv).len_val();
     let metis = entries(nested_dissection(&sp, &node));
