@@ -531,9 +531,13 @@ fn solve_model(
             }
             (None, Some(medium)) => {
                 let (t, target) = run.next_step();
-                let due = medium.due(&model, run.references(), run.state(), t, target);
+                let watch = medium.due(&model, run.references(), run.state(), t, target);
                 // the watch after this state, for the next step's checkpoint
                 run.keep_medium(medium);
+                if let remake::Watch::Until(passes) = watch {
+                    run.cap_step(passes + PAST * largest_step(case));
+                }
+                let due = watch == remake::Watch::Remake;
                 (due || stuck.after(run.rejected(), t)).then_some(Change::Remake)
             }
             (None, None) => None,
@@ -736,7 +740,7 @@ fn changed_model(
 
 /// Start the new medium `m` at the checkpoint's state, and cut the next step so that it takes
 /// none of its slivers, as made, past the end of its edge at the speed of the last (`rate`;
-/// but not to less than a tenth of the largest step).
+/// but not to less than [`PAST`] of the largest step).
 fn restart_medium(
     case: &Case,
     model: &Model,
@@ -745,12 +749,22 @@ fn restart_medium(
     rate: f64,
 ) {
     let room = m.start(model, &cp.state.x, cp.state.clock.t, rate);
-    let largest = match &case.file.time {
+    let largest = largest_step(case);
+    let clock = &mut cp.state.clock;
+    clock.dt = clock.dt.min(room.max(PAST * largest));
+}
+
+/// A share of the largest step: the shortest step after a remake, and how long after a
+/// sliver's node gets to the end of the edge across it the step that takes it there ends (the
+/// step after which the medium is made again).
+const PAST: f64 = 0.1;
+
+/// The case's largest step.
+fn largest_step(case: &Case) -> f64 {
+    match &case.file.time {
         Some(time) => time.dt_max(),
         None => case.file.steps.max,
-    };
-    let clock = &mut cp.state.clock;
-    clock.dt = clock.dt.min(room.max(0.1 * largest));
+    }
 }
 
 /// The model on which a run goes on once its medium is made again (`made`) at the checkpoint

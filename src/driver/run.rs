@@ -160,6 +160,11 @@ impl<'a> Run<'a> {
         (self.st.ctl.t, self.st.ctl.target())
     }
 
+    /// Let the next step end at `until` at the latest.
+    pub(super) fn cap_step(&mut self, until: f64) {
+        self.st.ctl.cap(until);
+    }
+
     /// The attempts rejected so far.
     pub(super) fn rejected(&self) -> usize {
         self.st.ctl.rejected

@@ -92,6 +92,26 @@ pub struct Medium {
     pub rate: f64,
 }
 
+/// How far (in lengths of its edge) a sliver's node may have gone along the edge across it
+/// since the medium was made for the medium to be made again after the node's next pass
+/// rather than before it. Made only after each pass, the frictionless pad in a box met 0.076
+/// of its normal force (0.007 otherwise) as a node neared the end of a face it had gone 0.4
+/// of along (docs/notes/2026-12-04-a-remake-after-the-pass.md).
+const FRESH: f64 = 0.05;
+
+/// What the medium's watch asks after an accepted state.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Watch {
+    /// Make the medium again now.
+    Remake,
+    /// A sliver's node reaches the end of the edge across it at this pseudo-time, at the
+    /// speed of the last step: the next step is to take it just past, and the medium is made
+    /// again there.
+    Until(f64),
+    /// Go on.
+    Go,
+}
+
 /// A thin triangle: a node across a long edge (a layer one cell across).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 struct Sliver {
@@ -100,6 +120,9 @@ struct Sliver {
     edge: [usize; 2],
     across: usize,
     at: f64,
+    /// Where along its edge the node stood when the medium was made.
+    #[serde(default)]
+    from: f64,
 }
 
 /// A thin tetrahedron (a layer one cell across): three corners on one face and one across,
@@ -799,13 +822,18 @@ impl Medium {
         )
     }
 
-    /// Whether the medium is to be made again at the accepted state `x`.
+    /// Whether the medium is to be made again at the accepted state `x`, or the next step cut.
     ///
-    /// Also, before a sliver's node passes the end of the edge across from it: a node that
-    /// has passed it stands over the next face, and the sliver, squeezed to hold a contact,
-    /// opens (or inverts). Each sliver's node is followed from one accepted state (at `t`) to
-    /// the next; once the next step (to `target`), at the speed of the last, would take it
-    /// past an end, it is due.
+    /// A sliver's node that passes the end of the edge across from it stands over the next
+    /// face, and the sliver, squeezed to hold a contact, opens (or inverts) as it goes on.
+    /// Each sliver's node is followed from one accepted state (at `t`) to the next; where the
+    /// next step (to `target`), at the speed of the last, would take one past an end, the
+    /// medium is made again now if a node has gone [`FRESH`] of its edge since it was made;
+    /// else the watch says when the node gets there ([`Watch::Until`]), the run cuts the step
+    /// to end just past it, and the medium is made again after it, the node joined to the
+    /// next face. (Made again just before, the node would be joined across the same edge
+    /// again, and due again at the next step.) A node found past an end is due at once, and
+    /// so is, in 3D, a thin tetrahedron's corner the next step would take past the face across.
     pub fn due(
         &mut self,
         model: &Model,
@@ -813,15 +841,24 @@ impl Medium {
         x: &[f64],
         t: f64,
         target: f64,
-    ) -> bool {
-        let mut passing = false;
+    ) -> Watch {
+        let mut passed = false;
+        // the earliest a node reaches the end of its edge at the speed of the last step
+        let mut passes = f64::INFINITY;
         let dt = t - self.t;
         let mut rate = 0.0f64;
+        // how far a node has gone along its face since the medium was made (edge lengths)
+        let mut travel = 0.0f64;
         for s in &mut self.slivers {
             let (at, length) = along_edge(model, s, x);
+            travel = travel.max((at - s.from).abs());
             let speed = if dt > 0.0 { (at - s.at) / dt } else { 0.0 };
             let next = at + speed * (target - t);
-            passing |= !(0.0..=1.0).contains(&next) || !(0.0..=1.0).contains(&at);
+            passed |= !(0.0..=1.0).contains(&at);
+            if !(0.0..=1.0).contains(&next) {
+                let end = if next > 1.0 { 1.0 } else { 0.0 };
+                passes = passes.min(t + (end - at) / speed);
+            }
             rate = rate.max(speed.abs() * length);
             s.at = at;
         }
@@ -829,14 +866,28 @@ impl Medium {
             let (now, length) = s.standing(model, x);
             for (v, before) in now.iter().zip(&s.room) {
                 let speed = if dt > 0.0 { (v - before) / dt } else { 0.0 };
-                passing |= *v < 0.0 || v + speed * (target - t) < 0.0;
+                // made again before the pass: in 3D a corner taken past it, as after it,
+                // stopped the sphere of `sphere-drag` dragged three radii
+                passed |= *v < 0.0 || v + speed * (target - t) < 0.0;
                 rate = rate.max(speed.abs() * length);
             }
             s.room = now;
         }
         self.t = t;
         self.rate = rate;
-        passing || self.slid_cells(model, reference, x) >= SLID || self.thin_quadrilateral(model, x)
+        // a node about to pass where the medium was made long ago: made again before it
+        let stale = passes.is_finite() && travel >= FRESH;
+        if passed
+            || stale
+            || self.slid_cells(model, reference, x) >= SLID
+            || self.thin_quadrilateral(model, x)
+        {
+            Watch::Remake
+        } else if passes.is_finite() {
+            Watch::Until(passes)
+        } else {
+            Watch::Go
+        }
     }
 
     /// Whether one of the medium's quadrilaterals has become thin at the state `x` (its
@@ -904,9 +955,11 @@ impl Medium {
                     edge: [i, (i + 1) % 3],
                     across: (i + 2) % 3,
                     at: 0.0,
+                    from: 0.0,
                 };
                 let (at, length) = along_edge(model, &s, x);
                 s.at = at;
+                s.from = at;
                 room = room.min(at.min(1.0 - at).max(0.0) * length);
                 self.slivers.push(s);
             }

@@ -32,6 +32,8 @@ pub struct Controller {
     cfg: Steps,
     pub accepted: usize,
     pub rejected: usize,
+    /// The latest the next step may end at, once (see [`Controller::cap`]).
+    cap: Option<f64>,
 }
 
 impl Controller {
@@ -80,6 +82,15 @@ impl Controller {
             cfg: cfg.clone(),
             accepted: 0,
             rejected: 0,
+            cap: None,
+        }
+    }
+
+    /// Let the next step end at `until` at the latest (if it is after the last accepted
+    /// time): once, the step after it as long as it would have been.
+    pub fn cap(&mut self, until: f64) {
+        if until > self.t + self.eps() {
+            self.cap = Some(self.cap.map_or(until, |c| c.min(until)));
         }
     }
 
@@ -104,6 +115,9 @@ impl Controller {
     pub fn target(&self) -> f64 {
         let vertex = self.next_vertex();
         let t = self.t + self.dt;
+        if let Some(cap) = self.cap.filter(|&c| c < t.min(vertex)) {
+            return cap;
+        }
         if t > vertex - self.eps() || vertex - t < 0.2 * self.dt {
             vertex
         } else {
@@ -115,7 +129,8 @@ impl Controller {
     pub fn accept(&mut self, target: f64, iterations: usize) {
         let taken = target - self.t;
         // a step cut short to land on a vertex says nothing about the step size
-        let at_vertex = self.vertices.contains(&target);
+        let capped = self.cap.take() == Some(target);
+        let at_vertex = capped || self.vertices.contains(&target);
         if !(at_vertex && taken < self.dt) {
             self.dt = taken;
         }
@@ -212,5 +227,36 @@ mod tests {
         assert_eq!(c.t, 1.0);
         // 0.1, 0.2, 0.25, 0.35, 0.45, 0.5, 0.6, … 1.0
         assert_eq!(seen.len(), 3 + 5 + 3);
+    }
+
+    #[test]
+    fn a_cap_cuts_one_step_and_not_the_next() {
+        let cfg = Steps {
+            initial: 0.1,
+            min: 0.001,
+            max: 0.1,
+            ..Default::default()
+        };
+        let mut c = Controller::new(&cfg, 1.0);
+        c.accept(c.target(), 3);
+        // a cap at or before the last accepted time asks nothing
+        c.cap(0.1);
+        assert!((c.target() - 0.2).abs() < 1e-12);
+        c.cap(0.13);
+        c.cap(0.17);
+        assert_eq!(c.target(), 0.13, "the earlier of two caps");
+        assert!(c.reject().is_ok());
+        assert!(c.target() < 0.13, "a failed capped step is cut further");
+        c.dt = 0.1;
+        assert_eq!(c.target(), 0.13);
+        c.accept(0.13, 3);
+        assert!(
+            (c.target() - 0.23).abs() < 1e-12,
+            "then a whole step: {}",
+            c.target()
+        );
+        // a cap past the step leaves it as it was
+        c.cap(0.5);
+        assert!((c.target() - 0.23).abs() < 1e-12);
     }
 }
