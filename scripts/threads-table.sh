@@ -63,7 +63,8 @@ for n in $rows; do
 s = json.load(open(sys.argv[1]))
 w, so, a, nw, kr = (s[k] for k in ("wall_seconds", "solver_seconds", "assembly_seconds", "newton_iterations", "krylov_iterations"))
 g, f = s["probes"].get("gap", float("nan")), s.get("factorisations", "?")
-print(f"  {sys.argv[2]} threads, run {sys.argv[3]}: wall {w:.2f} s, solver {so:.2f} s, assembly {a:.2f} s, Newton {nw}, Krylov {kr}, factorisations {f}, gap {g:.12e}", flush=True)' \
+fs, ap = s.get("factorisation_seconds") or float("nan"), s.get("factor_solve_seconds") or float("nan")
+print(f"  {sys.argv[2]} threads, run {sys.argv[3]}: wall {w:.2f} s, solver {so:.2f} s (factorising {fs:.2f}, applying the factors {ap:.2f}), assembly {a:.2f} s, Newton {nw}, Krylov {kr}, factorisations {f}, gap {g:.12e}", flush=True)' \
                     "$dir/summary.json" "$n×$n at $t" "$r"
             else
                 echo "  $n×$n at $t threads, run $r: failed (see $dir.log)"
@@ -91,18 +92,21 @@ fewest = next(iter(rows))
 base = rows[fewest]
 per = f"{fewest} thread" + ("s" if fewest != "1" else "")
 print(f"\n{n}×{n}, {base[0]['dofs']['free']} free unknowns")
-print(f"| threads | wall s | solver s | assembly s | output s | wall / {per} | solver / {per} | Newton its | Krylov its | factorisations | gap |")
-print("|---|---|---|---|---|---|---|---|---|---|---|")
+print(f"| threads | wall s | solver s | factorising s | applying the factors s | rest of GMRES s | assembly s | output s | wall / {per} | solver / {per} | Newton its | Krylov its | factorisations | gap |")
+print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
 for t, runs in rows.items():
     w, s, a = med(runs, "wall_seconds"), med(runs, "solver_seconds"), med(runs, "assembly_seconds")
     o = med(runs, "output_seconds") if all("output_seconds" in x for x in runs) else float("nan")
+    split = all(x.get("factorisation_seconds") is not None for x in runs)
+    fs = med(runs, "factorisation_seconds") if split else float("nan")
+    ap = med(runs, "factor_solve_seconds") if split else float("nan")
     rw = f"{w / med(base, 'wall_seconds'):.2f}"
     rs = f"{s / med(base, 'solver_seconds'):.2f}"
     its = sorted({x["newton_iterations"] for x in runs})
     kry = sorted({x["krylov_iterations"] for x in runs})
     fac = sorted({x.get("factorisations", -1) for x in runs})
     gaps = sorted({f"{x['probes'].get('gap', float('nan')):.12e}" for x in runs})
-    print(f"| {t} | {w:.2f} | {s:.2f} | {a:.2f} | {o:.2f} | {rw} | {rs} | {'/'.join(map(str, its))} | {'/'.join(map(str, kry))} | {'/'.join(map(str, fac))} | {' '.join(gaps)} |")
+    print(f"| {t} | {w:.2f} | {s:.2f} | {fs:.2f} | {ap:.2f} | {s - fs - ap:.2f} | {a:.2f} | {o:.2f} | {rw} | {rs} | {'/'.join(map(str, its))} | {'/'.join(map(str, kry))} | {'/'.join(map(str, fac))} | {' '.join(gaps)} |")
 try:
     print("\nthe elimination tree's bounds (tmc check):")
     print(open(f"{out}/h1-{n}-check.txt").read().rstrip())

@@ -513,6 +513,8 @@ impl<'a> Recorder<'a> {
         s.wall_seconds = wall;
         s.assembly_seconds = spent.assembly + tot.t_reactions;
         s.solver_seconds = spent.solve;
+        s.factorisation_seconds = spent.parts.map(|p| p.factorising);
+        s.factor_solve_seconds = spent.parts.map(|p| p.preconditioning);
         s.output_seconds = self.writing;
         s.peak_memory_mb = peak_memory_mb();
         let ranks = st.asm.ranks;

@@ -50,6 +50,10 @@ pub struct Summary {
     pub assembly_seconds: f64,
     /// Factorisation and linear-solve time of every attempt.
     pub solver_seconds: f64,
+    /// Of `solver_seconds`, the numeric factorisations', and the factors' applications
+    /// (a direct solve's triangular solves, GMRES's preconditioner); `null` on PETSc.
+    pub factorisation_seconds: Option<f64>,
+    pub factor_solve_seconds: Option<f64>,
     /// Time spent writing the run's files: each step's `.vtu`, history row and checkpoint.
     pub output_seconds: f64,
     /// GMRES iterations over all accepted steps (0 with a direct solver).
@@ -239,6 +243,8 @@ impl Summary {
             wall_seconds: 0.0,
             assembly_seconds: 0.0,
             solver_seconds: 0.0,
+            factorisation_seconds: None,
+            factor_solve_seconds: None,
             output_seconds: 0.0,
             krylov_iterations: 0,
             tangents_skipped: 0,

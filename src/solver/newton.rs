@@ -13,7 +13,7 @@
 //! own round-off.
 
 use super::idle::IdleThreads;
-use super::linear::{LinearError, LinearSolver};
+use super::linear::{LinearError, LinearSolver, SolveParts};
 use crate::assembly::{Assembler, AssemblyError, AssemblyStats};
 use crate::dofs::{Field, NONE, equation_structure};
 use crate::model::{Model, StepContext};
@@ -215,6 +215,10 @@ pub struct Spent {
     /// Numeric factorisations (fewer than the updates where a factor was kept).
     #[serde(default)]
     pub factorisations: usize,
+    /// Of [`Spent::solve`], the seconds in factorisations and in applying the factors, where
+    /// the engine times them apart.
+    #[serde(default)]
+    pub parts: Option<SolveParts>,
 }
 
 /// What Newton carries from one step to the next, and over a restart: the run's residual
@@ -671,6 +675,9 @@ impl Newton {
         });
         self.spent.solve += t1.elapsed().as_secs_f64();
         self.spent.factorisations += solver.take_factorisations();
+        if let Some(p) = solver.take_parts() {
+            *self.spent.parts.get_or_insert_with(SolveParts::default) += p;
+        }
         solved.map_err(StepFailure::Linear)?;
         self.spent.updates += 1;
         if !st.rhs.iter().all(|v| v.is_finite()) {

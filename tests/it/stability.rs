@@ -46,6 +46,17 @@ fn solve_checked(h: &Hard) -> (Summary, Rows) {
         s.linear_solves
     );
     assert!(s.assembly_seconds + s.solver_seconds <= s.wall_seconds);
+    // faer's solvers time their factorisations and the factors' applications apart
+    let (f, a) = (s.factorisation_seconds, s.factor_solve_seconds);
+    let (f, a) = (
+        f.expect("factorisation_seconds"),
+        a.expect("factor_solve_seconds"),
+    );
+    assert!(
+        f > 0.0 && a > 0.0 && f + a <= s.solver_seconds,
+        "{}: {f} + {a}",
+        h.name
+    );
     if let Some(tol) = h.energy_tol {
         let rel = (s.external_work - s.energy).abs() / s.energy;
         assert!(

@@ -39,6 +39,9 @@ impl Lagged for BlockTriangular {
     fn lag(&self) -> &Lag {
         &self.lag
     }
+    fn lag_mut(&mut self) -> &mut Lag {
+        &mut self.lag
+    }
     fn mul(&self, x: &[f64], y: &mut [f64]) {
         BlockTriangular::mul(self, x, y)
     }
@@ -70,6 +73,10 @@ impl Factorization for BlockTriangular {
 
     fn factorisations(&self) -> Option<usize> {
         Some(self.lag.count)
+    }
+
+    fn parts(&self) -> Option<super::SolveParts> {
+        Some(self.lag.parts)
     }
 
     fn solve(&mut self, b: &mut [f64]) -> Result<usize, LinearError> {

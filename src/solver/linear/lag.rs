@@ -5,6 +5,8 @@ use super::gmres::gmres;
 use super::static_lu::{Real, StaticLu};
 use super::submatrix::SubMatrix;
 use super::{GMRES_MAX, GMRES_RESTART, GMRES_TOL, GMRES_USABLE, LinearError};
+use std::cell::Cell;
+use std::time::Instant;
 
 /// GMRES iterations a lagged LU factor may take at most to solve with a newer tangent before
 /// it is refactored (each iteration: a product with the matrix and a solve with the factor).
@@ -61,6 +63,36 @@ pub(super) struct Lag {
     /// Relative residual a solve with an older factor must reach: [`GMRES_TOL`], or
     /// [`DAMPED_TOL`] for a dear factor through damped iterations.
     pub(super) tol: f64,
+    /// Seconds in the factorisations and the preconditioner's applications so far, and when
+    /// the factorisation under way began.
+    pub(super) parts: SolveParts,
+    started: Option<Instant>,
+}
+
+/// Where a solver's seconds went: its numeric factorisations and the applications of its
+/// factors as a preconditioner (the triangular solves); the rest of a Krylov solve is its
+/// products with the matrix and its orthogonalisation.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct SolveParts {
+    pub factorising: f64,
+    pub preconditioning: f64,
+}
+
+impl std::ops::Sub for SolveParts {
+    type Output = SolveParts;
+    fn sub(self, o: SolveParts) -> SolveParts {
+        SolveParts {
+            factorising: self.factorising - o.factorising,
+            preconditioning: self.preconditioning - o.preconditioning,
+        }
+    }
+}
+
+impl std::ops::AddAssign for SolveParts {
+    fn add_assign(&mut self, o: SolveParts) {
+        self.factorising += o.factorising;
+        self.preconditioning += o.preconditioning;
+    }
 }
 
 impl Lag {
@@ -72,6 +104,8 @@ impl Lag {
             count: 0,
             dear: false,
             tol: GMRES_TOL,
+            parts: SolveParts::default(),
+            started: None,
         }
     }
 
@@ -93,12 +127,16 @@ impl Lag {
     /// Around a factorisation: `factoring` before, `factored_now` after it succeeded.
     pub(super) fn factoring(&mut self) {
         self.factored = false;
+        self.started = Some(Instant::now());
     }
 
     pub(super) fn factored_now(&mut self) {
         self.factored = true;
         self.current = true;
         self.count += 1;
+        if let Some(t) = self.started.take() {
+            self.parts.factorising += t.elapsed().as_secs_f64();
+        }
     }
 }
 
@@ -106,6 +144,7 @@ impl Lag {
 pub(super) trait Lagged {
     /// Whether the factor is of the current matrix, and the budget of an older one.
     fn lag(&self) -> &Lag;
+    fn lag_mut(&mut self) -> &mut Lag;
     /// y = A x with the current matrix.
     fn mul(&self, x: &[f64], y: &mut [f64]);
     /// z = M⁻¹ r with the factor held.
@@ -130,9 +169,14 @@ pub(super) fn solve_lagged(l: &mut impl Lagged, b: &mut [f64]) -> Result<usize, 
             (lag.tol, lag.budget, lag.dear)
         };
         let this = &*l;
+        let preconditioning = Cell::new(0.0);
         let out = gmres(
             &|x: &[f64], y: &mut [f64]| this.mul(x, y),
-            &|r: &[f64], z: &mut [f64]| this.precondition(r, z),
+            &|r: &[f64], z: &mut [f64]| {
+                let t = Instant::now();
+                this.precondition(r, z);
+                preconditioning.set(preconditioning.get() + t.elapsed().as_secs_f64());
+            },
             &rhs,
             b,
             tol,
@@ -140,6 +184,7 @@ pub(super) fn solve_lagged(l: &mut impl Lagged, b: &mut [f64]) -> Result<usize, 
             budget,
             give_up,
         );
+        l.lag_mut().parts.preconditioning += preconditioning.get();
         match out {
             Ok(its) => return Ok(spent + its),
             Err((its, residual)) if l.lag().current && residual <= GMRES_USABLE => {

@@ -5,7 +5,7 @@ use super::ordering::nested_dissection;
 use super::static_lu::Real;
 use super::submatrix::SubMatrix;
 use super::tree::TreeLdlt;
-use super::{Factorization, LinearError, PARALLEL_FACTOR_NNZ};
+use super::{Factorization, LinearError, PARALLEL_FACTOR_NNZ, SolveParts};
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::perm::PermRef;
 use faer::sparse::linalg::SupernodalThreshold;
@@ -19,12 +19,21 @@ use faer::{Conj, MatMut, Par, Side};
 
 impl Factorization for SymFactor {
     fn factor(&mut self, values: &[f64]) -> Result<(), LinearError> {
-        SymFactor::factor(self, values)
+        let t = std::time::Instant::now();
+        SymFactor::factor(self, values)?;
+        self.parts.factorising += t.elapsed().as_secs_f64();
+        Ok(())
     }
 
     fn solve(&mut self, b: &mut [f64]) -> Result<usize, LinearError> {
+        let t = std::time::Instant::now();
         SymFactor::solve(self, b);
+        self.parts.preconditioning += t.elapsed().as_secs_f64();
         Ok(0)
+    }
+
+    fn parts(&self) -> Option<SolveParts> {
+        Some(self.parts)
     }
 
     fn entries(&self) -> Option<usize> {
@@ -58,6 +67,8 @@ pub(super) struct SymFactor {
     pub(super) tree: Option<TreeLdlt>,
     pub(super) precision: Precision,
     pub(super) par: Par,
+    /// Seconds in its factorisations and solves as a whole system's solver.
+    pub(super) parts: SolveParts,
     pub(super) l64: Vec<f64>,
     pub(super) l32: Vec<f32>,
     pub(super) a32: Vec<f32>,
@@ -119,6 +130,7 @@ impl SymFactor {
         let len = symbolic.len_val();
         Ok(SymFactor {
             tree,
+            parts: SolveParts::default(),
             l64: if single { Vec::new() } else { vec![0.0; len] },
             l32: if single { vec![0.0; len] } else { Vec::new() },
             a32: if single {

@@ -22,6 +22,9 @@ impl<T: Real> Lagged for LaggedLu<T> {
     fn lag(&self) -> &Lag {
         &self.lag
     }
+    fn lag_mut(&mut self) -> &mut Lag {
+        &mut self.lag
+    }
     fn mul(&self, x: &[f64], y: &mut [f64]) {
         self.sub.mul(x, y)
     }
@@ -169,6 +172,10 @@ impl<T: Real> Factorization for LaggedLu<T> {
 
     fn factorisations(&self) -> Option<usize> {
         Some(self.lag.count)
+    }
+
+    fn parts(&self) -> Option<super::SolveParts> {
+        Some(self.lag.parts)
     }
 
     fn entries(&self) -> Option<usize> {

@@ -43,6 +43,7 @@ use crate::dofs::{Pattern, Structure};
 use block::BlockTriangular;
 use faer::Par;
 pub use gmres::gmres;
+pub use lag::SolveParts;
 use ldlt::{Precision, SymFactor};
 use lu::{LaggedLu, SINGLE_LU_ENTRIES};
 use ordering::nodes_of;
@@ -133,6 +134,11 @@ pub trait Factorization: Send {
     fn factorisations(&self) -> Option<usize> {
         None
     }
+    /// Seconds in its factorisations and preconditioner applications so far, where the
+    /// engine times them apart.
+    fn parts(&self) -> Option<SolveParts> {
+        None
+    }
 }
 
 /// Relative residual at which GMRES stops, and its iteration budget.
@@ -177,6 +183,7 @@ pub struct LinearSolver {
     /// Calls of `factor`, and the factorisations already counted by `take_factorisations`.
     factor_calls: usize,
     factorisations_taken: usize,
+    parts_taken: SolveParts,
 }
 
 impl LinearSolver {
@@ -289,6 +296,7 @@ impl LinearSolver {
             krylov_count: 0,
             factor_calls: 0,
             factorisations_taken: 0,
+            parts_taken: SolveParts::default(),
         }
     }
 
@@ -303,6 +311,13 @@ impl LinearSolver {
     pub fn take_factorisations(&mut self) -> usize {
         let total = self.backend.factorisations().unwrap_or(self.factor_calls);
         total - std::mem::replace(&mut self.factorisations_taken, total)
+    }
+
+    /// Seconds in factorisations and preconditioner applications since the last call, where
+    /// the engine times them apart.
+    pub fn take_parts(&mut self) -> Option<SolveParts> {
+        let total = self.backend.parts()?;
+        Some(total - std::mem::replace(&mut self.parts_taken, total))
     }
 
     /// Whether the tangents factorised next are near the last ([`Factorization::set_near`]).

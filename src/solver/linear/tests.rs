@@ -403,6 +403,9 @@ impl Lagged for Unfactored {
     fn lag(&self) -> &Lag {
         &self.lag
     }
+    fn lag_mut(&mut self) -> &mut Lag {
+        &mut self.lag
+    }
     fn mul(&self, x: &[f64], y: &mut [f64]) {
         tridiagonal(2.0 + self.shift, x, y)
     }
