@@ -514,7 +514,7 @@ impl<'a> Recorder<'a> {
         s.assembly_seconds = spent.assembly + tot.t_reactions;
         s.solver_seconds = spent.solve;
         s.factorisation_seconds = spent.parts.map(|p| p.factorising);
-        s.factor_solve_seconds = spent.parts.map(|p| p.preconditioning);
+        s.factor_solve_seconds = spent.parts.map(|p| p.applying);
         s.output_seconds = self.writing;
         s.peak_memory_mb = peak_memory_mb();
         let ranks = st.asm.ranks;

@@ -69,13 +69,13 @@ pub(super) struct Lag {
     started: Option<Instant>,
 }
 
-/// Where a solver's seconds went: its numeric factorisations and the applications of its
-/// factors as a preconditioner (the triangular solves); the rest of a Krylov solve is its
-/// products with the matrix and its orthogonalisation.
+/// Where a solver's seconds went: its numeric factorisations, and the applications of its
+/// factors (a direct solve's triangular solves, GMRES's preconditioner); the rest of a Krylov
+/// solve is its products with the matrix and its orthogonalisation.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SolveParts {
     pub factorising: f64,
-    pub preconditioning: f64,
+    pub applying: f64,
 }
 
 impl std::ops::Sub for SolveParts {
@@ -83,7 +83,7 @@ impl std::ops::Sub for SolveParts {
     fn sub(self, o: SolveParts) -> SolveParts {
         SolveParts {
             factorising: self.factorising - o.factorising,
-            preconditioning: self.preconditioning - o.preconditioning,
+            applying: self.applying - o.applying,
         }
     }
 }
@@ -91,7 +91,7 @@ impl std::ops::Sub for SolveParts {
 impl std::ops::AddAssign for SolveParts {
     fn add_assign(&mut self, o: SolveParts) {
         self.factorising += o.factorising;
-        self.preconditioning += o.preconditioning;
+        self.applying += o.applying;
     }
 }
 
@@ -184,7 +184,7 @@ pub(super) fn solve_lagged(l: &mut impl Lagged, b: &mut [f64]) -> Result<usize, 
             budget,
             give_up,
         );
-        l.lag_mut().parts.preconditioning += preconditioning.get();
+        l.lag_mut().parts.applying += preconditioning.get();
         match out {
             Ok(its) => return Ok(spent + its),
             Err((its, residual)) if l.lag().current && residual <= GMRES_USABLE => {
