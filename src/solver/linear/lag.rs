@@ -63,8 +63,8 @@ pub(super) struct Lag {
     /// Relative residual a solve with an older factor must reach: [`GMRES_TOL`], or
     /// [`DAMPED_TOL`] for a dear factor through damped iterations.
     pub(super) tol: f64,
-    /// Seconds in the factorisations and the preconditioner's applications so far, and when
-    /// the factorisation under way began.
+    /// Seconds in the factorisations and the factor's applications so far, and when the
+    /// factorisation under way began.
     pub(super) parts: SolveParts,
     started: Option<Instant>,
 }
@@ -144,6 +144,7 @@ impl Lag {
 pub(super) trait Lagged {
     /// Whether the factor is of the current matrix, and the budget of an older one.
     fn lag(&self) -> &Lag;
+    /// The same, to add a solve's seconds to.
     fn lag_mut(&mut self) -> &mut Lag;
     /// y = A x with the current matrix.
     fn mul(&self, x: &[f64], y: &mut [f64]);
@@ -169,13 +170,13 @@ pub(super) fn solve_lagged(l: &mut impl Lagged, b: &mut [f64]) -> Result<usize, 
             (lag.tol, lag.budget, lag.dear)
         };
         let this = &*l;
-        let preconditioning = Cell::new(0.0);
+        let applying = Cell::new(0.0);
         let out = gmres(
             &|x: &[f64], y: &mut [f64]| this.mul(x, y),
             &|r: &[f64], z: &mut [f64]| {
                 let t = Instant::now();
                 this.precondition(r, z);
-                preconditioning.set(preconditioning.get() + t.elapsed().as_secs_f64());
+                applying.set(applying.get() + t.elapsed().as_secs_f64());
             },
             &rhs,
             b,
@@ -184,7 +185,7 @@ pub(super) fn solve_lagged(l: &mut impl Lagged, b: &mut [f64]) -> Result<usize, 
             budget,
             give_up,
         );
-        l.lag_mut().parts.applying += preconditioning.get();
+        l.lag_mut().parts.applying += applying.get();
         match out {
             Ok(its) => return Ok(spent + its),
             Err((its, residual)) if l.lag().current && residual <= GMRES_USABLE => {
