@@ -50,9 +50,10 @@ pub struct Summary {
     pub assembly_seconds: f64,
     /// Factorisation and linear-solve time of every attempt.
     pub solver_seconds: f64,
-    /// Of `solver_seconds`, the numeric factorisations', and the factors' applications
-    /// (a direct solve's triangular solves, GMRES's preconditioner); `null` on PETSc.
+    /// Of `solver_seconds`, the numeric factorisations' (`null` on PETSc).
     pub factorisation_seconds: Option<f64>,
+    /// Of `solver_seconds`, the factors' applications: a direct solve's triangular solves,
+    /// GMRES's preconditioner (`null` on PETSc).
     pub factor_solve_seconds: Option<f64>,
     /// Time spent writing the run's files: each step's `.vtu`, history row and checkpoint.
     pub output_seconds: f64,

@@ -47,11 +47,8 @@ fn solve_checked(h: &Hard) -> (Summary, Rows) {
     );
     assert!(s.assembly_seconds + s.solver_seconds <= s.wall_seconds);
     // faer's solvers time their factorisations and the factors' applications apart
-    let (f, a) = (s.factorisation_seconds, s.factor_solve_seconds);
-    let (f, a) = (
-        f.expect("factorisation_seconds"),
-        a.expect("factor_solve_seconds"),
-    );
+    let f = s.factorisation_seconds.expect("factorisation_seconds");
+    let a = s.factor_solve_seconds.expect("factor_solve_seconds");
     assert!(
         f > 0.0 && a > 0.0 && f + a <= s.solver_seconds,
         "{}: {f} + {a}",
