@@ -34,8 +34,10 @@ pub(super) struct Recorder<'a> {
     /// The output folder, on the rank that writes (rank 0); `None` on the others.
     folder: Option<RunFolder>,
     out_dir: PathBuf,
-    /// When the run started (wall seconds count from it).
+    /// When this process started the run (wall seconds count from it), and the wall seconds
+    /// a run resumed from a checkpoint had run before.
     start: Instant,
+    before: f64,
     series: Series,
     layout: HistoryLayout,
     history: History,
@@ -92,6 +94,7 @@ impl<'a> Recorder<'a> {
             folder,
             out_dir,
             start,
+            before: 0.0,
             series,
             layout,
             history,
@@ -114,7 +117,7 @@ impl<'a> Recorder<'a> {
 
     /// Wall seconds since the run started.
     pub(super) fn wall(&self) -> f64 {
-        self.start.elapsed().as_secs_f64()
+        self.before + self.start.elapsed().as_secs_f64()
     }
 
     /// The probes at the stepper's last accepted state, whose reactions are `reactions`.
@@ -334,10 +337,10 @@ impl<'a> Recorder<'a> {
         })?;
         self.written = files.written;
         self.writing = files.seconds;
-        // wall seconds go on from where the run stopped
-        self.start = Instant::now()
-            .checked_sub(std::time::Duration::from_secs_f64(wall))
-            .unwrap_or(self.start);
+        // wall seconds go on from where the run stopped (an `Instant` moved back that far
+        // would not exist on a machine started more recently than that: the run's seconds
+        // then began again at 0, below its assembly's and solver's)
+        self.before = wall;
         Ok(())
     }
 

@@ -594,10 +594,23 @@ fn restart_continues_an_interrupted_run_exactly() {
         stderr(&o)
     );
 
+    let (cols, before) = common::history(&stopped);
+    let wall = cols.iter().position(|c| c == "wall_seconds").unwrap();
     let o = solve_cli(&case, &stopped, &["--restart", "--set", "steps.min=1e-6"]);
     assert!(o.status.success(), "{}", stderr(&o));
     // the same rows, every column but the wall time, to the last bit
     common::same_history_to_the_bit(&full, &stopped);
+    // the wall seconds go on from the stopped run's: never back, and at the end no fewer
+    // than the assembly's and the solver's, which count both parts
+    let rows = common::history(&stopped).1;
+    assert!(rows.windows(2).all(|w| w[1][wall] >= w[0][wall]));
+    assert!(rows[done][wall] >= before[done - 1][wall]);
+    let s = common::summary(&stopped);
+    let seconds = |key: &str| s[key].as_f64().unwrap();
+    assert!(
+        seconds("wall_seconds") >= seconds("assembly_seconds") + seconds("solver_seconds"),
+        "{s}"
+    );
     let (a, b) = (common::summary(&full), common::summary(&stopped));
     for key in [
         "converged",
