@@ -1281,10 +1281,14 @@ struct Layers {
 impl Layers {
     fn of(mesh: &Mesh, medium: &[usize], cells: &[NewCell]) -> Layers {
         let dim = mesh.dim;
-        let mut on_solid = vec![false; mesh.coords.len()];
+        // each solid node's body (its block's first physical group)
+        let mut body: Vec<Option<usize>> = vec![None; mesh.coords.len()];
         for (b, blk) in mesh.cells.iter().enumerate() {
             if !medium.contains(&b) {
-                blk.conn.iter().for_each(|&n| on_solid[n] = true);
+                let group = blk.groups.first().copied().unwrap_or(usize::MAX - b);
+                blk.conn.iter().for_each(|&n| {
+                    body[n].get_or_insert(group);
+                });
             }
         }
         // the layers: the cells across, joined where they share a node
@@ -1300,16 +1304,17 @@ impl Layers {
         let mut height = vec![None; cells.len()];
         for (k, cell) in cells.iter().enumerate() {
             let nodes = mesh.cells[cell.b].cell(cell.c);
-            if nodes.len() != dim + 1 || !nodes.iter().all(|&n| on_solid[n]) {
+            let Some(bodies) = nodes
+                .iter()
+                .map(|&n| body[n])
+                .collect::<Option<Vec<usize>>>()
+            else {
+                continue;
+            };
+            if nodes.len() != dim + 1 {
                 continue;
             }
-            height[k] = Some(match dim {
-                2 => {
-                    let (t, n) = height_across(&cell.p);
-                    (t, Vector3::new(n[0], n[1], 0.0))
-                }
-                _ => thinnest(&cell.p),
-            });
+            height[k] = Some(across_gap(&cell.p, &bodies));
             for &n in nodes {
                 let j = *first_at.entry(n).or_insert(k);
                 let (a, b) = (top(&mut root, j), top(&mut root, k));
@@ -1368,6 +1373,70 @@ impl Layers {
             false => opened(p, self.dim),
         })
     }
+}
+
+/// The thickness of a simplex `p` whose corners all stand on solids (`bodies`: each corner's)
+/// and the normal across it: over the face whose corners are all on one body where the corner
+/// on the other stands over that face (the gap lies across the body's face, whatever the
+/// cell's shape: a right triangle between two faces 0.028 apart, its corners 0.05 apart
+/// along them, is thinnest across its slanted edge, and a closed layer carried across that
+/// is sheared along the faces, which the slide taken into a closed layer's reference then
+/// takes out of its squeeze); else over its longest edge (2D) or along its thinnest
+/// direction (3D), as where the faces meet at an angle (a cylinder on its plate: its corner
+/// beyond the face, measured across that face's line, the press's force changed 9 % at a
+/// remake).
+fn across_gap(p: &[[f64; 3]], bodies: &[usize]) -> (f64, Vector3<f64>) {
+    let k = p.len();
+    let alone = (0..k).find(|&i| {
+        let others: Vec<usize> = (0..k).filter(|&j| j != i).collect();
+        others.iter().all(|&j| bodies[j] == bodies[others[0]]) && bodies[i] != bodies[others[0]]
+    });
+    let v = |i: usize| Vector3::new(p[i][0], p[i][1], p[i][2]);
+    match (k, alone) {
+        (3, Some(i)) if foot_within(v(i), v((i + 1) % 3), v((i + 2) % 3)) => {
+            let (a, b) = ((i + 1) % 3, (i + 2) % 3);
+            let e = v(b) - v(a);
+            let n = Vector3::new(-e[1], e[0], 0.0).normalize();
+            (n.dot(&(v(i) - v(a))).abs(), n)
+        }
+        (4, Some(i)) => {
+            let f: Vec<usize> = (0..4).filter(|&j| j != i).collect();
+            let (a, b, c) = (v(f[0]), v(f[1]), v(f[2]));
+            match (b - a).cross(&(c - a)).try_normalize(0.0) {
+                Some(n) if over_face(v(i), [a, b, c], n) => (n.dot(&(v(i) - a)).abs(), n),
+                _ => thinnest(p),
+            }
+        }
+        (3, _) => {
+            let (t, n) = height_across(p);
+            (t, Vector3::new(n[0], n[1], 0.0))
+        }
+        _ => thinnest(p),
+    }
+}
+
+/// Whether the foot of the perpendicular from `apex` to the line through `a` and `b` falls
+/// on the segment between them (to a tenth of its length past either end).
+fn foot_within(apex: Vector3<f64>, a: Vector3<f64>, b: Vector3<f64>) -> bool {
+    let e = b - a;
+    let s = (apex - a).dot(&e) / e.norm_squared().max(f64::MIN_POSITIVE);
+    (-0.1..=1.1).contains(&s)
+}
+
+/// Whether the foot of the perpendicular from `apex` to the plane of the triangle `t` (unit
+/// normal `n`) falls inside it (each barycentric coordinate above −0.1).
+fn over_face(apex: Vector3<f64>, t: [Vector3<f64>; 3], n: Vector3<f64>) -> bool {
+    let area = |p: Vector3<f64>, q: Vector3<f64>, r: Vector3<f64>| (q - p).cross(&(r - p)).dot(&n);
+    let whole = area(t[0], t[1], t[2]);
+    let foot = apex - n * n.dot(&(apex - t[0]));
+    whole != 0.0
+        && [
+            area(foot, t[1], t[2]),
+            area(t[0], foot, t[2]),
+            area(t[0], t[1], foot),
+        ]
+        .iter()
+        .all(|w| w / whole >= -0.1)
 }
 
 /// A triangle's height over its longest edge, and that edge's normal.
@@ -1536,8 +1605,15 @@ mod tests {
         let layers = Layers::of(&mesh, &[2], &cells);
         assert_eq!(layers.thickness.len(), 1, "one layer");
         let g = layers.thickness[0].unwrap();
+        // each cell's height across the gap: over the face of the body two of its corners are
+        // on (nodes 0–2 the lower solid's, 3–5 the upper's)
+        let across = |k: usize| {
+            let bodies: Vec<usize> = (mesh.cells[2].cell(k).iter()).map(|&n| n / 3).collect();
+            let (t, n) = across_gap(&cells[k].p, &bodies);
+            (t, Vector2::new(n.x, n.y))
+        };
         let before: Vec<f64> = (0..4)
-            .map(|k| height_across(&cells[k].p).0 / plane(&cells[k].F).determinant())
+            .map(|k| across(k).0 / plane(&cells[k].F).determinant())
             .collect();
         let mut sorted = before.clone();
         sorted.sort_by(f64::total_cmp);
@@ -1545,7 +1621,7 @@ mod tests {
         for (k, cell) in cells.iter().enumerate() {
             let F0 = plane(&layers.carried(k, &cell.p).unwrap().try_inverse().unwrap());
             // squeezed from the layer's thickness to the cell's height, without shear
-            let (t, n) = height_across(&cell.p);
+            let (t, n) = across(k);
             assert!((F0.determinant() - t / g).abs() < 1e-9 * t / g, "cell {k}");
             assert!(((F0 * n).norm() - t / g).abs() < 1e-9, "cell {k}");
             assert!(shear(&F0) < 1e-7);
@@ -1556,6 +1632,47 @@ mod tests {
         let layers = Layers::of(&mesh, &[2], &cells);
         assert!(!layers.closed());
         assert!((0..4).all(|k| layers.carried(k, &cells[k].p).is_none()));
+    }
+
+    #[test]
+    fn a_cell_across_a_gap_is_measured_across_the_face_its_corner_stands_over() {
+        // the pad in a box of quadrilaterals (h = 0.05) remade mid-press: a right triangle,
+        // two corners 0.05 apart on the plate and one on the pad 0.028 above the second
+        let (plate, pad) = (0, 1);
+        let p = [[1.0, 0.5, 0.0], [1.05, 0.5, 0.0], [1.05, 0.528, 0.0]];
+        let (t, n) = across_gap(&p, &[plate, plate, pad]);
+        assert!(
+            (t - 0.028).abs() < 1e-12 && (n.y.abs() - 1.0).abs() < 1e-12,
+            "{t} {n:?}"
+        );
+        // thinnest across its slanted edge, which the rule it replaces took
+        let (h, m) = height_across(&p);
+        assert!(h < 0.025 && m.x.abs() > 0.4, "{h} {m:?}");
+        // a corner beyond the face (faces meeting at an angle): as before, the thinnest way
+        let wedge = [[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.2, 0.01, 0.0]];
+        let (t, n) = across_gap(&wedge, &[plate, plate, pad]);
+        let (h, m) = height_across(&wedge);
+        assert!(t == h && n.xy() == m);
+        // all on one body: the thinnest way
+        assert_eq!(across_gap(&p, &[pad, pad, pad]).0, height_across(&p).0);
+        // in 3D, three corners on the plate and one over them 0.02 up
+        let q = [
+            [0.0, 0.0, 0.0],
+            [0.05, 0.0, 0.0],
+            [0.0, 0.05, 0.0],
+            [0.015, 0.015, 0.02],
+        ];
+        let (t, n) = across_gap(&q, &[plate, plate, plate, pad]);
+        assert!(
+            (t - 0.02).abs() < 1e-12 && (n.z.abs() - 1.0).abs() < 1e-12,
+            "{t} {n:?}"
+        );
+        // its corner far beyond the face: the thinnest way
+        let far = [q[0], q[1], q[2], [0.3, 0.3, 0.02]];
+        assert_eq!(
+            across_gap(&far, &[plate, plate, plate, pad]),
+            thinnest(&far)
+        );
     }
 
     #[test]
