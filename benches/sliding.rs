@@ -1,44 +1,263 @@
-//! `make bench`: the README's cylinder slid along its plate, frictionless (issue 68's item 3
-//! and what the remakes cost, item 7).
+//! `make bench`: bodies slid along a plate, the medium made again as they move (issue 68).
 //!
-//! `cases/cylinder-slide.toml` (the rim pressed 0.15 over t ∈ [0, 1], then moved along the
-//! plate over t ∈ [1, 2]) on the case's mesh (h = 0.1) and one twice as fine, slid 0.3 (as
-//! shipped) and 0.5, its medium Lagrangian (`remake = false`) and made again as the cylinder
-//! moves: how far each slides, the normal force over the slide against the press's end, the
-//! force ratio F_t/F_n over the slide (time-weighted mean and largest size; exact contact: 0),
-//! the remakes and the share of the run's wall time they take (`medium_remade_seconds`).
+//! The first table: `cases/cylinder-slide.toml` (the rim pressed 0.15 over t ∈ [0, 1], then
+//! moved along the plate over t ∈ [1, 2]) on the case's mesh (h = 0.1) and one twice as fine,
+//! slid 0.3 (as shipped) and 0.5, its medium Lagrangian (`remake = false`) and made again as
+//! the cylinder moves: how far each slides, the normal force over the slide against the
+//! press's end, the force ratio F_t/F_n over the slide (time-weighted mean and largest size;
+//! exact contact: 0), the remakes and the share of the run's wall time they take
+//! (`medium_remade_seconds`). Issue 68's item 3 and item 7.
 //!
-//! Then the square pad in 3D (`geo/pad-box-3d.geo`: a half pad 1 × 0.5 × 0.5 over a plate, the
-//! medium a box of tetrahedra around it, h = 0.2, the pad at 0.2 and at 0.15) pressed 0.12
-//! and dragged its width with friction, the medium made again as it moves (issue 68's item 4):
-//! how far it slides, F_t/F_n from a drag of 0.05 on (mean, range, the steps outside 3 % of
-//! μ), the steps, remakes and their share.
+//! The second: friction (item 4), each scene as a user draws it, with no special key, the
+//! medium made again as the body moves: the pad in a box of `cases/pad-box-slide.toml`
+//! (triangles and quadrilaterals, h = 0.1 and 0.05) dragged five pad widths; the square pad in
+//! 3D (`geo/pad-box-3d.geo`: a half pad 1 × 0.5 × 0.5 over a plate, the medium a box of
+//! tetrahedra around it, h = 0.2, the pad at 0.2 and at 0.15) dragged its width; the hemisphere
+//! of `cases/sphere-drag.toml` dragged three radii; the block as wide as its base
+//! (`geo/block.geo`, n = 16 and 32) pressed 0.35 into its 0.25 layer and dragged 0.5. Each
+//! row: how far it was dragged of the drag asked, where full slip begins (the first step at
+//! 97 % of μ), F_t/F_n from there to the end (mean, range, the steps outside 3 % of μ), the
+//! steps, remakes and their share of the wall time.
+//!
+//! `TMC_BENCH_PART=cylinder` or `friction` runs one table; `TMC_BENCH_ROW=K` with it runs that
+//! table's row K alone (from 0, no header), so that rows can run side by side;
+//! `TMC_BENCH_REPORT=1` prints the rows of runs already solved, without solving again.
 
 mod common;
 use common::{case_text, root, solve};
 
 fn main() {
-    println!(
-        "\n| h | slide asked | medium | slid | F_n over the slide / pressed | F_t/F_n mean | largest |F_t/F_n| | steps | remakes | wall s | remakes' share |"
-    );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|");
-    for h in [0.1, 0.05] {
-        for slide in [0.3, 0.5] {
-            for remake in [false, true] {
+    let part = std::env::var("TMC_BENCH_PART").ok();
+    let only: Option<usize> = std::env::var("TMC_BENCH_ROW")
+        .ok()
+        .map(|k| k.parse().expect("TMC_BENCH_ROW: a row's number"));
+    let runs = |name: &str| part.as_deref().is_none_or(|p| p == name);
+    let wanted = |k: usize| only.is_none_or(|o| o == k);
+    if runs("cylinder") {
+        if only.is_none() {
+            println!(
+                "\n| h | slide asked | medium | slid | F_n over the slide / pressed | F_t/F_n mean | largest |F_t/F_n| | steps | remakes | wall s | remakes' share |"
+            );
+            println!("|---|---|---|---|---|---|---|---|---|---|---|");
+        }
+        let rows = [0.1, 0.05]
+            .into_iter()
+            .flat_map(|h| [0.3, 0.5].map(|slide| (h, slide)))
+            .flat_map(|(h, slide)| [false, true].map(|remake| (h, slide, remake)));
+        for (k, (h, slide, remake)) in rows.enumerate() {
+            if wanted(k) {
                 row(h, slide, remake);
             }
         }
     }
-    println!(
-        "\n| 3D pad, h = 0.2 | μ | dragged | F_t/F_n mean | range | outside 3 % of μ | steps | remakes | wall s | remakes' share |"
-    );
-    println!("|---|---|---|---|---|---|---|---|---|---|");
-    for (hp, mu) in [(0.2, 0.3), (0.15, 0.1), (0.15, 0.3), (0.15, 1.0)] {
-        pad_row(hp, mu);
+    if runs("friction") {
+        if only.is_none() {
+            println!(
+                "\n| scene | mesh | μ | dragged / asked | full slip from | F_t/F_n mean | range | outside 3 % of μ | steps | remakes | wall s | remakes' share |"
+            );
+            println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
+        }
+        for (k, scene) in friction_scenes().into_iter().enumerate() {
+            if wanted(k) {
+                scene.run();
+            }
+        }
     }
 }
 
-/// The 3D pad of the second table: a half pad on the plane of symmetry y = 0, pressed over
+/// The friction table's scenes, in its order.
+fn friction_scenes() -> Vec<Scene> {
+    let mut all = Vec::new();
+    for quads in [false, true] {
+        for h in [0.1, 0.05] {
+            for mu in [0.1, 0.3, 0.5, 1.0] {
+                all.push(Scene::Pad { quads, h, mu });
+            }
+        }
+    }
+    for (hp, mu) in [
+        (0.2, 0.3),
+        (0.15, 0.1),
+        (0.15, 0.3),
+        (0.15, 0.5),
+        (0.15, 1.0),
+    ] {
+        all.push(Scene::Pad3d { hp, mu });
+    }
+    for (h, mu) in [(0.25, 0.3), (0.15, 0.3)] {
+        all.push(Scene::Sphere { h, mu });
+    }
+    for n in [16, 32] {
+        for mu in [0.3, 0.5] {
+            all.push(Scene::Block { n, mu });
+        }
+    }
+    all
+}
+
+/// One row of the friction table.
+enum Scene {
+    /// `cases/pad-box-slide.toml` dragged five pad widths.
+    Pad { quads: bool, h: f64, mu: f64 },
+    /// The square pad in 3D, meshed at `hp`, dragged its width.
+    Pad3d { hp: f64, mu: f64 },
+    /// `cases/sphere-drag.toml` on a plate reaching x = 2.2, dragged three radii.
+    Sphere { h: f64, mu: f64 },
+    /// The block as wide as its base, n cells along it.
+    Block { n: usize, mu: f64 },
+}
+
+impl Scene {
+    fn run(&self) {
+        match *self {
+            Scene::Pad { quads, h, mu } => {
+                let text = edit(
+                    &case_text("pad-box-slide"),
+                    &[
+                        (
+                            "params = { h = 0.1 }",
+                            &format!("params = {{ h = {h}, quads = {} }}", quads as u8),
+                        ),
+                        ("mu = 0.3, normal", &format!("mu = {mu}, normal")),
+                        ("ux = 1.0\n", "ux = 5.0\n"),
+                        ("initial = 0.05\nmax = 0.05", "initial = 0.01\nmax = 0.01"),
+                    ],
+                ) + ENDS;
+                let cells = if quads { "quadrilaterals" } else { "triangles" };
+                let dir = format!("pad-{cells}-{h}-{mu}");
+                friction_row(
+                    "pad in a box",
+                    &format!("{cells}, h = {h}"),
+                    mu,
+                    5.0,
+                    &dir,
+                    &text,
+                    ("top", "y"),
+                );
+            }
+            Scene::Pad3d { hp, mu } => {
+                let geo = root().join("geo/pad-box-3d.geo");
+                let text = format!(
+                    "mesh = \"{}\"\n\n[mesh_options]\nparams = {{ h = 0.2, hp = {hp} }}\n{}",
+                    geo.display(),
+                    PAD_3D.replace("MU", &mu.to_string())
+                );
+                let dir = format!("pad-3d-{hp}-{mu}");
+                friction_row(
+                    "square pad, 3D",
+                    &format!("the pad at {hp}"),
+                    mu,
+                    1.0,
+                    &dir,
+                    &text,
+                    ("top", "z"),
+                );
+            }
+            Scene::Sphere { h, mu } => {
+                let text = edit(
+                    &case_text("sphere-drag"),
+                    &[
+                        (
+                            "params = { h = 0.15 }",
+                            &format!("params = {{ h = {h}, x1 = 2.2 }}"),
+                        ),
+                        (
+                            "friction = { mu = 0.3,",
+                            &format!("remake = true\nfriction = {{ mu = {mu},"),
+                        ),
+                        ("ux = 0.4\n", "ux = 1.2\n"),
+                    ],
+                ) + ENDS;
+                let dir = format!("sphere-{h}-{mu}");
+                friction_row(
+                    "hemisphere, 3D",
+                    &format!("h = {h}"),
+                    mu,
+                    1.2,
+                    &dir,
+                    &text,
+                    ("slider_top", "z"),
+                );
+            }
+            Scene::Block { n, mu } => {
+                let geo = root().join("geo/block.geo");
+                let text = format!(
+                    "mesh = \"{}\"\n\n[mesh_options]\nparams = {{ n = {n}, m = {}, l = {} }}\n{}",
+                    geo.display(),
+                    n / 2,
+                    n / 4,
+                    BLOCK.replace("MU", &mu.to_string())
+                );
+                let dir = format!("block-{n}-{mu}");
+                friction_row(
+                    "block as wide as its base",
+                    &format!("n = {n}"),
+                    mu,
+                    0.5,
+                    &dir,
+                    &text,
+                    ("top", "y"),
+                );
+            }
+        }
+    }
+}
+
+/// `text` with each `(from, to)` replaced, each `from` found once.
+fn edit(text: &str, changes: &[(&str, &str)]) -> String {
+    let mut text = text.to_string();
+    for (from, to) in changes {
+        assert_eq!(text.matches(from).count(), 1, "{from}");
+        text = text.replace(from, to);
+    }
+    text
+}
+
+/// The ends only in `[output]`: no step between is read.
+const ENDS: &str = "\n[output]\nevery = 1000000\n";
+
+/// The block of the friction table, as `tests/it/friction.rs` drags it, its medium made again.
+const BLOCK: &str = r#"
+[[region]]
+group = "solid"
+kind = "solid"
+K = 20.0
+mu = 10.0
+
+[[region]]
+group = "medium"
+kind = "medium"
+gamma = 1e-4
+beta1 = 1.0
+beta2 = 1e-2
+remake = true
+friction = { mu = MU, normal = "auto" }
+
+[[bc]]
+group = "bottom"
+ux = 0.0
+uy = 0.0
+
+[[bc]]
+group = "top"
+uy = -0.35
+path = [0.0, 1.0, 1.0]
+
+[[bc]]
+group = "top"
+ux = 0.5
+path = [0.0, 0.0, 1.0]
+
+[steps]
+path = [0.0, 1.0, 1.0]
+initial = 0.025
+max = 0.025
+
+[output]
+every = 1000000
+"#;
+
+/// The 3D pad of the friction table: a half pad on the plane of symmetry y = 0, pressed over
 /// t ∈ [0, 1] and dragged its width over t ∈ [1, 2].
 const PAD_3D: &str = r#"
 [[region]]
@@ -89,39 +308,51 @@ max = 0.05
 every = 1000000
 "#;
 
-/// One run of the 3D pad's table: the pad meshed at `hp`, friction coefficient `mu`.
-fn pad_row(hp: f64, mu: f64) {
-    let geo = root().join("geo/pad-box-3d.geo");
-    let text = format!(
-        "mesh = \"{}\"\n\n[mesh_options]\nparams = {{ h = 0.2, hp = {hp} }}\n{}",
-        geo.display(),
-        PAD_3D.replace("MU", &mu.to_string())
-    );
-    let dir = root().join(format!("target/bench-sliding/pad-3d-{hp}-{mu}"));
-    let _ = std::fs::remove_dir_all(&dir);
-    let (_, s) = solve(&dir, &text);
+/// Solve `text` in `target/bench-sliding/dir` and print its row: the driven `group`'s force
+/// along x against its force along the plate's normal (`axis`), from the first step of the drag
+/// (t > 1) at 97 % of `mu` to the end; `asked` the drag asked.
+fn friction_row(
+    scene: &str,
+    mesh: &str,
+    mu: f64,
+    asked: f64,
+    dir: &str,
+    text: &str,
+    (group, axis): (&str, &str),
+) {
+    let dir = root().join("target/bench-sliding").join(dir);
+    let s = solved(&dir, text);
     let (at, rows) = history(&dir);
-    let (t, fx, fz, ux) = (at("time"), at("R_top_x"), at("R_top_z"), at("U_top_x"));
-    let dragged = rows
-        .last()
-        .map_or(0.0, |r| if r[t] > 1.0 { r[ux] } else { 0.0 });
-    let ratios: Vec<f64> = (rows.iter())
-        .filter(|r| r[t] > 1.0 && r[ux] >= 0.05)
-        .map(|r| r[fx] / -r[fz])
+    let (t, fx, fnormal, ux) = (
+        at("time"),
+        at(&format!("R_{group}_x")),
+        at(&format!("R_{group}_{axis}")),
+        at(&format!("U_{group}_x")),
+    );
+    let drag: Vec<(f64, f64)> = (rows.iter())
+        .filter(|r| r[t] > 1.0)
+        .map(|r| (r[ux], r[fx] / -r[fnormal]))
         .collect();
+    let dragged = drag.last().map_or(0.0, |d| d.0);
+    let slip: Vec<(f64, f64)> = (drag.iter().copied())
+        .skip_while(|d| d.1 < 0.97 * mu)
+        .collect();
+    let from = slip
+        .first()
+        .map_or("—".to_string(), |d| format!("{:.3}", d.0));
+    let ratios: Vec<f64> = slip.iter().map(|d| d.1).collect();
     let n = ratios.len().max(1) as f64;
     let mean = ratios.iter().sum::<f64>() / n;
     let (lo, hi) = (ratios.iter()).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &r| {
         (a.min(r), b.max(r))
     });
-    let outside = ratios
-        .iter()
+    let outside = (ratios.iter())
         .filter(|r| (*r - mu).abs() > 0.03 * mu)
         .count();
     let wall = s["wall_seconds"].as_f64().unwrap();
     let remade = s["medium_remade_seconds"].as_f64().unwrap_or(0.0);
     println!(
-        "| pad at {hp} | {mu} | {dragged:.3} | {mean:.4} | {lo:.4}–{hi:.4} | {outside} of {} | {} | {} | {wall:.1} | {:.2} |",
+        "| {scene} | {mesh} | {mu} | {dragged:.3} / {asked} | {from} | {mean:.4} | {lo:.4}–{hi:.4} | {outside} of {} | {} | {} | {wall:.1} | {:.2} |",
         ratios.len(),
         s["load_steps"],
         s["medium_remade"],
@@ -143,8 +374,7 @@ fn row(h: f64, slide: f64, remake: bool) {
         .replace("remake = true\n", &format!("remake = {remake}\n"));
     let medium = if remake { "made again" } else { "Lagrangian" };
     let dir = root().join(format!("target/bench-sliding/{h}-{slide}-{medium}"));
-    let _ = std::fs::remove_dir_all(&dir);
-    let (_, s) = solve(&dir, &text);
+    let s = solved(&dir, &text);
     let (at, rows) = history(&dir);
     let (t, fy, ratio, ux) = (at("time"), at("R_rim_y"), at("Ft_Fn_rim"), at("U_rim_x"));
     let pressed = rows.iter().rfind(|r| r[t] <= 1.0 + 1e-12).unwrap()[fy].abs();
@@ -168,6 +398,18 @@ fn row(h: f64, slide: f64, remake: bool) {
         s["medium_remade"],
         remade.map_or("—".into(), |r| format!("{:.2}", r / wall)),
     );
+}
+
+/// `text` solved afresh into `dir/out`, its `summary.json`; with `TMC_BENCH_REPORT` set, the
+/// run already there read again (one stopped part-way, by `timeout`, is reported as far as it
+/// went).
+fn solved(dir: &std::path::Path, text: &str) -> serde_json::Value {
+    if std::env::var_os("TMC_BENCH_REPORT").is_some() {
+        let summary = std::fs::read_to_string(dir.join("out/summary.json")).unwrap();
+        return serde_json::from_str(&summary).unwrap();
+    }
+    let _ = std::fs::remove_dir_all(dir);
+    solve(dir, text).1
 }
 
 /// The history of the run solved into `dir/out`: a column's index by its name, and the rows.
