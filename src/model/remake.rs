@@ -1281,18 +1281,6 @@ struct Layers {
 impl Layers {
     fn of(mesh: &Mesh, medium: &[usize], cells: &[NewCell]) -> Layers {
         let dim = mesh.dim;
-        // each solid node's body (its block's first physical group)
-        let mut body: Vec<Option<usize>> = vec![None; mesh.coords.len()];
-        for (b, blk) in mesh.cells.iter().enumerate() {
-            if !medium.contains(&b) {
-                let group = blk.groups.first().copied().unwrap_or(usize::MAX - b);
-                blk.conn.iter().for_each(|&n| {
-                    body[n].get_or_insert(group);
-                });
-            }
-        }
-        // the layers: the cells across, joined where they share a node
-        let mut root: Vec<usize> = (0..cells.len()).collect();
         fn top(root: &mut [usize], mut k: usize) -> usize {
             while root[k] != k {
                 root[k] = root[root[k]];
@@ -1300,6 +1288,27 @@ impl Layers {
             }
             k
         }
+        // each solid node's body: the solids' cells joined where they share a node
+        let mut of_node: Vec<usize> = (0..mesh.coords.len()).collect();
+        let mut on_solid = vec![false; mesh.coords.len()];
+        for (b, blk) in mesh.cells.iter().enumerate() {
+            if medium.contains(&b) {
+                continue;
+            }
+            for c in 0..blk.n_cells() {
+                let nodes = blk.cell(c);
+                for &n in nodes {
+                    on_solid[n] = true;
+                    let (x, y) = (top(&mut of_node, nodes[0]), top(&mut of_node, n));
+                    of_node[x.max(y)] = x.min(y);
+                }
+            }
+        }
+        let body: Vec<Option<usize>> = (0..mesh.coords.len())
+            .map(|n| on_solid[n].then(|| top(&mut of_node, n)))
+            .collect();
+        // the layers: the cells across, joined where they share a node
+        let mut root: Vec<usize> = (0..cells.len()).collect();
         let mut first_at: std::collections::HashMap<usize, usize> = Default::default();
         let mut height = vec![None; cells.len()];
         for (k, cell) in cells.iter().enumerate() {
@@ -1375,7 +1384,8 @@ impl Layers {
     }
 }
 
-/// The thickness of a simplex `p` whose corners all stand on solids (`bodies`: each corner's)
+/// The thickness of a simplex `p` whose corners all stand on solids (`bodies`: each corner's
+/// body, a solid's cells joined through their nodes)
 /// and the normal across it: over the face whose corners are all on one body where the corner
 /// on the other stands over that face (the gap lies across the body's face, whatever the
 /// cell's shape: a right triangle between two faces 0.028 apart, its corners 0.05 apart
