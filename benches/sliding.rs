@@ -21,7 +21,11 @@
 //!
 //! `TMC_BENCH_PART=cylinder` or `friction` runs one table; `TMC_BENCH_ROW=K` with it runs that
 //! table's row K alone (from 0, no header), so that rows can run side by side;
-//! `TMC_BENCH_REPORT=1` prints the rows of runs already solved, without solving again.
+//! `TMC_BENCH_REPORT=1` prints the rows of runs already solved, without solving again. The
+//! friction table takes about an hour and a half of one core: on the 16-core machine, one
+//! thread a row, its rows took 54 minutes in all while the quadrilaterals at h = 0.05 still
+//! stopped in their press, and each pad at h = 0.05 took 9–10 minutes
+//! (docs/notes/2026-12-04-the-friction-table-on-16-cores.md).
 
 mod common;
 use common::{case_text, root, solve};
