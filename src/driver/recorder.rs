@@ -34,8 +34,8 @@ pub(super) struct Recorder<'a> {
     /// The output folder, on the rank that writes (rank 0); `None` on the others.
     folder: Option<RunFolder>,
     out_dir: PathBuf,
-    /// When this process started the run (wall seconds count from it), and the wall seconds
-    /// a run resumed from a checkpoint had run before.
+    /// When this recorder started counting (the run's start, or its resumption from a
+    /// checkpoint), and the wall seconds the run had run before that.
     start: Instant,
     before: f64,
     series: Series,
@@ -337,10 +337,12 @@ impl<'a> Recorder<'a> {
         })?;
         self.written = files.written;
         self.writing = files.seconds;
-        // wall seconds go on from where the run stopped (an `Instant` moved back that far
-        // would not exist on a machine started more recently than that: the run's seconds
-        // then began again at 0, below its assembly's and solver's)
+        // wall seconds go on from where the run stopped, counted from now (an `Instant` moved
+        // back that far would not exist on a machine started more recently than that: the
+        // run's seconds then began again at 0, below its assembly's and solver's); a run that
+        // goes on in this process after a remake resumes so too, from its own start
         self.before = wall;
+        self.start = Instant::now();
         Ok(())
     }
 
