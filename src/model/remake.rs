@@ -1401,36 +1401,34 @@ fn across_gap(p: &[[f64; 3]], bodies: &[usize]) -> (f64, Vector3<f64>) {
         let others: Vec<usize> = (0..k).filter(|&j| j != i).collect();
         others.iter().all(|&j| bodies[j] == bodies[others[0]]) && bodies[i] != bodies[others[0]]
     });
+    if k == 3 {
+        // the edge across from the lone corner (it starts at the next), or the longest
+        let side = match alone {
+            Some(i) if foot_within(p, i) => (i + 1) % 3,
+            _ => longest_edge(p, 3).0,
+        };
+        let (t, n) = height_over(p, side);
+        return (t, Vector3::new(n[0], n[1], 0.0));
+    }
     let v = |i: usize| Vector3::new(p[i][0], p[i][1], p[i][2]);
-    match (k, alone) {
-        (3, Some(i)) if foot_within(v(i), v((i + 1) % 3), v((i + 2) % 3)) => {
-            let (a, b) = ((i + 1) % 3, (i + 2) % 3);
-            let e = v(b) - v(a);
-            let n = Vector3::new(-e[1], e[0], 0.0).normalize();
-            (n.dot(&(v(i) - v(a))).abs(), n)
-        }
-        (4, Some(i)) => {
-            let f: Vec<usize> = (0..4).filter(|&j| j != i).collect();
-            let (a, b, c) = (v(f[0]), v(f[1]), v(f[2]));
-            match (b - a).cross(&(c - a)).try_normalize(0.0) {
-                Some(n) if over_face(v(i), [a, b, c], n) => (n.dot(&(v(i) - a)).abs(), n),
-                _ => thinnest(p),
-            }
-        }
-        (3, _) => {
-            let (t, n) = height_across(p);
-            (t, Vector3::new(n[0], n[1], 0.0))
-        }
+    let Some(i) = alone else {
+        return thinnest(p);
+    };
+    let f: Vec<usize> = (0..4).filter(|&j| j != i).collect();
+    let (a, b, c) = (v(f[0]), v(f[1]), v(f[2]));
+    match (b - a).cross(&(c - a)).try_normalize(0.0) {
+        Some(n) if over_face(v(i), [a, b, c], n) => (n.dot(&(v(i) - a)).abs(), n),
         _ => thinnest(p),
     }
 }
 
-/// Whether the foot of the perpendicular from `apex` to the line through `a` and `b` falls
-/// on the segment between them (to a tenth of its length past either end).
-fn foot_within(apex: Vector3<f64>, a: Vector3<f64>, b: Vector3<f64>) -> bool {
-    let e = b - a;
-    let s = (apex - a).dot(&e) / e.norm_squared().max(f64::MIN_POSITIVE);
-    (-0.1..=1.1).contains(&s)
+/// Whether the foot of the perpendicular from corner `i` of the triangle `p` to the line of
+/// the edge across from it falls on that edge (to a tenth of its length past either end).
+fn foot_within(p: &[[f64; 3]], i: usize) -> bool {
+    let a = (i + 1) % 3;
+    let e = edge(p, 3, a);
+    let to = Vector2::new(p[i][0] - p[a][0], p[i][1] - p[a][1]);
+    (-0.1..=1.1).contains(&(to.dot(&e) / e.norm_squared().max(f64::MIN_POSITIVE)))
 }
 
 /// Whether the foot of the perpendicular from `apex` to the plane of the triangle `t` (unit
@@ -1449,12 +1447,12 @@ fn over_face(apex: Vector3<f64>, t: [Vector3<f64>; 3], n: Vector3<f64>) -> bool 
         .all(|w| w / whole >= -0.1)
 }
 
-/// A triangle's height over its longest edge, and that edge's normal.
-fn height_across(p: &[[f64; 3]]) -> (f64, Vector2<f64>) {
-    let (i, l2) = longest_edge(p, 3);
+/// A triangle's height over its edge from corner `i`, and that edge's normal.
+fn height_over(p: &[[f64; 3]], i: usize) -> (f64, Vector2<f64>) {
+    let e = edge(p, 3, i);
     (
-        2.0 * area(p, 3) / l2.sqrt().max(f64::MIN_POSITIVE),
-        normal_to(edge(p, 3, i)),
+        2.0 * area(p, 3) / e.norm().max(f64::MIN_POSITIVE),
+        normal_to(e),
     )
 }
 
@@ -1535,6 +1533,11 @@ impl Remade {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A triangle's height over its longest edge, and that edge's normal: its thinnest way.
+    fn height_across(p: &[[f64; 3]]) -> (f64, Vector2<f64>) {
+        height_over(p, longest_edge(p, 3).0)
+    }
 
     #[test]
     fn the_shear_measure_sees_shear_and_not_rotation_or_squeeze() {
