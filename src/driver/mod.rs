@@ -538,7 +538,14 @@ fn solve_model(
                     run.cap_step(passes + PAST * largest_step(case));
                 }
                 let due = watch == remake::Watch::Remake;
-                (due || stuck.after(run.rejected(), t)).then_some(Change::Remake)
+                let stuck_here = stuck.after(run.rejected(), t);
+                if stuck_here && medium.stuck(&model) && opts.verbose {
+                    crate::note!(
+                        "  stuck at t = {t} on the medium as made: made again by {} first",
+                        medium.mesher.name()
+                    );
+                }
+                (due || stuck_here).then_some(Change::Remake)
             }
             (None, None) => None,
         };
@@ -630,11 +637,12 @@ fn medium_again(
     cp: &mut checkpoint::Checkpoint,
     folder: Option<&mut RunFolder>,
 ) -> Result<(), SolveError> {
-    let Some(rate) = medium.as_ref().map(|m| m.rate) else {
+    let Some((rate, mesher)) = medium.as_ref().map(|m| (m.rate, m.mesher)) else {
         return Ok(());
     };
     *medium = remake::Medium::find(model, remaking(case))?;
     if let Some(m) = medium.as_mut() {
+        m.mesher = mesher;
         restart_medium(case, model, m, cp, rate);
     }
     if let Some(folder) = folder {

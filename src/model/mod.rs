@@ -280,7 +280,7 @@ impl Model {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::case::Case;
     use crate::mesh::gmsh::{MeshOptions, mesh_geo};
@@ -288,7 +288,7 @@ mod tests {
 
     /// The model of the shipped case `name`, its `.geo` meshed as the case says (with `params`
     /// over its own) into `target/unit-scratch/model/`.
-    fn model_of(name: &str, params: &[(&str, f64)]) -> Model {
+    pub(crate) fn model_of(name: &str, params: &[(&str, f64)]) -> Model {
         let root = Path::new(env!("CARGO_MANIFEST_DIR"));
         let case = Case::read(&root.join(format!("cases/{name}.toml"))).unwrap();
         let mut set: std::collections::BTreeMap<String, f64> =

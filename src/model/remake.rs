@@ -33,7 +33,7 @@ use crate::dofs::{CellState, Field, NONE, gather, rebase};
 use crate::element::{RefElement, centre, local_coords, physical_gradients};
 use crate::kernel::friction::HISTORY_PER_POINT;
 use crate::mesh::Mesh;
-use crate::mesh::remesh::{RemeshError, boundary_loops, remesh, supported};
+use crate::mesh::remesh::{Mesher, RemeshError, boundary_loops, remesh, supported};
 use nalgebra::{Matrix2, Matrix3, SymmetricEigen, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
@@ -90,6 +90,10 @@ pub struct Medium {
     /// sliver's node moved along its edge at most over the last step.
     t: f64,
     pub rate: f64,
+    /// Which of gmsh's meshers fills a 3D medium first: the other one's since the last time
+    /// the run stuck on a medium it made ([`Medium::stuck`]).
+    #[serde(default)]
+    pub mesher: Mesher,
 }
 
 /// How far (in lengths of its edge) a sliver's node may have gone along the edge across it
@@ -660,6 +664,7 @@ impl Medium {
             thin: Vec::new(),
             t: 0.0,
             rate: 0.0,
+            mesher: Mesher::default(),
         }))
     }
 
@@ -907,6 +912,17 @@ impl Medium {
         })
     }
 
+    /// The run stuck on the medium as made (a step failed twice from one state): in 3D the
+    /// remake that follows, and those after it, fill the medium with the other mesher first.
+    /// Returns whether it changed.
+    pub fn stuck(&mut self, model: &Model) -> bool {
+        let swap = model.mesh.dim == 3;
+        if swap {
+            self.mesher = self.mesher.other();
+        }
+        swap
+    }
+
     /// Start following the medium's slivers at the state `x` at `t` (the initial state, or the
     /// one the medium was just made again at), their nodes taken to move along their edges
     /// at most at `rate`, the speed of the last step. Returns the longest step (in
@@ -1003,7 +1019,7 @@ impl Medium {
         let placed: Vec<[f64; 3]> = (0..model.mesh.coords.len())
             .map(|n| own[n].unwrap_or_else(|| model.placed(n, x)))
             .collect();
-        let r = remesh(&model.mesh, &placed, &self.blocks)?;
+        let r = remesh(&model.mesh, &placed, &self.blocks, self.mesher)?;
         let find = Locator::new(model, reference, &self.blocks, x);
         let here = |n: usize| match r.old_of[n] {
             Some(o) => placed[o],
@@ -1533,6 +1549,52 @@ impl Remade {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_run_stuck_on_a_3d_medium_goes_on_with_the_other_mesher_and_a_restart_knows_which() {
+        // in 2D the triangles are spade's: nothing to swap
+        let cylinder = super::super::tests::model_of("cylinder-slide", &[("h", 0.2)]);
+        let mut flat = Medium::find(&cylinder, Some("medium")).unwrap().unwrap();
+        assert!(!flat.stuck(&cylinder));
+        assert_eq!(flat.mesher, Mesher::Delaunay);
+        let sphere = super::super::tests::model_of("sphere-drag", &[("h", 0.3)]);
+        let mut m = Medium::find(&sphere, Some("medium")).unwrap().unwrap();
+        assert_eq!(m.mesher, Mesher::Delaunay);
+        let x = sphere.initial_state();
+        let cells = |m: &Medium| {
+            let r = m.remake(&sphere, &sphere.cell_reference, &x).unwrap();
+            // the medium's block: the one whose cells have their own references
+            let medium: Vec<&crate::mesh::Block> = (r.reference.iter().zip(&r.mesh.cells))
+                .filter(|(refs, _)| refs.is_some())
+                .map(|(_, b)| b)
+                .collect();
+            assert_eq!(medium.len(), 1);
+            let mut tets: Vec<[usize; 4]> = (0..medium[0].n_cells())
+                .map(|c| {
+                    let mut t: [usize; 4] = std::array::from_fn(|i| medium[0].cell(c)[i]);
+                    t.sort_unstable();
+                    t
+                })
+                .collect();
+            tets.sort_unstable();
+            (r.mesh.coords.len(), tets)
+        };
+        let delaunay = cells(&m);
+        // stuck: the remakes from then on fill the medium with HXT's tetrahedra, other cells
+        assert!(m.stuck(&sphere));
+        assert_eq!(m.mesher, Mesher::Hxt);
+        assert_ne!(cells(&m), delaunay);
+        // a checkpoint keeps which (one from before there was a choice reads as Delaunay)
+        let kept: Medium = serde_json::from_str(&serde_json::to_string(&m).unwrap()).unwrap();
+        assert_eq!(kept.mesher, Mesher::Hxt);
+        let mut old = serde_json::to_value(&m).unwrap();
+        old.as_object_mut().unwrap().remove("mesher");
+        let old: Medium = serde_json::from_value(old).unwrap();
+        assert_eq!(old.mesher, Mesher::Delaunay);
+        // stuck again: back to Delaunay's, the same cells as before
+        assert!(m.stuck(&sphere));
+        assert_eq!(cells(&m), delaunay);
+    }
 
     /// A triangle's height over its longest edge, and that edge's normal: its thinnest way.
     fn height_across(p: &[[f64; 3]]) -> (f64, Vector2<f64>) {
