@@ -277,7 +277,8 @@ impl<'a> Run<'a> {
     /// length: no inertia), or from the state as joined where that does not converge. The
     /// points' history stays as joined: whatever the settling slipped is the next step's
     /// slip, whose work that step makes heat over its length. A settling after a remake stops
-    /// at the relative residual `to` ([`crate::model::remake::SETTLED`]).
+    /// at the relative residual `to` ([`crate::model::remake::SETTLED`]). Where the settling
+    /// does not converge, `-v` says so.
     pub(super) fn rejoined(&mut self, to: Option<f64>) {
         let st = &mut self.st;
         st.asm.rejoined(st.model, &st.x);
@@ -285,8 +286,14 @@ impl<'a> Run<'a> {
         if let Some(stored) = joined_heat(&self.st) {
             *self.accounts.totals.heat_joined.get_or_insert(0.0) += stored;
         }
-        if let Some(rep) = self.st.settle_mechanics(to) {
-            self.accounts.count(&rep);
+        match self.st.settle_mechanics(to) {
+            Ok(rep) => self.accounts.count(&rep),
+            Err(why) if self.opts.verbose => crate::note!(
+                "  not settled at t = {} on the new mesh ({why}); the next step starts from it \
+                 as it is",
+                self.st.ctl.t
+            ),
+            Err(_) => {}
         }
     }
 

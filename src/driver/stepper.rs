@@ -194,9 +194,9 @@ impl<'a> Stepper<'a> {
     /// scene the temperature kept (a step of no length has no capacity: what it solved for θ
     /// is a steady state, not the state), in a steady one settled too; the history stays as
     /// it was. To the relative residual `to` where given and looser than the steps' (see
-    /// [`Newton::settling`]). Returns the report, or `None` (and the state unchanged) where
-    /// it does not converge.
-    pub(super) fn settle_mechanics(&mut self, to: Option<f64>) -> Option<StepReport> {
+    /// [`Newton::settling`]). Returns the report, or why not (the state unchanged) where it
+    /// does not converge.
+    pub(super) fn settle_mechanics(&mut self, to: Option<f64>) -> Result<StepReport, StepFailure> {
         let transient = self.model.physics.transient;
         let tol = self.newton.tol;
         if let Some(to) = to {
@@ -204,7 +204,7 @@ impl<'a> Stepper<'a> {
         }
         let attempt = self.attempt(self.ctl.t);
         (self.newton.tol, self.newton.settling) = (tol, false);
-        let settled = attempt.ok().map(|(x, rep)| {
+        let settled = attempt.map(|(x, rep)| {
             let dofs = &self.model.dofs;
             for (d, v) in x.into_iter().enumerate() {
                 if !transient || dofs.field[d] != Field::Theta {
