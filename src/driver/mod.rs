@@ -542,7 +542,7 @@ fn solve_model(
                 if stuck_here && medium.stuck(&model) && opts.verbose {
                     crate::note!(
                         "  stuck at t = {t} on the medium as made: made again by {} first",
-                        medium.mesher.name()
+                        medium.mesher().name()
                     );
                 }
                 (due || stuck_here).then_some(Change::Remake)
@@ -637,12 +637,11 @@ fn medium_again(
     cp: &mut checkpoint::Checkpoint,
     folder: Option<&mut RunFolder>,
 ) -> Result<(), SolveError> {
-    let Some((rate, mesher)) = medium.as_ref().map(|m| (m.rate, m.mesher)) else {
+    let Some(rate) = medium.as_ref().map(|m| m.rate) else {
         return Ok(());
     };
     *medium = remake::Medium::find(model, remaking(case))?;
     if let Some(m) = medium.as_mut() {
-        m.mesher = mesher;
         restart_medium(case, model, m, cp, rate);
     }
     if let Some(folder) = folder {

@@ -19,8 +19,9 @@ use std::collections::HashMap;
 /// Each leaves, now and then, a medium from which no step converges where the other's goes on
 /// (the square pad in 3D at μ = 0.5 stopped at a slide of 0.24 on Delaunay's cells and slid
 /// its width on HXT's, which stop the hemisphere sooner than Delaunay's;
-/// docs/notes/2026-12-04-the-other-mesher-where-a-3d-drag-sticks.md), so a run stuck on
-/// one's cells goes on with the other's.
+/// docs/notes/2026-12-04-the-other-mesher-where-a-3d-drag-sticks.md), so the remake at a state
+/// a run stuck at is HXT's. Delaunay's cells are the same from run to run, HXT's are not (the
+/// same faces, two calls: other cells), so HXT is not the first choice.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Mesher {
     /// gmsh's Delaunay (`Mesh.Algorithm3D = 1`), HXT where it leaves a flat tetrahedron.
