@@ -12,7 +12,6 @@
 //! plane) are triangulated again first (`plane_faces.rs`).
 
 use super::{Block, CellKind, Mesh};
-use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
 
 /// Which of gmsh's tetrahedral meshers fills a 3D medium first (the other where it fails).
@@ -22,7 +21,7 @@ use std::collections::HashMap;
 /// docs/notes/2026-12-04-the-other-mesher-where-a-3d-drag-sticks.md), so the remake at a state
 /// a run stuck at is HXT's. Delaunay's cells are the same from run to run, HXT's are not (the
 /// same faces, two calls: other cells), so HXT is not the first choice.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Mesher {
     /// gmsh's Delaunay (`Mesh.Algorithm3D = 1`), HXT where it leaves a flat tetrahedron.
     #[default]
