@@ -193,6 +193,8 @@ const FAILURE_WAIT: std::time::Duration = std::time::Duration::from_secs(60);
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    // before any other thread starts, so that all of them leave the signals to one thread
+    tmc::driver::take_signals(matches!(cli.command, Command::Solve { .. }));
     // the ranks share the CPUs; a thread count this machine cannot start (a huge one would
     // hang while spawning) is refused before anything starts
     let ranks = tmc::parallel::launched_size().unwrap_or(1).max(1);
@@ -334,7 +336,6 @@ fn command(cli: Cli) -> ExitCode {
             idle_threads,
             memory,
         } => {
-            tmc::driver::stop_on_signals();
             let opts = SolveOptions {
                 out_dir: output,
                 quiet: quiet || silent(),

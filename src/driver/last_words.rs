@@ -107,7 +107,7 @@ pub(super) fn forget() {
     hold().take();
 }
 
-/// What the SIGTERM handler does (a store, safe in a handler).
+/// What a SIGTERM does to a solve.
 pub(super) fn on_terminate() {
     TERMINATED.store(true, Ordering::Relaxed);
 }

@@ -115,7 +115,7 @@ impl From<LinearError> for SolveError {
     }
 }
 
-/// Set by SIGINT/SIGTERM (see [`stop_on_signals`]): runs stop after their current step.
+/// Set by SIGINT/SIGTERM (see [`take_signals`]): runs stop after their current step.
 static INTERRUPTED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
 
 /// Whether a stop was asked for.
@@ -128,26 +128,70 @@ pub fn request_stop() {
     INTERRUPTED.store(true, std::sync::atomic::Ordering::Relaxed);
 }
 
-extern "C" fn on_signal(sig: libc::c_int) {
-    request_stop();
-    if sig == libc::SIGTERM {
-        last_words::on_terminate();
+/// Signals as a set.
+fn signal_set(signals: &[libc::c_int]) -> libc::sigset_t {
+    // SAFETY: an empty set filled with valid signal numbers
+    unsafe {
+        let mut set: libc::sigset_t = std::mem::zeroed();
+        libc::sigemptyset(&mut set);
+        for &s in signals {
+            libc::sigaddset(&mut set, s);
+        }
+        set
     }
-    // a second signal ends the process at once
-    unsafe { libc::signal(sig, libc::SIG_DFL) };
 }
 
-/// Make SIGINT (Ctrl-C) and SIGTERM stop a run after its current step, with its summary
-/// written; a second signal ends the process at once. Under a launcher that kills its
-/// ranks soon after SIGTERM, a run whose step does not end in time ends at its last accepted
-/// step instead (`last_words.rs`). For the `tmc` binary.
-pub fn stop_on_signals() {
-    let handler = on_signal as extern "C" fn(libc::c_int) as libc::sighandler_t;
+/// End the process as `signal`'s default action does (from the thread that takes signals).
+fn end_as(signal: libc::c_int) {
+    // SAFETY: the default disposition, the signal let through on this thread, and raised at it
     unsafe {
-        libc::signal(libc::SIGINT, handler);
-        libc::signal(libc::SIGTERM, handler);
+        libc::signal(signal, libc::SIG_DFL);
+        let one = signal_set(&[signal]);
+        libc::pthread_sigmask(libc::SIG_UNBLOCK, &one, std::ptr::null_mut());
+        libc::raise(signal);
     }
-    last_words::watch();
+}
+
+/// Take SIGINT (Ctrl-C) and SIGTERM on a thread of their own, for the `tmc` binary: called
+/// first in `main`, before any other thread starts, so that every thread the process starts
+/// (rayon's, MPI's, the last words' watcher) keeps them blocked and no handler ever runs in
+/// the middle of other code. METIS, for one, puts a handler on SIGTERM while it works that
+/// jumps out of wherever the signal lands: out of `malloc`, whose lock then stays taken, and
+/// the process hangs at its next allocation. With `graceful` (a solve), a signal stops the run
+/// after its current step, with its summary written, and the same signal again ends the
+/// process at once; under a launcher that kills its ranks soon after SIGTERM, a run whose step
+/// does not end in time ends at its last accepted step instead (`last_words.rs`). Otherwise a
+/// signal ends the process as it would have.
+pub fn take_signals(graceful: bool) {
+    let both = signal_set(&[libc::SIGINT, libc::SIGTERM]);
+    // SAFETY: blocking two signals on this thread; threads started after inherit it
+    unsafe { libc::pthread_sigmask(libc::SIG_BLOCK, &both, std::ptr::null_mut()) };
+    let taker = move || {
+        let mut seen = [false; 2];
+        loop {
+            let mut signal = 0;
+            // SAFETY: waiting for one of the two signals blocked on every thread
+            if unsafe { libc::sigwait(&both, &mut signal) } != 0 {
+                continue;
+            }
+            let once = &mut seen[usize::from(signal == libc::SIGTERM)];
+            if !graceful || *once {
+                end_as(signal);
+            }
+            *once = true;
+            request_stop();
+            if signal == libc::SIGTERM {
+                last_words::on_terminate();
+            }
+        }
+    };
+    std::thread::Builder::new()
+        .name("signals".into())
+        .spawn(taker)
+        .expect("a thread to take signals starts");
+    if graceful {
+        last_words::watch();
+    }
 }
 
 /// Options of `tmc solve`.

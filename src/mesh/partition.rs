@@ -10,56 +10,44 @@ pub use crate::parallel::Partition;
 /// race, giving results that depend on other threads, or crash. Every call holds this.
 static METIS: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
-/// Make a METIS call, `call`, returning its status: one call at a time, and none loses a
-/// SIGTERM or changes its handler. While it works METIS puts its own handler on SIGTERM (and
-/// SIGABRT), puts the one it found back at its end as a handler that runs once, and a SIGTERM
-/// that comes meanwhile (`mpirun` passing on a Ctrl-C, a user's `kill`) ends the call with
-/// `METIS_ERROR`, never reaching the run's handler: the run would fail as if METIS could not
-/// cut its mesh, or go on with its ordering lost and its stop forgotten. So the handlers are
-/// put back as they were after each call, and a call that ends with `METIS_ERROR` is made
-/// once more: METIS's own errors come again from the same input (it is deterministic), so if
-/// that one succeeds, the first ended on a signal, which is raised again for the run's handler
-/// and the second call's result is kept.
-pub(crate) fn metis(mut call: impl FnMut() -> i32) -> i32 {
+/// Make a METIS call, `call`, returning its status: one call at a time, and none lets a
+/// SIGTERM in or changes its handler. While it works METIS puts its own handler on SIGTERM (and
+/// SIGABRT), one that jumps back to the call's start from wherever the signal lands, and puts
+/// the one it found back at its end as a handler that runs once. A SIGTERM from outside
+/// (`mpirun` passing on a Ctrl-C, a user's `kill`) that landed in `malloc` left its lock
+/// taken, and the call hung at its next allocation; one that landed elsewhere ended the call
+/// with `METIS_ERROR`, never reaching the run's handler. So SIGTERM is blocked on this thread
+/// while METIS works, and reaches the handler in place once it is done (the `tmc` binary takes
+/// it on a thread of its own, `driver::take_signals`, and blocks it everywhere else); the
+/// handlers are put back as they were. SIGABRT, with which METIS ends a call that runs out of
+/// memory, is left to it.
+pub(crate) fn metis(call: impl FnOnce() -> i32) -> i32 {
     let _one_at_a_time = METIS.lock().unwrap_or_else(|e| e.into_inner());
-    let kept = |call: &mut dyn FnMut() -> i32| {
-        let signals = [libc::SIGTERM, libc::SIGABRT];
-        // SAFETY: reading the dispositions of two signals, and setting them back as they were
-        let mut was: [libc::sigaction; 2] = unsafe { std::mem::zeroed() };
+    let signals = [libc::SIGTERM, libc::SIGABRT];
+    // SAFETY: reading the dispositions of two signals, blocking one on this thread, and
+    // setting both back as they were
+    unsafe {
+        let mut was: [libc::sigaction; 2] = std::mem::zeroed();
         for (s, w) in signals.iter().zip(&mut was) {
-            unsafe { libc::sigaction(*s, std::ptr::null(), w) };
+            libc::sigaction(*s, std::ptr::null(), w);
         }
+        let mut term: libc::sigset_t = std::mem::zeroed();
+        libc::sigemptyset(&mut term);
+        libc::sigaddset(&mut term, libc::SIGTERM);
+        let mut mask: libc::sigset_t = std::mem::zeroed();
+        libc::pthread_sigmask(libc::SIG_BLOCK, &term, &mut mask);
         let status = call();
         for (s, w) in signals.iter().zip(&was) {
-            // the handler METIS put back, as it was; one the handler itself changed since
-            // (the run's, on a signal, to the default) stays
-            let mut now: libc::sigaction = unsafe { std::mem::zeroed() };
-            unsafe { libc::sigaction(*s, std::ptr::null(), &mut now) };
+            // the handler METIS put back, as it was; one changed since by another thread stays
+            let mut now: libc::sigaction = std::mem::zeroed();
+            libc::sigaction(*s, std::ptr::null(), &mut now);
             if now.sa_sigaction == w.sa_sigaction {
-                unsafe { libc::sigaction(*s, w, std::ptr::null_mut()) };
+                libc::sigaction(*s, w, std::ptr::null_mut());
             }
         }
+        libc::pthread_sigmask(libc::SIG_SETMASK, &mask, std::ptr::null_mut());
         status
-    };
-    let status = kept(&mut call);
-    if status != metis_sys::rstatus_et_METIS_ERROR {
-        return status;
     }
-    let again = kept(&mut call);
-    if again == metis_sys::rstatus_et_METIS_OK {
-        // SAFETY: METIS left its handler by a long jump, which would keep SIGTERM blocked on
-        // this thread were it installed to be blocked while it runs: unblocked, and raised
-        // here, the signal runs the handler in place now, the run's (or the default, which
-        // ends the process as the SIGTERM would have).
-        unsafe {
-            let mut term: libc::sigset_t = std::mem::zeroed();
-            libc::sigemptyset(&mut term);
-            libc::sigaddset(&mut term, libc::SIGTERM);
-            libc::pthread_sigmask(libc::SIG_UNBLOCK, &term, std::ptr::null_mut());
-            libc::raise(libc::SIGTERM);
-        }
-    }
-    again
 }
 
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -215,27 +203,26 @@ mod tests {
     mod signals {
         use super::super::{METIS, metis};
         use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering::SeqCst};
+        use std::time::{Duration, Instant};
 
+        /// SIGTERMs handled, and of them those handled while METIS worked.
         static HANDLED: AtomicUsize = AtomicUsize::new(0);
-        /// Signals sent, or about to be: the last one is handled before its target call lets
-        /// go of the lock, so that none reaches a thread while another's METIS traps it.
-        static SENT: AtomicUsize = AtomicUsize::new(0);
-        /// The worker's calls: the one it is inside (0: none), and the one the next signal is
-        /// for (0: none).
+        static HANDLED_INSIDE: AtomicUsize = AtomicUsize::new(0);
+        /// The worker's calls, and the one it is inside (0: none).
         static CALLS: AtomicUsize = AtomicUsize::new(0);
         static INSIDE: AtomicUsize = AtomicUsize::new(0);
-        static TARGET: AtomicUsize = AtomicUsize::new(0);
-        /// A signal ended a METIS call (METIS caught it).
-        static CAUGHT: AtomicBool = AtomicBool::new(false);
         /// The worker may stop.
         static DONE: AtomicBool = AtomicBool::new(false);
 
         extern "C" fn counted(_: libc::c_int) {
             HANDLED.fetch_add(1, SeqCst);
+            if INSIDE.load(SeqCst) != 0 {
+                HANDLED_INSIDE.fetch_add(1, SeqCst);
+            }
         }
 
         fn arm(handler: libc::sighandler_t) -> libc::sighandler_t {
-            // SAFETY: setting a disposition; the handler only counts (an atomic add)
+            // SAFETY: setting a disposition; the handler only counts (atomic adds)
             unsafe { libc::signal(libc::SIGTERM, handler) }
         }
 
@@ -243,8 +230,8 @@ mod tests {
             counted as extern "C" fn(libc::c_int) as libc::sighandler_t
         }
 
-        /// METIS nested dissection of a k × k grid (tens of milliseconds at k = 200), as
-        /// call after call of a worker that signals are sent to (`spot`).
+        /// METIS nested dissection of a k × k grid (tens of milliseconds at k = 200); for the
+        /// worker that signals are sent to (`spot`), the call it is inside is marked.
         fn order(k: usize, spot: bool) -> (i32, Vec<i32>) {
             let (mut xadj, mut adjncy) = (vec![0i32], Vec::new());
             for v in 0..k * k {
@@ -273,29 +260,21 @@ mod tests {
                     )
                 };
                 INSIDE.store(0, SeqCst);
-                let caught = status == metis_sys::rstatus_et_METIS_ERROR;
-                CAUGHT.fetch_or(caught, SeqCst);
-                if !caught && TARGET.load(SeqCst) == call {
-                    // a signal sent late comes after METIS put back the handler as one that
-                    // runs once, and `metis` leaves the default that it then falls to (the
-                    // run's handler sets that itself): armed again for the next send
-                    arm(counting());
-                }
-                // the signal for this call, if METIS did not catch it, is handled before the
-                // lock is let go
-                while !caught
-                    && TARGET.load(SeqCst) == call
-                    && HANDLED.load(SeqCst) < SENT.load(SeqCst)
-                {
-                    std::hint::spin_loop();
-                }
                 status
             });
             (status, perm)
         }
 
+        /// Wait up to ten seconds for `until`.
+        fn wait(until: impl Fn() -> bool) {
+            let start = Instant::now();
+            while !until() && start.elapsed() < Duration::from_secs(10) {
+                std::thread::yield_now();
+            }
+        }
+
         #[test]
-        fn a_sigterm_that_comes_while_metis_works_reaches_the_run_and_the_result_stands() {
+        fn a_sigterm_that_comes_while_metis_works_reaches_the_run_after_it_and_the_result_stands() {
             let k = 200;
             let (status, alone) = order(k, false);
             assert_eq!(status, metis_sys::rstatus_et_METIS_OK);
@@ -306,7 +285,6 @@ mod tests {
                 arm(h)
             };
             let before = under_lock(counting());
-            let sends = 4;
             let worker = std::thread::spawn(move || {
                 let mut runs = vec![order(k, true)];
                 while !DONE.load(SeqCst) {
@@ -318,37 +296,24 @@ mod tests {
                 use std::os::unix::thread::JoinHandleExt;
                 worker.as_pthread_t()
             };
-            let mut caught = 0;
+            let sends = 4;
+            let mut during = 0;
             for sent in 1..=sends {
-                SENT.store(sent, SeqCst);
-                // a call to send it to, held by Dekker's handshake with the worker's spin:
-                // the target named, then the worker seen still inside it
-                loop {
-                    let call = INSIDE.load(SeqCst);
-                    if call != 0 {
-                        TARGET.store(call, SeqCst);
-                        if INSIDE.load(SeqCst) == call {
-                            break;
-                        }
-                        TARGET.store(0, SeqCst);
-                    }
-                    std::hint::spin_loop();
-                }
-                std::thread::sleep(std::time::Duration::from_millis(2));
-                // SAFETY: the worker thread is alive: it spins until the signal is handled
+                wait(|| INSIDE.load(SeqCst) != 0);
+                let call = INSIDE.load(SeqCst);
+                std::thread::sleep(Duration::from_millis(2));
+                // SAFETY: the worker thread is alive: it works until DONE
                 unsafe { libc::pthread_kill(id, libc::SIGTERM) };
-                let waited = std::time::Instant::now();
-                while HANDLED.load(SeqCst) < sent && waited.elapsed().as_secs() < 10 {
-                    std::thread::yield_now();
-                }
-                caught += usize::from(CAUGHT.swap(false, SeqCst));
-                TARGET.store(0, SeqCst);
+                // still inside the call it was in before the signal was sent
+                during += usize::from(call != 0 && INSIDE.load(SeqCst) == call);
+                wait(|| HANDLED.load(SeqCst) >= sent);
             }
             DONE.store(true, SeqCst);
             let runs: Vec<(i32, Vec<i32>)> = worker.join().unwrap();
             under_lock(before);
             assert_eq!(HANDLED.load(SeqCst), sends, "a SIGTERM was lost");
-            assert!(caught >= 1, "no SIGTERM came while METIS worked");
+            assert!(during >= 1, "no SIGTERM came while METIS worked");
+            assert_eq!(HANDLED_INSIDE.load(SeqCst), 0, "a SIGTERM came into METIS");
             for (status, perm) in runs {
                 assert_eq!(status, metis_sys::rstatus_et_METIS_OK);
                 assert!(perm == alone, "an interrupted ordering differs");
