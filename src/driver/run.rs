@@ -421,7 +421,8 @@ impl<'a> Run<'a> {
                 format!("Δλ = {dl:.3e}")
             };
             let remade = self.accounts.totals.medium.is_some();
-            let hint = stall_hint(&st.model.physics, remade);
+            let drag = !pressing(st.model, st.ctl.t, target);
+            let hint = stall_hint(&st.model.physics, remade, drag);
             let err = SolveError::StepTooSmall {
                 at: st.position(),
                 step,
@@ -531,9 +532,11 @@ impl<'a> Run<'a> {
 /// made again where a leading corner digs into the face it slides on; the user's guide says
 /// how far they get, and a mass density carries them through, or many of them: on every
 /// region, or where the medium is made again (which takes none) on the solids
-/// (docs/notes/2026-12-04-a-sigterm-in-metis-and-a-hint-taken.md).
-fn stall_hint(physics: &crate::model::Physics, remade: bool) -> &'static str {
-    match (physics.friction, physics.inertia, remade) {
+/// (docs/notes/2026-12-04-a-sigterm-in-metis-and-a-hint-taken.md). Nothing where the step
+/// that fails is a press (`drag` false, [`pressing`]): the drag's words would send the user
+/// after the wrong cause.
+fn stall_hint(physics: &crate::model::Physics, remade: bool, drag: bool) -> &'static str {
+    match (physics.friction && drag, physics.inertia, remade) {
         (false, _, _) => "",
         (true, false, false) => {
             "; with friction, drags stall where the full slide begins (docs/CASE.md, \
@@ -558,4 +561,31 @@ fn stall_hint(physics: &crate::model::Physics, remade: bool) -> &'static str {
              takes none)"
         }
     }
+}
+
+/// Whether the step from `from` to `to` moves the prescribed displacements as the run's first
+/// segment of time does (a press, where a drag follows it): along the same axes, the
+/// increments' sizes summed per axis as vectors less than 60° apart. A step that moves none,
+/// or a first segment that moves none (a press by a load), is taken for a drag.
+fn pressing(model: &Model, from: f64, to: f64) -> bool {
+    let moved = |from: f64, to: f64| {
+        let (a, b) = (model.path.amplitudes(from), model.path.amplitudes(to));
+        let dim = model.dofs.dim;
+        let mut along = [0.0f64; 3];
+        for (k, &d) in model.dofs.u.iter().enumerate() {
+            if let Some(p) = model
+                .cons
+                .prescribed
+                .get(d as usize)
+                .and_then(|p| p.as_ref())
+            {
+                along[k % dim] += (p.at(&b) - p.at(&a)).abs();
+            }
+        }
+        nalgebra::Vector3::from(along)
+    };
+    let first = model.path.times.get(1).copied().unwrap_or(0.0);
+    let (step, press) = (moved(from, to), moved(0.0, first));
+    let norms = step.norm() * press.norm();
+    norms > 0.0 && step.dot(&press) >= 0.5 * norms
 }

@@ -754,6 +754,29 @@ fn a_stalled_drag_over_a_medium_made_again_names_a_mass_density_on_the_solids() 
     );
 }
 
+/// A press that cannot step, with friction in the medium, is not told what carries a drag:
+/// the pad in a box pressed in one step of two Newton iterations, with no room to cut it. The
+/// same scene stalled in its drag is told (the test above).
+#[test]
+fn a_stalled_press_is_not_told_what_carries_a_drag() {
+    let body = case_body("pad-box-slide").replace(
+        "initial = 0.05\nmax = 0.05",
+        "initial = 1.0\nmax = 1.0\nmin = 0.6\nmax_iter = 2",
+    );
+    assert!(body.contains("max_iter = 2"));
+    let case = case_file(
+        "pad-box-press-stall",
+        "pad-box.geo",
+        "params = { h = 0.1 }",
+        &body,
+    );
+    let o = solve_cli(&case, &case.with_file_name("out"), &[]);
+    let e = stderr(&o);
+    assert!(!o.status.success(), "{e}");
+    assert!(e.contains("the 0 converged steps"), "{e}");
+    assert!(!e.contains("with friction") && !e.contains("`rho`"), "{e}");
+}
+
 /// The pad in a box on quadrilaterals (`quads = 1`, h = 0.1), at μ = 0.3. Its medium is made
 /// again, into triangles, as soon as a quadrilateral has closed thin: before, the pad's
 /// leading corner went through the plate's face inside the one quadrilateral across the gap
