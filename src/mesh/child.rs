@@ -94,7 +94,8 @@ fn receive<T: DeserializeOwned>(file: &mut std::fs::File) -> Option<T> {
 /// A child forked once that answers requests with `work`, one after another, until the pipe
 /// to it closes (when this value is dropped, or the process ends). The child does nothing but
 /// the work and its answers, and `_exit`s, so it runs no destructor or handler of this
-/// process. A request it dies or exits on is reported (how it ended), and the child is gone:
+/// process; it is killed when the thread that made it ends. A request it dies or exits on is
+/// reported (how it ended), and the child is gone:
 /// the next request needs a new one. The child closes every file it inherited but its two
 /// pipes, so that a child made later does not hold another's pipe open. In the `tmc` binary
 /// it keeps SIGINT and SIGTERM blocked, as every thread of its parent has them: a Ctrl-C that
@@ -119,8 +120,16 @@ impl Served {
                 return Err(e);
             }
         };
+        let parent = unsafe { libc::getpid() };
         let pid = fork(&[request_write, answer_read], &[request_read, answer_write])?;
         if pid == 0 {
+            // killed when the thread that made it ends, however it ends: a process ended by a
+            // signal (a Ctrl-C to `tmc mesh`) runs no drop, and its child would go on meshing
+            if unsafe { libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL) } != 0
+                || unsafe { libc::getppid() } != parent
+            {
+                unsafe { libc::_exit(0) };
+            }
             close_all_but(&[0, 1, 2, request_read, answer_write]);
             let mut requests = unsafe { std::fs::File::from_raw_fd(request_read) };
             let mut answers = unsafe { std::fs::File::from_raw_fd(answer_write) };
@@ -224,5 +233,30 @@ mod tests {
             matches!(&ended, Err(Isolation::Ended(s)) if s == "exit status 4"),
             "{ended:?}"
         );
+    }
+
+    #[test]
+    fn a_served_child_ends_with_the_thread_that_made_it_though_never_dropped() {
+        // as a process ended by a signal leaves it: its pipe never closed, the child would wait
+        // for a request for ever
+        let pid = std::thread::spawn(|| {
+            let mut served = Served::start(work).unwrap();
+            assert_eq!(served.ask::<i64, i64>(&3).unwrap(), 9);
+            let pid = served.pid;
+            std::mem::forget(served);
+            pid
+        })
+        .join()
+        .unwrap();
+        let start = std::time::Instant::now();
+        let mut status: c_int = 0;
+        while unsafe { libc::waitpid(pid, &mut status, libc::WNOHANG) } == 0 {
+            assert!(
+                start.elapsed() < std::time::Duration::from_secs(10),
+                "the child outlived its thread"
+            );
+            std::thread::sleep(std::time::Duration::from_millis(10));
+        }
+        assert!(libc::WIFSIGNALED(status) && libc::WTERMSIG(status) == libc::SIGKILL);
     }
 }
