@@ -715,17 +715,7 @@ fn a_pad_in_a_box_of_medium_slides_its_width_frictionless_and_at_mu() {
 /// hint asked for it on every region, and the case so changed was refused).
 #[test]
 fn a_stalled_drag_over_a_medium_made_again_names_a_mass_density_on_the_solids() {
-    let body = case_body("pad-box-slide").replace("mu = 0.3, normal", "mu = 1.0, normal");
-    assert!(body.contains("mu = 1.0, normal"));
-    let case = case_file(
-        "pad-box-stall",
-        "pad-box.geo",
-        "params = { h = 0.1 }",
-        &body,
-    );
-    let o = solve_cli(&case, &case.with_file_name("out"), &[]);
-    let e = stderr(&o);
-    assert!(!o.status.success(), "{e}");
+    let (case, e) = pad_box_stall("pad-box-stall", ("mu = 0.3, normal", "mu = 1.0, normal"));
     assert!(
         e.contains("leading corner digs into the face it slides on")
             && e.contains("`rho` on every solid can carry it through")
@@ -759,22 +749,32 @@ fn a_stalled_drag_over_a_medium_made_again_names_a_mass_density_on_the_solids() 
 /// same scene stalled in its drag is told (the test above).
 #[test]
 fn a_stalled_press_is_not_told_what_carries_a_drag() {
-    let body = case_body("pad-box-slide").replace(
-        "initial = 0.05\nmax = 0.05",
-        "initial = 1.0\nmax = 1.0\nmin = 0.6\nmax_iter = 2",
-    );
-    assert!(body.contains("max_iter = 2"));
-    let case = case_file(
+    let (_, e) = pad_box_stall(
         "pad-box-press-stall",
+        (
+            "initial = 0.05\nmax = 0.05",
+            "initial = 1.0\nmax = 1.0\nmin = 0.6\nmax_iter = 2",
+        ),
+    );
+    assert!(e.contains("the 0 converged steps"), "{e}");
+    assert!(!e.contains("with friction") && !e.contains("`rho`"), "{e}");
+}
+
+/// `cases/pad-box-slide.toml` (h = 0.1) with one edit `(from, to)`, solved in a scratch folder
+/// named `name`, where it must stop: the case file and what the run said.
+fn pad_box_stall(name: &str, (from, to): (&str, &str)) -> (std::path::PathBuf, String) {
+    let body = case_body("pad-box-slide");
+    assert_eq!(body.matches(from).count(), 1, "{from}");
+    let case = case_file(
+        name,
         "pad-box.geo",
         "params = { h = 0.1 }",
-        &body,
+        &body.replace(from, to),
     );
     let o = solve_cli(&case, &case.with_file_name("out"), &[]);
     let e = stderr(&o);
     assert!(!o.status.success(), "{e}");
-    assert!(e.contains("the 0 converged steps"), "{e}");
-    assert!(!e.contains("with friction") && !e.contains("`rho`"), "{e}");
+    (case, e)
 }
 
 /// The pad in a box on quadrilaterals (`quads = 1`, h = 0.1), at μ = 0.3. Its medium is made
