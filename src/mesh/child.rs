@@ -95,11 +95,11 @@ fn receive<T: DeserializeOwned>(file: &mut std::fs::File) -> Option<T> {
 /// to it closes (when this value is dropped, or the process ends). The child does nothing but
 /// the work and its answers, and `_exit`s, so it runs no destructor or handler of this
 /// process; it is killed when the thread that made it ends. A request it dies or exits on is
-/// reported (how it ended), and the child is gone:
-/// the next request needs a new one. The child closes every file it inherited but its two
-/// pipes, so that a child made later does not hold another's pipe open. In the `tmc` binary
-/// it keeps SIGINT and SIGTERM blocked, as every thread of its parent has them: a Ctrl-C that
-/// a terminal sends the whole group stops the run, and the child finishes the request at hand.
+/// reported (how it ended), and the child is gone: the next request needs a new one. The child
+/// closes every file it inherited but its two pipes, so that a child made later does not hold
+/// another's pipe open. In the `tmc` binary it keeps SIGINT and SIGTERM blocked, as every
+/// thread of its parent has them: a Ctrl-C that a terminal sends the whole group stops the
+/// run, and the child finishes the request at hand.
 pub struct Served {
     pid: libc::pid_t,
     to: Option<std::fs::File>,
