@@ -34,6 +34,7 @@ pub mod output;
 pub mod parallel;
 pub mod plot;
 pub mod post;
+pub mod signals;
 pub mod solver;
 pub mod study;
 pub mod threads;

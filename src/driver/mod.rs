@@ -128,25 +128,12 @@ pub fn request_stop() {
     INTERRUPTED.store(true, std::sync::atomic::Ordering::Relaxed);
 }
 
-/// Signals as a set.
-fn signal_set(signals: &[libc::c_int]) -> libc::sigset_t {
-    // SAFETY: an empty set filled with valid signal numbers
-    unsafe {
-        let mut set: libc::sigset_t = std::mem::zeroed();
-        libc::sigemptyset(&mut set);
-        for &s in signals {
-            libc::sigaddset(&mut set, s);
-        }
-        set
-    }
-}
-
 /// End the process as `signal`'s default action does (from the thread that takes signals).
 fn end_as(signal: libc::c_int) {
     // SAFETY: the default disposition, the signal let through on this thread, and raised at it
     unsafe {
         libc::signal(signal, libc::SIG_DFL);
-        let one = signal_set(&[signal]);
+        let one = crate::signals::set(&[signal]);
         libc::pthread_sigmask(libc::SIG_UNBLOCK, &one, std::ptr::null_mut());
         libc::raise(signal);
     }
@@ -163,7 +150,7 @@ fn end_as(signal: libc::c_int) {
 /// does not end in time ends at its last accepted step instead (`last_words.rs`). Otherwise a
 /// signal ends the process as it would have.
 pub fn take_signals(graceful: bool) {
-    let both = signal_set(&[libc::SIGINT, libc::SIGTERM]);
+    let both = crate::signals::set(&[libc::SIGINT, libc::SIGTERM]);
     // SAFETY: blocking two signals on this thread; threads started after inherit it
     unsafe { libc::pthread_sigmask(libc::SIG_BLOCK, &both, std::ptr::null_mut()) };
     let taker = move || {

@@ -31,9 +31,7 @@ pub(crate) fn metis(call: impl FnOnce() -> i32) -> i32 {
         for (s, w) in signals.iter().zip(&mut was) {
             libc::sigaction(*s, std::ptr::null(), w);
         }
-        let mut term: libc::sigset_t = std::mem::zeroed();
-        libc::sigemptyset(&mut term);
-        libc::sigaddset(&mut term, libc::SIGTERM);
+        let term = crate::signals::set(&[libc::SIGTERM]);
         let mut mask: libc::sigset_t = std::mem::zeroed();
         libc::pthread_sigmask(libc::SIG_BLOCK, &term, &mut mask);
         let status = call();
