@@ -12,6 +12,10 @@ mkdir -p target
 # One test thread more than CPUs: many tests wait on a child (mpirun starting its ranks, a run
 # polled for its step files before Ctrl-C), and the extra thread keeps the CPUs busy meanwhile
 # (the integration binary on 2 CPUs: 313 s with 2 test threads, 260–280 s with 3, 307 s with 4).
+# Not more: the `distributed::` tests come one after another, and two `mpirun` jobs at once put
+# four ranks on two CPUs, each polling while it waits for the others (the 24 slowest tests:
+# 161 s with 3 test threads, over 6 minutes with 4; docs/notes/2026-12-05-the-suite-s-time-and-
+# a-mesher-that-is-not-the-same-twice.md).
 export RUST_TEST_THREADS=${RUST_TEST_THREADS:-$(($(nproc) + 1))}
 # More tests at once than CPUs: a solve's pool threads sleep between its parallel parts
 # instead of spinning, which would take the CPU another test's solve is waiting for (tmc solve
