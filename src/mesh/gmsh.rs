@@ -231,6 +231,47 @@ pub fn mesh_geo(geo: &Path, out: &Path, opts: &MeshOptions) -> Result<MeshReport
     })
 }
 
+/// Mesh the 3D `geo` in first-order cells with the `gmsh` program, in a process of its own
+/// started with the address space's randomisation off, and read the mesh it writes to `out`
+/// (both in one folder). For gmsh's HXT, whose tetrahedra depend on where its objects lie in
+/// memory: the same faces gave other cells in each run of tmc (each forks its meshing child
+/// from its own randomised addresses), the same cells each time in processes started alike
+/// (docs/notes/2026-12-05-the-suite-s-time-and-a-mesher-that-is-not-the-same-twice.md).
+/// `None` where the program cannot be started; where the kernel keeps the randomisation, the
+/// cells are HXT's as before.
+pub(crate) fn mesh_geo_apart(geo: &Path, out: &Path) -> Option<Result<super::Mesh, String>> {
+    use std::os::unix::process::CommandExt;
+    /// `ADDR_NO_RANDOMIZE` of <sys/personality.h>.
+    const ADDR_NO_RANDOMIZE: libc::c_ulong = 0x0040000;
+    let (dir, name, written) = (geo.parent()?, geo.file_name()?, out.file_name()?);
+    let mut gmsh = std::process::Command::new("gmsh");
+    // relative names, so that the process starts alike wherever the folder is
+    gmsh.current_dir(dir)
+        .arg(name)
+        .args(["-3", "-nt", "1", "-format", "msh41", "-v", "1", "-o"])
+        .arg(written)
+        .stdin(std::process::Stdio::null());
+    // SAFETY: between fork and exec only async-signal-safe calls, on the child itself: its
+    // personality, and its end with the thread that started it (as the meshing child's)
+    unsafe {
+        gmsh.pre_exec(|| {
+            libc::personality(ADDR_NO_RANDOMIZE);
+            libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL);
+            Ok(())
+        });
+    }
+    let done = gmsh.output().ok()?;
+    let said = |o: &[u8]| String::from_utf8_lossy(o).trim().to_owned();
+    if !done.status.success() || !out.is_file() {
+        let errors: Vec<String> = [said(&done.stderr), said(&done.stdout)]
+            .into_iter()
+            .filter(|e| !e.is_empty())
+            .collect();
+        return Some(Err(format!("meshing failed: {}", errors.join("; "))));
+    }
+    Some(super::msh::read_msh(out).map_err(|e| e.to_string()))
+}
+
 thread_local! {
     /// This thread's meshing child, forked at its first mesh and kept for the next.
     static MESHER: std::cell::RefCell<Option<Served>> = const { std::cell::RefCell::new(None) };

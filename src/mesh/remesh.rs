@@ -19,8 +19,10 @@ use std::collections::HashMap;
 /// (the square pad in 3D at μ = 0.5 stopped at a slide of 0.24 on Delaunay's cells and slid
 /// its width on HXT's, which stop the hemisphere sooner than Delaunay's;
 /// docs/notes/2026-12-04-the-other-mesher-where-a-3d-drag-sticks.md), so the remake at a state
-/// a run stuck at is HXT's. Delaunay's cells are the same from run to run, HXT's are not (the
-/// same faces, two calls: other cells), so HXT is not the first choice.
+/// a run stuck at is HXT's. HXT's cells depend on the addresses it works at (the same faces,
+/// two calls in one process: other cells), so it meshes in a process of its own started with
+/// the address space's randomisation off, where they are the same each time
+/// (`gmsh::mesh_geo_apart`); Delaunay, the same each time in the meshing child, comes first.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Mesher {
     /// gmsh's Delaunay (`Mesh.Algorithm3D = 1`), HXT where it leaves a flat tetrahedron.
@@ -50,11 +52,14 @@ impl Mesher {
     /// gmsh's `Mesh.Algorithm3D` numbers, in the order tried.
     fn algorithms(self) -> [u32; 2] {
         match self {
-            Mesher::Delaunay => [1, 10],
-            Mesher::Hxt => [10, 1],
+            Mesher::Delaunay => [1, HXT],
+            Mesher::Hxt => [HXT, 1],
         }
     }
 }
+
+/// HXT's number in gmsh's `Mesh.Algorithm3D`.
+const HXT: u32 = 10;
 
 /// Why a medium could not be made again: its shape (its boundary crosses itself, a body
 /// passed the end of its base) or the mesher, which may mesh the next state (`mesher`).
@@ -691,13 +696,18 @@ fn tetrahedralize_between(
     for algorithm in mesher.algorithms() {
         let geo = format!("Mesh.Algorithm3D = {algorithm};\nGeneral.NumThreads = 1;\n{loops}");
         write("medium.geo", &geo)?;
-        match super::gmsh::mesh_geo(
-            &dir.0.join("medium.geo"),
-            &dir.0.join("medium.msh"),
-            &options,
-        ) {
-            Ok(made) => return Ok(made.mesh),
-            Err(e) => failed.push(e.to_string()),
+        let (geo, msh) = (dir.0.join("medium.geo"), dir.0.join("medium.msh"));
+        // HXT's cells depend on the addresses it works at: made apart, where they are alike
+        let apart = (algorithm == HXT).then(|| super::gmsh::mesh_geo_apart(&geo, &msh));
+        let made = match apart.flatten() {
+            Some(made) => made,
+            None => super::gmsh::mesh_geo(&geo, &msh, &options)
+                .map(|made| made.mesh)
+                .map_err(|e| e.to_string()),
+        };
+        match made {
+            Ok(mesh) => return Ok(mesh),
+            Err(e) => failed.push(e),
         }
     }
     Err(format!(
@@ -1093,6 +1103,52 @@ mod tests3 {
             [Mesher::Delaunay, Mesher::Hxt].map(|m| either_mesher_fills_the_box(&mesh, &x, m));
         // the other mesher is another medium: what a run stuck on one's cells goes on with
         assert_ne!(delaunay, hxt);
+    }
+
+    /// Whether this kernel lets a process start with its addresses not randomised (a
+    /// container's filter may not).
+    fn fixed_addresses_allowed() -> bool {
+        use std::os::unix::process::CommandExt;
+        let mut t = std::process::Command::new("true");
+        // SAFETY: one system call on the child between fork and exec
+        unsafe {
+            t.pre_exec(|| match libc::personality(0x0040000) {
+                -1 => Err(std::io::Error::last_os_error()),
+                _ => Ok(()),
+            });
+        }
+        t.status().is_ok_and(|s| s.success())
+    }
+
+    #[test]
+    fn hxt_makes_the_same_cells_each_time_it_is_asked() {
+        // in one process two calls gave other cells before HXT meshed in a process of its own
+        // with the addresses fixed (a run and its restart, or two runs, went other ways)
+        if !fixed_addresses_allowed() {
+            eprintln!("this kernel keeps the addresses randomised: HXT's cells may differ");
+            return;
+        }
+        let mesh = box_around_a_block();
+        let x: Vec<[f64; 3]> = (mesh.coords.iter())
+            .map(|p| {
+                let inside = p.iter().all(|&c| (1.0..=3.0).contains(&c));
+                [p[0] + if inside { 0.2 } else { 0.0 }, p[1], p[2]]
+            })
+            .collect();
+        let first = either_mesher_fills_the_box(&mesh, &x, Mesher::Hxt);
+        for k in 1..4 {
+            let again = either_mesher_fills_the_box(&mesh, &x, Mesher::Hxt);
+            let kept = again
+                .iter()
+                .filter(|c| first.binary_search(c).is_ok())
+                .count();
+            assert!(
+                again == first,
+                "call {k}: {kept} of its {} cells among the first call's {}",
+                again.len(),
+                first.len()
+            );
+        }
     }
 
     /// The box of [`box_around_a_block`] made again at `x` by `mesher` first: its boundary
