@@ -231,6 +231,10 @@ pub fn mesh_geo(geo: &Path, out: &Path, opts: &MeshOptions) -> Result<MeshReport
     })
 }
 
+/// `ADDR_NO_RANDOMIZE` of <sys/personality.h>: a program started with it lays out its memory
+/// the same way at every start.
+pub(crate) const ADDR_NO_RANDOMIZE: libc::c_ulong = 0x0040000;
+
 /// Mesh the 3D `geo` in first-order cells with the `gmsh` program, in a process of its own
 /// started with the address space's randomisation off, and read the mesh it writes to `out`
 /// (both in one folder). For gmsh's HXT, whose tetrahedra depend on where its objects lie in
@@ -241,8 +245,6 @@ pub fn mesh_geo(geo: &Path, out: &Path, opts: &MeshOptions) -> Result<MeshReport
 /// cells are HXT's as before.
 pub(crate) fn mesh_geo_apart(geo: &Path, out: &Path) -> Option<Result<super::Mesh, String>> {
     use std::os::unix::process::CommandExt;
-    /// `ADDR_NO_RANDOMIZE` of <sys/personality.h>.
-    const ADDR_NO_RANDOMIZE: libc::c_ulong = 0x0040000;
     let (dir, name, written) = (geo.parent()?, geo.file_name()?, out.file_name()?);
     let mut gmsh = std::process::Command::new("gmsh");
     // relative names, so that the process starts alike wherever the folder is

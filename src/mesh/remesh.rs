@@ -1112,10 +1112,12 @@ mod tests3 {
         let mut t = std::process::Command::new("true");
         // SAFETY: one system call on the child between fork and exec
         unsafe {
-            t.pre_exec(|| match libc::personality(0x0040000) {
-                -1 => Err(std::io::Error::last_os_error()),
-                _ => Ok(()),
-            });
+            t.pre_exec(
+                || match libc::personality(crate::mesh::gmsh::ADDR_NO_RANDOMIZE) {
+                    -1 => Err(std::io::Error::last_os_error()),
+                    _ => Ok(()),
+                },
+            );
         }
         t.status().is_ok_and(|s| s.success())
     }
