@@ -52,13 +52,14 @@ impl Mesher {
     /// gmsh's `Mesh.Algorithm3D` numbers, in the order tried.
     fn algorithms(self) -> [u32; 2] {
         match self {
-            Mesher::Delaunay => [1, HXT],
-            Mesher::Hxt => [HXT, 1],
+            Mesher::Delaunay => [DELAUNAY, HXT],
+            Mesher::Hxt => [HXT, DELAUNAY],
         }
     }
 }
 
-/// HXT's number in gmsh's `Mesh.Algorithm3D`.
+/// Delaunay's and HXT's numbers in gmsh's `Mesh.Algorithm3D`.
+const DELAUNAY: u32 = 1;
 const HXT: u32 = 10;
 
 /// Why a medium could not be made again: its shape (its boundary crosses itself, a body
