@@ -316,7 +316,11 @@ fn command(cli: Cli) -> ExitCode {
                     for w in r.warnings.iter().chain(&r.mesh.untouched_bodies()) {
                         note!("warning: {w}");
                     }
-                    say!("wrote {} ({}D)", r.output.display(), r.dim);
+                    let before = match r.cached {
+                        true => ", as meshed before (TMC_MESH_CACHE=off meshes it again)",
+                        false => "",
+                    };
+                    say!("wrote {} ({}D){before}", r.output.display(), r.dim);
                     print_mesh(&r.mesh);
                     ExitCode::SUCCESS
                 }

@@ -46,13 +46,16 @@ pub struct CheckReport {
     /// On several ranks, each rank's tangent entries and estimated peak memory in MB (its
     /// own part), in rank order; empty on one process.
     pub per_rank: Vec<(usize, f64)>,
+    /// Whether a solve after this check opens gmsh: its mesh a `.geo` that the cache of
+    /// meshes does not keep (`mesh/cache.rs`; one it keeps, this check has just kept).
+    pub gmsh: bool,
 }
 
 impl CheckReport {
     /// The run's peak memory in MB: what its tangent brings with it and the factors in their
     /// precision (without the factor where it is PETSc's, sized only when it factorises).
     pub fn estimated_mb(&self) -> f64 {
-        run_memory_mb(self.tangent_entries, self.factor_bytes)
+        run_memory_mb(self.tangent_entries, self.factor_bytes, self.gmsh)
     }
 }
 
@@ -104,7 +107,8 @@ pub fn check(case_path: &Path, opts: &SolveOptions) -> Result<CheckReport, Solve
         model.warnings.push(medium.describe(&model));
     }
     super::refuse_on_ranks(&case, &model, Ranks::world())?;
-    let mut plan = Plan::new(&case, &model, opts)?;
+    let gmsh = super::meshes_again(&case);
+    let mut plan = Plan::new(&case, &model, opts, gmsh)?;
     // the state a solve starts from, assembled as its first step records it
     assemble_initial(&mut plan.asm, &model, &model.initial_state())?;
     let factor_entries = plan
@@ -130,7 +134,7 @@ pub fn check(case_path: &Path, opts: &SolveOptions) -> Result<CheckReport, Solve
         // each rank its own slot, summed: every rank holds every rank's figures
         let mut mine = vec![0.0; 2 * ranks.size];
         mine[2 * ranks.rank] = tangent_entries as f64;
-        mine[2 * ranks.rank + 1] = run_memory_mb(tangent_entries, factor_bytes);
+        mine[2 * ranks.rank + 1] = run_memory_mb(tangent_entries, factor_bytes, gmsh);
         ranks.sum_into(&mut mine);
         mine.chunks(2).map(|r| (r[0] as usize, r[1])).collect()
     };
@@ -154,6 +158,7 @@ pub fn check(case_path: &Path, opts: &SolveOptions) -> Result<CheckReport, Solve
         expansion: expansion(&case),
         warnings: model.warnings,
         per_rank,
+        gmsh,
         mesh: model.mesh,
     })
 }

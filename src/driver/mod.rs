@@ -204,20 +204,32 @@ pub struct SolveOptions {
 /// starts, removed if the run fails before.
 pub type StagedMesh = TempFile;
 
+/// The options a case meshes its `.geo` with.
+fn mesh_options(case: &Case) -> MeshOptions {
+    let m = &case.file.mesh_options;
+    MeshOptions {
+        order: m.order.unwrap_or(1),
+        incomplete: m.incomplete,
+        set_numbers: m.params.iter().map(|(k, v)| (k.clone(), *v)).collect(),
+        verbose: false,
+    }
+}
+
+/// Whether a run of `case` would mesh with gmsh: its mesh a `.geo` that the cache of meshes
+/// does not keep (or has not kept yet).
+pub(crate) fn meshes_again(case: &Case) -> bool {
+    let path = case.mesh_path();
+    path.extension().is_some_and(|e| e == "geo")
+        && crate::mesh::gmsh::kept(&path, &mesh_options(case)).is_none_or(|k| !k.held())
+}
+
 /// The case's mesh: its `.msh` read, or its `.geo` meshed into a staged file in `out_dir`.
 pub fn mesh_for(case: &Case, out_dir: &Path) -> Result<(Mesh, Option<StagedMesh>), SolveError> {
     let path = case.mesh_path();
     match path.extension().and_then(|e| e.to_str()) {
         Some("geo") => {
             let out = out_dir.join(".mesh.new.msh");
-            let m = &case.file.mesh_options;
-            let opts = MeshOptions {
-                order: m.order.unwrap_or(1),
-                incomplete: m.incomplete,
-                set_numbers: m.params.iter().map(|(k, v)| (k.clone(), *v)).collect(),
-                verbose: false,
-            };
-            let report = mesh_geo(&path, &out, &opts)?;
+            let report = mesh_geo(&path, &out, &mesh_options(case))?;
             let staged = TempFile::new(out);
             let mut mesh = report.mesh;
             mesh.warnings = report.warnings;

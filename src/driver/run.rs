@@ -45,7 +45,7 @@ impl<'a> Run<'a> {
         opts: &'a SolveOptions,
         start: Instant,
     ) -> Result<Run<'a>, SolveError> {
-        let plan = Plan::new(case, model, opts)?;
+        let plan = Plan::new(case, model, opts, crate::mesh::gmsh::opened())?;
         let plan_said = std::iter::once(describe(&model.physics, plan.strategy))
             .chain(plan.note.clone())
             .collect();

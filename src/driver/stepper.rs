@@ -31,7 +31,14 @@ pub(super) struct Plan {
 }
 
 impl Plan {
-    pub(super) fn new(case: &Case, model: &Model, opts: &SolveOptions) -> Result<Plan, SolveError> {
+    /// The plan of a run of `case` on `model`, `gmsh` whether the run opens gmsh (for the
+    /// memory it will hold).
+    pub(super) fn new(
+        case: &Case,
+        model: &Model,
+        opts: &SolveOptions,
+        gmsh: bool,
+    ) -> Result<Plan, SolveError> {
         let kind = choose_linear(*case.file.solver.linear.get_ref(), &model.physics);
         if kind == LinearKind::Ldlt && !symmetric_tangent(&model.physics) {
             let span = case.file.mesh.span();
@@ -57,6 +64,7 @@ impl Plan {
             whole: kind,
             idle: opts.idle_threads,
             memory_mb: opts.memory_mb,
+            gmsh,
         };
         let Planned {
             asm,

@@ -81,6 +81,8 @@ pub struct MeshReport {
     /// gmsh's warnings, then the mesh reader's.
     pub warnings: Vec<String>,
     pub mesh: super::Mesh,
+    /// Taken from the cache of meshes made before (`mesh/cache.rs`), not made now.
+    pub cached: bool,
 }
 
 /// What the meshing process sends back.
@@ -143,17 +145,43 @@ fn paths_usable(geo: &Path, out: &Path, opts: &MeshOptions) -> Result<(), GmshEr
     Ok(())
 }
 
+/// Where the cache of meshes keeps the mesh of `geo` with `opts` (`mesh/cache.rs`), `None`
+/// where it keeps none: gmsh's log asked for (`verbose`), among the cache's own reasons.
+pub fn kept(geo: &Path, opts: &MeshOptions) -> Option<super::cache::Kept> {
+    let params: Vec<(&str, u64)> = (opts.set_numbers.iter())
+        .map(|(name, value)| (name.as_str(), value.to_bits()))
+        .collect();
+    let asked = (opts.order, opts.incomplete, params);
+    (!opts.verbose)
+        .then(|| super::cache::Kept::of(geo, &asked))
+        .flatten()
+}
+
+/// Set once this process has opened gmsh's library.
+static OPENED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Whether this process has opened gmsh (its libraries are then in its memory).
+pub fn opened() -> bool {
+    OPENED.load(std::sync::atomic::Ordering::Relaxed)
+}
+
 /// Mesh `geo` and write MSH 4.1 to `out`.
 ///
 /// gmsh runs in a child process, so that a `.geo` that calls `Exit` or a crash inside gmsh
 /// ends only that process and is reported. The mesh is written to a temporary name, read back
 /// (a truncated file, e.g. on a full disk, fails here), synced and renamed: `out` is either the
-/// complete new mesh or untouched.
+/// complete new mesh or untouched. A mesh made before of the same file and options is taken
+/// from the cache instead (`mesh/cache.rs`: gmsh is then not opened), and a new one kept there.
 pub fn mesh_geo(geo: &Path, out: &Path, opts: &MeshOptions) -> Result<MeshReport, GmshError> {
     paths_usable(geo, out, opts)?;
+    let kept = kept(geo, opts);
+    if let Some(report) = kept.as_ref().and_then(|k| from_cache(k, out)) {
+        return Ok(report);
+    }
     // opened here, in tmc, so that a meshing child, forked from it, finds gmsh loaded (and a
     // missing library is told before any child is made)
     gmshc::load().map_err(|e| GmshError::Library(e.clone()))?;
+    OPENED.store(true, std::sync::atomic::Ordering::Relaxed);
     // .geo parameters: not gmsh's `-setnumber`, whose values stay in a process-wide table that
     // every later `open` re-applies; instead a wrapper defines them before including the file,
     // and `DefineConstant` keeps an existing definition.
@@ -216,6 +244,10 @@ pub fn mesh_geo(geo: &Path, out: &Path, opts: &MeshOptions) -> Result<MeshReport
         },
     })?;
     mesh.source = out.to_owned();
+    let entry = super::cache::Entry {
+        dim,
+        warnings: warnings.clone(),
+    };
     warnings.extend(mesh.warnings.iter().cloned());
     let write = |source| GmshError::Write {
         path: out.to_owned(),
@@ -223,11 +255,38 @@ pub fn mesh_geo(geo: &Path, out: &Path, opts: &MeshOptions) -> Result<MeshReport
     };
     tmp.sync().map_err(write)?;
     tmp.commit(out).map_err(write)?;
+    if let Some(k) = kept {
+        k.keep(out, &entry);
+    }
     Ok(MeshReport {
         dim,
         output: out.to_owned(),
         warnings,
         mesh,
+        cached: false,
+    })
+}
+
+/// The mesh kept in the cache under `kept`, copied to `out` and read, if there is one that
+/// reads; `out` is left as it was otherwise.
+fn from_cache(kept: &super::cache::Kept, out: &Path) -> Option<MeshReport> {
+    let tmp = TempFile::new(out.with_extension("part.msh"));
+    let entry = kept.fetch(tmp.path())?;
+    let Ok(mut mesh) = super::msh::read_msh(tmp.path()) else {
+        kept.forget();
+        return None;
+    };
+    tmp.sync().ok()?;
+    tmp.commit(out).ok()?;
+    mesh.source = out.to_owned();
+    let mut warnings = entry.warnings;
+    warnings.extend(mesh.warnings.iter().cloned());
+    Some(MeshReport {
+        dim: entry.dim,
+        output: out.to_owned(),
+        warnings,
+        mesh,
+        cached: true,
     })
 }
 

@@ -2,6 +2,7 @@
 //!
 //! Everything a user names is a gmsh physical group; raw numeric ids never leave this module.
 
+pub mod cache;
 mod child;
 pub mod faces;
 pub mod geo_text;

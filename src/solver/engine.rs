@@ -116,6 +116,8 @@ pub struct Request<'a> {
     /// The memory (MB) the linear algebra may take (`None`: what the machine has available),
     /// for `engine = "auto"`.
     pub memory_mb: Option<f64>,
+    /// Whether the run opens gmsh (meshes a `.geo`), whose libraries its memory then holds.
+    pub gmsh: bool,
 }
 
 /// The assembler and the solvers a run uses, their symbolic analyses done, and what Newton's
@@ -136,20 +138,26 @@ pub struct Planned {
 /// 15.9 M entries), 51.8 at 1.1 M (15 876 MB, 120 M entries).
 const BYTES_PER_TANGENT_ENTRY: f64 = 60.0;
 
-/// What a run holds whatever its size (the program and its libraries, the runtime), MB: the
-/// peak resident of block-plate-3d-tm1 at 8×8 less its tangent's and factor's share (23 MB):
-/// 50 MB without PETSc built in, 73 with it.
+/// What a run that meshes its `.geo` holds whatever its size (the program and its libraries,
+/// gmsh's among them, the runtime), MB: the peak resident of block-plate-3d-tm1 at 8×8 less
+/// its tangent's and factor's share (23 MB): 50 MB without PETSc built in, 73 with it.
 const BASE_MB: f64 = 80.0;
+
+/// What gmsh's libraries (OpenCASCADE's among them) add to a run's resident memory, MB, where
+/// it opens them: block-plate-3d-tm1's peak with its mesh made in the run against taken from
+/// the cache of meshes, 75.6 against 35.5 MB at 8×8, 220.2 against 179.0 at 16×16.
+pub const GMSH_MB: f64 = 40.0;
 
 /// The peak memory of a run in MB, from its tangent's entries ([`BYTES_PER_TANGENT_ENTRY`]
 /// each) and its factors' values in the precision each is held in (`factor_bytes`, as the
-/// symbolic analysis laid them out). Measured against it on block-plate-3d-tm1 (faer, the
-/// build without PETSc): 73 / 210 / 1 483 / 15 876 MB at 3k / 20.5k / 147k / 1.1M unknowns
-/// for an estimate of 103 / 248 / 1 603 / 16 944.
-pub fn run_memory_mb(tangent_entries: usize, factor_bytes: Option<usize>) -> f64 {
-    BASE_MB
-        + (tangent_entries as f64 * BYTES_PER_TANGENT_ENTRY + factor_bytes.unwrap_or(0) as f64)
-            / 1e6
+/// symbolic analysis laid them out), gmsh's libraries counted where the run opens them
+/// (`gmsh`). Measured against it on block-plate-3d-tm1 (faer, the build without PETSc,
+/// meshing): 73 / 210 / 1 483 / 15 876 MB at 3k / 20.5k / 147k / 1.1M unknowns for an
+/// estimate of 103 / 248 / 1 603 / 16 944.
+pub fn run_memory_mb(tangent_entries: usize, factor_bytes: Option<usize>, gmsh: bool) -> f64 {
+    let base = if gmsh { BASE_MB } else { BASE_MB - GMSH_MB };
+    base + (tangent_entries as f64 * BYTES_PER_TANGENT_ENTRY + factor_bytes.unwrap_or(0) as f64)
+        / 1e6
 }
 
 /// The memory this machine has available now (`MemAvailable` of /proc/meminfo), MB.
@@ -168,7 +176,7 @@ fn over_budget(
     solvers: &[(Part, LinearSolver)],
 ) -> Option<(f64, f64)> {
     let factors = solvers.iter().map(|(_, s)| s.factor_bytes()).sum();
-    let need = run_memory_mb(pattern.nnz(), factors);
+    let need = run_memory_mb(pattern.nnz(), factors, request.gmsh);
     let budget = request.memory_mb.or_else(available_mb)?;
     (need > budget).then_some((need, budget))
 }

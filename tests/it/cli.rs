@@ -1069,6 +1069,60 @@ fn a_3d_run_gives_the_same_answers_at_one_and_two_threads_and_the_same_history_t
     }
 }
 
+/// A `.geo` meshed before with the same parameters is taken from the cache of meshes: gmsh is
+/// not opened, `tmc mesh` says so, and the mesh is the one made the first time. Other
+/// parameters, or the cache turned off, mesh it again.
+#[test]
+fn a_mesh_made_before_is_taken_from_the_cache_without_gmsh() {
+    let dir = scratch("mesh-cache");
+    let cache = dir.join("cache");
+    let env = [
+        ("LD_DEBUG", "files"),
+        ("TMC_MESH_CACHE", cache.to_str().unwrap()),
+    ];
+    let opened = |o: &Output| {
+        assert!(o.status.success(), "{}", stderr(o));
+        stderr(o)
+            .lines()
+            .any(|l| l.contains("file=") && l.contains("libgmsh"))
+    };
+    let said = |o: &Output| String::from_utf8_lossy(&o.stdout).contains("as meshed before");
+    let mesh = |name: &str, extra: &[&str], env: &[(&str, &str)]| {
+        let msh = dir.join(name);
+        let mut args = vec!["mesh", "geo/block.geo", "-o", msh.to_str().unwrap()];
+        args.extend(extra);
+        let o = tmc_with(&args, env);
+        (o, std::fs::read(&msh).unwrap_or_default())
+    };
+    let n = ["--set", "n=6"];
+    let (o, first) = mesh("first.msh", &n, &env);
+    assert!(opened(&o) && !said(&o), "meshed the first time");
+    let (o, again) = mesh("again.msh", &n, &env);
+    assert!(
+        !opened(&o) && said(&o),
+        "taken from the cache: {}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+    assert!(!first.is_empty() && again == first, "the same mesh");
+    let (o, _) = mesh("other.msh", &["--set", "n=8"], &env);
+    assert!(opened(&o), "other parameters: meshed");
+    let (o, off) = mesh("off.msh", &n, &[env[0], ("TMC_MESH_CACHE", "off")]);
+    assert!(opened(&o) && !said(&o), "the cache off: meshed");
+    assert_eq!(off, first, "gmsh makes the same mesh again");
+    // a run of the case meshes nothing either
+    let case = dir.join("block.toml");
+    std::fs::write(&case, shipped_case("block")).unwrap();
+    let out = dir.join("out");
+    let o = tmc_with(&solve_args(&case, &out), &env);
+    assert!(
+        opened(&o),
+        "the shipped case's own parameters, the first time"
+    );
+    let o = tmc_with(&solve_args(&case, &out), &env);
+    assert!(!opened(&o), "and not again");
+    assert_eq!(summary(&out)["converged"], true);
+}
+
 /// gmsh (with OpenCASCADE) and PETSc are opened when a run needs them, not when tmc starts:
 /// linked, their libraries cost every start a quarter of a second of symbol lookups.
 #[test]
@@ -1080,7 +1134,8 @@ fn gmsh_is_loaded_only_to_mesh_and_petsc_only_for_its_engine() {
             .lines()
             .any(|l| l.contains("file=") && l.contains(lib))
     };
-    let debug = [("LD_DEBUG", "files")];
+    // meshed each time: a mesh kept from before would open no gmsh (the test below)
+    let debug = [("LD_DEBUG", "files"), ("TMC_MESH_CACHE", "off")];
     let o = tmc_with(&["--version"], &debug);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(loaded(&o, "libmpi"), "LD_DEBUG names what is loaded");
