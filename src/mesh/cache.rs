@@ -4,7 +4,7 @@
 //! made of everything its cells follow from: the `.geo` (its place and its bytes), the
 //! parameters and element order asked, the gmsh library (its place, size and time) and this
 //! tmc's version. A `.geo` that reads other files or its surroundings (`Include`, `Merge`,
-//! `GetEnv`, …) or writes files (`Save`, `Printf`) is meshed every time.
+//! `GetEnv`, …) or writes files (`Save`, `Print`, `Printf`) is meshed every time.
 //!
 //! The folder is `TMC_MESH_CACHE` (`off`: none), else `$XDG_CACHE_HOME/tmc/meshes`, else
 //! `$HOME/.cache/tmc/meshes`. An entry is two files, `KEY.msh` and `KEY.json` (gmsh's dimension
@@ -21,7 +21,9 @@ pub const ENTRIES: usize = 200;
 /// Meshes larger than this (bytes of `.msh`) are not kept.
 pub const LARGEST: u64 = 256 << 20;
 
-/// Words of a `.geo` that make its mesh depend on more than its own text and parameters.
+/// Words of a `.geo` that make its mesh depend on more than its own text and parameters, or
+/// its meshing do more than mesh (`Print` stands for `Printf` too: any text that holds one is
+/// meshed every time).
 const NOT_KEPT: [&str; 11] = [
     "Include",
     "Merge",
@@ -32,7 +34,7 @@ const NOT_KEPT: [&str; 11] = [
     "SystemCall",
     "OnelabRun",
     "Save",
-    "Printf",
+    "Print",
     "Plugin",
 ];
 
