@@ -1109,7 +1109,7 @@ fn a_mesh_made_before_is_taken_from_the_cache_without_gmsh() {
     let (o, off) = mesh("off.msh", &n, &[env[0], ("TMC_MESH_CACHE", "off")]);
     assert!(opened(&o) && !said(&o), "the cache off: meshed");
     assert_eq!(off, first, "gmsh makes the same mesh again");
-    // a run of the case meshes nothing either
+    // a run meshes its case's .geo (the shipped block's own parameters) once, not again
     let case = dir.join("block.toml");
     std::fs::write(&case, shipped_case("block")).unwrap();
     let out = dir.join("out");
@@ -1134,7 +1134,7 @@ fn gmsh_is_loaded_only_to_mesh_and_petsc_only_for_its_engine() {
             .lines()
             .any(|l| l.contains("file=") && l.contains(lib))
     };
-    // meshed each time: a mesh kept from before would open no gmsh (the test below)
+    // meshed each time: a mesh kept from before would open no gmsh (the test above)
     let debug = [("LD_DEBUG", "files"), ("TMC_MESH_CACHE", "off")];
     let o = tmc_with(&["--version"], &debug);
     assert!(o.status.success(), "{}", stderr(&o));
