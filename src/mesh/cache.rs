@@ -12,6 +12,7 @@
 //! last; one that cannot be read is a miss, and removed. The folder keeps the [`ENTRIES`] last
 //! used.
 
+use crate::files::TempFile;
 use std::hash::{Hash, Hasher};
 use std::path::{Path, PathBuf};
 
@@ -107,22 +108,21 @@ impl Kept {
     }
 
     fn try_keep(&self, msh: &Path, entry: &Entry) -> std::io::Result<()> {
+        use std::io::Write;
         std::fs::create_dir_all(&self.dir)?;
-        // names of this call's own: another process or thread may keep the same mesh
-        static NEXT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
-        let n = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        let pid = std::process::id();
-        let own = |ext: &str| (self.dir).join(format!(".{}.{pid}.{n}.{ext}", self.key));
-        let (m, j) = (own("msh"), own("json"));
-        let placed = std::fs::copy(msh, &m)
-            .and_then(|_| std::fs::rename(&m, self.path("msh")))
-            .and_then(|_| std::fs::write(&j, serde_json::to_vec(entry).unwrap_or_default()))
-            .and_then(|_| std::fs::rename(&j, self.path("json")));
-        if placed.is_err() {
-            let _ = std::fs::remove_file(&m);
-            let _ = std::fs::remove_file(&j);
-        }
-        placed
+        // under names of this call's own (another process or thread may keep the same mesh),
+        // removed if the copy fails or the process halts before they are in place
+        let own = |ext: &str| {
+            let unique = crate::files::scratch_dir("kept");
+            let name = unique.file_name().unwrap_or_default().to_string_lossy();
+            (self.dir).join(format!(".{}.{name}.{ext}", self.key))
+        };
+        let (m, mut f) = TempFile::create(own("msh"))?;
+        std::io::copy(&mut std::fs::File::open(msh)?, &mut f)?;
+        m.commit(&self.path("msh"))?;
+        let (j, mut f) = TempFile::create(own("json"))?;
+        f.write_all(&serde_json::to_vec(entry).map_err(std::io::Error::other)?)?;
+        j.commit(&self.path("json"))
     }
 }
 
