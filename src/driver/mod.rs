@@ -680,11 +680,12 @@ fn medium_again(
     cp: &mut checkpoint::Checkpoint,
     folder: Option<&mut RunFolder>,
 ) -> Result<(), SolveError> {
-    let Some(rate) = medium.as_ref().map(|m| m.rate) else {
+    let Some((rate, made_for_pass)) = medium.as_ref().map(|m| (m.rate, m.made_for_pass)) else {
         return Ok(());
     };
     *medium = remake::Medium::find(model, remaking(case))?;
     if let Some(m) = medium.as_mut() {
+        m.made_for_pass = made_for_pass;
         restart_medium(case, model, m, cp, rate);
     }
     if let Some(folder) = folder {

@@ -427,9 +427,9 @@ fn boundary_of(
     Ok((cdt, vertex, lengths))
 }
 
-/// The region's corners pressed on faces joined over them in `cdt` (`fans`; `vertex` the
-/// triangulation's vertex of each boundary node), then which of its faces lie inside the
-/// region the loops `region` bound (`inside_faces`).
+/// The region's corners pressed on faces joined over them in `cdt` (`fans`, `joined_ahead`;
+/// `vertex` the triangulation's vertex of each boundary node), then which of its faces lie
+/// inside the region the loops `region` bound (`inside_faces`).
 fn fanned_inside(
     cdt: &mut spade::ConstrainedDelaunayTriangulation<spade::Point2<f64>>,
     region: &[Vec<usize>],
@@ -443,7 +443,7 @@ fn fanned_inside(
             (i.min(j), i.max(j))
         })
         .collect();
-    for (n, m) in fans(region, x) {
+    for (n, m) in fans(region, x).into_iter().chain(joined_ahead(region, x)) {
         let (vn, vm) = (vertex[&n], vertex[&m]);
         if cdt.can_add_constraint(vn, vm) {
             cdt.add_constraint(vn, vm);
@@ -555,6 +555,74 @@ fn fans(region: &[Vec<usize>], x: &[[f64; 3]]) -> Vec<(usize, usize)> {
         }
     }
     out
+}
+
+/// Where a body's corner `c` (a medium-side angle [`SHARPER`] past a straight one) stands
+/// over the edge (a, b) of another face, at most a quarter of the edges there above it, the
+/// pairs that join it also over that face's next edge on its open side (away from the
+/// corner's own face along the layer): (c, b) and (c, b's next node). Made by Delaunay's
+/// rule alone, the cell ahead of the corner is (c, b, a node above): as the corner slides
+/// towards b it closes to nothing and drags b along (the pad in a box at μ = 0.3 met 0.331
+/// of its normal force there, the plate's node under the corner carrying a shear of 0.51 at
+/// a pressure of 0.96); joined over b's next edge, the cell is a layer's, whose thickness
+/// the slide keeps, until the medium is made again after the corner passes b
+/// (docs/notes/2026-12-05-a-corner-joined-ahead-and-one-remake-before-a-pass.md).
+fn joined_ahead(region: &[Vec<usize>], x: &[[f64; 3]]) -> Vec<(usize, usize)> {
+    let dist = |a: usize, b: usize| (x[a][0] - x[b][0]).hypot(x[a][1] - x[b][1]);
+    // each boundary node with its last and next along its loop, in the loops' order
+    let around: Vec<(usize, usize, usize)> = (region.iter())
+        .flat_map(|lp| {
+            let k = lp.len();
+            (0..k).map(move |i| (lp[(i + k - 1) % k], lp[i], lp[(i + 1) % k]))
+        })
+        .collect();
+    let last: HashMap<usize, usize> = around.iter().map(|&(l, n, _)| (n, l)).collect();
+    let next: HashMap<usize, usize> = around.iter().map(|&(_, n, m)| (n, m)).collect();
+    let mut out = Vec::new();
+    for &(p, c, q) in &around {
+        if medium_angle(x[p], x[c], x[q]) < std::f64::consts::PI + SHARPER {
+            continue;
+        }
+        let reach = 0.25 * dist(p, c).min(dist(c, q));
+        // the edge (a, b), a loop's edge in its order, that c stands closest over, its foot
+        // on the edge
+        let mut over: Option<(f64, usize, usize)> = None;
+        for &(_, a, b) in &around {
+            if [a, b].iter().any(|n| [c, p, q].contains(n)) {
+                continue;
+            }
+            let l = dist(a, b);
+            let (t, height) = (along(x[a], x[b], x[c]), orient(x[a], x[b], x[c]) / l);
+            let close = height > 0.0 && height <= reach.min(0.25 * l);
+            if (0.0..=1.0).contains(&t) && close && over.is_none_or(|(h, ..)| height < h) {
+                over = Some((height, a, b));
+            }
+        }
+        let Some((_, a, b)) = over else { continue };
+        // the corner's own face along the layer is its side nearer the edge's line
+        let off = |n: usize| orient(x[a], x[b], x[n]).abs();
+        let own = if off(p) < off(q) { p } else { q };
+        let (near, beyond) = match along(x[a], x[b], x[own]) < along(x[a], x[b], x[c]) {
+            true => (b, next[&b]),
+            false => (a, last[&a]),
+        };
+        // the edge beyond in its loop's order, with the corner on its medium side
+        let (from, to) = if near == b {
+            (near, beyond)
+        } else {
+            (beyond, near)
+        };
+        if beyond != c && orient(x[from], x[to], x[c]) > 0.0 {
+            out.extend([(c, near), (c, beyond)]);
+        }
+    }
+    out
+}
+
+/// Where the foot of `c` stands along the edge from `a` to `b`: 0 at a, 1 at b.
+fn along(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
+    let ab = [b[0] - a[0], b[1] - a[1]];
+    ((c[0] - a[0]) * ab[0] + (c[1] - a[1]) * ab[1]) / (ab[0] * ab[0] + ab[1] * ab[1])
 }
 
 /// Whether the tetrahedra `conn` (new node numbers) have the boundary `faces` (old node
@@ -986,29 +1054,40 @@ mod tests {
         assert!(made.coords.len() > 4400, "{} nodes", made.coords.len());
     }
 
+    /// A plate's face (y = 0, nodes every 0.1 from 0 to 1) in a box 0.5 high, under a pad from
+    /// x = `left` to `right`, 0.3 high, its bottom 5e-4 over the face with nodes at `bottom`
+    /// too (its bottom right corner the hole's fifth node): the outer loop, the hole and the
+    /// places.
+    fn pad_over_plate(
+        left: f64,
+        right: f64,
+        bottom: &[f64],
+    ) -> (Vec<usize>, Vec<usize>, Vec<[f64; 3]>) {
+        let mut x: Vec<[f64; 3]> = (0..=10).map(|i| [i as f64 * 0.1, 0.0, 0.0]).collect();
+        x.extend([[1.0, 0.5, 0.0], [0.0, 0.5, 0.0]]);
+        let outer: Vec<usize> = (0..x.len()).collect();
+        let g = 5e-4;
+        let first = x.len();
+        let corners = [
+            [left, g],
+            [left, 0.3],
+            [right, 0.3],
+            [right, 0.1],
+            [right, g],
+        ];
+        x.extend(corners.map(|p| [p[0], p[1], 0.0]));
+        x.extend(bottom.iter().map(|&b| [b, g, 0.0]));
+        (outer, (first..x.len()).collect(), x)
+    }
+
     #[test]
     fn a_corner_pressed_past_a_face_s_node_is_joined_over_that_face() {
         // a plate's face (y = 0, nodes every 0.1) under a square pad whose bottom right corner
         // C stands 5e-4 over it, just past the plate's node B at x = 0.5: the cells at the
         // corner are C over the plate's edges beside B, and none joins B to the corner's own
         // faces (a sliver the slide turns inside out)
-        let mut x: Vec<[f64; 3]> = (0..=10).map(|i| [i as f64 * 0.1, 0.0, 0.0]).collect();
-        x.extend([[1.0, 0.5, 0.0], [0.0, 0.5, 0.0]]);
-        let outer: Vec<usize> = (0..x.len()).collect();
-        let g = 5e-4;
-        let pad = [
-            [0.2, g],
-            [0.2, 0.3],
-            [0.505, 0.3],
-            [0.505, 0.1],
-            [0.505, g],
-            [0.4, g],
-            [0.3, g],
-        ];
-        let first = x.len();
-        x.extend(pad.iter().map(|p| [p[0], p[1], 0.0]));
-        let hole: Vec<usize> = (first..x.len()).collect();
-        let (b, c) = (5, first + 4);
+        let (outer, hole, x) = pad_over_plate(0.2, 0.505, &[0.4, 0.3]);
+        let (b, c) = (5, hole[4]);
         let made = triangulate_between(&[vec![outer, hole]], &x).unwrap();
         let at = |n: usize| made.coords.iter().position(|p| *p == x[n]).unwrap();
         let blk = &made.cells[0];
@@ -1028,6 +1107,48 @@ mod tests {
             let p: Vec<[f64; 3]> = q.iter().map(|&k| made.coords[k]).collect();
             assert!(orient(p[0], p[1], p[2]) > 0.0, "{p:?}");
         }
+    }
+
+    #[test]
+    fn a_corner_over_a_face_s_edge_is_joined_over_the_next_edge_on_its_open_side() {
+        // the pad of the test above, its bottom right corner C 5e-4 over the middle of the
+        // plate's edge from x = 0.4 to 0.5: C is over that edge and over the next one on its
+        // open side (0.5 to 0.6), so that no cell ahead of it closes as it slides to 0.5;
+        // behind it, under the pad, the layer is Delaunay's (C over no edge before 0.4)
+        let (outer, hole, x) = pad_over_plate(0.15, 0.45, &[0.35, 0.25]);
+        let c = hole[4];
+        let made = triangulate_between(&[vec![outer.clone(), hole.clone()]], &x).unwrap();
+        let at = |n: usize| made.coords.iter().position(|p| *p == x[n]).unwrap();
+        let blk = &made.cells[0];
+        let has = |n: [usize; 3]| {
+            let n = n.map(at);
+            (0..blk.n_cells()).any(|k| n.iter().all(|m| blk.cell(k).contains(m)))
+        };
+        assert!(has([4, 5, c]), "C over the edge it stands over");
+        assert!(has([5, 6, c]), "C over the next edge ahead");
+        assert!(!has([3, 4, c]), "C over no edge behind");
+        for k in 0..blk.n_cells() {
+            let p: Vec<[f64; 3]> = blk.cell(k).iter().map(|&n| made.coords[n]).collect();
+            assert!(orient(p[0], p[1], p[2]) > 0.0, "{p:?}");
+        }
+        // the pad mirrored (its corner C at its left, open to the left): over 0.3 to 0.4
+        let mirrored: Vec<[f64; 3]> = x.iter().map(|p| [1.0 - p[0], p[1], 0.0]).collect();
+        let (outer, hole) = (
+            outer.iter().rev().copied().collect(),
+            hole.iter().rev().copied().collect(),
+        );
+        let made = triangulate_between(&[vec![outer, hole]], &mirrored).unwrap();
+        let at = |n: usize| made.coords.iter().position(|p| *p == mirrored[n]).unwrap();
+        let blk = &made.cells[0];
+        let has = |n: [usize; 3]| {
+            let n = n.map(at);
+            (0..blk.n_cells()).any(|k| n.iter().all(|m| blk.cell(k).contains(m)))
+        };
+        assert!(
+            has([5, 6, c]) && has([4, 5, c]),
+            "C over its edge and the next ahead"
+        );
+        assert!(!has([3, 4, c]), "C over no edge behind");
     }
 
     #[test]

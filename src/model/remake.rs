@@ -90,6 +90,13 @@ pub struct Medium {
     /// sliver's node moved along its edge at most over the last step.
     t: f64,
     pub rate: f64,
+    /// Whether the medium was last made before a pass its watch saw coming ([`FRESH`]),
+    /// which it is then not made again before: made again once more just before the pass,
+    /// each node is joined across the edge it has not yet passed, as it was. Set by any
+    /// remake while a pass is coming; cleared by one after a pass or with none coming, or
+    /// once a node has gone a whole edge since (a checkpoint before then keeps it).
+    #[serde(default)]
+    pub made_for_pass: bool,
     /// Which of gmsh's meshers fills a 3D medium first: Delaunay, HXT for the remake at a
     /// state the run stuck at ([`Medium::stuck`]). A checkpoint is never taken between the
     /// two, so it keeps none.
@@ -665,6 +672,7 @@ impl Medium {
             thin: Vec::new(),
             t: 0.0,
             rate: 0.0,
+            made_for_pass: false,
             mesher: Mesher::default(),
         }))
     }
@@ -881,13 +889,17 @@ impl Medium {
         }
         self.t = t;
         self.rate = rate;
-        // a node about to pass where the medium was made long ago: made again before it
-        let stale = passes.is_finite() && travel >= FRESH;
-        if passed
-            || stale
+        // a node about to pass where the medium was made long ago: made again before it,
+        // once
+        let stale = passes.is_finite() && travel >= FRESH && !self.made_for_pass;
+        let other = passed
             || self.slid_cells(model, reference, x) >= SLID
-            || self.thin_quadrilateral(model, x)
-        {
+            || self.thin_quadrilateral(model, x);
+        // made for a pass that has not come once a node has gone a whole edge since
+        self.made_for_pass &= travel < 1.0;
+        if other || stale {
+            // made while a pass is coming, before it: fresh for it, whatever asked
+            self.made_for_pass = passes.is_finite() && !passed;
             Watch::Remake
         } else if passes.is_finite() {
             Watch::Until(passes)
