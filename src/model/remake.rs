@@ -889,14 +889,14 @@ impl Medium {
         }
         self.t = t;
         self.rate = rate;
+        // made for a pass that has not come once a node has gone a whole edge since
+        self.made_for_pass &= travel < 1.0;
         // a node about to pass where the medium was made long ago: made again before it,
         // once
         let stale = passes.is_finite() && travel >= FRESH && !self.made_for_pass;
         let other = passed
             || self.slid_cells(model, reference, x) >= SLID
             || self.thin_quadrilateral(model, x);
-        // made for a pass that has not come once a node has gone a whole edge since
-        self.made_for_pass &= travel < 1.0;
         if other || stale {
             // made while a pass is coming, before it: fresh for it, whatever asked
             self.made_for_pass = passes.is_finite() && !passed;
