@@ -516,15 +516,7 @@ const SHARPER: f64 = std::f64::consts::FRAC_PI_4;
 /// is the larger (the sharper corner of its body) is the one joined over the other's edges.
 fn fans(region: &[Vec<usize>], x: &[[f64; 3]]) -> Vec<(usize, usize)> {
     let dist = |a: usize, b: usize| (x[a][0] - x[b][0]).hypot(x[a][1] - x[b][1]);
-    let mut corner = Vec::new();
-    for lp in region {
-        let k = lp.len();
-        for i in 0..k {
-            let (p, v, q) = (lp[(i + k - 1) % k], lp[i], lp[(i + 1) % k]);
-            let reach = 0.25 * dist(p, v).min(dist(v, q));
-            corner.push((p, v, q, reach, medium_angle(x[p], x[v], x[q])));
-        }
-    }
+    let corner = corners(region, x);
     // the corners by squares as wide as the farthest reach, to look only at the next ones
     let side = corner
         .iter()
@@ -557,6 +549,23 @@ fn fans(region: &[Vec<usize>], x: &[[f64; 3]]) -> Vec<(usize, usize)> {
     out
 }
 
+/// Each boundary node `v` of the loops `region`, in their order, with its last and next
+/// nodes along its loop and a quarter of its shorter edge: (last, v, next, reach, the
+/// medium-side angle at v).
+fn corners(region: &[Vec<usize>], x: &[[f64; 3]]) -> Vec<(usize, usize, usize, f64, f64)> {
+    let dist = |a: usize, b: usize| (x[a][0] - x[b][0]).hypot(x[a][1] - x[b][1]);
+    let mut corner = Vec::new();
+    for lp in region {
+        let k = lp.len();
+        for i in 0..k {
+            let (p, v, q) = (lp[(i + k - 1) % k], lp[i], lp[(i + 1) % k]);
+            let reach = 0.25 * dist(p, v).min(dist(v, q));
+            corner.push((p, v, q, reach, medium_angle(x[p], x[v], x[q])));
+        }
+    }
+    corner
+}
+
 /// Where a body's corner `c` (a medium-side angle [`SHARPER`] past a straight one) stands
 /// over the edge (a, b) of another face, at most a quarter of the edges there above it, the
 /// pairs that join it also over that face's next edge on its open side (away from the
@@ -569,25 +578,18 @@ fn fans(region: &[Vec<usize>], x: &[[f64; 3]]) -> Vec<(usize, usize)> {
 /// (docs/notes/2026-12-05-a-corner-joined-ahead-and-one-remake-before-a-pass.md).
 fn joined_ahead(region: &[Vec<usize>], x: &[[f64; 3]]) -> Vec<(usize, usize)> {
     let dist = |a: usize, b: usize| (x[a][0] - x[b][0]).hypot(x[a][1] - x[b][1]);
-    // each boundary node with its last and next along its loop, in the loops' order
-    let around: Vec<(usize, usize, usize)> = (region.iter())
-        .flat_map(|lp| {
-            let k = lp.len();
-            (0..k).map(move |i| (lp[(i + k - 1) % k], lp[i], lp[(i + 1) % k]))
-        })
-        .collect();
-    let last: HashMap<usize, usize> = around.iter().map(|&(l, n, _)| (n, l)).collect();
-    let next: HashMap<usize, usize> = around.iter().map(|&(_, n, m)| (n, m)).collect();
+    let around = corners(region, x);
+    let last: HashMap<usize, usize> = around.iter().map(|&(l, n, ..)| (n, l)).collect();
+    let next: HashMap<usize, usize> = around.iter().map(|&(_, n, m, ..)| (n, m)).collect();
     let mut out = Vec::new();
-    for &(p, c, q) in &around {
-        if medium_angle(x[p], x[c], x[q]) < std::f64::consts::PI + SHARPER {
+    for &(p, c, q, reach, angle) in &around {
+        if angle < std::f64::consts::PI + SHARPER {
             continue;
         }
-        let reach = 0.25 * dist(p, c).min(dist(c, q));
         // the edge (a, b), a loop's edge in its order, that c stands closest over, its foot
         // on the edge
         let mut over: Option<(f64, usize, usize)> = None;
-        for &(_, a, b) in &around {
+        for &(_, a, b, ..) in &around {
             if [a, b].iter().any(|n| [c, p, q].contains(n)) {
                 continue;
             }
@@ -1109,6 +1111,13 @@ mod tests {
         }
     }
 
+    /// Whether `made` has a cell on the nodes `n` (by their places in `x`).
+    fn has_cell(made: &Mesh, x: &[[f64; 3]], n: [usize; 3]) -> bool {
+        let n = n.map(|k| made.coords.iter().position(|p| *p == x[k]).unwrap());
+        let blk = &made.cells[0];
+        (0..blk.n_cells()).any(|k| n.iter().all(|m| blk.cell(k).contains(m)))
+    }
+
     #[test]
     fn a_corner_over_a_face_s_edge_is_joined_over_the_next_edge_on_its_open_side() {
         // the pad of the test above, its bottom right corner C 5e-4 over the middle of the
@@ -1118,12 +1127,8 @@ mod tests {
         let (outer, hole, x) = pad_over_plate(0.15, 0.45, &[0.35, 0.25]);
         let c = hole[4];
         let made = triangulate_between(&[vec![outer.clone(), hole.clone()]], &x).unwrap();
-        let at = |n: usize| made.coords.iter().position(|p| *p == x[n]).unwrap();
+        let has = |n: [usize; 3]| has_cell(&made, &x, n);
         let blk = &made.cells[0];
-        let has = |n: [usize; 3]| {
-            let n = n.map(at);
-            (0..blk.n_cells()).any(|k| n.iter().all(|m| blk.cell(k).contains(m)))
-        };
         assert!(has([4, 5, c]), "C over the edge it stands over");
         assert!(has([5, 6, c]), "C over the next edge ahead");
         assert!(!has([3, 4, c]), "C over no edge behind");
@@ -1138,12 +1143,7 @@ mod tests {
             hole.iter().rev().copied().collect(),
         );
         let made = triangulate_between(&[vec![outer, hole]], &mirrored).unwrap();
-        let at = |n: usize| made.coords.iter().position(|p| *p == mirrored[n]).unwrap();
-        let blk = &made.cells[0];
-        let has = |n: [usize; 3]| {
-            let n = n.map(at);
-            (0..blk.n_cells()).any(|k| n.iter().all(|m| blk.cell(k).contains(m)))
-        };
+        let has = |n: [usize; 3]| has_cell(&made, &mirrored, n);
         assert!(
             has([5, 6, c]) && has([4, 5, c]),
             "C over its edge and the next ahead"
