@@ -600,10 +600,11 @@ fn friction_and_its_heat_carry_across_a_medium_made_again() {
     }
     let (_, _, _, mean, _) = slide_forces(&out);
     assert!((mean - 0.3).abs() < 0.05, "F_t/F_n {mean} over the slide");
-    // the slide begins after step 20, and the medium is made again every step or two
+    // the slide begins after step 20; the medium is made again in bursts as the faces'
+    // nodes pass each other, six times by step 55 and nine times after it
     let stopped = out.with_file_name("stopped");
     let case = out.with_file_name("case.toml");
-    let remakes = interrupted_after(&case, &stopped, 45);
+    let remakes = interrupted_after(&case, &stopped, 55);
     assert!(remakes > 5, "stopped after {remakes} remakes");
     let o = solve_cli(&case, &stopped, &["--restart"]);
     assert!(o.status.success(), "{}", stderr(&o));
