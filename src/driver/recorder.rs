@@ -551,6 +551,7 @@ impl<'a> Recorder<'a> {
             s.medium_remade_force_change = Some(tot.remake_force_change);
             s.medium_remade_heat_change = Some(tot.remake_heat_change);
             s.medium_remade_seconds = Some(tot.remake_seconds);
+            s.medium_remade_unsettled = Some(tot.remake_unsettled);
         }
         // 0 until the first join
         s.heat_joined = (self.layout.joined).then(|| tot.heat_joined.unwrap_or(0.0));

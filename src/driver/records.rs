@@ -123,6 +123,10 @@ pub struct Summary {
     /// The wall time the remakes took, from the state at which each was due to the settled
     /// state the next step starts from (`null` where the medium was never made again).
     pub medium_remade_seconds: Option<f64>,
+    /// How many of those remakes left the mechanics unsettled: the settling at the same load
+    /// did not converge, the next step started from the state as remade, and the changes
+    /// above were read there (`null` where the medium was never made again).
+    pub medium_remade_unsettled: Option<usize>,
     /// Transient scenes with a friction layer with `reconnect`: what its joins changed the
     /// heat stored by, so far; with it, `heat_stored` = `heat_in` + `friction_heat` +
     /// `heat_joined` (`null` otherwise).
@@ -273,6 +277,7 @@ impl Summary {
             medium_remade_force_change: None,
             medium_remade_heat_change: None,
             medium_remade_seconds: None,
+            medium_remade_unsettled: None,
             heat_joined: None,
             balances: Balances::default(),
             output: out_dir.display().to_string(),

@@ -277,8 +277,9 @@ impl<'a> Run<'a> {
     /// length: no inertia), or from the state as joined where that does not converge. The
     /// points' history stays as joined: whatever the settling slipped is the next step's
     /// slip, whose work that step makes heat over its length. A settling after a remake stops
-    /// at the relative residual `to` ([`crate::model::remake::SETTLED`]). Where the settling
-    /// does not converge, `-v` says so.
+    /// at the relative residual `to` ([`crate::model::remake::SETTLED`]). Where that settling
+    /// does not converge, it is counted, and said: the first time (unless quiet), or each
+    /// time with `-v`; a join's settling that does not converge, with `-v` only.
     pub(super) fn rejoined(&mut self, to: Option<f64>) {
         let st = &mut self.st;
         st.asm.rejoined(st.model, &st.x);
@@ -286,14 +287,28 @@ impl<'a> Run<'a> {
         if let Some(stored) = joined_heat(&self.st) {
             *self.accounts.totals.heat_joined.get_or_insert(0.0) += stored;
         }
-        match self.st.settle_mechanics(to) {
-            Ok(rep) => self.accounts.count(&rep),
-            Err(why) if self.opts.verbose => crate::note!(
-                "  not settled at t = {} on the new mesh ({why}); the next step starts from it \
-                 as it is",
-                self.st.ctl.t
-            ),
-            Err(_) => {}
+        let why = match self.st.settle_mechanics(to) {
+            Ok(rep) => return self.accounts.count(&rep),
+            Err(why) => why,
+        };
+        let t = self.st.t_text(self.st.ctl.t);
+        if self.opts.verbose {
+            crate::note!(
+                "  not settled at t = {t} on the new mesh ({why}); the next step starts from it \
+                 as it is"
+            );
+        }
+        if to.is_none() {
+            return;
+        }
+        let tot = &mut self.accounts.totals;
+        tot.remake_unsettled += 1;
+        if tot.remake_unsettled == 1 && !self.opts.verbose && !self.opts.quiet {
+            self.rec.say(&format!(
+                "warning: the mechanics did not settle on the medium made again at t = {t} \
+                 ({why}); the next step starts from it as it is (`-v` says each such remake; \
+                 summary.json counts them, `medium_remade_unsettled`)"
+            ));
         }
     }
 

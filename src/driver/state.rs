@@ -80,6 +80,10 @@ pub struct Totals {
     /// to the settled state the next step starts from (gmsh, the new model, its settling).
     #[serde(default)]
     pub remake_seconds: f64,
+    /// How many remakes left the mechanics unsettled (the settling did not converge; the next
+    /// step started from the state as remade).
+    #[serde(default)]
+    pub remake_unsettled: usize,
     /// A medium made again as the bodies move: its watch of the slivers at the last accepted
     /// state before this one (the state a restart decides from, as the run would have).
     #[serde(default)]
