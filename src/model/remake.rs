@@ -943,10 +943,12 @@ impl Medium {
         // a node about to pass where the medium was made long ago: made again before it,
         // once
         let stale = passes.is_finite() && travel >= FRESH && !self.made_for_pass;
-        let other = passed
+        // the cells' slide is looked at only where nothing else has asked already
+        let remake = stale
+            || passed
             || self.slid_cells(model, reference, x) >= SLID
             || self.thin_quadrilateral(model, x);
-        if other || stale {
+        if remake {
             // made while a pass is coming, before it: fresh for it, whatever asked
             self.made_for_pass = passes.is_finite() && !passed;
             Watch::Remake
