@@ -443,7 +443,8 @@ fn fanned_inside(
             (i.min(j), i.max(j))
         })
         .collect();
-    for (n, m) in fans(region, x).into_iter().chain(joined_ahead(region, x)) {
+    let corner = corners(region, x);
+    for (n, m) in fans(&corner, x).into_iter().chain(joined_ahead(&corner, x)) {
         let (vn, vm) = (vertex[&n], vertex[&m]);
         if cdt.can_add_constraint(vn, vm) {
             cdt.add_constraint(vn, vm);
@@ -514,9 +515,9 @@ const SHARPER: f64 = std::f64::consts::FRAC_PI_4;
 /// stay whole as the node slides along it, and not a sliver between the corner's own faces
 /// and `m`, which a slide turns inside out. Of two such nodes the one whose medium-side angle
 /// is the larger (the sharper corner of its body) is the one joined over the other's edges.
-fn fans(region: &[Vec<usize>], x: &[[f64; 3]]) -> Vec<(usize, usize)> {
+/// `corner`: the region's boundary nodes as [`corners`] gives them.
+fn fans(corner: &[Corner], x: &[[f64; 3]]) -> Vec<(usize, usize)> {
     let dist = |a: usize, b: usize| (x[a][0] - x[b][0]).hypot(x[a][1] - x[b][1]);
-    let corner = corners(region, x);
     // the corners by squares as wide as the farthest reach, to look only at the next ones
     let side = corner
         .iter()
@@ -533,7 +534,7 @@ fn fans(region: &[Vec<usize>], x: &[[f64; 3]]) -> Vec<(usize, usize)> {
         by_square.entry(square(c.1)).or_default().push(k);
     }
     let mut out = Vec::new();
-    for &(p, m, q, reach, angle) in &corner {
+    for &(p, m, q, reach, angle) in corner {
         let [i, j] = square(m);
         let near = (-1..=1).flat_map(|a| (-1..=1).map(move |b| [i + a, j + b]));
         for k in near.flat_map(|s| by_square.get(&s).into_iter().flatten()) {
@@ -549,10 +550,14 @@ fn fans(region: &[Vec<usize>], x: &[[f64; 3]]) -> Vec<(usize, usize)> {
     out
 }
 
+/// A boundary node with its neighbours along its loop, its reach and its medium-side angle
+/// (see [`corners`]).
+type Corner = (usize, usize, usize, f64, f64);
+
 /// Each boundary node `v` of the loops `region`, in their order, with its last and next
 /// nodes along its loop and a quarter of its shorter edge: (last, v, next, reach, the
 /// medium-side angle at v).
-fn corners(region: &[Vec<usize>], x: &[[f64; 3]]) -> Vec<(usize, usize, usize, f64, f64)> {
+fn corners(region: &[Vec<usize>], x: &[[f64; 3]]) -> Vec<Corner> {
     let dist = |a: usize, b: usize| (x[a][0] - x[b][0]).hypot(x[a][1] - x[b][1]);
     let mut corner = Vec::new();
     for lp in region {
@@ -576,20 +581,20 @@ fn corners(region: &[Vec<usize>], x: &[[f64; 3]]) -> Vec<(usize, usize, usize, f
 /// a pressure of 0.96); joined over b's next edge, the cell is a layer's, whose thickness
 /// the slide keeps, until the medium is made again after the corner passes b
 /// (docs/notes/2026-12-05-a-corner-joined-ahead-and-one-remake-before-a-pass.md).
-fn joined_ahead(region: &[Vec<usize>], x: &[[f64; 3]]) -> Vec<(usize, usize)> {
+/// `around`: the region's boundary nodes as [`corners`] gives them.
+fn joined_ahead(around: &[Corner], x: &[[f64; 3]]) -> Vec<(usize, usize)> {
     let dist = |a: usize, b: usize| (x[a][0] - x[b][0]).hypot(x[a][1] - x[b][1]);
-    let around = corners(region, x);
     let last: HashMap<usize, usize> = around.iter().map(|&(l, n, ..)| (n, l)).collect();
     let next: HashMap<usize, usize> = around.iter().map(|&(_, n, m, ..)| (n, m)).collect();
     let mut out = Vec::new();
-    for &(p, c, q, reach, angle) in &around {
+    for &(p, c, q, reach, angle) in around {
         if angle < std::f64::consts::PI + SHARPER {
             continue;
         }
         // the edge (a, b), a loop's edge in its order, that c stands closest over, its foot
         // on the edge
         let mut over: Option<(f64, usize, usize)> = None;
-        for &(_, a, b, ..) in &around {
+        for &(_, a, b, ..) in around {
             if [a, b].iter().any(|n| [c, p, q].contains(n)) {
                 continue;
             }
