@@ -26,6 +26,10 @@ pub struct Steps {
     pub grow: f64,
     /// Cut factor after a failed step.
     pub cut: f64,
+    /// Where Newton fails at the shortest step (and a medium made again does not settle),
+    /// the step is taken by pseudo-transient continuation (`solver::newton::continuation`)
+    /// before the run gives up; `false`: the run stops there.
+    pub continuation: bool,
     /// Load path: λ at pseudo-times t = 0, 1, …, T, linear in between (default `[0, 1]`).
     /// Every value is reached by a step: e.g. `[0, 1, 0.2]` loads, then unloads to 0.2, and
     /// `[0, 0.25, 0.5, 1]` also writes the states at λ = 0.25 and 0.5.
@@ -43,6 +47,7 @@ impl Default for Steps {
             easy_iter: 7,
             grow: 1.5,
             cut: 0.25,
+            continuation: true,
             path: None,
         }
     }

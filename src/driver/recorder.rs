@@ -511,6 +511,7 @@ impl<'a> Recorder<'a> {
         s.time = ctl.t;
         s.load_steps = ctl.accepted;
         s.rejected_steps = ctl.rejected;
+        s.continued_steps = tot.continued;
         s.newton_iterations = tot.iterations;
         s.rejected_iterations = spent.iterations - tot.iterations;
         s.linear_solves = spent.updates;

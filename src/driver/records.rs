@@ -35,6 +35,10 @@ pub struct Summary {
     pub time: f64,
     pub load_steps: usize,
     pub rejected_steps: usize,
+    /// Accepted steps that Newton could not converge however short, taken by pseudo-transient
+    /// continuation at the shortest step.
+    #[serde(default)]
+    pub continued_steps: usize,
     /// Newton iterations of the accepted steps.
     pub newton_iterations: usize,
     /// Newton iterations of the rejected attempts (their time is in the seconds below).
@@ -241,6 +245,7 @@ impl Summary {
             time: 0.0,
             load_steps: 0,
             rejected_steps: 0,
+            continued_steps: 0,
             newton_iterations: 0,
             rejected_iterations: 0,
             linear_solves: 0,

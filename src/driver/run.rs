@@ -288,7 +288,10 @@ impl<'a> Run<'a> {
             *self.accounts.totals.heat_joined.get_or_insert(0.0) += stored;
         }
         let why = match self.st.settle_mechanics(to) {
-            Ok(rep) => return self.accounts.count(&rep),
+            Ok((rep, continued)) => {
+                self.accounts.totals.continued += usize::from(continued);
+                return self.accounts.count(&rep);
+            }
             Err(why) => why,
         };
         let t = self.st.t_text(self.st.ctl.t);
@@ -411,22 +414,19 @@ impl<'a> Run<'a> {
             return Err(self.fail(failure)?);
         }
         self.accounts.totals.last_failure = failure.to_string();
-        let st = &self.st;
         // a cut step's attempt can be most of a large run's time: say so, log files too
         if !self.opts.quiet {
-            let lambda = st.model.path.lambda(target);
-            let to = if st.show_t() {
-                format!("t {} (λ {lambda:.4})", st.t_text(target))
-            } else {
-                format!("λ {lambda:.4}")
-            };
             self.rec.say(&format!(
-                "  step to {to} failed: {}; cutting the step",
+                "  step to {} failed: {}; cutting the step",
+                self.target_text(target),
                 self.accounts.totals.last_failure
             ));
         }
         // whatever the attempts wrote into the history goes
         if let Err(dl) = self.st.cut() {
+            if self.continued(target)? {
+                return Ok(());
+            }
             self.rec.clear_bar();
             let st = &self.st;
             let reason = self.accounts.totals.last_failure.clone();
@@ -456,6 +456,54 @@ impl<'a> Run<'a> {
             return Err(err);
         }
         Ok(())
+    }
+
+    /// Where a step to `target` ends, for a line: "t 1.02 (λ 1.0000)" or "λ 0.5000".
+    fn target_text(&self, target: f64) -> String {
+        let st = &self.st;
+        let lambda = st.model.path.lambda(target);
+        if st.show_t() {
+            format!("t {} (λ {lambda:.4})", st.t_text(target))
+        } else {
+            format!("λ {lambda:.4}")
+        }
+    }
+
+    /// Newton failed at the shortest step: the step to `target` by pseudo-transient
+    /// continuation, accepted where it converges (said the first time unless quiet, each
+    /// time with `-v`; counted in the summary). Returns whether it was; where not, the
+    /// failure says why continuation did not take it either.
+    fn continued(&mut self, target: f64) -> Result<bool, SolveError> {
+        if !self.st.continues() {
+            return Ok(false);
+        }
+        let (trial, rep) = match self.st.attempt_continued(target) {
+            Ok(taken) => taken,
+            Err(failure) => {
+                self.st.asm.restore();
+                let tot = &mut self.accounts.totals;
+                tot.last_failure = format!(
+                    "{}; by continuation at the same load: {failure}",
+                    tot.last_failure
+                );
+                return Ok(false);
+            }
+        };
+        let tot = &mut self.accounts.totals;
+        tot.continued += 1;
+        let say = self.opts.verbose || !(tot.continued_told || self.opts.quiet);
+        tot.continued_told |= say;
+        if say {
+            self.rec.say(&format!(
+                "  step to {} taken by continuation in {} iterations: Newton did not converge \
+                 however short the step (docs/THEORY.md, \"Steps Newton cannot take\"; \
+                 summary.json counts them, `continued_steps`)",
+                self.target_text(target),
+                rep.iterations
+            ));
+        }
+        self.accept(target, trial, rep)?;
+        Ok(true)
     }
 
     /// A failure no smaller step can mend (the engine's): the run ends at once, its summary

@@ -84,6 +84,13 @@ pub struct Totals {
     /// step started from the state as remade).
     #[serde(default)]
     pub remake_unsettled: usize,
+    /// How many steps pseudo-transient continuation took where Newton failed at the shortest
+    /// step.
+    #[serde(default)]
+    pub continued: usize,
+    /// Whether a step taken by continuation has been said (the first is, without `-v`).
+    #[serde(default)]
+    pub continued_told: bool,
     /// A medium made again as the bodies move: its watch of the slivers at the last accepted
     /// state before this one (the state a restart decides from, as the run would have).
     #[serde(default)]

@@ -104,6 +104,17 @@ impl Plan {
     }
 }
 
+/// How a step is solved for one part: [`Newton::step`] or [`Newton::continuation`].
+type Solve = fn(
+    &mut Newton,
+    &Model,
+    &mut Assembler,
+    &mut LinearSolver,
+    &mut [f64],
+    &StepContext,
+    Part,
+) -> Result<StepReport, StepFailure>;
+
 /// The run's solving state: the plan's assembler, Newton and solvers, the step controller, and
 /// the last accepted state.
 pub(super) struct Stepper<'a> {
@@ -117,6 +128,8 @@ pub(super) struct Stepper<'a> {
     pub(super) x: Vec<f64>,
     /// The case steps over physical time (`[time]`).
     pub(super) transient_clock: bool,
+    /// Whether a step Newton cannot take is tried by continuation (`[steps] continuation`).
+    continuation: bool,
 }
 
 impl<'a> Stepper<'a> {
@@ -131,7 +144,13 @@ impl<'a> Stepper<'a> {
             ctl: controller(case, model),
             x: model.initial_state(),
             transient_clock: case.file.time.is_some(),
+            continuation: case.file.steps.continuation,
         }
+    }
+
+    /// Whether a step Newton cannot take is tried by continuation (`[steps] continuation`).
+    pub(super) fn continues(&self) -> bool {
+        self.continuation
     }
 
     /// The run's ranks (their decisions to stop are taken together).
@@ -154,13 +173,39 @@ impl<'a> Stepper<'a> {
     /// Solve the step to pseudo-time `target` from the last accepted state, part by part;
     /// the trial state is returned with the report.
     pub(super) fn attempt(&mut self, target: f64) -> Result<(Vec<f64>, StepReport), StepFailure> {
+        self.attempt_by(target, Newton::step)
+    }
+
+    /// The step to `target` that [`Stepper::attempt`] could not converge however short,
+    /// solved by pseudo-transient continuation (`Newton::continuation`). Only where the case
+    /// has it ([`Stepper::continues`]).
+    pub(super) fn attempt_continued(
+        &mut self,
+        target: f64,
+    ) -> Result<(Vec<f64>, StepReport), StepFailure> {
+        self.attempt_by(target, Newton::continuation)
+    }
+
+    /// The step to `target` solved by `solve` for each part in turn.
+    fn attempt_by(
+        &mut self,
+        target: f64,
+        solve: Solve,
+    ) -> Result<(Vec<f64>, StepReport), StepFailure> {
         let step = self.model.path.step(self.ctl.t, target);
         let mut trial = self.x.clone();
         let mut report: Option<StepReport> = None;
         for (part, solver) in self.solvers.iter_mut() {
-            let rep =
-                self.newton
-                    .step(self.model, &mut self.asm, solver, &mut trial, &step, *part)?;
+            let (model, asm) = (self.model, &mut self.asm);
+            let rep = solve(
+                &mut self.newton,
+                model,
+                asm,
+                solver,
+                &mut trial,
+                &step,
+                *part,
+            )?;
             report = Some(match report {
                 None => rep,
                 Some(a) => a.then(rep),
@@ -202,24 +247,31 @@ impl<'a> Stepper<'a> {
     /// scene the temperature kept (a step of no length has no capacity: what it solved for θ
     /// is a steady state, not the state), in a steady one settled too; the history stays as
     /// it was. To the relative residual `to` where given and looser than the steps' (see
-    /// [`Newton::settling`]). Returns the report, or why not (the state unchanged) where it
-    /// does not converge.
-    pub(super) fn settle_mechanics(&mut self, to: Option<f64>) -> Result<StepReport, StepFailure> {
+    /// [`Newton::settling`]); where Newton does not converge, by continuation if the case
+    /// has it. Returns the report and whether continuation took it, or why not (the state
+    /// unchanged) where neither converges.
+    pub(super) fn settle_mechanics(
+        &mut self,
+        to: Option<f64>,
+    ) -> Result<(StepReport, bool), StepFailure> {
         let transient = self.model.physics.transient;
         let tol = self.newton.tol;
         if let Some(to) = to {
             (self.newton.tol, self.newton.settling) = (tol.max(to), true);
         }
-        let attempt = self.attempt(self.ctl.t);
+        let mut attempt = self.attempt(self.ctl.t).map(|a| (a, false));
+        if let (Err(StepFailure::NotConverged { .. }), true) = (&attempt, self.continuation) {
+            attempt = self.attempt_continued(self.ctl.t).map(|a| (a, true));
+        }
         (self.newton.tol, self.newton.settling) = (tol, false);
-        let settled = attempt.map(|(x, rep)| {
+        let settled = attempt.map(|((x, rep), continued)| {
             let dofs = &self.model.dofs;
             for (d, v) in x.into_iter().enumerate() {
                 if !transient || dofs.field[d] != Field::Theta {
                     self.x[d] = v;
                 }
             }
-            rep
+            (rep, continued)
         });
         self.asm.restore();
         settled

@@ -12,6 +12,8 @@
 //! field that the load hardly excites (p in a uniaxial squeeze) would be judged against its
 //! own round-off.
 
+mod continuation;
+
 use super::idle::IdleThreads;
 use super::linear::{LinearError, LinearSolver, SolveParts};
 use crate::assembly::{Assembler, AssemblyError, AssemblyStats};
@@ -918,6 +920,37 @@ mod tests {
         for (a, b) in tail {
             assert!(b <= 10.0 * a * a, "{b:.2e} after {a:.2e}: {r:?}");
         }
+    }
+
+    #[test]
+    fn continuation_ends_where_newton_does_and_takes_its_first_moves_short() {
+        let model = block("continuation");
+        let to = model.path.step(0.0, 0.05);
+        let solve = |continued: bool| {
+            let (mut asm, mut solver, mut newton) = solving(&model, 30);
+            let mut x = model.initial_state();
+            let (asm, solver) = (&mut asm, &mut solver);
+            let rep = match continued {
+                false => newton.step(&model, asm, solver, &mut x, &to, Part::All),
+                true => newton.continuation(&model, asm, solver, &mut x, &to, Part::All),
+            };
+            (x, rep.unwrap())
+        };
+        let (newton, by_newton) = solve(false);
+        let (continued, by_continuation) = solve(true);
+        // the same balance at the same load, to about the tolerance (1e-10)
+        let gap = (newton.iter().zip(&continued)).fold(0.0f64, |a, (p, q)| a.max((p - q).abs()));
+        let size = newton.iter().fold(0.0f64, |a, p| a.max(p.abs()));
+        assert!(gap <= 1e-8 * size, "{gap:e} of {size:e}");
+        let r = worst_history(&by_continuation);
+        assert!(*r.last().unwrap() <= 1e-10, "{r:?}");
+        // the shifted updates are shorter than Newton's: more iterations to the same state
+        assert!(
+            by_continuation.iterations > by_newton.iterations,
+            "{} against Newton's {}",
+            by_continuation.iterations,
+            by_newton.iterations
+        );
     }
 
     #[test]

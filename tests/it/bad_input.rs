@@ -313,14 +313,16 @@ fn nothing_a_user_wrote_is_lost() {
 #[test]
 fn a_rerun_that_takes_no_load_step_keeps_the_previous_results() {
     // a first run, then a rerun into its folder that cannot take its first load step (two
-    // Newton iterations allowed, no step below the first): the folder stays as it was, byte
-    // for byte, and the message says so
+    // Newton iterations allowed, no step below the first, no continuation): the folder stays
+    // as it was, byte for byte, and the message says so
     let (dir, out, _, before) = finished_run("bad-no-step");
     assert!(before.iter().any(|(f, _)| f == "summary.json"));
     let stuck = slab_case(
         &dir,
         "stuck",
-        &format!("{SOLID}{HELD}[steps]\ninitial = 1.0\nmin = 0.9\nmax_iter = 2\n"),
+        &format!(
+            "{SOLID}{HELD}[steps]\ninitial = 1.0\nmin = 0.9\nmax_iter = 2\ncontinuation = false\n"
+        ),
     );
     let e = fails_with(&solve(&stuck, &out), &["load step from λ = 0"]);
     assert!(
