@@ -148,9 +148,10 @@ impl<'a> Stepper<'a> {
         }
     }
 
-    /// Whether a step Newton cannot take is tried by continuation (`[steps] continuation`).
+    /// Whether a step Newton cannot take is tried by continuation: where the case has it
+    /// (`[steps] continuation`) and the run is on one rank (`Newton::continuation`).
     pub(super) fn continues(&self) -> bool {
-        self.continuation
+        self.continuation && self.asm.ranks.size == 1
     }
 
     /// The run's ranks (their decisions to stop are taken together).
@@ -260,7 +261,7 @@ impl<'a> Stepper<'a> {
             (self.newton.tol, self.newton.settling) = (tol.max(to), true);
         }
         let mut attempt = self.attempt(self.ctl.t).map(|a| (a, false));
-        if let (Err(StepFailure::NotConverged { .. }), true) = (&attempt, self.continuation) {
+        if let (Err(StepFailure::NotConverged { .. }), true) = (&attempt, self.continues()) {
             attempt = self.attempt_continued(self.ctl.t).map(|a| (a, true));
         }
         (self.newton.tol, self.newton.settling) = (tol, false);
