@@ -17,10 +17,14 @@ impl Pattern {
     /// Position of entry (row, col) in the value array.
     #[inline]
     pub fn slot(&self, row: usize, col: usize) -> usize {
+        self.find(row, col).expect("entry in pattern")
+    }
+
+    /// Position of entry (row, col) in the value array, if the pattern has it.
+    #[inline]
+    pub fn find(&self, row: usize, col: usize) -> Option<usize> {
         let (a, b) = (self.col_ptr[col], self.col_ptr[col + 1]);
-        a + self.row_idx[a..b]
-            .binary_search(&row)
-            .expect("entry in pattern")
+        self.row_idx[a..b].binary_search(&row).ok().map(|i| a + i)
     }
     pub fn nnz(&self) -> usize {
         self.row_idx.len()

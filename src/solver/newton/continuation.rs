@@ -48,7 +48,7 @@ impl Newton {
     ) -> Result<StepReport, StepFailure> {
         let equations = self.equations(part);
         let diagonal: Vec<usize> = (equations.iter())
-            .filter_map(|&e| diagonal_slot(asm, e))
+            .filter_map(|&e| asm.pattern.find(e, e))
             .collect();
         let limit = self.max_iter * ITERATIONS_PER_NEWTON;
         if asm.ranks.size > 1 || diagonal.len() < equations.len() {
@@ -136,13 +136,6 @@ impl Newton {
             largest: None,
         })
     }
-}
-
-/// Where equation `e`'s diagonal entry lies in the tangent's values, if it has one.
-fn diagonal_slot(asm: &Assembler, e: usize) -> Option<usize> {
-    let p = &asm.pattern;
-    let (a, b) = (p.col_ptr[e], p.col_ptr[e + 1]);
-    p.row_idx[a..b].binary_search(&e).ok().map(|i| a + i)
 }
 
 /// The median of `values` (0 for none).
