@@ -32,7 +32,10 @@ demo: deps-demo
 # more than a test thread's 2 MB of stack unoptimised) and what that build says when asked
 # for the engine; beside them the PETSc layer under valgrind (`make memcheck`, 43 s alone).
 # The unit tests are not built a second time optimised: that build took 265 s of the 480 s
-# the optimised build of a fresh clone took.
+# the optimised build of a fresh clone took. Tests still running 30 minutes into the first
+# part, or 15 into the unit tests, are ended and named, and `make test` fails there. Every
+# build here has RUSTC_BOOTSTRAP=1 (timed-tests.sh sets it): cargo counts it in a build's
+# fingerprint, and a build without it would build everything again.
 SERIAL := CARGO_TARGET_DIR=target/serial CARGO_PROFILE_DEV_DEBUG=0 CARGO_INCREMENTAL=0
 # The tests keep the meshes they make in a cache of their own, emptied first, not in the
 # user's (docs/CASE.md, `[mesh_options]`): each `make test` meshes as a fresh clone does.
@@ -41,8 +44,9 @@ test: deps
 	rm -rf target/test-mesh-cache
 	scripts/timed-tests.sh $(CARGO) test --release --features petsc --test it
 	scripts/memcheck.sh >target/memcheck.log 2>&1 & m=$$!; \
-	RUST_MIN_STACK=67108864 $(SERIAL) $(CARGO) test --lib && \
-	$(SERIAL) $(CARGO) test --test it cli::without_petsc; s=$$?; \
+	TESTS_LOG=target/unit-test-times.log TESTS_DEADLINE=900 RUST_TEST_THREADS=$$(nproc) \
+	  scripts/timed-tests.sh env RUST_MIN_STACK=67108864 $(SERIAL) $(CARGO) test --lib && \
+	RUSTC_BOOTSTRAP=1 $(SERIAL) $(CARGO) test --test it cli::without_petsc; s=$$?; \
 	wait $$m; c=$$?; cat target/memcheck.log; [ $$s -eq 0 ] && [ $$c -eq 0 ]
 
 # The PETSc layer under valgrind: a converging solve and its error paths, on one rank and two.
