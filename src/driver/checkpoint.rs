@@ -291,8 +291,9 @@ impl Checkpoint {
 
 /// The mesh a run whose medium is made again ran on after its `remakes`-th remake, with the
 /// new medium cells' references and the regularization's extent: what a restart from a
-/// checkpoint on that mesh builds its model from. The last two are kept, [`MEDIUM_FILES`]: a
-/// run stopped after a remake and before its next step restarts from the state before it.
+/// checkpoint on that mesh builds its model from. Two are kept, [`MEDIUM_FILES`]: the newest,
+/// and the one the folder's checkpoint continues, so that a run stopped after remakes and
+/// before its next step restarts from the state before them.
 #[derive(Debug, Serialize, Deserialize)]
 pub struct RemadeMedium {
     pub remakes: usize,
@@ -305,17 +306,37 @@ pub struct RemadeMedium {
 pub const MEDIUM_FILES: [&str; 2] = ["medium.json", "medium-previous.json"];
 
 impl RemadeMedium {
-    /// Write it into `dir` as the newest, the one it replaces kept as the previous.
-    pub fn write(&self, dir: &Path) -> Result<(), SolveError> {
+    /// Write it into `dir` as the newest. The one it replaces is kept as the previous, unless
+    /// the previous holds remake `saved` (the one the folder's checkpoint continues) and the
+    /// newest does not: a remake that no step followed is replaced.
+    pub fn write(&self, dir: &Path, saved: Option<usize>) -> Result<(), SolveError> {
         let [newest, previous] = MEDIUM_FILES.map(|f| dir.join(f));
-        match std::fs::rename(&newest, &previous) {
-            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
-                return Err(SolveError::Output(crate::output::werr(&previous, e)));
-            }
-            _ => {}
+        let keep_previous = saved.is_some_and(|k| {
+            Self::remakes_in(&previous) == Some(k) && Self::remakes_in(&newest) != Some(k)
+        });
+        match keep_previous {
+            true => {}
+            false => match std::fs::rename(&newest, &previous) {
+                Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                    return Err(SolveError::Output(crate::output::werr(&previous, e)));
+                }
+                _ => {}
+            },
         }
         let text = serde_json::to_string(self).expect("a mesh is serialisable");
         crate::output::write_atomic(&newest, text.as_bytes()).map_err(SolveError::Output)
+    }
+
+    /// The remake a medium file at `path` holds, read from its start (the file begins with
+    /// it: `{"remakes":N,`); `None` where there is none or it cannot be read.
+    fn remakes_in(path: &Path) -> Option<usize> {
+        use std::io::Read;
+        let mut start = [0u8; 32];
+        let n = std::fs::File::open(path).ok()?.read(&mut start).ok()?;
+        let text = std::str::from_utf8(&start[..n]).ok()?;
+        let rest = text.strip_prefix("{\"remakes\":")?;
+        let digits = rest.split(|c: char| !c.is_ascii_digit()).next()?;
+        digits.parse().ok()
     }
 
     /// The medium of the `remakes`-th remake from `dir`'s files; the error says what is

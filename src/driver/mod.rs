@@ -528,6 +528,8 @@ fn solve_model(
         .as_mut()
         .is_some_and(|m| watch_from(m, &model, from.as_ref()));
     let (mut model, mut folder, mut from) = (model, Some(folder), from);
+    // the remake whose mesh the folder's checkpoint continues (none before a first step)
+    let mut saved = from.as_ref().map(|cp| cp.state.totals.medium_remakes);
     let mut probes = probes.to_vec();
     let mut changed = false;
     // the groups' flows before a remake, to measure what it changed
@@ -548,10 +550,12 @@ fn solve_model(
         if !changed {
             run.announce();
         }
+        let here = from.as_ref().map_or(0, |cp| cp.state.totals.medium_remakes);
         match from.take() {
             Some(cp) => run.resume(cp)?,
             None => run.record_initial()?,
         }
+        let accepted = run.accepted();
         if layer.is_none() && medium.is_none() {
             return step_to_end(run);
         }
@@ -597,6 +601,9 @@ fn solve_model(
             Stepped::Ended(summary) => return Ok(summary),
             Stepped::Changed(run, change) => (run, change),
         };
+        if run.accepted() > accepted {
+            saved = Some(here);
+        }
         // the new medium is made while the run can still end with its summary if it cannot be
         let mut made = None;
         if let (Change::Remake, Some(m)) = (&change, &medium) {
@@ -615,7 +622,7 @@ fn solve_model(
             if let Some(placed) = placed {
                 probes = placed;
             }
-            medium_again(case, &model, &mut medium, &mut cp, kept.as_mut())?;
+            medium_again(case, &model, &mut medium, &mut cp, kept.as_mut(), saved)?;
         }
         folder = kept;
         // the run's clock goes on through the change: the time it took (gmsh, the new model)
@@ -652,11 +659,13 @@ fn watch_from(
     false
 }
 
-/// The remade medium's mesh in `folder`, for a restart from the next step's checkpoint on.
+/// The remade medium's mesh in `folder`, for a restart from the next step's checkpoint on;
+/// the mesh of remake `saved`, which the folder's checkpoint continues, is kept beside it.
 fn write_remade(
     folder: &mut RunFolder,
     model: &Model,
     cp: &checkpoint::Checkpoint,
+    saved: Option<usize>,
 ) -> Result<(), SolveError> {
     for name in checkpoint::MEDIUM_FILES {
         folder.record(name)?;
@@ -667,18 +676,20 @@ fn write_remade(
         mesh: model.mesh.clone(),
         reference: model.cell_reference.clone(),
     };
-    remade.write(folder.dir())?;
+    remade.write(folder.dir(), saved)?;
     Ok(())
 }
 
 /// After a change at the checkpoint `cp`, the medium of `model` (the new one) watched from
-/// its state, and its mesh in the run's folder for a restart.
+/// its state, and its mesh in the run's folder for a restart (beside remake `saved`'s, which
+/// the folder's checkpoint continues).
 fn medium_again(
     case: &Case,
     model: &Model,
     medium: &mut Option<remake::Medium>,
     cp: &mut checkpoint::Checkpoint,
     folder: Option<&mut RunFolder>,
+    saved: Option<usize>,
 ) -> Result<(), SolveError> {
     let Some((rate, made_for_pass)) = medium.as_ref().map(|m| (m.rate, m.made_for_pass)) else {
         return Ok(());
@@ -689,7 +700,7 @@ fn medium_again(
         restart_medium(case, model, m, cp, rate);
     }
     if let Some(folder) = folder {
-        write_remade(folder, model, cp)?;
+        write_remade(folder, model, cp, saved)?;
     }
     Ok(())
 }

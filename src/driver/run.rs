@@ -166,6 +166,11 @@ impl<'a> Run<'a> {
     }
 
     /// The attempts rejected so far.
+    /// The steps accepted so far, those before a restart or a change of mesh included.
+    pub(super) fn accepted(&self) -> usize {
+        self.st.ctl.accepted
+    }
+
     pub(super) fn rejected(&self) -> usize {
         self.st.ctl.rejected
     }

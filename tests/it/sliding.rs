@@ -528,6 +528,50 @@ fn a_run_whose_medium_is_made_again_restarts_as_if_never_stopped() {
     }
 }
 
+/// A run that stops where its medium was made again twice with no step between (a step that
+/// fails on the new medium has it made again at once) restarts from its checkpoint: the mesh
+/// the checkpoint continues is kept beside the newest. The pad in a box on quadrilaterals at
+/// μ = 1 stalls so at a drag of 0.32 (h = 0.1), the medium made 20 times, its checkpoint on
+/// the 18th; the restart met "it continues the mesh of the medium's remake 18, and
+/// medium.json holds remake 20, medium-previous.json holds remake 19" before.
+#[test]
+fn a_run_stopped_after_remakes_that_no_step_followed_restarts_from_its_checkpoint() {
+    let body = case_body("pad-box-slide").replace("mu = 0.3, normal", "mu = 1.0, normal");
+    let case = case_file(
+        "pad-box-quads-stall-restart",
+        "pad-box.geo",
+        "params = { h = 0.1, quads = 1 }",
+        &(body + common::ENDS_ONLY),
+    );
+    let out = case.with_file_name("out");
+    let o = solve_cli(&case, &out, &[]);
+    let stopped = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{stopped}");
+    let remake_of = |file: &str| -> u64 {
+        let text = std::fs::read_to_string(out.join(file)).unwrap();
+        let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+        v["remakes"].as_u64().unwrap()
+    };
+    let restart: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("restart.json")).unwrap()).unwrap();
+    let saved = restart["totals"]["medium_remakes"].as_u64().unwrap();
+    assert!(
+        remake_of("medium.json") >= saved + 2,
+        "the scene no longer stops two remakes past its checkpoint (remake {} after {saved}): \
+         this test needs another that does",
+        remake_of("medium.json")
+    );
+    assert_eq!(remake_of("medium-previous.json"), saved);
+    // it goes on from the checkpoint and stops where it stopped, its files as they were
+    let o = solve_cli(&case, &out, &["--restart"]);
+    let again = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{again}");
+    let at =
+        |e: &str| e[e.find("load step from").expect(e)..e.find(" failed").expect(e)].to_string();
+    assert_eq!(at(&again), at(&stopped), "{again}");
+    assert_eq!(remake_of("medium-previous.json"), saved);
+}
+
 #[test]
 fn a_medium_made_again_is_refused_several_ranks_by_name() {
     let case = root().join("cases/cylinder-slide.toml");
