@@ -314,14 +314,13 @@ impl RemadeMedium {
         let keep_previous = saved.is_some_and(|k| {
             Self::remakes_in(&previous) == Some(k) && Self::remakes_in(&newest) != Some(k)
         });
-        match keep_previous {
-            true => {}
-            false => match std::fs::rename(&newest, &previous) {
+        if !keep_previous {
+            match std::fs::rename(&newest, &previous) {
                 Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
                     return Err(SolveError::Output(crate::output::werr(&previous, e)));
                 }
                 _ => {}
-            },
+            }
         }
         let text = serde_json::to_string(self).expect("a mesh is serialisable");
         crate::output::write_atomic(&newest, text.as_bytes()).map_err(SolveError::Output)
