@@ -19,16 +19,9 @@ fn mpirun(ranks: usize, case: &Path, out: &Path, extra: &[&str]) -> std::process
 /// waits a second or two after a rank ends with an error before it ends the job, time the
 /// jobs can spend side by side.
 fn mpirun_together(jobs: &[(usize, Vec<&std::ffi::OsStr>)]) -> Vec<std::process::Output> {
-    // each job its own session directory: Open MPI's jobs started at once race to make the
-    // shared one, and the loser ends in orte_init ("A call to mkdir was unable to create the
-    // desired directory ... File exists"; seen once in the whole binary's run)
-    let sessions = std::env::temp_dir().join(format!("tmc-it-ompi-{}", std::process::id()));
-    let started: Vec<std::process::Child> = (jobs.iter().enumerate())
-        .map(|(k, (ranks, args))| {
-            let session = sessions.join(k.to_string());
-            std::fs::create_dir_all(&session).unwrap();
+    let started: Vec<std::process::Child> = (jobs.iter())
+        .map(|(ranks, args)| {
             common::mpirun_command(*ranks)
-                .env("OMPI_MCA_orte_tmpdir_base", &session)
                 .args(args)
                 .stdout(std::process::Stdio::piped())
                 .stderr(std::process::Stdio::piped())
@@ -36,11 +29,10 @@ fn mpirun_together(jobs: &[(usize, Vec<&std::ffi::OsStr>)]) -> Vec<std::process:
                 .unwrap()
         })
         .collect();
-    let ended = (started.into_iter())
+    started
+        .into_iter()
         .map(|job| job.wait_with_output().unwrap())
-        .collect();
-    let _ = std::fs::remove_dir_all(&sessions);
-    ended
+        .collect()
 }
 
 fn solve_args<'a>(case: &'a Path, out: &'a Path, extra: &[&'a str]) -> Vec<&'a std::ffi::OsStr> {

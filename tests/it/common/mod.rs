@@ -310,6 +310,9 @@ fn vtu_array(vtu: &Path, name: &str, point: bool) -> Vec<f64> {
 }
 
 /// `mpirun -n RANKS tmc`, as root and on more ranks than cores if need be, to add arguments to.
+/// Each job has a session directory of its own: Open MPI 4.1's jobs started at the same moment
+/// race to make their shared one, and the loser ends in orte_init ("A call to mkdir was unable
+/// to create the desired directory ... File exists"; seen once in a whole run of the tests).
 #[allow(dead_code)]
 pub fn mpirun_command(ranks: usize) -> std::process::Command {
     let mut c = std::process::Command::new("mpirun");
@@ -317,8 +320,34 @@ pub fn mpirun_command(ranks: usize) -> std::process::Command {
         .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
         .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
         .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
+        .env("OMPI_MCA_orte_tmpdir_base", mpi_session())
         .current_dir(root());
     c
+}
+
+/// A new folder for one `mpirun` job's session, under a folder of this test process's (Open
+/// MPI empties it as the job ends). The folders of test processes that have ended are removed
+/// the first time.
+fn mpi_session() -> PathBuf {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    static NEXT: AtomicUsize = AtomicUsize::new(0);
+    static SWEPT: std::sync::Once = std::sync::Once::new();
+    let tmp = std::env::temp_dir();
+    SWEPT.call_once(|| {
+        for e in std::fs::read_dir(&tmp).into_iter().flatten().flatten() {
+            let name = e.file_name().to_string_lossy().into_owned();
+            let pid = name
+                .strip_prefix("tmc-it-ompi-")
+                .and_then(|p| p.parse::<u32>().ok());
+            if pid.is_some_and(|p| !Path::new(&format!("/proc/{p}")).exists()) {
+                let _ = std::fs::remove_dir_all(e.path());
+            }
+        }
+    });
+    let k = NEXT.fetch_add(1, Ordering::Relaxed);
+    let dir = tmp.join(format!("tmc-it-ompi-{}/{k}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
 }
 
 /// `mpirun -n RANKS` of tmc with `args`.
