@@ -626,10 +626,12 @@ fn joined_ahead(around: &[Corner], x: &[[f64; 3]]) -> Vec<(usize, usize)> {
     out
 }
 
-/// Where the foot of `c` stands along the edge from `a` to `b`: 0 at a, 1 at b.
-fn along(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
+/// Where the foot of `c` stands along the edge from `a` to `b` (in their plane x, y): 0 at a,
+/// 1 at b (0 on an edge of no length).
+pub(crate) fn along(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
     let ab = [b[0] - a[0], b[1] - a[1]];
-    ((c[0] - a[0]) * ab[0] + (c[1] - a[1]) * ab[1]) / (ab[0] * ab[0] + ab[1] * ab[1])
+    let length2 = ab[0] * ab[0] + ab[1] * ab[1];
+    ((c[0] - a[0]) * ab[0] + (c[1] - a[1]) * ab[1]) / length2.max(f64::MIN_POSITIVE)
 }
 
 /// Whether the tetrahedra `conn` (new node numbers) have the boundary `faces` (old node

@@ -1511,9 +1511,7 @@ fn across_gap(p: &[[f64; 3]], bodies: &[usize]) -> (f64, Vector3<f64>) {
 /// the edge across from it falls on that edge (to a tenth of its length past either end).
 fn foot_within(p: &[[f64; 3]], i: usize) -> bool {
     let a = (i + 1) % 3;
-    let e = edge(p, 3, a);
-    let to = Vector2::new(p[i][0] - p[a][0], p[i][1] - p[a][1]);
-    (-0.1..=1.1).contains(&(to.dot(&e) / e.norm_squared().max(f64::MIN_POSITIVE)))
+    (-0.1..=1.1).contains(&crate::mesh::remesh::along(p[a], p[(a + 1) % 3], p[i]))
 }
 
 /// Whether the foot of the perpendicular from `apex` to the plane of the triangle `t` (unit
