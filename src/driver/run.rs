@@ -165,12 +165,12 @@ impl<'a> Run<'a> {
         self.st.ctl.cap(until);
     }
 
-    /// The attempts rejected so far.
     /// The steps accepted so far, those before a restart or a change of mesh included.
     pub(super) fn accepted(&self) -> usize {
         self.st.ctl.accepted
     }
 
+    /// The attempts rejected so far.
     pub(super) fn rejected(&self) -> usize {
         self.st.ctl.rejected
     }
