@@ -71,6 +71,9 @@ pub struct Region {
     thickness: Option<Spanned<f64>>,
     /// A medium made again between the bodies as they move (`model/remake.rs`).
     remake: Option<Spanned<bool>>,
+    /// With `remake`: the mechanics settled at the same load after each remake, and what the
+    /// remake changed measured there.
+    settle: Option<Spanned<bool>>,
     /// Regularization weights β1, β2 (eq. 20) and α_r (eq. 18).
     beta1: Option<Spanned<f64>>,
     beta2: Option<Spanned<f64>>,
@@ -138,6 +141,12 @@ impl Region {
     /// Whether the region is a medium made again between the bodies as they move.
     pub fn remakes(&self) -> bool {
         self.remake.as_ref().is_some_and(|r| *r.get_ref())
+    }
+
+    /// Whether the region is a medium made again whose mechanics are settled after each
+    /// remake (`settle`), what the remake changed measured there.
+    pub fn settles(&self) -> bool {
+        self.remakes() && self.settle.as_ref().is_some_and(|s| *s.get_ref())
     }
 }
 
@@ -366,6 +375,7 @@ impl RegionKeys<'_> {
                 " (its conductivity is `k`)",
             ),
             ("remake", r.remake.as_ref().map(|v| v.span()), ""),
+            ("settle", r.settle.as_ref().map(|v| v.span()), ""),
         ];
         if let Some((key, span, hint)) = (spans.into_iter()).find_map(|(k, s, h)| Some((k, s?, h)))
         {
@@ -404,6 +414,13 @@ impl RegionKeys<'_> {
                 "is not carried across a remake yet: a medium made again takes none (give \
                  it to the solids)",
             )?;
+        } else if let Some(settle) = &r.settle {
+            return self.fail(
+                settle.span(),
+                "`settle` settles the mechanics after each remake of the medium; it needs \
+                 `remake = true`"
+                    .into(),
+            );
         }
         if let Some(law) = &r.law {
             return self.fail(

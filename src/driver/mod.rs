@@ -28,7 +28,7 @@ use crate::output::{OutputError, RunFolder, werr};
 use crate::parallel::Ranks;
 use crate::solver::idle::IdleThreads;
 use crate::solver::linear::LinearError;
-use run::Run;
+use run::{Run, Settle};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -524,6 +524,8 @@ fn solve_model(
     let out_dir = folder.dir().to_owned();
     let mut layer = Layer::find(&model)?;
     let mut medium = remake::Medium::find(&model, remaking(case))?;
+    // the mechanics settled after each remake, what it changed measured there
+    let settles = case.file.region.iter().any(|r| r.settles());
     let mut check_first = medium
         .as_mut()
         .is_some_and(|m| watch_from(m, &model, from.as_ref()));
@@ -532,8 +534,8 @@ fn solve_model(
     let mut saved = from.as_ref().map(|cp| cp.state.totals.medium_remakes);
     let mut probes = probes.to_vec();
     let mut changed = false;
-    // the groups' flows before a remake, to measure what it changed
-    let mut before_remake = None;
+    // when a remake was due, and the groups' flows before it where it is measured
+    let mut before_remake: Option<(Option<records::Reactions>, Instant)> = None;
     let mut stuck = Stuck::default();
     // the remakes in a row the mesher failed
     let mut mesher_failed = 0;
@@ -563,10 +565,14 @@ fn solve_model(
             run.keep_medium(m);
         }
         if changed {
-            run.rejoined(medium.is_some().then_some(remake::SETTLED));
+            run.rejoined(match &medium {
+                None => Settle::Join,
+                Some(_) if settles => Settle::Remade(remake::SETTLED),
+                Some(_) => Settle::Deferred,
+            });
         }
         if let Some((before, since)) = before_remake.take() {
-            run.remade_from(&before, since)?;
+            run.remade_from(before.as_ref(), since)?;
         }
         stuck.rejected = run.rejected();
         let due = |run: &mut Run| match (&layer, medium.as_mut()) {
@@ -610,7 +616,8 @@ fn solve_model(
             let since = Instant::now();
             (run, made) = remade_or_kept(run, m, &model, &mut mesher_failed)?;
             if made.is_some() {
-                before_remake = Some((run.flows_at_rest()?, since));
+                let before = settles.then(|| run.flows_at_rest()).transpose()?;
+                before_remake = Some((before, since));
             }
         }
         let (mut cp, mut kept) = run.end_to_rejoin();
@@ -988,6 +995,15 @@ mod tests {
     /// The block scene on a coarse mesh, solved into `target/unit-scratch/NAME` with the
     /// engine's failures scripted; the run's result and its folder.
     fn solve_scripted(name: &str, script: Script) -> (Result<Summary, SolveError>, PathBuf) {
+        solve_scripted_from(name, script, None)
+    }
+
+    /// [`solve_scripted`], the mesh taken as changed under the initial state as `settle` says.
+    fn solve_scripted_from(
+        name: &str,
+        script: Script,
+        settle: Option<Settle>,
+    ) -> (Result<Summary, SolveError>, PathBuf) {
         let root = Path::new(env!("CARGO_MANIFEST_DIR"));
         let out = root.join("target/unit-scratch/driver").join(name);
         let _ = std::fs::remove_dir_all(&out);
@@ -1023,7 +1039,12 @@ mod tests {
             };
             LinearSolver::with(kind, Box::new(scripted))
         });
-        let result = run.record_initial().and_then(|_| step_to_end(run));
+        let result = run.record_initial().and_then(|_| {
+            if let Some(settle) = settle {
+                run.rejoined(settle);
+            }
+            step_to_end(run)
+        });
         (result, out)
     }
 
@@ -1062,6 +1083,32 @@ mod tests {
         // the same end state, by another path (hyperelastic: the path does not matter)
         let rel = (gap(&cut) - gap(&clean)).abs() / gap(&clean);
         assert!(rel < 1e-6, "gap {} against {}", gap(&cut), gap(&clean));
+    }
+
+    /// The first step from a mesh changed under the state and not settled (a medium made
+    /// again, `Settle::Deferred`) that fails is tried again at its length once the mechanics
+    /// are settled; failing from a settled state, it is cut.
+    #[test]
+    fn a_step_failing_from_an_unsettled_remake_is_tried_again_settled_not_cut() {
+        let (clean, _) = solve_scripted("settled-clean", |_| None);
+        let clean = clean.unwrap();
+        // the first step's first factorisation (the first two are the initial state's)
+        let fail_first = |k| (k == 2).then(|| LinearError::Factor("scripted".into()));
+        for (settle, cut) in [(Settle::Deferred, false), (Settle::Remade(1e-6), true)] {
+            let (run, _) = solve_scripted_from("settled-retry", fail_first, Some(settle));
+            let run = run.unwrap();
+            assert!(run.converged, "{}", run.message);
+            assert_eq!(run.rejected_steps, 1, "{settle:?}");
+            // a cut step takes more steps to the end
+            assert_eq!(
+                run.load_steps > clean.load_steps,
+                cut,
+                "{settle:?}: {} steps",
+                run.load_steps
+            );
+            let rel = (gap(&run) - gap(&clean)).abs() / gap(&clean);
+            assert!(rel < 1e-6, "gap {} against {}", gap(&run), gap(&clean));
+        }
     }
 
     #[test]

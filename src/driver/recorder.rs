@@ -549,10 +549,12 @@ impl<'a> Recorder<'a> {
         s.friction_layer_joins = tot.layer_joins;
         s.medium_remade = tot.medium_remakes;
         if tot.medium_remakes > 0 {
-            s.medium_remade_force_change = Some(tot.remake_force_change);
-            s.medium_remade_heat_change = Some(tot.remake_heat_change);
+            // measured where the mechanics are settled after each remake (`settle`)
+            let measured = tot.remake_force_change.is_some();
+            s.medium_remade_force_change = tot.remake_force_change;
+            s.medium_remade_heat_change = tot.remake_heat_change;
             s.medium_remade_seconds = Some(tot.remake_seconds);
-            s.medium_remade_unsettled = Some(tot.remake_unsettled);
+            s.medium_remade_unsettled = measured.then_some(tot.remake_unsettled);
         }
         // 0 until the first join
         s.heat_joined = (self.layout.joined).then(|| tot.heat_joined.unwrap_or(0.0));

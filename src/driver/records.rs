@@ -120,16 +120,16 @@ pub struct Summary {
     /// How many times the medium was made again as the bodies moved (0 if never).
     pub medium_remade: usize,
     /// Across a remake of the medium, the largest relative change of a group's reaction
-    /// |ΔR|/|R| and of its heat flow |ΔQ|/|Q|, each at the state itself (`null` where the
-    /// medium was never made again).
+    /// |ΔR|/|R| and of its heat flow |ΔQ|/|Q|, each at the state itself settled (`null` where
+    /// the medium was never made again, or not settled: `settle`).
     pub medium_remade_force_change: Option<f64>,
     pub medium_remade_heat_change: Option<f64>,
-    /// The wall time the remakes took, from the state at which each was due to the settled
-    /// state the next step starts from (`null` where the medium was never made again).
+    /// The wall time the remakes took, from the state at which each was due to the state
+    /// the next step starts from (`null` where the medium was never made again).
     pub medium_remade_seconds: Option<f64>,
     /// How many of those remakes left the mechanics unsettled: the settling at the same load
     /// did not converge, the next step started from the state as remade, and the changes
-    /// above were read there (`null` where the medium was never made again).
+    /// above were read there (`null` where the medium was never made again, or not settled).
     pub medium_remade_unsettled: Option<usize>,
     /// Transient scenes with a friction layer with `reconnect`: what its joins changed the
     /// heat stored by, so far; with it, `heat_stored` = `heat_in` + `friction_heat` +

@@ -32,6 +32,24 @@ pub(super) struct Run<'a> {
     held_in_full: Vec<String>,
     /// What the run solves and how, and the plan's note, for [`Run::announce`].
     plan_said: Vec<String>,
+    /// The medium was made again and its mechanics not settled, and no step has been taken
+    /// from it yet ([`Settle::Deferred`]).
+    unsettled: bool,
+}
+
+/// How the mechanics are brought to balance after the mesh changed under the state
+/// ([`Run::rejoined`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum Settle {
+    /// A reconnected layer joined again: settled to the steps' own tolerance.
+    Join,
+    /// The medium made again, settled to this relative residual (`settle`;
+    /// [`crate::model::remake::SETTLED`]), what the remake changed measured there.
+    Remade(f64),
+    /// The medium made again, not settled: the next step starts from the state as carried,
+    /// and where it fails, the mechanics are settled (to [`crate::model::remake::SETTLED`])
+    /// and the step tried again.
+    Deferred,
 }
 
 impl<'a> Run<'a> {
@@ -66,6 +84,7 @@ impl<'a> Run<'a> {
                 .flat_map(|bc| bc.held_in_full())
                 .collect(),
             plan_said,
+            unsettled: false,
         })
     }
 
@@ -194,6 +213,7 @@ impl<'a> Run<'a> {
     fn accept(&mut self, target: f64, trial: Vec<f64>, rep: StepReport) -> Result<(), SolveError> {
         let model = self.st.model;
         let dlambda = model.path.lambda(target) - model.path.lambda(self.st.ctl.t);
+        self.unsettled = false;
         let (step, x_last) = self.st.advance(target, trial, rep.iterations);
         let warning = self.accounts.step(&mut self.st, &step, &x_last, &rep)?;
         // what the next step starts from, written to the checkpoint below
@@ -276,22 +296,38 @@ impl<'a> Run<'a> {
         (cp, self.rec.take_folder())
     }
 
-    /// A run resumed on a mesh whose reconnected layers were just joined again: their cells
-    /// start from the state as it is.
-    /// The next step starts from their mechanics settled at the same loads (a step of no
-    /// length: no inertia), or from the state as joined where that does not converge. The
-    /// points' history stays as joined: whatever the settling slipped is the next step's
-    /// slip, whose work that step makes heat over its length. A settling after a remake stops
-    /// at the relative residual `to` ([`crate::model::remake::SETTLED`]). Where that settling
-    /// does not converge, it is counted, and said: the first time (unless quiet), or each
-    /// time with `-v`; a join's settling that does not converge, with `-v` only.
-    pub(super) fn rejoined(&mut self, to: Option<f64>) {
+    /// A run resumed on a mesh changed under its state: a reconnected layer's cells joined
+    /// again, or the medium made again, each starting from the state as it is.
+    ///
+    /// As `settle` says, the next step starts from the mechanics settled at the same loads
+    /// (see [`Run::settle`]), or (a remake not settled) from the state as carried, whose
+    /// imbalance the next step takes up with its own; where that step fails, the mechanics
+    /// are settled then and the step tried again (see [`Run::reject`]).
+    pub(super) fn rejoined(&mut self, settle: Settle) {
         let st = &mut self.st;
         st.asm.rejoined(st.model, &st.x);
         // the settling below keeps the temperature: the heat stored changes at the join only
         if let Some(stored) = joined_heat(&self.st) {
             *self.accounts.totals.heat_joined.get_or_insert(0.0) += stored;
         }
+        self.unsettled = settle == Settle::Deferred;
+        if !self.unsettled {
+            self.settle(settle);
+        }
+    }
+
+    /// The mechanics settled at the same loads (a step of no length: no inertia), or left as
+    /// they are where that does not converge. The points' history stays as joined: whatever
+    /// the settling slipped is the next step's slip, whose work that step makes heat over its
+    /// length. A remake's settling where the medium asks for one (`settle`) that does not
+    /// converge is counted, and said: the first time (unless quiet), or each time with `-v`;
+    /// any other, with `-v` only.
+    fn settle(&mut self, settle: Settle) {
+        let to = match settle {
+            Settle::Join => None,
+            Settle::Remade(to) => Some(to),
+            Settle::Deferred => Some(crate::model::remake::SETTLED),
+        };
         let why = match self.st.settle_mechanics(to) {
             Ok((rep, continued)) => {
                 self.accounts.totals.continued += usize::from(continued);
@@ -306,7 +342,7 @@ impl<'a> Run<'a> {
                  as it is"
             );
         }
-        if to.is_none() {
+        if !matches!(settle, Settle::Remade(_)) {
             return;
         }
         let tot = &mut self.accounts.totals;
@@ -336,20 +372,25 @@ impl<'a> Run<'a> {
         Ok(flows?.0)
     }
 
-    /// After the medium was made again (and [`Run::rejoined`]), `since` it was due: how much
-    /// each group's reaction and heat flow changed from `before`, the largest kept in the
-    /// totals with the time the remake took (see [`flow_change`]); `-v` says this remake's.
+    /// After the medium was made again (and [`Run::rejoined`]), `since` it was due: the time
+    /// the remake took, kept in the totals; where the mechanics were settled, with the flows
+    /// `before` it, how much each group's reaction and heat flow changed, the largest kept
+    /// too (see [`flow_change`]), and `-v` says this remake's.
     pub(super) fn remade_from(
         &mut self,
-        before: &Reactions,
+        before: Option<&Reactions>,
         since: std::time::Instant,
     ) -> Result<(), SolveError> {
+        let Some(before) = before else {
+            self.accounts.totals.remake_seconds += since.elapsed().as_secs_f64();
+            return Ok(());
+        };
         let after = self.flows_at_rest()?;
         let (force, heat) = flow_change(before, &after);
         let tot = &mut self.accounts.totals;
         tot.remake_seconds += since.elapsed().as_secs_f64();
-        tot.remake_force_change = tot.remake_force_change.max(force);
-        tot.remake_heat_change = tot.remake_heat_change.max(heat);
+        tot.remake_force_change = Some(tot.remake_force_change.unwrap_or(0.0).max(force));
+        tot.remake_heat_change = Some(tot.remake_heat_change.unwrap_or(0.0).max(heat));
         if self.opts.verbose {
             crate::note!(
                 "  the groups' reactions changed by {:.2} % at most, their heat flows by {:.2} %",
@@ -419,6 +460,23 @@ impl<'a> Run<'a> {
             return Err(self.fail(failure)?);
         }
         self.accounts.totals.last_failure = failure.to_string();
+        if std::mem::take(&mut self.unsettled) {
+            // the first step from a medium made again as carried: tried again settled
+            if !self.opts.quiet {
+                self.rec.say(&format!(
+                    "  step to {} failed: {}; settling the medium made again and trying it again",
+                    self.target_text(target),
+                    self.accounts.totals.last_failure
+                ));
+            }
+            self.st.asm.restore();
+            self.st.ctl.retry();
+            // the remake's own work, done late
+            let since = std::time::Instant::now();
+            self.settle(Settle::Deferred);
+            self.accounts.totals.remake_seconds += since.elapsed().as_secs_f64();
+            return Ok(());
+        }
         // a cut step's attempt can be most of a large run's time: say so, log files too
         if !self.opts.quiet {
             self.rec.say(&format!(

@@ -71,17 +71,18 @@ pub struct Totals {
     #[serde(default)]
     pub medium_remakes: usize,
     /// The largest relative change of a group's reaction, and of its heat flow, across a
-    /// remake of the medium (0 without one).
+    /// remake of the medium, measured where the mechanics are settled after each (`settle`;
+    /// `None` where no remake was).
     #[serde(default)]
-    pub remake_force_change: f64,
+    pub remake_force_change: Option<f64>,
     #[serde(default)]
-    pub remake_heat_change: f64,
+    pub remake_heat_change: Option<f64>,
     /// The wall time the medium's remakes took: from the accepted state at which one was due
-    /// to the settled state the next step starts from (gmsh, the new model, its settling).
+    /// to the state the next step starts from (gmsh, the new model, its settling if any).
     #[serde(default)]
     pub remake_seconds: f64,
-    /// How many remakes left the mechanics unsettled (the settling did not converge; the next
-    /// step started from the state as remade).
+    /// How many remakes left the mechanics unsettled where they are settled (the settling
+    /// did not converge; the next step started from the state as remade).
     #[serde(default)]
     pub remake_unsettled: usize,
     /// How many steps pseudo-transient continuation took where Newton failed at the shortest

@@ -144,6 +144,11 @@ impl Controller {
         self.dt = self.dt.clamp(self.min, self.max);
     }
 
+    /// Record a failed attempt that is tried again at the same Δt (from a state changed since).
+    pub fn retry(&mut self) {
+        self.rejected += 1;
+    }
+
     /// Record a failed attempt; `Err` with the Δt that failed when it is below the minimum.
     pub fn reject(&mut self) -> Result<(), f64> {
         self.rejected += 1;
