@@ -104,7 +104,13 @@ pub fn check(case_path: &Path, opts: &SolveOptions) -> Result<CheckReport, Solve
     }
     // so does a medium asked to be made again that cannot be
     if let Some(medium) = crate::model::remake::Medium::find(&model, super::remaking(&case))? {
-        model.warnings.push(medium.describe(&model));
+        let next = match case.file.region.iter().any(|r| r.settles()) {
+            true => "the mechanics settled at the same load after each, what it changed measured",
+            false => "the next step from the state as carried (`settle` settles it first)",
+        };
+        model
+            .warnings
+            .push(format!("{}; {next}", medium.describe(&model)));
     }
     super::refuse_on_ranks(&case, &model, Ranks::world())?;
     let gmsh = super::meshes_again(&case);

@@ -325,7 +325,21 @@ fn check_says_the_medium_will_be_made_again() {
     assert!(o.status.success(), "{}", stderr(&o));
     let text = String::from_utf8_lossy(&o.stdout).to_string() + &stderr(&o);
     assert!(
-        text.contains("medium made again as the bodies move"),
+        text.contains("medium made again as the bodies move")
+            && text.contains("the next step from the state as carried"),
+        "{text}"
+    );
+    // and whether each remake is settled first
+    let settled = case_file(
+        "check-settled",
+        "cylinder-plate.geo",
+        "params = { h = 0.1 }",
+        &case_body("cylinder-slide").replace("remake = true\n", "remake = true\nsettle = true\n"),
+    );
+    let o = tmc(&["check", settled.to_str().unwrap()]);
+    let text = String::from_utf8_lossy(&o.stdout).to_string() + &stderr(&o);
+    assert!(
+        o.status.success() && text.contains("the mechanics settled at the same load after each"),
         "{text}"
     );
 }
