@@ -104,9 +104,10 @@ pub fn check(case_path: &Path, opts: &SolveOptions) -> Result<CheckReport, Solve
     }
     // so does a medium asked to be made again that cannot be
     if let Some(medium) = crate::model::remake::Medium::find(&model, super::remaking(&case))? {
-        let next = match case.file.region.iter().any(|r| r.settles()) {
-            true => "the mechanics settled at the same load after each, what it changed measured",
-            false => "the next step from the state as carried (`settle` settles it first)",
+        let next = if case.file.region.iter().any(|r| r.settles()) {
+            "the mechanics settled at the same load after each, what it changed measured"
+        } else {
+            "the next step from the state as carried (`settle` settles it first)"
         };
         model
             .warnings

@@ -43,12 +43,13 @@ use std::collections::HashMap;
 pub const SLID: f64 = 0.5;
 
 /// The relative residual (of each field, as Newton measures it) to which the mechanics are
-/// settled after a remake where the medium asks (`settle`), before the next step: the state
-/// the remake's change is measured at (in percent) and the next step starts from, a
-/// millionth out of balance at most (the steps' own `tol` where that is looser). Not settled,
-/// the next step starts from the state as carried, with the same steps and forces. Settled to the steps' 1e-9, the README cylinder's
-/// settlings (slid 0.5) took 2.4 Newton iterations each, most of them from below 1e-6
-/// already; to 1e-6, 0.85 (docs/notes/2026-12-04-what-a-remake-costs.md).
+/// settled after a remake where the medium asks (`settle`), or where the first step from it
+/// fails: the state the remake's change is measured at (in percent) and the next step starts
+/// from, a millionth out of balance at most (the steps' own `tol` where that is looser).
+/// Otherwise the next step starts from the state as carried, with the same steps and forces
+/// (docs/notes/2026-12-05-a-remake-goes-on-unsettled.md). Settled to the steps' 1e-9, the
+/// README cylinder's settlings (slid 0.5) took 2.4 Newton iterations each, most of them from
+/// below 1e-6 already; to 1e-6, 0.85 (docs/notes/2026-12-04-what-a-remake-costs.md).
 pub const SETTLED: f64 = 1e-6;
 
 /// The J below which a medium cell is a closed layer, whose compression a new cell carries.
