@@ -29,9 +29,12 @@ fn pipe() -> Result<(c_int, c_int), Isolation> {
     Ok((fds[0], fds[1]))
 }
 
-/// Fork; in the child (0) close the fds of `parent`, in this process those of `child`.
+/// Fork; in the child (0) close the fds of `parent`, in this process those of `child`. No
+/// METIS call runs in another thread meanwhile (see [`super::partition::metis_held`]).
 fn fork(parent: &[c_int], child: &[c_int]) -> Result<libc::pid_t, Isolation> {
+    let metis = super::partition::metis_held();
     let pid = unsafe { libc::fork() };
+    drop(metis);
     if pid < 0 {
         let e = std::io::Error::last_os_error();
         for fd in parent.iter().chain(child) {

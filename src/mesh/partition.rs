@@ -10,6 +10,14 @@ pub use crate::parallel::Partition;
 /// race, giving results that depend on other threads, or crash. Every call holds this.
 static METIS: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
+/// No METIS call runs while the guard this returns lives. A fork holds it: METIS draws from
+/// the C library's `rand`, under that library's lock, and a child forked while another thread
+/// held it inherits it taken; a meshing child so forked in the test binary hung for good in
+/// gmsh's first `srandom`.
+pub(crate) fn metis_held() -> std::sync::MutexGuard<'static, ()> {
+    METIS.lock().unwrap_or_else(|e| e.into_inner())
+}
+
 /// Make a METIS call, `call`, returning its status: one call at a time, and none lets a
 /// SIGTERM in or changes its handler. While it works METIS puts its own handler on SIGTERM (and
 /// SIGABRT), one that jumps back to the call's start from wherever the signal lands, and puts
@@ -22,7 +30,7 @@ static METIS: std::sync::Mutex<()> = std::sync::Mutex::new(());
 /// handlers are put back as they were. SIGABRT, with which METIS ends a call that runs out of
 /// memory, is left to it.
 pub(crate) fn metis(call: impl FnOnce() -> i32) -> i32 {
-    let _one_at_a_time = METIS.lock().unwrap_or_else(|e| e.into_inner());
+    let _one_at_a_time = metis_held();
     let signals = [libc::SIGTERM, libc::SIGABRT];
     // SAFETY: reading the dispositions of two signals, blocking one on this thread, and
     // setting both back as they were
@@ -199,7 +207,7 @@ mod tests {
     }
 
     mod signals {
-        use super::super::{METIS, metis};
+        use super::super::{metis, metis_held};
         use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering::SeqCst};
         use std::time::{Duration, Instant};
 
@@ -279,7 +287,7 @@ mod tests {
             // put in place, and back, under METIS's lock: a METIS call on another thread puts
             // back at its end the handler it found at its start
             let under_lock = |h| {
-                let _one_at_a_time = METIS.lock().unwrap_or_else(|e| e.into_inner());
+                let _one_at_a_time = metis_held();
                 arm(h)
             };
             let before = under_lock(counting());
