@@ -104,7 +104,7 @@ pub fn check(case_path: &Path, opts: &SolveOptions) -> Result<CheckReport, Solve
     }
     // so does a medium asked to be made again that cannot be
     if let Some(medium) = crate::model::remake::Medium::find(&model, super::remaking(&case))? {
-        let next = if case.file.region.iter().any(|r| r.settles()) {
+        let next = if super::settling(&case) {
             "the mechanics settled at the same load after each, what it changed measured"
         } else {
             "the next step from the state as carried (`settle` settles it first)"

@@ -341,6 +341,12 @@ pub(crate) fn remaking(case: &Case) -> Option<&str> {
         .map(|r| r.group.get_ref().as_str())
 }
 
+/// Whether the medium made again is settled after each remake, what it changed measured there
+/// (`settle`).
+pub(crate) fn settling(case: &Case) -> bool {
+    case.file.region.iter().any(|r| r.settles())
+}
+
 /// What a run on several ranks refuses before it starts (`tmc check` refuses it too): a
 /// friction layer that is reconnected, and a medium made again, run on one process.
 pub(crate) fn refuse_on_ranks(case: &Case, model: &Model, ranks: Ranks) -> Result<(), SolveError> {
@@ -524,8 +530,7 @@ fn solve_model(
     let out_dir = folder.dir().to_owned();
     let mut layer = Layer::find(&model)?;
     let mut medium = remake::Medium::find(&model, remaking(case))?;
-    // the mechanics settled after each remake, what it changed measured there
-    let settles = case.file.region.iter().any(|r| r.settles());
+    let settles = settling(case);
     let mut check_first = medium
         .as_mut()
         .is_some_and(|m| watch_from(m, &model, from.as_ref()));
@@ -567,7 +572,7 @@ fn solve_model(
         if changed {
             run.rejoined(match &medium {
                 None => Settle::Join,
-                Some(_) if settles => Settle::Remade(remake::SETTLED),
+                Some(_) if settles => Settle::Remade,
                 Some(_) => Settle::Deferred,
             });
         }
@@ -1094,7 +1099,7 @@ mod tests {
         let clean = clean.unwrap();
         // the first step's first factorisation (the first two are the initial state's)
         let fail_first = |k| (k == 2).then(|| LinearError::Factor("scripted".into()));
-        for (settle, cut) in [(Settle::Deferred, false), (Settle::Remade(1e-6), true)] {
+        for (settle, cut) in [(Settle::Deferred, false), (Settle::Remade, true)] {
             let (run, _) = solve_scripted_from("settled-retry", fail_first, Some(settle));
             let run = run.unwrap();
             assert!(run.converged, "{}", run.message);

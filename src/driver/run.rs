@@ -43,9 +43,9 @@ pub(super) struct Run<'a> {
 pub(super) enum Settle {
     /// A reconnected layer joined again: settled to the steps' own tolerance.
     Join,
-    /// The medium made again, settled to this relative residual (`settle`;
-    /// [`crate::model::remake::SETTLED`]), what the remake changed measured there.
-    Remade(f64),
+    /// The medium made again, settled (`settle`; to [`crate::model::remake::SETTLED`]), what
+    /// the remake changed measured there.
+    Remade,
     /// The medium made again, not settled: the next step starts from the state as carried,
     /// and where it fails, the mechanics are settled (to [`crate::model::remake::SETTLED`])
     /// and the step tried again.
@@ -325,8 +325,7 @@ impl<'a> Run<'a> {
     fn settle(&mut self, settle: Settle) {
         let to = match settle {
             Settle::Join => None,
-            Settle::Remade(to) => Some(to),
-            Settle::Deferred => Some(crate::model::remake::SETTLED),
+            Settle::Remade | Settle::Deferred => Some(crate::model::remake::SETTLED),
         };
         let why = match self.st.settle_mechanics(to) {
             Ok((rep, continued)) => {
@@ -342,7 +341,7 @@ impl<'a> Run<'a> {
                  as it is"
             );
         }
-        if !matches!(settle, Settle::Remade(_)) {
+        if settle != Settle::Remade {
             return;
         }
         let tot = &mut self.accounts.totals;

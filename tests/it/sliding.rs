@@ -48,13 +48,18 @@ fn solved_on_readme_mesh(name: &str, body: &str) -> (std::path::PathBuf, serde_j
     (out, s)
 }
 
+/// The case `body`, its medium made again settled after each remake (`settle`).
+fn settled(body: &str) -> String {
+    assert_eq!(body.matches("remake = true\n").count(), 1, "{body}");
+    body.replace("remake = true\n", "remake = true\nsettle = true\n")
+}
+
 /// The README's cylinder slid as `cases/cylinder-slide.toml` slides it, its mechanics settled
 /// after each remake (`settle`): what a remake changes is measured, and the forces over the
 /// slide are those of the run in `out`, whose next step started from the state as carried
 /// (`forces`, as [`slide_forces`] reads them).
 fn settled_alike(out: &Path, forces: (f64, f64, f64, f64, f64)) {
-    let body =
-        case_body("cylinder-slide").replace("remake = true\n", "remake = true\nsettle = true\n");
+    let body = settled(&case_body("cylinder-slide"));
     let (settled, s) = solved_on_readme_mesh("cylinder-slide-settled", &body);
     // what a remake changes of the rim's reaction at the settled state (measured: 1.3 % at
     // most, 1.0 % when made again before each pass too; 2.3 % when each new cell of the
@@ -180,11 +185,7 @@ fn the_cylinder_slides_on_a_medium_made_again_with_the_force_of_its_press_and_no
 fn slid_half(name: &str, params: &str, settle: bool) -> std::path::PathBuf {
     let body = case_body("cylinder-slide").replace("ux = 0.3\n", "ux = 0.5\n");
     assert!(body.contains("ux = 0.5"));
-    let body = if settle {
-        body.replace("remake = true\n", "remake = true\nsettle = true\n")
-    } else {
-        body
-    };
+    let body = if settle { settled(&body) } else { body };
     let body = body + common::ENDS_ONLY;
     let case = case_file(name, "cylinder-plate.geo", params, &body);
     let out = case.with_file_name("out");
@@ -286,12 +287,9 @@ fn a_medium_that_cannot_be_made_again_ends_the_run_with_its_summary() {
 /// (across every remake), and a remake's change of the heat flow is measured.
 #[test]
 fn heat_crosses_a_medium_made_again_and_is_conserved() {
-    let body = case_body("cylinder-slide")
+    let body = settled(&case_body("cylinder-slide"))
         .replace("mu = 10.0\n", "mu = 10.0\nk = 10.0\n")
-        .replace(
-            "remake = true\n",
-            "remake = true\nsettle = true\nk = 0.01\n",
-        )
+        .replace("remake = true\n", "remake = true\nk = 0.01\n")
         .replace("ux = 0.0\nuy = 0.0\n", "ux = 0.0\nuy = 0.0\ntheta = 0.0\n")
         .replace(
             "[[bc]]\ngroup = \"rim\"\nuy",
@@ -336,7 +334,7 @@ fn check_says_the_medium_will_be_made_again() {
         "check-settled",
         "cylinder-plate.geo",
         "params = { h = 0.1 }",
-        &case_body("cylinder-slide").replace("remake = true\n", "remake = true\nsettle = true\n"),
+        &settled(&case_body("cylinder-slide")),
     );
     let o = tmc(&["check", settled.to_str().unwrap()]);
     let text = String::from_utf8_lossy(&o.stdout).to_string() + &stderr(&o);
