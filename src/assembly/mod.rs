@@ -280,25 +280,37 @@ fn all_finite(v: &[f64]) -> bool {
 
 impl Assembler {
     pub fn new(model: &Model) -> Assembler {
-        Self::with_ranks(model, Ranks::SERIAL, None)
+        Self::with_ranks(model, Ranks::SERIAL, None, None)
+    }
+
+    /// [`Assembler::new`] on `pattern`, the model's whole pattern built beforehand
+    /// ([`build_pattern`]), so that the solvers' analysis of it can run beside this.
+    pub fn on(model: &Model, pattern: Pattern) -> Assembler {
+        Self::with_ranks(model, Ranks::SERIAL, None, Some(pattern))
     }
 
     /// The assembler of one rank of a distributed run: its cells are those the distribution
     /// gives it.
     pub fn distributed(model: &Model, distribution: Distribution) -> Assembler {
-        Self::with_ranks(model, distribution.ranks, Some(distribution))
+        Self::with_ranks(model, distribution.ranks, Some(distribution), None)
     }
 
-    fn with_ranks(model: &Model, ranks: Ranks, distribution: Option<Distribution>) -> Assembler {
+    fn with_ranks(
+        model: &Model,
+        ranks: Ranks,
+        distribution: Option<Distribution>,
+        built: Option<Pattern>,
+    ) -> Assembler {
         let terms = model.terms();
         let partition = distribution.as_ref().map(|d| &d.partition);
         let mine = |bi: usize, c: usize| {
             partition.is_none_or(|p| term_rank(model, p, terms[bi], c) == ranks.rank)
         };
         // on several ranks, the entries of this rank's cells only
-        let pattern = match partition {
-            None => build_pattern(&model.mesh, &model.dofs, &model.cons),
-            Some(_) => {
+        let pattern = match (partition, built) {
+            (None, Some(pattern)) => pattern,
+            (None, None) => build_pattern(&model.mesh, &model.dofs, &model.cons),
+            (Some(_), _) => {
                 let (nn, cells) = (model.mesh.coords.len(), cells_of(model, &terms, mine));
                 build_pattern_of(nn, cells, |_| true, &model.dofs, &model.cons)
             }

@@ -127,12 +127,24 @@ pub fn shared_sides(mesh: &Mesh, a: &[usize], b: &[usize]) -> Vec<Side> {
         k.sort_unstable();
         k
     };
+    // a shared side's nodes are all on cells of both: only such sides are looked up
+    let on = |blocks: &[usize]| {
+        let mut on = vec![false; mesh.coords.len()];
+        for &bi in blocks {
+            mesh.cells[bi].conn.iter().for_each(|&n| on[n] = true);
+        }
+        on
+    };
+    let (on_a, on_b) = (on(a), on(b));
     let mut in_b: HashMap<Vec<usize>, (usize, usize)> = HashMap::new();
     for &bi in b {
         let blk = &mesh.cells[bi];
         for c in 0..blk.n_cells() {
+            let nodes = blk.cell(c);
             for side in sides(blk.kind) {
-                in_b.insert(key(blk.cell(c), side), (bi, c));
+                if side.iter().all(|&i| on_a[nodes[i]]) {
+                    in_b.insert(key(nodes, side), (bi, c));
+                }
             }
         }
     }
@@ -142,6 +154,9 @@ pub fn shared_sides(mesh: &Mesh, a: &[usize], b: &[usize]) -> Vec<Side> {
         for c in 0..blk.n_cells() {
             let nodes = blk.cell(c);
             for side in sides(blk.kind) {
+                if !side.iter().all(|&i| on_b[nodes[i]]) {
+                    continue;
+                }
                 if let Some(other) = in_b.remove(&key(nodes, side)) {
                     let corners = side.iter().map(|&i| nodes[i]).collect();
                     out.push(Side {

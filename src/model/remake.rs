@@ -35,8 +35,8 @@ use crate::kernel::friction::HISTORY_PER_POINT;
 use crate::mesh::Mesh;
 use crate::mesh::remesh::{Mesher, RemeshError, boundary_loops, remesh, supported};
 use nalgebra::{Matrix2, Matrix3, SymmetricEigen, Vector2, Vector3};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
-use std::collections::HashMap;
 
 /// How far (in cell sizes, see [`Medium::slid_cells`]) a medium cell's faces may slide past
 /// each other before the medium is made again.
@@ -790,18 +790,18 @@ impl Medium {
         let mesh = &model.mesh;
         // each boundary node's neighbours: along its loop in 2D, across the edges of the
         // outer triangles in 3D
-        let mut next: HashMap<usize, Vec<usize>> = HashMap::new();
+        let mut next: Vec<Vec<usize>> = vec![Vec::new(); mesh.coords.len()];
         // in 3D, the own nodes that share a cell with a solid's node stay where they are
         let mut beside = vec![false; mesh.coords.len()];
         if mesh.dim == 3 {
             for f in crate::mesh::faces::outer_triangles(mesh, &self.blocks)? {
                 for i in 0..3 {
                     let (a, b) = (f[i], f[(i + 1) % 3]);
-                    next.entry(a).or_default().push(b);
-                    next.entry(b).or_default().push(a);
+                    next[a].push(b);
+                    next[b].push(a);
                 }
             }
-            for around in next.values_mut() {
+            for around in &mut next {
                 around.sort_unstable();
                 around.dedup();
             }
@@ -818,15 +818,16 @@ impl Medium {
             for lp in boundary_loops(mesh, &self.blocks)? {
                 let k = lp.len();
                 for i in 0..k {
-                    next.insert(lp[i], vec![lp[(i + k - 1) % k], lp[(i + 1) % k]]);
+                    next[lp[i]] = vec![lp[(i + k - 1) % k], lp[(i + 1) % k]];
                 }
             }
         }
         let d = model.dofs.dim;
         let u_of = |n: usize, i: usize| model.dofs.u.get(n * d + i).map(|&u| u as usize);
         let mut places = vec![None; mesh.coords.len()];
-        let mut own: Vec<usize> = (next.keys().copied()).filter(|&n| !on_solid[n]).collect();
-        own.sort_unstable();
+        let own: Vec<usize> = (0..mesh.coords.len())
+            .filter(|&n| !next[n].is_empty() && !on_solid[n])
+            .collect();
         for i in 0..d {
             // per component: the solids' nodes and what is prescribed hold; the rest is the
             // mean of its neighbours, a little held to where the mesh put it (so that a part
@@ -838,11 +839,12 @@ impl Medium {
             };
             let value = |n: usize| u_of(n, i).map_or(0.0, |u| x[u]);
             let free: Vec<usize> = own.iter().copied().filter(|&n| !held(n)).collect();
-            let at: HashMap<usize, usize> = free.iter().enumerate().map(|(k, &n)| (n, k)).collect();
-            let weight = |n: usize| next[&n].len() as f64 * (1.0 + 1e-9);
+            let mut at = vec![usize::MAX; mesh.coords.len()];
+            free.iter().enumerate().for_each(|(k, &n)| at[n] = k);
+            let weight = |n: usize| next[n].len() as f64 * (1.0 + 1e-9);
             let rhs: Vec<f64> = (free.iter())
                 .map(|&n| {
-                    next[&n]
+                    next[n]
                         .iter()
                         .filter(|&&m| held(m))
                         .map(|&m| value(m))
@@ -851,10 +853,10 @@ impl Medium {
                 .collect();
             let apply = |v: &[f64], out: &mut [f64]| {
                 for (k, &n) in free.iter().enumerate() {
-                    let around: f64 = next[&n]
+                    let around: f64 = next[n]
                         .iter()
-                        .filter_map(|m| at.get(m))
-                        .map(|&j| v[j])
+                        .filter(|&&m| at[m] != usize::MAX)
+                        .map(|&m| v[at[m]])
                         .sum();
                     out[k] = weight(n) * v[k] - around;
                 }
@@ -1096,8 +1098,11 @@ impl Medium {
             Some(o) => placed[o],
             None => r.mesh.coords[n],
         };
-        let cells: Vec<NewCell> = (r.medium.iter())
+        // each new cell's old state looked up on its own: over the threads the run has
+        let at: Vec<(usize, usize)> = (r.medium.iter())
             .flat_map(|&b| (0..r.mesh.cells[b].n_cells()).map(move |c| (b, c)))
+            .collect();
+        let cells: Vec<NewCell> = (at.into_par_iter())
             .map(|(b, c)| {
                 let p: Vec<[f64; 3]> = r.mesh.cells[b].cell(c).iter().map(|&n| here(n)).collect();
                 let k = p.len() as f64;
@@ -1135,6 +1140,7 @@ impl Medium {
             }
         }
         let theta = (0..r.mesh.coords.len())
+            .into_par_iter()
             .map(|n| match r.old_of[n] {
                 Some(_) => 0.0,
                 None => find.value(&here(n), |at| Some(at.theta())).unwrap_or(0.0),

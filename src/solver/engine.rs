@@ -11,7 +11,7 @@ use super::linear::{LinearError, LinearKind, LinearSolver};
 use super::newton::Part;
 use crate::assembly::Assembler;
 use crate::case::{EngineChoice, PetscMethod, Solver};
-use crate::dofs::{Pattern, Structure, equation_structure};
+use crate::dofs::{Pattern, Structure, build_pattern, equation_structure};
 use crate::model::Model;
 use crate::parallel::Ranks;
 use std::ops::Range;
@@ -202,12 +202,18 @@ pub fn plan(model: &Model, request: &Request, systems: &[System]) -> Result<Plan
     if *request.solver.engine.get_ref() == EngineChoice::Petsc || !Ranks::world().is_serial() {
         return on_ranks(model, request, systems, request.solver.petsc.method);
     }
-    let asm = Assembler::new(model);
+    // the assembler's maps and schedule beside the solvers' ordering and symbolic analysis:
+    // a medium made again plans its run anew each time
+    let pattern = build_pattern(&model.mesh, &model.dofs, &model.cons);
     let structure = equation_structure(&model.dofs, &model.cons);
-    let solvers = Faer {
+    let faer = Faer {
         whole: request.whole,
-    }
-    .solvers(systems, &asm.pattern, &structure)?;
+    };
+    let (asm, solvers) = rayon::join(
+        || Assembler::on(model, pattern.clone()),
+        || faer.solvers(systems, &pattern, &structure),
+    );
+    let solvers = solvers?;
     let auto = *request.solver.engine.get_ref() == EngineChoice::Auto
         && *request.solver.linear.get_ref() == crate::case::LinearChoice::Auto;
     let mut note = None;

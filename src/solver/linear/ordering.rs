@@ -36,33 +36,50 @@ pub(super) fn nested_dissection_trying(
     tries: Option<i32>,
 ) -> (Vec<usize>, Vec<usize>) {
     let n = p.nrows();
-    // compact node ids
-    let mut id = std::collections::HashMap::new();
+    // compact node ids, in the order of their first equation
+    let mut id = vec![u32::MAX; node.iter().map(|&v| v as usize + 1).max().unwrap_or(0)];
+    let mut nv = 0;
     let vertex: Vec<usize> = node
         .iter()
         .map(|&v| {
-            let k = id.len();
-            *id.entry(v).or_insert(k)
+            if id[v as usize] == u32::MAX {
+                id[v as usize] = nv as u32;
+                nv += 1;
+            }
+            id[v as usize] as usize
         })
         .collect();
-    let nv = id.len();
-    let mut adj: Vec<Vec<i32>> = vec![Vec::new(); nv];
+    // each vertex's equations, then its neighbours through their columns: sorted, once each
+    let mut eq_at = vec![0usize; nv + 1];
+    for &v in &vertex {
+        eq_at[v + 1] += 1;
+    }
+    for v in 0..nv {
+        eq_at[v + 1] += eq_at[v];
+    }
+    let mut eqs = vec![0usize; n];
+    let mut next = eq_at.clone();
+    for (e, &v) in vertex.iter().enumerate() {
+        eqs[next[v]] = e;
+        next[v] += 1;
+    }
     let (cp, ri) = (p.col_ptr(), p.row_idx());
-    for j in 0..n {
-        for &i in &ri[cp[j]..cp[j + 1]] {
-            let (a, b) = (vertex[i], vertex[j]);
-            if a != b {
-                adj[b].push(a as i32);
+    let mut seen = vec![usize::MAX; nv];
+    let mut xadj = Vec::with_capacity(nv + 1);
+    let mut adjncy: Vec<i32> = Vec::with_capacity(cp[n] / 2);
+    xadj.push(0i32);
+    for b in 0..nv {
+        let start = adjncy.len();
+        for &j in &eqs[eq_at[b]..eq_at[b + 1]] {
+            for &i in &ri[cp[j]..cp[j + 1]] {
+                let a = vertex[i];
+                if a != b && seen[a] != b {
+                    seen[a] = b;
+                    adjncy.push(a as i32);
+                }
             }
         }
-    }
-    let mut xadj = Vec::with_capacity(nv + 1);
-    let mut adjncy = Vec::new();
-    xadj.push(0i32);
-    for a in &mut adj {
-        a.sort_unstable();
-        a.dedup();
-        adjncy.extend_from_slice(a);
+        adjncy[start..].sort_unstable();
         xadj.push(adjncy.len() as i32);
     }
     let order: Vec<usize> = if nv > 1 && !adjncy.is_empty() {
@@ -102,11 +119,9 @@ pub(super) fn nested_dissection_trying(
         (0..nv).collect()
     };
     // equations of each vertex, in their original order
-    let mut eqs: Vec<Vec<usize>> = vec![Vec::new(); nv];
-    for (e, &v) in vertex.iter().enumerate() {
-        eqs[v].push(e);
-    }
-    let fwd: Vec<usize> = order.iter().flat_map(|&v| eqs[v].iter().copied()).collect();
+    let fwd: Vec<usize> = (order.iter())
+        .flat_map(|&v| eqs[eq_at[v]..eq_at[v + 1]].iter().copied())
+        .collect();
     let mut inv = vec![0; n];
     for (new, &old) in fwd.iter().enumerate() {
         inv[old] = new;

@@ -155,14 +155,24 @@ impl TreeLdlt {
             Some(p) => (p.arrays().0.to_vec(), p.arrays().1.to_vec()),
             None => ((0..n).collect(), (0..n).collect()),
         };
-        let mut a_of: Vec<Vec<(usize, usize)>> = vec![Vec::new(); ns];
+        // each supernode's entries counted, then laid out in one array (a supernode's in its
+        // panel's order): a medium made again analyses a new pattern each time
         let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
+        let lower = |c: usize| (col_ptr[c]..col_ptr[c + 1]).filter(move |&k| row_idx[k] >= c);
+        let mut a_at = vec![0usize; ns + 1];
         for c in 0..n {
-            for k in col_ptr[c]..col_ptr[c + 1] {
+            for k in lower(c) {
+                a_at[node_of[inv[row_idx[k]].min(inv[c])] + 1] += 1;
+            }
+        }
+        for s in 0..ns {
+            a_at[s + 1] += a_at[s];
+        }
+        let mut next = a_at.clone();
+        let mut a = vec![(0usize, 0usize); a_at[ns]];
+        for c in 0..n {
+            for k in lower(c) {
                 let r = row_idx[k];
-                if r < c {
-                    continue;
-                }
                 let (i, j) = (inv[r].max(inv[c]), inv[r].min(inv[c]));
                 let s = node_of[j];
                 let w = begin[s + 1] - begin[s];
@@ -171,13 +181,13 @@ impl TreeLdlt {
                 } else {
                     w + pattern_of(s).partition_point(|&x| x < i)
                 };
-                a_of[s].push(((j - begin[s]) * (w + n_rows[s]) + li, k));
+                a[next[s]] = ((j - begin[s]) * (w + n_rows[s]) + li, k);
+                next[s] += 1;
             }
         }
-        for entries in &mut a_of {
-            entries.sort_unstable();
+        for s in 0..ns {
+            a[a_at[s]..a_at[s + 1]].sort_unstable();
         }
-        let (a_at, a) = flatten(a_of);
 
         // who updates whom, and the tree (a supernode's parent holds its first row below it)
         let mut upd_of: Vec<Vec<usize>> = vec![Vec::new(); ns];
