@@ -6,7 +6,9 @@ pub mod local;
 pub mod pattern;
 
 pub use local::{CellState, Layout, gather, rebase};
-pub use pattern::{Pattern, Structure, build_pattern, build_pattern_of, equation_structure};
+pub use pattern::{
+    Ordering, Pattern, Structure, build_pattern, build_pattern_of, equation_structure,
+};
 
 use crate::mesh::Mesh;
 

@@ -129,6 +129,20 @@ pub struct Structure {
     pub node: Vec<u32>,
     /// Per equation: `true` for temperature, `false` for mechanics (u and p).
     pub thermal: Vec<bool>,
+    /// How a direct solver orders the node graph to keep its factor's fill low.
+    pub ordering: Ordering,
+}
+
+/// How a direct solver orders its equations (their mesh nodes' graph) against fill.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Ordering {
+    /// METIS's nested dissection: the least fill, found once for a run's many factorisations.
+    #[default]
+    NestedDissection,
+    /// faer's approximate minimum degree: found several times faster, with about as little
+    /// fill on a 2D mesh; for a run that plans its solver anew every few steps (a medium made
+    /// again as the bodies move).
+    MinimumDegree,
 }
 
 /// Mesh node and field kind of every free equation, for the linear solver.
@@ -142,5 +156,9 @@ pub fn equation_structure(dofs: &DofMap, cons: &Constraints) -> Structure {
             thermal[e as usize] = dofs.field[d] == Field::Theta;
         }
     }
-    Structure { node, thermal }
+    Structure {
+        node,
+        thermal,
+        ordering: Ordering::default(),
+    }
 }

@@ -11,7 +11,7 @@ use super::linear::{LinearError, LinearKind, LinearSolver};
 use super::newton::Part;
 use crate::assembly::Assembler;
 use crate::case::{EngineChoice, PetscMethod, Solver};
-use crate::dofs::{Pattern, Structure, build_pattern, equation_structure};
+use crate::dofs::{Ordering, Pattern, Structure, build_pattern, equation_structure};
 use crate::model::Model;
 use crate::parallel::Ranks;
 use std::ops::Range;
@@ -118,6 +118,8 @@ pub struct Request<'a> {
     pub memory_mb: Option<f64>,
     /// Whether the run opens gmsh (meshes a `.geo`), whose libraries its memory then holds.
     pub gmsh: bool,
+    /// How faer's direct solvers order their equations.
+    pub ordering: Ordering,
 }
 
 /// The assembler and the solvers a run uses, their symbolic analyses done, and what Newton's
@@ -205,7 +207,10 @@ pub fn plan(model: &Model, request: &Request, systems: &[System]) -> Result<Plan
     // the assembler's maps and schedule beside the solvers' ordering and symbolic analysis:
     // a medium made again plans its run anew each time
     let pattern = build_pattern(&model.mesh, &model.dofs, &model.cons);
-    let structure = equation_structure(&model.dofs, &model.cons);
+    let structure = Structure {
+        ordering: request.ordering,
+        ..equation_structure(&model.dofs, &model.cons)
+    };
     let faer = Faer {
         whole: request.whole,
     };
@@ -365,6 +370,7 @@ mod tests {
         let structure = Structure {
             node: vec![0, 0, 1, 1],
             thermal: vec![false, true, false, true],
+            ordering: Ordering::default(),
         };
         (pattern, structure)
     }

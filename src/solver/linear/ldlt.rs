@@ -1,7 +1,7 @@
 //! Symmetric LDLᵀ of a sub-block, in double or single precision, on faer's supernodal
 //! factorisation.
 
-use super::ordering::nested_dissection;
+use super::ordering::{Nodes, fill_reducing};
 use super::static_lu::Real;
 use super::submatrix::SubMatrix;
 use super::tree::TreeLdlt;
@@ -81,14 +81,14 @@ pub(super) struct SymFactor {
 }
 
 impl SymFactor {
-    /// `node[i]`: mesh node of the sub-block's equation i.
+    /// `nodes`: the mesh node of each of the sub-block's equations, and how to order them.
     pub(super) fn new(
         sub: SubMatrix,
-        node: &[u32],
+        nodes: &Nodes,
         precision: Precision,
     ) -> Result<SymFactor, LinearError> {
         let n = sub.pattern.nrows();
-        let (fwd, inv) = nested_dissection(&sub.pattern, node);
+        let (fwd, inv) = fill_reducing(&sub.pattern, nodes);
         let perm = PermRef::new_checked(&fwd, &inv, n);
         let symbolic = factorize_symbolic_cholesky(
             sub.pattern.as_ref(),

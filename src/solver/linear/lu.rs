@@ -2,7 +2,7 @@
 //! preconditions them within its budget.
 
 use super::lag::{Lag, Lagged, lag_budget, solve_lagged};
-use super::ordering::nested_dissection;
+use super::ordering::{Nodes, fill_reducing};
 use super::static_lu::{Real, StaticLu};
 use super::submatrix::SubMatrix;
 use super::{Factorization, LinearError};
@@ -80,10 +80,10 @@ impl<T: Real> LaggedLu<T> {
         self.staticlu.entries() * std::mem::size_of::<T>()
     }
 
-    /// `node[i]`: mesh node of the block's equation i (the elimination order keeps a node's
-    /// unknowns together).
-    pub(super) fn new(sub: SubMatrix, node: &[u32]) -> LaggedLu<T> {
-        let (fwd, _) = nested_dissection(&sub.pattern, node);
+    /// `nodes`: the mesh node of each of the block's equations, and how to order them (the
+    /// elimination order keeps a node's unknowns together).
+    pub(super) fn new(sub: SubMatrix, nodes: &Nodes) -> LaggedLu<T> {
+        let (fwd, _) = fill_reducing(&sub.pattern, nodes);
         let staticlu = StaticLu::<T>::new(&sub.pattern, &fwd);
         LaggedLu {
             lag: Lag::new(lag_budget(&staticlu, &sub)),

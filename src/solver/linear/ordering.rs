@@ -1,12 +1,32 @@
 //! The fill-reducing ordering: METIS nested dissection of the mesh nodes' graph, or faer's
-//! approximate minimum degree of it where METIS fails.
+//! approximate minimum degree of it (where the run asks for it, or where METIS fails).
 
-use crate::dofs::Structure;
+use crate::dofs::{Ordering, Structure};
 use faer::sparse::SymbolicSparseColMat;
 
-/// The mesh node of each of the equations `eqs`, for [`nested_dissection`].
-pub(super) fn nodes_of(s: &Structure, eqs: &[usize]) -> Vec<u32> {
-    eqs.iter().map(|&e| s.node[e]).collect()
+/// The equations of a block as its ordering sees them: each one's mesh node, and how the
+/// run orders them ([`Structure::ordering`]).
+pub(super) struct Nodes {
+    pub node: Vec<u32>,
+    pub ordering: Ordering,
+}
+
+/// The mesh node of each of the equations `eqs`, and the structure's ordering, for
+/// [`fill_reducing`].
+pub(super) fn nodes_of(s: &Structure, eqs: &[usize]) -> Nodes {
+    Nodes {
+        node: eqs.iter().map(|&e| s.node[e]).collect(),
+        ordering: s.ordering,
+    }
+}
+
+/// The fill-reducing ordering of a symmetric pattern whose equations stand at `nodes`, as
+/// they ask: (forward, inverse) with `forward[new] = old`, a node's unknowns together.
+pub(super) fn fill_reducing(
+    p: &SymbolicSparseColMat<usize>,
+    nodes: &Nodes,
+) -> (Vec<usize>, Vec<usize>) {
+    ordered(p, &nodes.node, nodes.ordering, None)
 }
 
 /// Graphs of at least this many mesh nodes are cut by the best of [`SEPARATOR_TRIES`]
@@ -21,6 +41,7 @@ pub(super) const SEPARATOR_TRIES: i32 = 5;
 /// Fill-reducing ordering of a symmetric pattern: METIS nested dissection of the graph whose
 /// vertices are mesh nodes (all unknowns of a node stay together), expanded to equations.
 /// Returns (forward, inverse) with `forward[new] = old`.
+#[cfg(test)]
 pub(super) fn nested_dissection(
     p: &SymbolicSparseColMat<usize>,
     node: &[u32],
@@ -30,9 +51,21 @@ pub(super) fn nested_dissection(
 
 /// [`nested_dissection`], with `tries` separators per level if given (else as many as the
 /// graph's size calls for).
+#[cfg(test)]
 pub(super) fn nested_dissection_trying(
     p: &SymbolicSparseColMat<usize>,
     node: &[u32],
+    tries: Option<i32>,
+) -> (Vec<usize>, Vec<usize>) {
+    ordered(p, node, Ordering::NestedDissection, tries)
+}
+
+/// The mesh nodes' graph of `p` ordered as `how` says (nested dissection with `tries`
+/// separators per level if given), expanded to equations.
+fn ordered(
+    p: &SymbolicSparseColMat<usize>,
+    node: &[u32],
+    how: Ordering,
     tries: Option<i32>,
 ) -> (Vec<usize>, Vec<usize>) {
     let n = p.nrows();
@@ -82,7 +115,9 @@ pub(super) fn nested_dissection_trying(
         adjncy[start..].sort_unstable();
         xadj.push(adjncy.len() as i32);
     }
-    let order: Vec<usize> = if nv > 1 && !adjncy.is_empty() {
+    let order: Vec<usize> = if how == Ordering::MinimumDegree {
+        minimum_degree(&xadj, &adjncy)
+    } else if nv > 1 && !adjncy.is_empty() {
         let mut nvtxs = nv as i32;
         let mut perm = vec![0i32; nv];
         let mut iperm = vec![0i32; nv];

@@ -7,6 +7,7 @@ use super::ordering::*;
 use super::static_lu::*;
 use super::submatrix::*;
 use super::*;
+use crate::dofs::Ordering;
 use faer::Side;
 use faer::perm::PermRef;
 use faer::sparse::SymbolicSparseColMat;
@@ -62,14 +63,20 @@ fn residual(p: &Pattern, v: &[f64], x: &[f64], b: &[f64]) -> f64 {
 
 #[test]
 fn every_solver_solves_and_refactors() {
-    for (kind, kut, ktu) in [
+    let kinds = [
         (LinearKind::Ldlt, 0.2, 0.2),
         (LinearKind::Lu, 0.1, 0.3),
         (LinearKind::BlockGmres, 0.0, 0.3),
         (LinearKind::BlockGmres, 0.05, 0.3),
-    ] {
+    ];
+    let orderings = [Ordering::NestedDissection, Ordering::MinimumDegree];
+    for ((kind, kut, ktu), ordering) in kinds.into_iter().flat_map(|k| orderings.map(|o| (k, o))) {
         let (p, mut v, node, thermal) = system(40, kut, ktu);
-        let s = Structure { node, thermal };
+        let s = Structure {
+            node,
+            thermal,
+            ordering,
+        };
         let mut solver = LinearSolver::new(kind, &p, &s).unwrap();
         for round in 0..2 {
             if round == 1 {
@@ -79,7 +86,10 @@ fn every_solver_solves_and_refactors() {
             let b: Vec<f64> = (0..p.n).map(|i| (i as f64).sin()).collect();
             let mut x = b.clone();
             solver.solve(&mut x).unwrap();
-            assert!(residual(&p, &v, &x, &b) < 1e-10, "{kind:?} {kut}");
+            assert!(
+                residual(&p, &v, &x, &b) < 1e-10,
+                "{kind:?} {kut} {ordering:?}"
+            );
             if kind == LinearKind::BlockGmres {
                 // one-way coupling: the block-triangular preconditioner is exact up to its
                 // single-precision rounding (1e-7): three iterations reach 1e-10
@@ -96,7 +106,11 @@ fn every_solver_solves_and_refactors() {
 #[test]
 fn a_lagged_lu_solves_newer_tangents_and_refactors_when_they_drift() {
     let (p, v, node, thermal) = system(40, 0.1, 0.3);
-    let s = Structure { node, thermal };
+    let s = Structure {
+        node,
+        thermal,
+        ordering: Ordering::default(),
+    };
     // a factor this small costs less than one GMRES iteration with it is worth: the
     // solver never lags it (a newer tangent is factorised and solved in one product)
     let cheap = double_lu(&p, &s);
@@ -156,7 +170,11 @@ fn a_lagged_lu_solves_newer_tangents_and_refactors_when_they_drift() {
             }
         }
     }
-    let s = Structure { node, thermal };
+    let s = Structure {
+        node,
+        thermal,
+        ordering: Ordering::default(),
+    };
     let mut solver = LinearSolver::block_gmres(&p, &s, true).unwrap();
     solver.factor(&w).unwrap();
     let mut x = b.clone();
@@ -169,7 +187,11 @@ fn a_lagged_lu_solves_newer_tangents_and_refactors_when_they_drift() {
 #[test]
 fn the_block_preconditioner_keeps_its_factors_only_for_a_near_tangent() {
     let (p, v, node, thermal) = system(40, 0.05, 0.3);
-    let s = Structure { node, thermal };
+    let s = Structure {
+        node,
+        thermal,
+        ordering: Ordering::default(),
+    };
     // a system this small is never lagged by its price
     let block = BlockTriangular::new(&p, &s, false).unwrap();
     assert_eq!(block.lag.budget, 0);
@@ -226,7 +248,11 @@ fn a_factor_s_price_is_the_same_at_every_thread_count() {
     // whether a factor is dear decides how Newton's damped updates are solved: a price that
     // fell with the threads gave the 147k row 83 Newton iterations at 2 threads and 81 at 8
     let (p, _, node, thermal) = system(40, 0.05, 0.3);
-    let s = Structure { node, thermal };
+    let s = Structure {
+        node,
+        thermal,
+        ordering: Ordering::default(),
+    };
     let price = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
@@ -256,7 +282,11 @@ fn a_dear_factor_is_kept_through_damped_iterations_for_a_looser_solve() {
     assert!(Lag::priced(33.6).dear && Lag::priced(33.6).budget == LAG_MAX_ITS);
     assert!(!Lag::priced(9.1).dear && Lag::priced(9.1).budget == 9);
     let (p, v, node, thermal) = system(40, 0.05, 0.3);
-    let s = Structure { node, thermal };
+    let s = Structure {
+        node,
+        thermal,
+        ordering: Ordering::default(),
+    };
     let dear = BlockTriangular {
         lag: Lag::priced(33.6),
         ..BlockTriangular::new(&p, &s, false).unwrap()
@@ -462,7 +492,11 @@ fn double_lu(p: &Pattern, s: &Structure) -> LaggedLu<f64> {
 #[test]
 fn a_single_precision_lu_solves_to_double_precision() {
     let (p, v, node, thermal) = system(40, 0.1, 0.3);
-    let s = Structure { node, thermal };
+    let s = Structure {
+        node,
+        thermal,
+        ordering: Ordering::default(),
+    };
     let single = double_lu(&p, &s).in_precision::<f32>();
     let mut solver = LinearSolver::with(LinearKind::Lu, Box::new(single));
     let b: Vec<f64> = (0..p.n).map(|i| (i as f64).cos()).collect();
@@ -502,6 +536,7 @@ fn a_vanishing_static_pivot_falls_back_to_partial_pivoting() {
     let s = Structure {
         node: (0..n as u32).collect(),
         thermal: vec![false; n],
+        ordering: Ordering::default(),
     };
     let mut solver = LinearSolver::new(LinearKind::Lu, &p, &s).unwrap();
     solver.factor(&v).unwrap();
@@ -682,6 +717,60 @@ fn nested_dissection_keeps_node_unknowns_together() {
     for pair in fwd.chunks(2) {
         assert_eq!(node[pair[0]], node[pair[1]]);
     }
+}
+
+#[test]
+fn the_minimum_degree_keeps_node_unknowns_together_and_fills_a_2d_mesh_little() {
+    let (p, _, node, _) = system(50, 0.1, 0.1);
+    let sp = SymbolicSparseColMat::new_checked(p.n, p.n, p.col_ptr, None, p.row_idx);
+    let nodes = Nodes {
+        node: node.clone(),
+        ordering: Ordering::MinimumDegree,
+    };
+    let (fwd, inv) = fill_reducing(&sp, &nodes);
+    let mut seen = fwd.clone();
+    seen.sort_unstable();
+    assert_eq!(seen, (0..p.n).collect::<Vec<_>>());
+    for (new, &old) in fwd.iter().enumerate() {
+        assert_eq!(inv[old], new);
+    }
+    for pair in fwd.chunks(2) {
+        assert_eq!(node[pair[0]], node[pair[1]]);
+    }
+    // a 2D grid of 60 × 60 nodes (5-point): about as little fill as METIS's, far below the
+    // natural order's band
+    let k = 60;
+    let at = |x: usize, y: usize| x + k * y;
+    let (mut col_ptr, mut row_idx) = (vec![0], Vec::new());
+    for y in 0..k {
+        for x in 0..k {
+            let mut col = vec![at(x, y)];
+            (x > 0).then(|| col.push(at(x - 1, y)));
+            (x + 1 < k).then(|| col.push(at(x + 1, y)));
+            (y > 0).then(|| col.push(at(x, y - 1)));
+            (y + 1 < k).then(|| col.push(at(x, y + 1)));
+            col.sort_unstable();
+            row_idx.extend(col);
+            col_ptr.push(row_idx.len());
+        }
+    }
+    let n = k * k;
+    let sp = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
+    let entries = |(fwd, inv): (Vec<usize>, Vec<usize>)| analysed(&sp, &fwd, &inv).len_val();
+    let node: Vec<u32> = (0..n as u32).collect();
+    let metis = entries(nested_dissection(&sp, &node));
+    let amd = entries(fill_reducing(
+        &sp,
+        &Nodes {
+            node,
+            ordering: Ordering::MinimumDegree,
+        },
+    ));
+    let natural = entries(((0..n).collect(), (0..n).collect()));
+    assert!(
+        amd < metis * 3 / 2 && amd < natural / 2,
+        "{amd} entries; METIS {metis}, the natural order {natural}"
+    );
 }
 
 /// faer's symbolic LDLᵀ of `sp`'s lower triangle in the order `fwd` (`inv` its inverse).
