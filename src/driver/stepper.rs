@@ -354,8 +354,8 @@ fn controller(case: &Case, model: &Model) -> Controller {
 
 /// How a run's direct solvers order their equations. A medium made again in 2D plans the
 /// run anew every few steps: there faer's minimum degree, found in a fraction of METIS's time
-/// with about as little fill, made the frictionless pad in a box 5 % faster and the README
-/// cylinder slid on h = 0.05 7 % (its remakes 11 % and 25 %;
+/// with about as little fill, took 18 % off the frictionless pad in a box's remakes (7 % off
+/// its run) and 10 % off those of the README cylinder slid on h = 0.05 (4 %;
 /// docs/notes/2026-12-05-a-remake-s-plan-made-cheaper.md). In 3D, where gmsh's meshing is
 /// most of a remake and minimum degree fills more, and in any other run, METIS's nested
 /// dissection.

@@ -115,43 +115,17 @@ fn ordered(
         adjncy[start..].sort_unstable();
         xadj.push(adjncy.len() as i32);
     }
-    let order: Vec<usize> = if how == Ordering::MinimumDegree {
-        minimum_degree(&xadj, &adjncy)
-    } else if nv > 1 && !adjncy.is_empty() {
-        let mut nvtxs = nv as i32;
-        let mut perm = vec![0i32; nv];
-        let mut iperm = vec![0i32; nv];
-        let mut options = [-1i32; metis_sys::METIS_NOPTIONS as usize];
-        let separators = tries.unwrap_or(if nv >= SEPARATOR_TRIES_FROM {
-            SEPARATOR_TRIES
-        } else {
-            1
-        });
-        // SAFETY: METIS reads xadj/adjncy (a valid CSR graph without self loops) and writes
-        // nv entries of perm and iperm; options is set to defaults (−1) before the call.
-        let status = crate::mesh::partition::metis(|| unsafe {
-            metis_sys::METIS_SetDefaultOptions(options.as_mut_ptr());
-            options[metis_sys::moptions_et_METIS_OPTION_NUMBERING as usize] = 0;
-            options[metis_sys::moptions_et_METIS_OPTION_NSEPS as usize] = separators;
-            metis_sys::METIS_NodeND(
-                &mut nvtxs,
-                xadj.as_mut_ptr(),
-                adjncy.as_mut_ptr(),
-                std::ptr::null_mut(),
-                options.as_mut_ptr(),
-                perm.as_mut_ptr(),
-                iperm.as_mut_ptr(),
-            )
-        });
-        if status == metis_sys::rstatus_et_METIS_OK {
-            perm.iter().map(|&v| v as usize).collect()
-        } else {
-            // METIS failed for itself (short of memory, say): the natural order would fill a
-            // 3D factor without bound, the minimum degree fills it about as little as METIS
-            minimum_degree(&xadj, &adjncy)
+    let order: Vec<usize> = match how {
+        _ if nv <= 1 || adjncy.is_empty() => (0..nv).collect(),
+        Ordering::MinimumDegree => minimum_degree(&xadj, &adjncy),
+        Ordering::NestedDissection => {
+            let separators = tries.unwrap_or(if nv >= SEPARATOR_TRIES_FROM {
+                SEPARATOR_TRIES
+            } else {
+                1
+            });
+            metis_nested_dissection(&mut xadj, &mut adjncy, separators)
         }
-    } else {
-        (0..nv).collect()
     };
     // equations of each vertex, in their original order
     let fwd: Vec<usize> = (order.iter())
@@ -162,6 +136,39 @@ fn ordered(
         inv[old] = new;
     }
     (fwd, inv)
+}
+
+/// METIS's nested dissection of the graph `xadj`/`adjncy` (CSR, sorted, without self loops, at
+/// least two vertices and an edge), `separators` tried per level: `order[new] = old`. Where
+/// METIS fails for itself (short of memory, say), the minimum degree: the natural order would
+/// fill a 3D factor without bound, the minimum degree fills it about as little as METIS.
+fn metis_nested_dissection(xadj: &mut [i32], adjncy: &mut [i32], separators: i32) -> Vec<usize> {
+    let nv = xadj.len() - 1;
+    let mut nvtxs = nv as i32;
+    let mut perm = vec![0i32; nv];
+    let mut iperm = vec![0i32; nv];
+    let mut options = [-1i32; metis_sys::METIS_NOPTIONS as usize];
+    // SAFETY: METIS reads xadj/adjncy (a valid CSR graph without self loops) and writes
+    // nv entries of perm and iperm; options is set to defaults (−1) before the call.
+    let status = crate::mesh::partition::metis(|| unsafe {
+        metis_sys::METIS_SetDefaultOptions(options.as_mut_ptr());
+        options[metis_sys::moptions_et_METIS_OPTION_NUMBERING as usize] = 0;
+        options[metis_sys::moptions_et_METIS_OPTION_NSEPS as usize] = separators;
+        metis_sys::METIS_NodeND(
+            &mut nvtxs,
+            xadj.as_mut_ptr(),
+            adjncy.as_mut_ptr(),
+            std::ptr::null_mut(),
+            options.as_mut_ptr(),
+            perm.as_mut_ptr(),
+            iperm.as_mut_ptr(),
+        )
+    });
+    if status == metis_sys::rstatus_et_METIS_OK {
+        perm.iter().map(|&v| v as usize).collect()
+    } else {
+        minimum_degree(xadj, adjncy)
+    }
 }
 
 /// faer's approximate minimum degree ordering of the graph `xadj`/`adjncy` (CSR, sorted,
