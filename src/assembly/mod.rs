@@ -37,6 +37,7 @@ use history::{PointHistory, Slab};
 use rayon::prelude::*;
 use scatter::{FIRST, Shared, Slots};
 use schedule::Schedule;
+use std::sync::Arc;
 use terms::points_per_cell;
 
 /// A block is not split into parts of fewer cells than this (a part's scheduling costs more
@@ -235,7 +236,9 @@ impl AssemblyStats {
 
 /// Assembler state reused across calls: pattern, value and vector storage.
 pub struct Assembler {
-    pub pattern: Pattern,
+    /// Shared with the solvers' analysis that ran beside the assembler's set-up
+    /// ([`Assembler::on`]), not copied.
+    pub pattern: Arc<Pattern>,
     /// The terms it runs ([`Model::terms`]), and the history slab of each that has one.
     terms: Vec<Term>,
     slab_of: Vec<Option<usize>>,
@@ -285,7 +288,7 @@ impl Assembler {
 
     /// [`Assembler::new`] on `pattern`, the model's whole pattern built beforehand
     /// ([`build_pattern`]), so that the solvers' analysis of it can run beside this.
-    pub fn on(model: &Model, pattern: Pattern) -> Assembler {
+    pub fn on(model: &Model, pattern: Arc<Pattern>) -> Assembler {
         Self::with_ranks(model, Ranks::SERIAL, None, Some(pattern))
     }
 
@@ -299,7 +302,7 @@ impl Assembler {
         model: &Model,
         ranks: Ranks,
         distribution: Option<Distribution>,
-        built: Option<Pattern>,
+        built: Option<Arc<Pattern>>,
     ) -> Assembler {
         let terms = model.terms();
         let partition = distribution.as_ref().map(|d| &d.partition);
@@ -309,10 +312,16 @@ impl Assembler {
         // on several ranks, the entries of this rank's cells only
         let pattern = match (partition, built) {
             (None, Some(pattern)) => pattern,
-            (None, None) => build_pattern(&model.mesh, &model.dofs, &model.cons),
+            (None, None) => Arc::new(build_pattern(&model.mesh, &model.dofs, &model.cons)),
             (Some(_), _) => {
                 let (nn, cells) = (model.mesh.coords.len(), cells_of(model, &terms, mine));
-                build_pattern_of(nn, cells, |_| true, &model.dofs, &model.cons)
+                Arc::new(build_pattern_of(
+                    nn,
+                    cells,
+                    |_| true,
+                    &model.dofs,
+                    &model.cons,
+                ))
             }
         };
         assert!(

@@ -15,6 +15,7 @@ use crate::dofs::{Ordering, Pattern, Structure, build_pattern, equation_structur
 use crate::model::Model;
 use crate::parallel::Ranks;
 use std::ops::Range;
+use std::sync::Arc;
 
 /// One system a strategy solves.
 #[derive(Clone, Debug)]
@@ -206,7 +207,7 @@ pub fn plan(model: &Model, request: &Request, systems: &[System]) -> Result<Plan
     }
     // the assembler's maps and schedule beside the solvers' ordering and symbolic analysis:
     // a medium made again plans its run anew each time
-    let pattern = build_pattern(&model.mesh, &model.dofs, &model.cons);
+    let pattern = Arc::new(build_pattern(&model.mesh, &model.dofs, &model.cons));
     let structure = Structure {
         ordering: request.ordering,
         ..equation_structure(&model.dofs, &model.cons)
@@ -215,7 +216,7 @@ pub fn plan(model: &Model, request: &Request, systems: &[System]) -> Result<Plan
         whole: request.whole,
     };
     let (asm, solvers) = rayon::join(
-        || Assembler::on(model, pattern.clone()),
+        || Assembler::on(model, Arc::clone(&pattern)),
         || faer.solvers(systems, &pattern, &structure),
     );
     let solvers = solvers?;
