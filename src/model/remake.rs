@@ -1098,21 +1098,42 @@ impl Medium {
             Some(o) => placed[o],
             None => r.mesh.coords[n],
         };
+        let dim = r.mesh.dim;
+        // the old squeeze is looked up where it is used: over the cells across a gap (all
+        // their corners on solids), whose squeeze gives a layer its thickness, and over the
+        // rest only where no layer was closed (a sliding run's medium is mostly the rest)
+        let mut on_solid = vec![false; r.mesh.coords.len()];
+        for (b, blk) in r.mesh.cells.iter().enumerate() {
+            if !r.medium.contains(&b) {
+                blk.conn.iter().for_each(|&n| on_solid[n] = true);
+            }
+        }
+        let across = |b: usize, c: usize| {
+            let nodes = r.mesh.cells[b].cell(c);
+            nodes.len() == dim + 1 && nodes.iter().all(|&n| on_solid[n])
+        };
         // each new cell's old state looked up on its own: over the threads the run has
         let at: Vec<(usize, usize)> = (r.medium.iter())
             .flat_map(|&b| (0..r.mesh.cells[b].n_cells()).map(move |c| (b, c)))
             .collect();
-        let cells: Vec<NewCell> = (at.into_par_iter())
+        let mut cells: Vec<NewCell> = (at.into_par_iter())
             .map(|(b, c)| {
                 let p: Vec<[f64; 3]> = r.mesh.cells[b].cell(c).iter().map(|&n| here(n)).collect();
                 let k = p.len() as f64;
                 let mid = std::array::from_fn(|i| p.iter().map(|q| q[i]).sum::<f64>() / k);
-                let F = squeezed(&find, &p, mid);
+                let F = match across(b, c) {
+                    true => squeezed(&find, &p, mid),
+                    false => Matrix3::identity(),
+                };
                 NewCell { b, c, p, mid, F }
             })
             .collect();
-        let dim = r.mesh.dim;
         let layers = Layers::of(&r.mesh, &r.medium, &cells);
+        if !layers.closed() {
+            (cells.par_iter_mut())
+                .filter(|cell| !across(cell.b, cell.c))
+                .for_each(|cell| cell.F = squeezed(&find, &cell.p, cell.mid));
+        }
         let mut reference: Vec<Option<Vec<[f64; 3]>>> = vec![None; r.mesh.cells.len()];
         for &b in &r.medium {
             reference[b] = Some(Vec::with_capacity(r.mesh.cells[b].conn.len()));
@@ -1330,7 +1351,8 @@ fn carried_stretch(F: &Matrix3<f64>, dim: usize) -> Option<Matrix3<f64>> {
 }
 
 /// A new medium cell: its block and number, its nodes' places and their mean, and the old
-/// medium's most squeezed deformation gradient over it.
+/// medium's most squeezed deformation gradient over it (the identity where it is not used: a
+/// cell not across a gap, where a layer was closed).
 struct NewCell {
     b: usize,
     c: usize,
