@@ -1,24 +1,27 @@
 #!/usr/bin/python3
-"""The README's cylinder slid without friction, in exact contact: an independent reference.
+"""A rigid body slid along a plate in exact contact: an independent reference.
 
     /usr/bin/python3 cylinder.py MESH.msh [--obstacle polygon|circle] [--press 0.15]
                                  [--slide 0.5] [--steps 200] [--penalty 1e4] [--points 20]
+                                 [--rim rim] [--mu 0]
 
-FEniCSx (Debian's python3-dolfinx 0.5.2) solves the plate of `geo/cylinder-plate.geo` alone,
-on the cells of the mesh tmc made (`tmc mesh geo/cylinder-plate.geo --set h=0.1 -o MESH.msh`):
-the Neo-Hooke energy of eq. 12 (K = 20, G = 10, plane strain with 3D invariants), P1, its
-bottom held. There is no third medium. The cylinder is rigid, as tmc's is where its whole rim
-is prescribed: either the polygon of the mesh's rim nodes (the cylinder tmc's run has) or the
-circle they were drawn on (R = 0.4 about (1, 1)). It starts 0.1 above the plate, is pressed
-PRESS down in twenty steps, then slid SLIDE along x in STEPS steps, held in y.
+FEniCSx (Debian's python3-dolfinx 0.5.2) solves the group "plate" of a mesh tmc made alone
+(`tmc mesh geo/cylinder-plate.geo --set h=0.1 -o MESH.msh`, or a run's mesh.msh): the
+Neo-Hooke energy of eq. 12 (K = 20, G = 10, plane strain with 3D invariants), P1, its bottom
+(y = 0) held, its top face at y = 0.5. There is no third medium. The other body is rigid, as
+tmc's is where its whole boundary is prescribed: the convex polygon of the nodes of the group
+RIM (the README's cylinder, or the pad of `pad-box-rigid.geo`), or for a cylinder the circle
+its rim's nodes were drawn on. It is pressed PRESS down in twenty steps, then slid SLIDE along
+x in STEPS steps, held in y.
 
 Contact is a penalty on the plate's top face, at POINTS Gauss points per edge: where a point
-stands inside the cylinder, the traction (PENALTY G/h) times its depth pushes it out along
-the normal of the nearest side (the polygon) or along the radius (the circle), without
-friction. Each state is the equilibrium of its loads.
+stands inside the body, the traction (PENALTY G/h) times its depth pushes it out along the
+normal of the nearest side (the polygon) or along the radius (the circle); with MU, Coulomb
+friction in full slip over the slide, MU times that pressure along the face, the way the body
+slides. Each state is the equilibrium of its loads.
 
-Prints per step: the slide, F_t, F_n and F_t/F_n, the force the plate puts on the cylinder
-(the contact tractions integrated over the plate's top; F_n > 0 pressing).
+Prints per step: the slide, F_t, F_n and F_t/F_n, the force the plate puts on the body (the
+contact tractions integrated over the plate's top; F_n > 0 pressing).
 """
 import argparse
 
@@ -38,10 +41,11 @@ args.add_argument("--slide", type=float, default=0.5)
 args.add_argument("--steps", type=int, default=200)
 args.add_argument("--penalty", type=float, default=1e4)
 args.add_argument("--points", type=int, default=20)
+args.add_argument("--rim", default="rim", help="the group of the rigid body's boundary")
+args.add_argument("--mu", type=float, default=0.0, help="Coulomb friction in full slip")
 a = args.parse_args()
 
 K, G = 20.0, 10.0
-CENTRE, RADIUS = np.array([1.0, 1.0]), 0.4
 
 
 def group(name, dim):
@@ -61,7 +65,7 @@ gmsh.open(a.msh)
 tags, coords, _ = gmsh.model.mesh.getNodes()
 place = {int(t): coords[3 * i:3 * i + 2] for i, t in enumerate(tags)}
 plate = group("plate", 2)
-rim = group("rim", 1)
+rim = group(a.rim, 1)
 gmsh.finalize()
 
 # the plate's own nodes, numbered from 0
@@ -81,6 +85,9 @@ for _ in range(len(rim)):
     corners.append(place[at])
     at = after[at]
 corners = np.array(corners)
+# the body's centre, and the radius of the circle its rim's nodes stand on (a cylinder's)
+CENTRE = corners.mean(axis=0)
+RADIUS = float(np.mean(np.linalg.norm(corners - CENTRE, axis=1)))
 if np.cross(corners[1] - corners[0], CENTRE - corners[0]) < 0:
     corners = corners[::-1]
 print(f"# {len(used)} plate nodes, {len(cells)} cells; the rim a polygon of {len(corners)} sides")
@@ -130,7 +137,10 @@ else:
         n = n + inside * ufl.as_vector(outward)
 h = float(np.median(np.linalg.norm(np.diff(corners, axis=0), axis=1)))
 p_n = a.penalty * G / h * ufl.max_value(depth, 0.0)
-traction = p_n * n  # what the cylinder puts on the plate
+# what the body puts on the plate: the pressure, and where it slides (x growing) friction in
+# full slip, μ p_n along the face in the direction of the slide
+sliding = fem.Constant(msh, 0.0)
+traction = p_n * n + a.mu * sliding * p_n * ufl.as_vector([-n[1], n[0]])
 R = (ufl.inner(P, pad(ufl.grad(v))) * ufl.dx(metadata={"quadrature_degree": 1})
      - ufl.dot(traction, v) * ds(1))
 
@@ -198,6 +208,7 @@ for k in range(1, 21):
     fx, fy = advance(np.array([0.0, -a.press * k / 20]))
 print(f"# pressed {a.press}: F_n {fy:.6f}")
 print("# slide F_t F_n F_t/F_n")
+sliding.value = 1.0
 for k in range(1, a.steps + 1):
     at = a.slide * k / a.steps
     fx, fy = advance(np.array([at, -a.press]))
