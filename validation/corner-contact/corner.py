@@ -22,6 +22,8 @@ Prints per step: drag, F_t (against the drag), F_n, F_t/F_n and `back`, the forc
 puts on the block (the contact tractions integrated over its bottom).
 """
 import argparse
+import sys
+from pathlib import Path
 
 import numpy as np
 import ufl
@@ -29,6 +31,9 @@ from dolfinx import fem, mesh
 from dolfinx.fem.petsc import NonlinearProblem
 from dolfinx.nls.petsc import NewtonSolver
 from mpi4py import MPI
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+from plane_strain import first_piola, pad  # noqa: E402
 
 args = argparse.ArgumentParser()
 for name in ["nx", "ny"]:
@@ -49,16 +54,7 @@ u = fem.Function(V)  # the displacement being solved for
 un = fem.Function(V)  # at the last accepted step
 uprev = fem.Function(V)  # at the one before
 v = ufl.TestFunction(V)
-
-
-def pad(g):  # 2D gradient -> 3x3 (plane strain)
-    return ufl.as_matrix([[g[0, 0], g[0, 1], 0], [g[1, 0], g[1, 1], 0], [0, 0, 0]])
-
-
-F = ufl.variable(ufl.Identity(3) + pad(ufl.grad(u)))
-J = ufl.det(F)
-psi = K / 2 * ufl.ln(J) ** 2 + G / 2 * (J ** (-2.0 / 3.0) * ufl.tr(F.T * F) - 3)
-P = ufl.diff(psi, F)
+P = first_piola(u, K, G)
 
 fdim = 1
 bottom = mesh.locate_entities_boundary(msh, fdim, lambda X: np.isclose(X[1], 0.0))

@@ -24,6 +24,8 @@ Prints per step: the slide, F_t, F_n and F_t/F_n, the force the plate puts on th
 contact tractions integrated over the plate's top; F_n > 0 pressing).
 """
 import argparse
+import sys
+from pathlib import Path
 
 import gmsh
 import numpy as np
@@ -32,6 +34,9 @@ from dolfinx import fem, mesh
 from dolfinx.fem import petsc
 from mpi4py import MPI
 from petsc4py import PETSc
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+from plane_strain import first_piola, pad  # noqa: E402
 
 args = argparse.ArgumentParser()
 args.add_argument("msh")
@@ -95,16 +100,7 @@ print(f"# {len(used)} plate nodes, {len(cells)} cells; the rim a polygon of {len
 V = fem.VectorFunctionSpace(msh, ("Lagrange", 1))
 u = fem.Function(V)
 v = ufl.TestFunction(V)
-
-
-def pad(g):  # 2D gradient -> 3x3 (plane strain)
-    return ufl.as_matrix([[g[0, 0], g[0, 1], 0], [g[1, 0], g[1, 1], 0], [0, 0, 0]])
-
-
-F = ufl.variable(ufl.Identity(3) + pad(ufl.grad(u)))
-J = ufl.det(F)
-psi = K / 2 * ufl.ln(J) ** 2 + G / 2 * (J ** (-2.0 / 3.0) * ufl.tr(F.T * F) - 3)
-P = ufl.diff(psi, F)
+P = first_piola(u, K, G)
 
 fdim = 1
 top = mesh.locate_entities_boundary(msh, fdim, lambda X: np.isclose(X[1], 0.5))
