@@ -48,6 +48,9 @@ args.add_argument("--penalty", type=float, default=1e4)
 args.add_argument("--points", type=int, default=20)
 args.add_argument("--rim", default="rim", help="the group of the rigid body's boundary")
 args.add_argument("--mu", type=float, default=0.0, help="Coulomb friction in full slip")
+args.add_argument("--pass", dest="passes", choices=["sides", "corners", "both"], default="sides",
+                  help="what is pushed across what: the plate's points across the body's "
+                  "sides, the body's corners across the plate's face, or both")
 a = args.parse_args()
 
 K, G = 20.0, 10.0
@@ -144,7 +147,41 @@ zero = fem.Constant(msh, np.zeros(2))
 bcs = [fem.dirichletbc(zero, fem.locate_dofs_topological(V, fdim, bottom), V)]
 residual = fem.form(R)
 jacobian = fem.form(ufl.derivative(R, u, ufl.TrialFunction(V)))
+R_elastic = ufl.inner(P, pad(ufl.grad(v))) * ufl.dx(metadata={"quadrature_degree": 1})
+elastic = fem.form(R_elastic)
+elastic_jacobian = fem.form(ufl.derivative(R_elastic, u, ufl.TrialFunction(V)))
 forces = [fem.form(traction[i] * ds(1)) for i in range(2)]
+
+
+# the plate's face as a line of nodes (block dofs, left to right), for the body's corners
+face = fem.locate_dofs_topological(V, fdim, top)
+face = face[np.argsort(V.tabulate_dof_coordinates()[face, 0])]
+face_X = V.tabulate_dof_coordinates()[face, :2]
+low = corners[corners[:, 1] <= CENTRE[1]]
+kappa = a.penalty * G  # per corner: the Gauss points' penalty times the length they stand for
+
+
+def corner_forces(values):
+    """The body's corners pushed across the plate's face (node to segment, no friction): per
+    corner below its face, the face's two nodes, their weights, the face's normal and the
+    force the corner puts on the face (κ × depth along the normal, into the plate)."""
+    if a.passes == "sides":
+        return []
+    at = face_X + values.reshape(-1, 2)[face]
+    found = []
+    for c in low + np.array(shift.value):
+        k = np.searchsorted(at[:, 0], c[0]) - 1
+        if not 0 <= k < len(at) - 1:
+            continue
+        t = at[k + 1] - at[k]
+        length = np.linalg.norm(t)
+        t /= length
+        n = np.array([-t[1], t[0]])
+        xi = np.dot(c - at[k], t) / length
+        depth = -np.dot(c - at[k], n)
+        if depth > 0:
+            found.append((k, np.array([1 - xi, xi]), n, -kappa * depth * n))
+    return found
 
 
 def assemble_R(snes, x, b):
@@ -152,15 +189,32 @@ def assemble_R(snes, x, b):
     u.vector.ghostUpdate(PETSc.InsertMode.INSERT_VALUES, PETSc.ScatterMode.FORWARD)
     with b.localForm() as local:
         local.set(0.0)
-    petsc.assemble_vector(b, residual)
+    if a.passes != "corners":
+        petsc.assemble_vector(b, residual)
+    else:
+        petsc.assemble_vector(b, elastic)
     petsc.apply_lifting(b, [jacobian], [bcs], [x], -1.0)
     b.ghostUpdate(PETSc.InsertMode.ADD_VALUES, PETSc.ScatterMode.REVERSE)
+    array = b.getArray()
+    for k, w, _, f in corner_forces(u.x.array):
+        for node, weight in zip(face[k:k + 2], w):
+            array[2 * node:2 * node + 2] -= weight * f
     petsc.set_bc(b, bcs, x, -1.0)
 
 
 def assemble_J(snes, x, A, P_):
     A.zeroEntries()
-    petsc.assemble_matrix(A, jacobian, bcs)
+    petsc.assemble_matrix(A, jacobian if a.passes != "corners" else elastic_jacobian, bcs)
+    A.assemble()
+    # each corner's depth along the face's normal, the normal held (Newton's line search
+    # makes up for its turn)
+    for k, w, n, _ in corner_forces(u.x.array):
+        nodes = face[k:k + 2]
+        for i, wi in zip(nodes, w):
+            for j, wj in zip(nodes, w):
+                block = kappa * wi * wj * np.outer(n, n)
+                A.setValues([2 * i, 2 * i + 1], [2 * j, 2 * j + 1], block.ravel(),
+                            addv=PETSc.InsertMode.ADD_VALUES)
     A.assemble()
 
 
@@ -196,8 +250,12 @@ def advance(to, parts=1):
             return advance(to, parts * 2)
         x_vec.copy(u.vector)
         u.x.scatter_forward()
-    fx, fy = (fem.assemble_scalar(f) for f in forces)
-    return -fx, -fy
+    on_plate = np.zeros(2)
+    if a.passes != "corners":
+        on_plate += [fem.assemble_scalar(f) for f in forces]
+    for _, _, _, f in corner_forces(u.x.array):
+        on_plate += f
+    return -on_plate[0], -on_plate[1]
 
 
 for k in range(1, 21):
