@@ -1,7 +1,8 @@
 //! Bodies sliding through a medium made again as they move (`remake` of a medium region):
 //! the README's cylinder slid along its plate keeps the normal force of its press and meets
-//! no drag on average, where the Lagrangian medium ploughs; and what `remake` cannot do yet
-//! is refused by `tmc check` and `tmc solve` alike.
+//! no drag on average, where the Lagrangian medium ploughs, and swings no more than the same
+//! mesh does in exact contact; and what `remake` cannot do yet is refused by `tmc check` and
+//! `tmc solve` alike.
 
 use crate::common;
 use common::*;
