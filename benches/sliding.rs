@@ -6,7 +6,10 @@
 //! the cylinder moves: how far each slides, the normal force over the slide against the
 //! press's end, the force ratio F_t/F_n over the slide (time-weighted mean and largest size;
 //! exact contact: 0), the remakes and the share of the run's wall time they take
-//! (`medium_remade_seconds`). Issue 68's item 3 and item 7.
+//! (`medium_remade_seconds`). Issue 68's item 3 and item 7. After each pair, the same slide in
+//! exact contact on the same mesh without a medium (`validation/cylinder-exact/`, FEniCSx: the
+//! rim a rigid polygon, penalty contact; its mean over its steps), where a faceted cylinder
+//! swings too.
 //!
 //! The second: friction (item 4), each scene as a user draws it, with no special key, the
 //! medium made again as the body moves: the pad in a box of `cases/pad-box-slide.toml`
@@ -47,10 +50,12 @@ fn main() {
         let rows = [0.1, 0.05]
             .into_iter()
             .flat_map(|h| [0.3, 0.5].map(|slide| (h, slide)))
-            .flat_map(|(h, slide)| [false, true].map(|remake| (h, slide, remake)));
-        for (k, (h, slide, remake)) in rows.enumerate() {
-            if wanted(k) {
-                row(h, slide, remake);
+            .flat_map(|(h, slide)| [0, 1, 2].map(|medium| (h, slide, medium)));
+        for (k, (h, slide, medium)) in rows.enumerate() {
+            match (wanted(k), medium) {
+                (false, _) => {}
+                (true, 2) => exact_row(h, slide),
+                (true, _) => row(h, slide, medium == 1),
             }
         }
     }
@@ -401,6 +406,60 @@ fn row(h: f64, slide: f64, remake: bool) {
         s["load_steps"],
         s["medium_remade"],
         remade.map_or("—".into(), |r| format!("{:.2}", r / wall)),
+    );
+}
+
+/// The same slide in exact contact (`validation/cylinder-exact/cylinder.py`, FEniCSx, no
+/// medium) on the mesh of the row before, in steps of 0.0025 (200 steps over 0.3 on h = 0.1
+/// met a snap Newton could not take at 0.019): its F_t/F_n in tmc's sign (the rim's
+/// reaction), its mean over the steps.
+fn exact_row(h: f64, slide: f64) {
+    let msh = root().join(format!(
+        "target/bench-sliding/{h}-{slide}-made again/out/mesh.msh"
+    ));
+    let head = format!("| {h} | {slide} | none: exact contact |");
+    if !msh.exists() {
+        println!("{head} (needs the row before, solved: {}) |", msh.display());
+        return;
+    }
+    let since = std::time::Instant::now();
+    let o = std::process::Command::new("/usr/bin/python3")
+        .arg(root().join("validation/cylinder-exact/cylinder.py"))
+        .arg(&msh)
+        .args(["--slide", &slide.to_string()])
+        .args(["--steps", &((slide / 0.0025).round() as usize).to_string()])
+        .output();
+    let text = match &o {
+        Ok(o) if o.status.success() => String::from_utf8_lossy(&o.stdout).into_owned(),
+        _ => {
+            println!("{head} (not run: /usr/bin/python3 with python3-dolfinx, `make deps`) |");
+            return;
+        }
+    };
+    let wall = since.elapsed().as_secs_f64();
+    let pressed: f64 = (text.lines())
+        .find_map(|l| l.strip_prefix("# pressed 0.15: F_n "))
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(f64::NAN);
+    let rows: Vec<Vec<f64>> = (text.lines())
+        .filter(|l| !l.starts_with('#'))
+        .map(|l| {
+            l.split_whitespace()
+                .filter_map(|v| v.parse().ok())
+                .collect()
+        })
+        .filter(|r: &Vec<f64>| r.len() == 4)
+        .collect();
+    let (mut lo, mut hi, mut most, mut mean) = (f64::INFINITY, 0f64, 0f64, 0.0);
+    for r in &rows {
+        (lo, hi) = (lo.min(r[2] / pressed), hi.max(r[2] / pressed));
+        most = most.max(r[3].abs());
+        mean -= r[3] / rows.len() as f64;
+    }
+    let slid = rows.last().map_or(0.0, |r| r[0]);
+    println!(
+        "{head} {slid:.3} | {lo:.3}–{hi:.3} of {pressed:.3} | {mean:+.3} | {most:.3} | {} | — | {wall:.2} | — |",
+        rows.len()
     );
 }
 
