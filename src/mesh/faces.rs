@@ -128,14 +128,10 @@ pub fn shared_sides(mesh: &Mesh, a: &[usize], b: &[usize]) -> Vec<Side> {
         k
     };
     // a shared side's nodes are all on cells of both: only such sides are looked up
-    let on = |blocks: &[usize]| {
-        let mut on = vec![false; mesh.coords.len()];
-        for &bi in blocks {
-            mesh.cells[bi].conn.iter().for_each(|&n| on[n] = true);
-        }
-        on
-    };
-    let (on_a, on_b) = (on(a), on(b));
+    let (on_a, on_b) = (
+        mesh.nodes_in(|i| a.contains(&i)),
+        mesh.nodes_in(|i| b.contains(&i)),
+    );
     let mut in_b: HashMap<Vec<usize>, (usize, usize)> = HashMap::new();
     for &bi in b {
         let blk = &mesh.cells[bi];

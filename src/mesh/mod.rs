@@ -290,6 +290,16 @@ impl Mesh {
         extent_of(&self.coords)
     }
 
+    /// Per node, whether a cell of a block (an index into [`Mesh::cells`]) `keep` accepts has
+    /// it.
+    pub fn nodes_in(&self, keep: impl Fn(usize) -> bool) -> Vec<bool> {
+        let mut on = vec![false; self.coords.len()];
+        for (_, b) in self.cells.iter().enumerate().filter(|&(i, _)| keep(i)) {
+            b.conn.iter().for_each(|&n| on[n] = true);
+        }
+        on
+    }
+
     /// The connected sets of cells among the blocks (indices into [`Mesh::cells`]) `keep`
     /// accepts (cells sharing a node are connected): per node, the index of its set, or
     /// `usize::MAX` for a node of no kept cell.

@@ -260,15 +260,9 @@ impl Model {
     /// conductivity across the gap grow without bound: a multigrid hands these rows to a
     /// direct solver).
     pub fn nodes_of(&self, kind: RegionKind) -> Vec<bool> {
-        let mut on = vec![false; self.mesh.coords.len()];
-        for info in &self.blocks {
-            if self.regions[info.region].1 == kind {
-                for &n in &self.mesh.cells[info.block].conn {
-                    on[n] = true;
-                }
-            }
-        }
-        on
+        self.mesh.nodes_in(|b| {
+            (self.blocks.iter()).any(|info| info.block == b && self.regions[info.region].1 == kind)
+        })
     }
 
     /// External loads at the load factor `lambda`.

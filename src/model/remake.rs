@@ -454,16 +454,7 @@ impl Model {
 
     /// Per node, whether it is a node of a solid's cell (not of the medium's alone).
     pub(crate) fn on_solids(&self) -> Vec<bool> {
-        let mut on = vec![false; self.mesh.coords.len()];
-        for b in &self.blocks {
-            if self.regions[b.region].1 != RegionKind::Medium {
-                self.mesh.cells[b.block]
-                    .conn
-                    .iter()
-                    .for_each(|&n| on[n] = true);
-            }
-        }
-        on
+        self.nodes_of(RegionKind::Solid)
     }
 
     /// Node `n`'s place at the state `x`.
@@ -1102,16 +1093,8 @@ impl Medium {
         // the old squeeze is looked up where it is used: over the cells across a gap (all
         // their corners on solids), whose squeeze gives a layer its thickness, and over the
         // rest only where no layer was closed (a sliding run's medium is mostly the rest)
-        let mut on_solid = vec![false; r.mesh.coords.len()];
-        for (b, blk) in r.mesh.cells.iter().enumerate() {
-            if !r.medium.contains(&b) {
-                blk.conn.iter().for_each(|&n| on_solid[n] = true);
-            }
-        }
-        let across = |b: usize, c: usize| {
-            let nodes = r.mesh.cells[b].cell(c);
-            nodes.len() == dim + 1 && nodes.iter().all(|&n| on_solid[n])
-        };
+        let body = r.mesh.components(|b| !r.medium.contains(&b));
+        let across = |b: usize, c: usize| spans_gap(r.mesh.cells[b].cell(c), &body, dim);
         // each new cell's old state looked up on its own: over the threads the run has
         let at: Vec<(usize, usize)> = (r.medium.iter())
             .flat_map(|&b| (0..r.mesh.cells[b].n_cells()).map(move |c| (b, c)))
@@ -1128,7 +1111,7 @@ impl Medium {
                 NewCell { b, c, p, mid, F }
             })
             .collect();
-        let layers = Layers::of(&r.mesh, &r.medium, &cells);
+        let layers = Layers::of(&r.mesh, &body, &cells);
         if !layers.closed() {
             (cells.par_iter_mut())
                 .filter(|cell| !across(cell.b, cell.c))
@@ -1394,7 +1377,10 @@ struct Layers {
 }
 
 impl Layers {
-    fn of(mesh: &Mesh, medium: &[usize], cells: &[NewCell]) -> Layers {
+    /// The layers of the new medium's `cells`, `body` giving each node of `mesh` its solid
+    /// body (the solids' cells joined where they share a node; `usize::MAX` for the medium's
+    /// own nodes, as [`Mesh::components`] gives it).
+    fn of(mesh: &Mesh, body: &[usize], cells: &[NewCell]) -> Layers {
         let dim = mesh.dim;
         fn top(root: &mut [usize], mut k: usize) -> usize {
             while root[k] != k {
@@ -1403,41 +1389,16 @@ impl Layers {
             }
             k
         }
-        // each solid node's body: the solids' cells joined where they share a node
-        let mut of_node: Vec<usize> = (0..mesh.coords.len()).collect();
-        let mut on_solid = vec![false; mesh.coords.len()];
-        for (b, blk) in mesh.cells.iter().enumerate() {
-            if medium.contains(&b) {
-                continue;
-            }
-            for c in 0..blk.n_cells() {
-                let nodes = blk.cell(c);
-                for &n in nodes {
-                    on_solid[n] = true;
-                    let (x, y) = (top(&mut of_node, nodes[0]), top(&mut of_node, n));
-                    of_node[x.max(y)] = x.min(y);
-                }
-            }
-        }
-        let body: Vec<Option<usize>> = (0..mesh.coords.len())
-            .map(|n| on_solid[n].then(|| top(&mut of_node, n)))
-            .collect();
         // the layers: the cells across, joined where they share a node
         let mut root: Vec<usize> = (0..cells.len()).collect();
         let mut first_at: std::collections::HashMap<usize, usize> = Default::default();
         let mut height = vec![None; cells.len()];
         for (k, cell) in cells.iter().enumerate() {
             let nodes = mesh.cells[cell.b].cell(cell.c);
-            let Some(bodies) = nodes
-                .iter()
-                .map(|&n| body[n])
-                .collect::<Option<Vec<usize>>>()
-            else {
-                continue;
-            };
-            if nodes.len() != dim + 1 {
+            if !spans_gap(nodes, body, dim) {
                 continue;
             }
+            let bodies: Vec<usize> = nodes.iter().map(|&n| body[n]).collect();
             height[k] = Some(across_gap(&cell.p, &bodies));
             for &n in nodes {
                 let j = *first_at.entry(n).or_insert(k);
@@ -1497,6 +1458,12 @@ impl Layers {
             false => opened(p, self.dim),
         })
     }
+}
+
+/// Whether a medium cell with `nodes` spans a gap: a simplex whose corners all stand on solids
+/// (`body`, as [`Layers::of`] takes it).
+fn spans_gap(nodes: &[usize], body: &[usize], dim: usize) -> bool {
+    nodes.len() == dim + 1 && nodes.iter().all(|&n| body[n] != usize::MAX)
 }
 
 /// The thickness of a simplex `p` whose corners all stand on solids (`bodies`: each corner's
@@ -1805,7 +1772,7 @@ mod tests {
         // the gap 1e-3 to 3e-3 along the layer; the old cells closed to J = 0.01 (thickness
         // 0.1 before, at the gap of 1e-3), 0.02 (0.1 at 2e-3) and 0.06 (about 0.04 and 0.05)
         let (mesh, cells) = layer([1e-3, 2e-3, 3e-3], [0.01, 0.02, 0.06, 0.06]);
-        let layers = Layers::of(&mesh, &[2], &cells);
+        let layers = Layers::of(&mesh, &mesh.components(|b| b != 2), &cells);
         assert_eq!(layers.thickness.len(), 1, "one layer");
         let g = layers.thickness[0].unwrap();
         // each cell's height across the gap: over the face of the body two of its corners are
@@ -1832,7 +1799,7 @@ mod tests {
         assert!(layers.closed());
         // a layer nowhere closed carries nothing of its own: the cells' old squeeze decides
         let (mesh, cells) = layer([0.1, 0.1, 0.1], [0.9, 0.6, 0.7, 0.8]);
-        let layers = Layers::of(&mesh, &[2], &cells);
+        let layers = Layers::of(&mesh, &mesh.components(|b| b != 2), &cells);
         assert!(!layers.closed());
         assert!((0..4).all(|k| layers.carried(k, &cells[k].p).is_none()));
     }
