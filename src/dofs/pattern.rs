@@ -133,6 +133,17 @@ pub struct Structure {
     pub ordering: Ordering,
 }
 
+impl Structure {
+    /// Each equation's mesh node and whether it is thermal, ordered by nested dissection.
+    pub fn new(node: Vec<u32>, thermal: Vec<bool>) -> Structure {
+        Structure {
+            node,
+            thermal,
+            ordering: Ordering::default(),
+        }
+    }
+}
+
 /// How a direct solver orders its equations (their mesh nodes' graph) against fill.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Ordering {
@@ -156,9 +167,5 @@ pub fn equation_structure(dofs: &DofMap, cons: &Constraints) -> Structure {
             thermal[e as usize] = dofs.field[d] == Field::Theta;
         }
     }
-    Structure {
-        node,
-        thermal,
-        ordering: Ordering::default(),
-    }
+    Structure::new(node, thermal)
 }

@@ -368,11 +368,7 @@ mod tests {
             col_ptr: (0..=n).map(|j| j * n).collect(),
             row_idx: (0..n * n).map(|k| k % n).collect(),
         };
-        let structure = Structure {
-            node: vec![0, 0, 1, 1],
-            thermal: vec![false, true, false, true],
-            ordering: Ordering::default(),
-        };
+        let structure = Structure::new(vec![0, 0, 1, 1], vec![false, true, false, true]);
         (pattern, structure)
     }
 

@@ -106,11 +106,7 @@ fn every_solver_solves_and_refactors() {
 #[test]
 fn a_lagged_lu_solves_newer_tangents_and_refactors_when_they_drift() {
     let (p, v, node, thermal) = system(40, 0.1, 0.3);
-    let s = Structure {
-        node,
-        thermal,
-        ordering: Ordering::default(),
-    };
+    let s = Structure::new(node, thermal);
     // a factor this small costs less than one GMRES iteration with it is worth: the
     // solver never lags it (a newer tangent is factorised and solved in one product)
     let cheap = double_lu(&p, &s);
@@ -170,11 +166,7 @@ fn a_lagged_lu_solves_newer_tangents_and_refactors_when_they_drift() {
             }
         }
     }
-    let s = Structure {
-        node,
-        thermal,
-        ordering: Ordering::default(),
-    };
+    let s = Structure::new(node, thermal);
     let mut solver = LinearSolver::block_gmres(&p, &s, true).unwrap();
     solver.factor(&w).unwrap();
     let mut x = b.clone();
@@ -187,11 +179,7 @@ fn a_lagged_lu_solves_newer_tangents_and_refactors_when_they_drift() {
 #[test]
 fn the_block_preconditioner_keeps_its_factors_only_for_a_near_tangent() {
     let (p, v, node, thermal) = system(40, 0.05, 0.3);
-    let s = Structure {
-        node,
-        thermal,
-        ordering: Ordering::default(),
-    };
+    let s = Structure::new(node, thermal);
     // a system this small is never lagged by its price
     let block = BlockTriangular::new(&p, &s, false).unwrap();
     assert_eq!(block.lag.budget, 0);
@@ -248,11 +236,7 @@ fn a_factor_s_price_is_the_same_at_every_thread_count() {
     // whether a factor is dear decides how Newton's damped updates are solved: a price that
     // fell with the threads gave the 147k row 83 Newton iterations at 2 threads and 81 at 8
     let (p, _, node, thermal) = system(40, 0.05, 0.3);
-    let s = Structure {
-        node,
-        thermal,
-        ordering: Ordering::default(),
-    };
+    let s = Structure::new(node, thermal);
     let price = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
@@ -282,11 +266,7 @@ fn a_dear_factor_is_kept_through_damped_iterations_for_a_looser_solve() {
     assert!(Lag::priced(33.6).dear && Lag::priced(33.6).budget == LAG_MAX_ITS);
     assert!(!Lag::priced(9.1).dear && Lag::priced(9.1).budget == 9);
     let (p, v, node, thermal) = system(40, 0.05, 0.3);
-    let s = Structure {
-        node,
-        thermal,
-        ordering: Ordering::default(),
-    };
+    let s = Structure::new(node, thermal);
     let dear = BlockTriangular {
         lag: Lag::priced(33.6),
         ..BlockTriangular::new(&p, &s, false).unwrap()
@@ -492,11 +472,7 @@ fn double_lu(p: &Pattern, s: &Structure) -> LaggedLu<f64> {
 #[test]
 fn a_single_precision_lu_solves_to_double_precision() {
     let (p, v, node, thermal) = system(40, 0.1, 0.3);
-    let s = Structure {
-        node,
-        thermal,
-        ordering: Ordering::default(),
-    };
+    let s = Structure::new(node, thermal);
     let single = double_lu(&p, &s).in_precision::<f32>();
     let mut solver = LinearSolver::with(LinearKind::Lu, Box::new(single));
     let b: Vec<f64> = (0..p.n).map(|i| (i as f64).cos()).collect();
@@ -533,11 +509,7 @@ fn a_vanishing_static_pivot_falls_back_to_partial_pivoting() {
             (i, j) => 1.0 + (i * n + 2 * j) as f64 * 0.1,
         })
         .collect();
-    let s = Structure {
-        node: (0..n as u32).collect(),
-        thermal: vec![false; n],
-        ordering: Ordering::default(),
-    };
+    let s = Structure::new((0..n as u32).collect(), vec![false; n]);
     let mut solver = LinearSolver::new(LinearKind::Lu, &p, &s).unwrap();
     solver.factor(&v).unwrap();
     let b = vec![1.0, -2.0, 0.5, 3.0];
