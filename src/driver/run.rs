@@ -380,14 +380,16 @@ impl<'a> Run<'a> {
         before: Option<&Reactions>,
         since: std::time::Instant,
     ) -> Result<(), SolveError> {
-        let Some(before) = before else {
-            self.accounts.totals.remake_seconds += since.elapsed().as_secs_f64();
-            return Ok(());
+        // measured where settled, the flows at rest counted in the remake's time
+        let change = match before {
+            Some(before) => Some(flow_change(before, &self.flows_at_rest()?)),
+            None => None,
         };
-        let after = self.flows_at_rest()?;
-        let (force, heat) = flow_change(before, &after);
         let tot = &mut self.accounts.totals;
         tot.remake_seconds += since.elapsed().as_secs_f64();
+        let Some((force, heat)) = change else {
+            return Ok(());
+        };
         tot.remake_force_change = Some(tot.remake_force_change.unwrap_or(0.0).max(force));
         tot.remake_heat_change = Some(tot.remake_heat_change.unwrap_or(0.0).max(heat));
         if self.opts.verbose {
