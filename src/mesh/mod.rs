@@ -293,11 +293,7 @@ impl Mesh {
     /// Per node, whether a cell of a block (an index into [`Mesh::cells`]) `keep` accepts has
     /// it.
     pub fn nodes_in(&self, keep: impl Fn(usize) -> bool) -> Vec<bool> {
-        let mut on = vec![false; self.coords.len()];
-        for (_, b) in self.cells.iter().enumerate().filter(|&(i, _)| keep(i)) {
-            b.conn.iter().for_each(|&n| on[n] = true);
-        }
-        on
+        nodes_of(&self.cells, self.coords.len(), |i, _| keep(i))
     }
 
     /// The connected sets of cells among the blocks (indices into [`Mesh::cells`]) `keep`
@@ -351,20 +347,10 @@ impl Mesh {
     /// joined to two or more others (a medium between bodies) is left out. (With a case,
     /// `model::held` says which bodies the medium alone holds.)
     pub fn untouched_bodies(&self) -> Vec<String> {
-        // which nodes the blocks `keep` accepts hold
-        let nodes_of = |blocks: &[Block], keep: &dyn Fn(&Block) -> bool| {
-            let mut m = vec![false; self.coords.len()];
-            for b in blocks.iter().filter(|b| keep(b)) {
-                for &n in &b.conn {
-                    m[n] = true;
-                }
-            }
-            m
-        };
-        let touched = nodes_of(&self.facets, &|b| !b.groups.is_empty());
+        let touched = nodes_of(&self.facets, self.coords.len(), |_, b| !b.groups.is_empty());
         let bodies: Vec<(usize, Vec<bool>)> = (0..self.groups.len())
             .filter(|&g| self.groups[g].dim == self.dim)
-            .map(|g| (g, nodes_of(&self.cells, &|b| b.groups.contains(&g))))
+            .map(|g| (g, self.nodes_in(|b| self.cells[b].groups.contains(&g))))
             .collect();
         let mut warnings = Vec::new();
         for &(g, _) in &bodies {
@@ -453,6 +439,16 @@ pub fn centroid(coords: &[[f64; 3]], nodes: &[usize]) -> [f64; 3] {
         }
     }
     m.map(|v| v / nodes.len() as f64)
+}
+
+/// Per node (of `nodes`), whether a block of `blocks` that `keep` accepts (by index and block)
+/// has it.
+fn nodes_of(blocks: &[Block], nodes: usize, keep: impl Fn(usize, &Block) -> bool) -> Vec<bool> {
+    let mut on = vec![false; nodes];
+    for (_, b) in blocks.iter().enumerate().filter(|&(i, b)| keep(i, b)) {
+        b.conn.iter().for_each(|&n| on[n] = true);
+    }
+    on
 }
 
 /// The largest side of the bounding box of `points` (0 for none).
