@@ -37,6 +37,7 @@ use crate::mesh::remesh::{Mesher, RemeshError, boundary_loops, remesh, supported
 use nalgebra::{Matrix2, Matrix3, SymmetricEigen, Vector2, Vector3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use std::collections::{HashMap, HashSet};
 
 /// How far (in cell sizes, see [`Medium::slid_cells`]) a medium cell's faces may slide past
 /// each other before the medium is made again.
@@ -204,6 +205,9 @@ struct ThinTet {
     first: usize,
     /// What [`ThinTet::standing`] gave at the last accepted state.
     room: Vec<f64>,
+    /// What it gave when the medium was made (a checkpoint's from before it was kept: none).
+    #[serde(default)]
+    from: Vec<f64>,
 }
 
 impl ThinTet {
@@ -220,6 +224,7 @@ impl ThinTet {
             corners,
             first,
             room: Vec::new(),
+            from: Vec::new(),
         })
     }
 
@@ -771,41 +776,39 @@ impl Medium {
     /// touches a part of it, that part where the mesh put it. The medium is fictitious: its
     /// outer faces, followed as the bodies drag what is around them, carried the box a user
     /// drew along with a body (a pad slid 2.5 of its widths pulled its box's top 1.6 above
-    /// where it was drawn, and the run stopped there). In 3D the own nodes that share a cell
-    /// with a solid's node stay where they are: placed too, the sphere dragged three radii
-    /// stopped at a slide of 0.91 on a cell turned inside out behind it; kept where the run
-    /// left them all, a free corner of the box ran away (4.5 times the mesh's extent by the
-    /// end; docs/notes/2026-12-03-the-sphere-dragged-three-radii.md). Other nodes: `None`.
+    /// where it was drawn, and the run stopped there).
+    ///
+    /// In 3D an own node that shares a cell with a solid's node and that a condition holds in
+    /// some direction (on a symmetry plane) stays where it is; so, until none is left, does
+    /// each node of a triangle that placed would turn over ([`FOLD`]), close onto its
+    /// neighbour across an edge ([`CREASE`]) or cross another triangle ([`crossing`]), which
+    /// gmsh refuses. Kept where the run left them all, the nodes beside a body were pushed out
+    /// of the box's free faces step after step (the sphere dragged three radii: one out by
+    /// 6.1, its cells needles); placed all, the sphere turned a cell inside out behind it, by
+    /// its symmetry plane; placed but there, the faces between the two folded over, and gmsh
+    /// refused them (docs/notes/2026-12-06-a-3d-press-made-again-step-after-step.md).
     fn own_places(&self, model: &Model, x: &[f64]) -> Result<Vec<Option<[f64; 3]>>, String> {
         let on_solid = model.on_solids();
         let mesh = &model.mesh;
+        let outer = match mesh.dim {
+            3 => crate::mesh::faces::outer_triangles(mesh, &self.blocks)?,
+            _ => Vec::new(),
+        };
         // each boundary node's neighbours: along its loop in 2D, across the edges of the
         // outer triangles in 3D
         let mut next: Vec<Vec<usize>> = vec![Vec::new(); mesh.coords.len()];
-        // in 3D, the own nodes that share a cell with a solid's node stay where they are
-        let mut beside = vec![false; mesh.coords.len()];
-        if mesh.dim == 3 {
-            for f in crate::mesh::faces::outer_triangles(mesh, &self.blocks)? {
-                for i in 0..3 {
-                    let (a, b) = (f[i], f[(i + 1) % 3]);
-                    next[a].push(b);
-                    next[b].push(a);
-                }
+        for f in &outer {
+            for i in 0..3 {
+                let (a, b) = (f[i], f[(i + 1) % 3]);
+                next[a].push(b);
+                next[b].push(a);
             }
-            for around in &mut next {
-                around.sort_unstable();
-                around.dedup();
-            }
-            for &b in &self.blocks {
-                let blk = &mesh.cells[b];
-                for c in 0..blk.n_cells() {
-                    let cell = blk.cell(c);
-                    if cell.iter().any(|&n| on_solid[n]) {
-                        cell.iter().for_each(|&n| beside[n] = true);
-                    }
-                }
-            }
-        } else {
+        }
+        for around in &mut next {
+            around.sort_unstable();
+            around.dedup();
+        }
+        if mesh.dim == 2 {
             for lp in boundary_loops(mesh, &self.blocks)? {
                 let k = lp.len();
                 for i in 0..k {
@@ -814,57 +817,45 @@ impl Medium {
             }
         }
         let d = model.dofs.dim;
-        let u_of = |n: usize, i: usize| model.dofs.u.get(n * d + i).map(|&u| u as usize);
-        let mut places = vec![None; mesh.coords.len()];
+        let held_by = |n: usize, i: usize| {
+            let u = model.dofs.u.get(n * d + i);
+            u.is_some_and(|&u| model.cons.prescribed[u as usize].is_some())
+        };
+        // the own nodes kept where the run left them: in 3D, first those beside a solid's
+        // node that a condition holds
+        let mut kept = vec![false; mesh.coords.len()];
+        let blocks = if mesh.dim == 3 { &self.blocks[..] } else { &[] };
+        for blk in blocks.iter().map(|&b| &mesh.cells[b]) {
+            for cell in (0..blk.n_cells()).map(|c| blk.cell(c)) {
+                if cell.iter().any(|&n| on_solid[n]) {
+                    for &n in cell.iter().filter(|&&n| (0..d).any(|i| held_by(n, i))) {
+                        kept[n] = true;
+                    }
+                }
+            }
+        }
         let own: Vec<usize> = (0..mesh.coords.len())
             .filter(|&n| !next[n].is_empty() && !on_solid[n])
             .collect();
-        for i in 0..d {
-            // per component: the solids' nodes and what is prescribed hold; the rest is the
-            // mean of its neighbours, a little held to where the mesh put it (so that a part
-            // no solid touches stays there)
-            let held = |n: usize| {
-                on_solid[n]
-                    || beside[n]
-                    || u_of(n, i).is_some_and(|u| model.cons.prescribed[u].is_some())
-            };
-            let value = |n: usize| u_of(n, i).map_or(0.0, |u| x[u]);
-            let free: Vec<usize> = own.iter().copied().filter(|&n| !held(n)).collect();
-            let mut at = vec![usize::MAX; mesh.coords.len()];
-            free.iter().enumerate().for_each(|(k, &n)| at[n] = k);
-            let weight = |n: usize| next[n].len() as f64 * (1.0 + 1e-9);
-            let rhs: Vec<f64> = (free.iter())
-                .map(|&n| {
-                    next[n]
-                        .iter()
-                        .filter(|&&m| held(m))
-                        .map(|&m| value(m))
-                        .sum()
-                })
-                .collect();
-            let apply = |v: &[f64], out: &mut [f64]| {
-                for (k, &n) in free.iter().enumerate() {
-                    let around: f64 = next[n]
-                        .iter()
-                        .filter(|&&m| at[m] != usize::MAX)
-                        .map(|&m| v[at[m]])
-                        .sum();
-                    out[k] = weight(n) * v[k] - around;
-                }
-            };
-            let diagonal: Vec<f64> = free.iter().map(|&n| weight(n)).collect();
-            let u = mean_of_neighbours(apply, &diagonal, &rhs)
-                .ok_or("the medium's outer faces could not be placed")?;
-            for (k, &n) in free.iter().enumerate() {
-                let p = places[n].get_or_insert(mesh.coords[n]);
-                p[i] += u[k];
+        let hinges = hinges(&outer);
+        loop {
+            let places = place_own(model, x, &next, &own, &kept)?;
+            let at = |n: usize| places[n].unwrap_or_else(|| model.placed(n, x));
+            let now = |n: usize| model.placed(n, x);
+            // the nodes of triangles turned over, the far corners of two on an edge closed
+            // onto each other, and the nodes of two that cross
+            let turned = (outer.iter()).filter(|f| folds(f.map(now), f.map(at)));
+            let shut = (hinges.iter()).filter(|h| closes(h.map(now), h.map(at)));
+            let mut folded: Vec<usize> = turned.flatten().copied().collect();
+            folded.extend(shut.flat_map(|h| [h[2], h[3]]));
+            let moved = |f: &[usize; 3]| f.iter().any(|&n| places[n].is_some() && !kept[n]);
+            folded.extend(crossing(&outer, moved, at).into_iter().flatten());
+            folded.retain(|&n| !on_solid[n] && !kept[n]);
+            if folded.is_empty() {
+                return Ok(places);
             }
-            for &n in own.iter().filter(|&&n| held(n)) {
-                let p = places[n].get_or_insert(mesh.coords[n]);
-                p[i] += value(n);
-            }
+            folded.into_iter().for_each(|n| kept[n] = true);
         }
-        Ok(places)
     }
 
     /// The medium in words, for `tmc check`.
@@ -920,17 +911,27 @@ impl Medium {
             s.at = at;
         }
         let (mut passed, passes) = passing(&along, t, target);
+        let mut thin_passed = false;
         for s in &mut self.thin {
             let (now, length) = s.standing(model, x);
-            for (v, before) in now.iter().zip(&s.room) {
+            if s.from.is_empty() {
+                // a checkpoint's watch from before it was kept: from where it stood then
+                s.from = s.room.clone();
+            }
+            for ((v, before), made) in now.iter().zip(&s.room).zip(&s.from) {
                 let speed = if dt > 0.0 { (v - before) / dt } else { 0.0 };
                 // made again before the pass: in 3D a corner taken past it, as after it,
                 // stopped the sphere of `sphere-drag` dragged three radii
-                passed |= *v < 0.0 || v + speed * (target - t) < 0.0;
+                thin_passed |= *v < 0.0 || v + speed * (target - t) < 0.0;
                 rate = rate.max(speed.abs() * length);
+                travel = travel.max((v - made).abs());
             }
             s.room = now;
         }
+        // a thin tetrahedron's pass asks once one has gone [`FRESH`] since the medium was
+        // made: a corner gmsh made beside an edge across, crawling past it, asked at each
+        // step of a press and got the same tetrahedron back
+        passed |= thin_passed && travel >= FRESH;
         self.t = t;
         self.rate = rate;
         // made for a pass that has not come once a node has gone a whole edge since
@@ -1015,6 +1016,7 @@ impl Medium {
                     let least = now.iter().fold(f64::INFINITY, |a, &v| a.min(v));
                     if least > 0.0 {
                         room = room.min(least * length);
+                        s.from = now.clone();
                         s.room = now;
                         self.thin.push(s);
                     }
@@ -1185,6 +1187,191 @@ fn failing_by_request() -> Result<(), RemeshError> {
         }
     }
     Ok(())
+}
+
+/// Where a triangle of the medium's outer faces counts as turned over when placed: its normal
+/// turned by more than this (in radians) from the one it has at the state, or its area gone.
+const FOLD: f64 = std::f64::consts::FRAC_PI_3;
+
+/// Whether the triangle at `now` turns over where placed at `placed` (see [`FOLD`]).
+fn folds(now: [[f64; 3]; 3], placed: [[f64; 3]; 3]) -> bool {
+    let normal = |p: [[f64; 3]; 3]| {
+        let v = p.map(|q| Vector3::new(q[0], q[1], q[2]));
+        (v[1] - v[0]).cross(&(v[2] - v[0]))
+    };
+    let (a, b) = (normal(now), normal(placed));
+    let size = a.norm() * b.norm();
+    !(size > 0.0 && a.dot(&b) > FOLD.cos() * size)
+}
+
+/// Each edge that two of the `triangles` share, as [a, b, c, d]: the edge a–b, c and d the
+/// two triangles' third corners.
+fn hinges(triangles: &[[usize; 3]]) -> Vec<[usize; 4]> {
+    let mut sides: Vec<([usize; 2], usize)> = (triangles.iter())
+        .flat_map(|f| (0..3).map(move |i| (f[i], f[(i + 1) % 3], f[(i + 2) % 3])))
+        .map(|(a, b, c)| ([a.min(b), a.max(b)], c))
+        .collect();
+    sides.sort_unstable();
+    (sides.windows(2))
+        .filter(|w| w[0].0 == w[1].0)
+        .map(|w| [w[0].0[0], w[0].0[1], w[0].1, w[1].1])
+        .collect()
+}
+
+/// Where two triangles on an edge count as closed onto each other: the angle between them
+/// (about the edge) below this, in radians.
+const CREASE: f64 = 0.25;
+
+/// Whether the two triangles of the hinge [a, b, c, d] (see [`hinges`]) close onto each other
+/// where placed at `placed`, from their angle at `now` (see [`CREASE`]).
+fn closes(now: [[f64; 3]; 4], placed: [[f64; 3]; 4]) -> bool {
+    let angle = |p: [[f64; 3]; 4]| {
+        let v = p.map(|q| Vector3::new(q[0], q[1], q[2]));
+        let e = (v[1] - v[0]).normalize();
+        let across = |w: Vector3<f64>| {
+            let r = w - v[0];
+            r - e * e.dot(&r)
+        };
+        across(v[2]).angle(&across(v[3]))
+    };
+    let after = angle(placed);
+    after < CREASE && after < angle(now)
+}
+
+/// The triangles of `faces` (at the places `at`) that cross another of them, among those that
+/// `moved` and any other: two that share no corner and one of whose edges goes through the
+/// other (what gmsh refuses as "a segment and a facet intersect").
+fn crossing(
+    faces: &[[usize; 3]],
+    moved: impl Fn(&[usize; 3]) -> bool,
+    at: impl Fn(usize) -> [f64; 3],
+) -> Vec<[usize; 3]> {
+    let corners = |f: &[usize; 3]| f.map(|n| Vector3::from(at(n)));
+    let boxes: Vec<([f64; 3], [f64; 3])> = (faces.iter())
+        .map(|f| {
+            let p = f.map(&at);
+            let lo = std::array::from_fn(|i| p.iter().map(|q| q[i]).fold(f64::INFINITY, f64::min));
+            let hi =
+                std::array::from_fn(|i| p.iter().map(|q| q[i]).fold(f64::NEG_INFINITY, f64::max));
+            (lo, hi)
+        })
+        .collect();
+    // the triangles in a grid of cells about as large as the median one
+    let mut sizes: Vec<f64> = boxes
+        .iter()
+        .map(|(lo, hi)| (0..3).map(|i| hi[i] - lo[i]).fold(0.0, f64::max))
+        .collect();
+    sizes.sort_by(f64::total_cmp);
+    let Some(&size) = sizes.get(sizes.len() / 2).filter(|&&s| s > 0.0) else {
+        return Vec::new();
+    };
+    let key = |p: [f64; 3]| p.map(|v| (v / size).floor() as i64);
+    let mut grid: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
+    for (k, (lo, hi)) in boxes.iter().enumerate() {
+        let (a, b) = (key(*lo), key(*hi));
+        for i in a[0]..=b[0] {
+            for j in a[1]..=b[1] {
+                for l in a[2]..=b[2] {
+                    grid.entry([i, j, l]).or_default().push(k);
+                }
+            }
+        }
+    }
+    let overlap = |k: usize, m: usize| {
+        (0..3).all(|i| boxes[k].0[i] <= boxes[m].1[i] && boxes[m].0[i] <= boxes[k].1[i])
+    };
+    let mut out = Vec::new();
+    let mut seen = HashSet::new();
+    for members in grid.values() {
+        for (i, &k) in members.iter().enumerate() {
+            for &m in &members[i + 1..] {
+                let (f, g) = (&faces[k], &faces[m]);
+                if !(moved(f) || moved(g)) || f.iter().any(|n| g.contains(n)) || !overlap(k, m) {
+                    continue;
+                }
+                if seen.insert((k.min(m), k.max(m))) && triangles_cross(corners(f), corners(g)) {
+                    out.extend([*f, *g]);
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Whether an edge of either triangle goes through the other.
+fn triangles_cross(a: [Vector3<f64>; 3], b: [Vector3<f64>; 3]) -> bool {
+    let through = |t: &[Vector3<f64>; 3], p: Vector3<f64>, q: Vector3<f64>| {
+        let vol = |a: Vector3<f64>, b: Vector3<f64>, c: Vector3<f64>, d: Vector3<f64>| {
+            (b - a).cross(&(c - a)).dot(&(d - a))
+        };
+        let (s, e) = (vol(t[0], t[1], t[2], p), vol(t[0], t[1], t[2], q));
+        if s * e >= 0.0 {
+            return false;
+        }
+        let sides = [
+            vol(p, q, t[0], t[1]),
+            vol(p, q, t[1], t[2]),
+            vol(p, q, t[2], t[0]),
+        ];
+        sides.iter().all(|&v| v > 0.0) || sides.iter().all(|&v| v < 0.0)
+    };
+    (0..3).any(|i| through(&b, a[i], a[(i + 1) % 3]) || through(&a, b[i], b[(i + 1) % 3]))
+}
+
+/// The places of the medium's `own` boundary nodes (see `Medium::own_places`) at the state
+/// `x`, `next` each node's neighbours along the boundary: per component, the solids' nodes,
+/// the `kept` and what is prescribed hold; the rest is the mean of its neighbours, a little
+/// held to where the mesh put it (so that a part no solid touches stays there).
+fn place_own(
+    model: &Model,
+    x: &[f64],
+    next: &[Vec<usize>],
+    own: &[usize],
+    kept: &[bool],
+) -> Result<Vec<Option<[f64; 3]>>, String> {
+    let on_solid = model.on_solids();
+    let mesh = &model.mesh;
+    let d = model.dofs.dim;
+    let u_of = |n: usize, i: usize| model.dofs.u.get(n * d + i).map(|&u| u as usize);
+    let mut places = vec![None; mesh.coords.len()];
+    for i in 0..d {
+        let held = |n: usize| {
+            on_solid[n] || kept[n] || u_of(n, i).is_some_and(|u| model.cons.prescribed[u].is_some())
+        };
+        let value = |n: usize| u_of(n, i).map_or(0.0, |u| x[u]);
+        let free: Vec<usize> = own.iter().copied().filter(|&n| !held(n)).collect();
+        let mut at = vec![usize::MAX; mesh.coords.len()];
+        free.iter().enumerate().for_each(|(k, &n)| at[n] = k);
+        let weight = |n: usize| next[n].len() as f64 * (1.0 + 1e-9);
+        let rhs: Vec<f64> = (free.iter())
+            .map(|&n| {
+                next[n]
+                    .iter()
+                    .filter(|&&m| held(m))
+                    .map(|&m| value(m))
+                    .sum()
+            })
+            .collect();
+        let apply = |v: &[f64], out: &mut [f64]| {
+            for (k, &n) in free.iter().enumerate() {
+                let around: f64 = (next[n].iter())
+                    .filter(|&&m| at[m] != usize::MAX)
+                    .map(|&m| v[at[m]])
+                    .sum();
+                out[k] = weight(n) * v[k] - around;
+            }
+        };
+        let diagonal: Vec<f64> = free.iter().map(|&n| weight(n)).collect();
+        let u = mean_of_neighbours(apply, &diagonal, &rhs)
+            .ok_or("the medium's outer faces could not be placed")?;
+        for (k, &n) in free.iter().enumerate() {
+            places[n].get_or_insert(mesh.coords[n])[i] += u[k];
+        }
+        for &n in own.iter().filter(|&&n| held(n)) {
+            places[n].get_or_insert(mesh.coords[n])[i] += value(n);
+        }
+    }
+    Ok(places)
 }
 
 /// The solution v of A v = b, A symmetric positive definite given by its product `apply`
@@ -1964,5 +2151,47 @@ mod tests {
         slid[2][0] = 1.2;
         slid[3][0] = 1.2;
         assert!(v(slid, s.corners, 2).iter().any(|&x| x < 0.0));
+    }
+
+    #[test]
+    fn placed_outer_faces_that_turn_over_close_up_or_cross_are_found() {
+        let tri = |a: [f64; 3], b: [f64; 3], c: [f64; 3]| [a, b, c];
+        let (o, ex, ey) = ([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]);
+        // a triangle tilted by less than FOLD stands; turned past it, or flat, it folds
+        assert!(!folds(tri(o, ex, ey), tri(o, ex, [0.0, 1.0, 1.0])));
+        assert!(folds(tri(o, ex, ey), tri(o, ex, [0.0, 0.5, 1.0])));
+        assert!(folds(tri(o, ex, ey), tri(o, ex, [0.0, -1.0, 0.0])));
+        assert!(folds(tri(o, ex, ey), tri(o, ex, [2.0, 0.0, 0.0])));
+        // two triangles on one edge, found as a hinge
+        assert_eq!(
+            hinges(&[[0, 1, 2], [1, 0, 3], [2, 4, 5]]),
+            vec![[0, 1, 2, 3]]
+        );
+        let open = [o, ex, [0.5, 1.0, 0.0], [0.5, -1.0, 0.1]];
+        // closed below CREASE about the edge, the more shut than they were
+        let shut = [o, ex, [0.5, 1.0, 0.0], [0.5, 1.0, 0.2]];
+        assert!(closes(open, shut));
+        assert!(!closes(shut, shut), "no closer than it was");
+        assert!(!closes(open, [o, ex, [0.5, 1.0, 0.0], [0.5, 0.0, 1.0]]));
+        // a triangle through another, one beside it, one sharing a corner
+        let at = |n: usize| {
+            [
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [0.2, 0.2, -0.5],
+                [0.2, 0.2, 0.5],
+                [0.6, 0.6, 0.5],
+                [3.0, 3.0, -0.5],
+                [3.0, 3.0, 0.5],
+            ][n]
+        };
+        let faces = [[0, 1, 2], [3, 4, 5], [6, 7, 5], [0, 4, 3]];
+        let crossed = crossing(&faces, |_| true, at);
+        assert_eq!(crossed, vec![[0, 1, 2], [3, 4, 5]]);
+        assert!(
+            crossing(&faces, |f| f[0] == 6, at).is_empty(),
+            "only moved ones"
+        );
     }
 }
