@@ -817,10 +817,6 @@ impl Medium {
             }
         }
         let d = model.dofs.dim;
-        let held_by = |n: usize, i: usize| {
-            let u = model.dofs.u.get(n * d + i);
-            u.is_some_and(|&u| model.cons.prescribed[u as usize].is_some())
-        };
         // the own nodes kept where the run left them: in 3D, first those beside a solid's
         // node that a condition holds
         let mut kept = vec![false; mesh.coords.len()];
@@ -828,7 +824,10 @@ impl Medium {
         for blk in blocks.iter().map(|&b| &mesh.cells[b]) {
             for cell in (0..blk.n_cells()).map(|c| blk.cell(c)) {
                 if cell.iter().any(|&n| on_solid[n]) {
-                    for &n in cell.iter().filter(|&&n| (0..d).any(|i| held_by(n, i))) {
+                    for &n in cell
+                        .iter()
+                        .filter(|&&n| (0..d).any(|i| held_along(model, n, i)))
+                    {
                         kept[n] = true;
                     }
                 }
@@ -839,7 +838,7 @@ impl Medium {
             .collect();
         let hinges = hinges(&outer);
         loop {
-            let places = place_own(model, x, &next, &own, &kept)?;
+            let places = place_own(model, x, &next, &own, &on_solid, &kept)?;
             let at = |n: usize| places[n].unwrap_or_else(|| model.placed(n, x));
             let now = |n: usize| model.placed(n, x);
             // the nodes of triangles turned over, the far corners of two on an edge closed
@@ -1199,7 +1198,7 @@ const FOLD: f64 = std::f64::consts::FRAC_PI_3;
 /// Whether the triangle at `now` turns over where placed at `placed` (see [`FOLD`]).
 fn folds(now: [[f64; 3]; 3], placed: [[f64; 3]; 3]) -> bool {
     let normal = |p: [[f64; 3]; 3]| {
-        let v = p.map(|q| Vector3::new(q[0], q[1], q[2]));
+        let v = p.map(Vector3::from);
         (v[1] - v[0]).cross(&(v[2] - v[0]))
     };
     let (a, b) = (normal(now), normal(placed));
@@ -1229,7 +1228,7 @@ const CREASE: f64 = 0.25;
 /// where placed at `placed`, from their angle at `now` (see [`CREASE`]).
 fn closes(now: [[f64; 3]; 4], placed: [[f64; 3]; 4]) -> bool {
     let angle = |p: [[f64; 3]; 4]| {
-        let v = p.map(|q| Vector3::new(q[0], q[1], q[2]));
+        let v = p.map(Vector3::from);
         let e = (v[1] - v[0]).normalize();
         let across = |w: Vector3<f64>| {
             let r = w - v[0];
@@ -1321,26 +1320,31 @@ fn triangles_cross(a: [Vector3<f64>; 3], b: [Vector3<f64>; 3]) -> bool {
     (0..3).any(|i| through(&b, a[i], a[(i + 1) % 3]) || through(&a, b[i], b[(i + 1) % 3]))
 }
 
+/// Whether a condition prescribes node `n`'s displacement along `i` in `model`.
+fn held_along(model: &Model, n: usize, i: usize) -> bool {
+    let u = model.dofs.u.get(n * model.dofs.dim + i);
+    u.is_some_and(|&u| model.cons.prescribed[u as usize].is_some())
+}
+
 /// The places of the medium's `own` boundary nodes (see `Medium::own_places`) at the state
-/// `x`, `next` each node's neighbours along the boundary: per component, the solids' nodes,
-/// the `kept` and what is prescribed hold; the rest is the mean of its neighbours, a little
-/// held to where the mesh put it (so that a part no solid touches stays there).
+/// `x`, `next` each node's neighbours along the boundary: per component, the solids' nodes
+/// (`on_solid`), the `kept` and what is prescribed hold; the rest is the mean of its
+/// neighbours, a little held to where the mesh put it (so that a part no solid touches stays
+/// there).
 fn place_own(
     model: &Model,
     x: &[f64],
     next: &[Vec<usize>],
     own: &[usize],
+    on_solid: &[bool],
     kept: &[bool],
 ) -> Result<Vec<Option<[f64; 3]>>, String> {
-    let on_solid = model.on_solids();
     let mesh = &model.mesh;
     let d = model.dofs.dim;
     let u_of = |n: usize, i: usize| model.dofs.u.get(n * d + i).map(|&u| u as usize);
     let mut places = vec![None; mesh.coords.len()];
     for i in 0..d {
-        let held = |n: usize| {
-            on_solid[n] || kept[n] || u_of(n, i).is_some_and(|u| model.cons.prescribed[u].is_some())
-        };
+        let held = |n: usize| on_solid[n] || kept[n] || held_along(model, n, i);
         let value = |n: usize| u_of(n, i).map_or(0.0, |u| x[u]);
         let free: Vec<usize> = own.iter().copied().filter(|&n| !held(n)).collect();
         let mut at = vec![usize::MAX; mesh.coords.len()];
