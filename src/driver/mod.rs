@@ -962,7 +962,9 @@ mod tests {
     //! ends.
 
     use super::*;
+    use crate::dofs::Field;
     use crate::solver::linear::{Factorization, LinearSolver};
+    use crate::solver::newton::StepReport;
     use std::sync::Arc;
     use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -1009,6 +1011,19 @@ mod tests {
         script: Script,
         settle: Option<Settle>,
     ) -> (Result<Summary, SolveError>, PathBuf) {
+        with_scripted_run(name, script, |mut run| {
+            run.record_initial().and_then(|_| {
+                if let Some(settle) = settle {
+                    run.rejoined(settle);
+                }
+                step_to_end(run)
+            })
+        })
+    }
+
+    /// What `go` makes of a run of the block scene on a coarse mesh, into
+    /// `target/unit-scratch/NAME`, with the engine's failures scripted; and the run's folder.
+    fn with_scripted_run<R>(name: &str, script: Script, go: impl FnOnce(Run) -> R) -> (R, PathBuf) {
         let root = Path::new(env!("CARGO_MANIFEST_DIR"));
         let out = root.join("target/unit-scratch/driver").join(name);
         let _ = std::fs::remove_dir_all(&out);
@@ -1044,13 +1059,7 @@ mod tests {
             };
             LinearSolver::with(kind, Box::new(scripted))
         });
-        let result = run.record_initial().and_then(|_| {
-            if let Some(settle) = settle {
-                run.rejoined(settle);
-            }
-            step_to_end(run)
-        });
-        (result, out)
+        (go(run), out)
     }
 
     fn summary_in(dir: &Path) -> serde_json::Value {
@@ -1173,5 +1182,44 @@ mod tests {
         assert_eq!(s["load_steps"].as_u64().unwrap() as usize, steps);
         assert!(s["rejected_steps"].as_u64().unwrap() > 3);
         assert_eq!(history_rows(&dir), steps + 1);
+    }
+
+    /// A step taken by continuation solves a one-way scene's mechanics by continuation and
+    /// its heat, linear in θ, by Newton: one update, where continuation's shifted solves
+    /// would creep (the block's first step: the same state as Newton's to round-off).
+    #[test]
+    fn a_step_by_continuation_solves_the_heat_of_a_one_way_scene_by_newton() {
+        let (rows, _) = with_scripted_run(
+            "continued-heat",
+            |_| None,
+            |mut run| {
+                run.record_initial().unwrap();
+                let (_, target) = run.next_step();
+                let (newton, by_newton) = run.st.attempt(target).unwrap();
+                run.st.asm.restore();
+                let (continued, by_continuation) = run.st.attempt_continued(target).unwrap();
+                let theta = |x: &[f64]| -> Vec<f64> {
+                    let dofs = &run.st.model.dofs;
+                    (0..x.len())
+                        .filter(|&d| dofs.field[d] == Field::Theta)
+                        .map(|d| x[d])
+                        .collect()
+                };
+                let (a, b) = (theta(&newton), theta(&continued));
+                let scale = a.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                let differ = a
+                    .iter()
+                    .zip(&b)
+                    .fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
+                assert!(
+                    scale > 0.0 && differ <= 1e-8 * scale,
+                    "θ differs by {differ}"
+                );
+                // the heat's rows: those where the mechanics' residual is not assembled
+                let heat = |r: &StepReport| r.history.iter().filter(|h| h[0] == 0.0).count();
+                (heat(&by_newton), heat(&by_continuation))
+            },
+        );
+        assert!(rows.0 > 0 && rows.1 == rows.0, "heat rows {rows:?}");
     }
 }
