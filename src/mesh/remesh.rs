@@ -201,7 +201,7 @@ pub fn remesh(
     on_boundary.sort_unstable();
     on_boundary.dedup();
     let find = finder(x, &on_boundary);
-    let (new_of, mut old_of, mut coords) = kept_nodes(mesh, medium, &on_boundary);
+    let (new_of, mut old_of, mut coords) = kept_nodes(mesh, medium, &facets, &on_boundary);
     // the made mesh's nodes: a boundary node is the old one, any other is new
     let mut made_to_new = Vec::with_capacity(made.coords.len());
     for &p in &made.coords {
@@ -813,13 +813,15 @@ fn finder(x: &[[f64; 3]], nodes: &[usize]) -> impl Fn([f64; 3]) -> Option<usize>
     }
 }
 
-/// The old nodes kept (those of every other cell and facet, and the medium's boundary
-/// `on_boundary`), numbered anew in their order: the new number of each old node
-/// (`usize::MAX` if dropped), the old node of each new one, and their coordinates.
+/// The old nodes kept (those of every other cell, of the `facets` as the medium made again
+/// has them, and of the medium's boundary `on_boundary`), numbered anew in their order: the
+/// new number of each old node (`usize::MAX` if dropped), the old node of each new one, and
+/// their coordinates.
 #[allow(clippy::type_complexity)]
 fn kept_nodes(
     mesh: &Mesh,
     medium: &[usize],
+    facets: &[Block],
     on_boundary: &[usize],
 ) -> (Vec<usize>, Vec<Option<usize>>, Vec<[f64; 3]>) {
     let n_old = mesh.coords.len();
@@ -829,7 +831,7 @@ fn kept_nodes(
             blk.conn.iter().for_each(|&n| keep[n] = true);
         }
     }
-    for blk in &mesh.facets {
+    for blk in facets {
         blk.conn.iter().for_each(|&n| keep[n] = true);
     }
     on_boundary.iter().for_each(|&n| keep[n] = true);
