@@ -179,6 +179,11 @@ impl<'a> Run<'a> {
         (self.st.ctl.t, self.st.ctl.target())
     }
 
+    /// Whether the run stands at a vertex of its load path, before its end.
+    pub(super) fn at_vertex(&self) -> bool {
+        self.st.ctl.at_vertex()
+    }
+
     /// Let the next step end at `until` at the latest.
     pub(super) fn cap_step(&mut self, until: f64) {
         self.st.ctl.cap(until);

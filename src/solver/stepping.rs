@@ -110,6 +110,13 @@ impl Controller {
         self.vertices.get(i).copied().unwrap_or(self.end)
     }
 
+    /// Whether the last accepted time is a vertex before the end: the next step starts a new
+    /// segment of the load path.
+    pub fn at_vertex(&self) -> bool {
+        let eps = self.eps();
+        !self.done() && self.vertices.iter().any(|&v| (v - self.t).abs() <= eps)
+    }
+
     /// Target time of the next attempt: never past the next vertex, and no sliver left
     /// before it.
     pub fn target(&self) -> f64 {
