@@ -192,7 +192,7 @@ impl<'a> Stepper<'a> {
     /// always by Newton: it is linear in θ, one solve converges it, where continuation's
     /// shifted solves creep down its slowest modes (the sphere dragged with friction and
     /// heat stopped where its mechanics had been taken by continuation and its heat was not,
-    /// at a residual of 2.3e-3 after 160 iterations).
+    /// at a residual of 1.5e-3 after 160 iterations).
     fn attempt_by(
         &mut self,
         target: f64,

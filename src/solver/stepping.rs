@@ -216,6 +216,14 @@ mod tests {
         for v in [1.0, 2.0, 3.0] {
             assert!(seen.contains(&v), "vertex {v} missed: {seen:?}");
         }
+        // standing on each vertex but the end, and only there, a new segment is next
+        let mut c = Controller::new(&cfg, 3.0);
+        assert!(!c.at_vertex(), "the start is no vertex");
+        while !c.done() {
+            let t = c.target();
+            c.accept(t, 3);
+            assert_eq!(c.at_vertex(), t == 1.0 || t == 2.0, "at {t}");
+        }
         // a step shortened to reach a vertex does not shrink the next one
         let i = seen.iter().position(|&t| t == 1.0).unwrap();
         assert!(seen[i + 1] - 1.0 >= seen[i] - seen[i - 1] - 1e-12);
