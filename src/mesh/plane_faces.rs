@@ -60,7 +60,7 @@ pub fn own_planes_again(
     x: &[[f64; 3]],
 ) -> Vec<[usize; 3]> {
     let solid = solid_faces(mesh, medium);
-    let on_solid: HashSet<usize> = solid.iter().flatten().copied().collect();
+    let on_solid = mesh.nodes_in(|b| !medium.contains(&b));
     let own: Vec<[usize; 3]> = (faces.iter())
         .filter(|&&f| !solid.contains(&key(f)))
         .copied()
@@ -100,7 +100,7 @@ fn again(
     old: &[[usize; 3]],
     n: Vector3<f64>,
     x: &[[f64; 3]],
-    on_solid: &HashSet<usize>,
+    on_solid: &[bool],
 ) -> Option<Vec<[usize; 3]>> {
     use spade::{
         AngleLimit, ConstrainedDelaunayTriangulation, Point2, RefinementParameters, Triangulation,
@@ -187,12 +187,12 @@ fn again(
 fn near_solids(
     old: &[[usize; 3]],
     boundary: &[(usize, usize)],
-    on_solid: &HashSet<usize>,
+    on_solid: &[bool],
     flat: impl Fn(usize) -> spade::Point2<f64>,
 ) -> HashSet<usize> {
     let on_edge: HashSet<usize> = boundary.iter().flat_map(|&(a, b)| [a, b]).collect();
     let solid_edges: Vec<(usize, usize)> = (boundary.iter().copied())
-        .filter(|(a, b)| on_solid.contains(a) && on_solid.contains(b))
+        .filter(|&(a, b)| on_solid[a] && on_solid[b])
         .collect();
     let near = |m: usize| {
         let p = flat(m);
@@ -206,7 +206,7 @@ fn near_solids(
         })
     };
     (old.iter().flatten().copied())
-        .filter(|m| !on_edge.contains(m) && !on_solid.contains(m))
+        .filter(|&m| !on_edge.contains(&m) && !on_solid[m])
         .filter(|&m| near(m))
         .collect()
 }
@@ -312,7 +312,7 @@ mod tests {
             [3, 0, 6],
             [0, 5, 6],
         ];
-        let solid: HashSet<usize> = [0, 4, 1].into_iter().collect();
+        let solid = [true, true, false, false, true, false, false];
         let new = again(&old, Vector3::z(), &x, &solid).unwrap();
         let nodes: HashSet<usize> = new.iter().flatten().copied().collect();
         assert!(!nodes.contains(&5) && nodes.contains(&6), "{new:?}");
@@ -320,8 +320,7 @@ mod tests {
             assert!(normal(&x, *f).z > 0.99, "turned as before: {f:?}");
         }
         // nothing near a solid: every node kept
-        let none = HashSet::new();
-        let all = again(&old, Vector3::z(), &x, &none).unwrap();
+        let all = again(&old, Vector3::z(), &x, &[false; 7]).unwrap();
         assert_eq!(
             all.iter().flatten().copied().collect::<HashSet<_>>().len(),
             7

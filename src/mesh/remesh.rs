@@ -825,12 +825,7 @@ fn kept_nodes(
     on_boundary: &[usize],
 ) -> (Vec<usize>, Vec<Option<usize>>, Vec<[f64; 3]>) {
     let n_old = mesh.coords.len();
-    let mut keep = vec![false; n_old];
-    for (b, blk) in mesh.cells.iter().enumerate() {
-        if !medium.contains(&b) {
-            blk.conn.iter().for_each(|&n| keep[n] = true);
-        }
-    }
+    let mut keep = mesh.nodes_in(|b| !medium.contains(&b));
     for blk in facets {
         blk.conn.iter().for_each(|&n| keep[n] = true);
     }
