@@ -188,11 +188,7 @@ impl<'a> Stepper<'a> {
         self.attempt_by(target, Newton::continuation)
     }
 
-    /// The step to `target` solved by `solve` for each part in turn; a one-way scene's heat
-    /// always by Newton: it is linear in θ, one solve converges it, where continuation's
-    /// shifted solves creep down its slowest modes (the sphere dragged with friction and
-    /// heat stopped where its mechanics had been taken by continuation and its heat was not,
-    /// at a residual of 1.5e-3 after 160 iterations).
+    /// The step to `target` solved by `solve` for each part in turn.
     fn attempt_by(
         &mut self,
         target: f64,
@@ -203,10 +199,6 @@ impl<'a> Stepper<'a> {
         let mut report: Option<StepReport> = None;
         for (part, solver) in self.solvers.iter_mut() {
             let (model, asm) = (self.model, &mut self.asm);
-            let solve: Solve = match part {
-                Part::Heat => Newton::step,
-                _ => solve,
-            };
             let rep = solve(
                 &mut self.newton,
                 model,

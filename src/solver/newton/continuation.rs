@@ -36,7 +36,11 @@ impl Newton {
     /// Solve the step to `step` from `x` (the last accepted state) by pseudo-transient
     /// continuation, for the equations of `part`. One rank only (the shift is laid on each
     /// rank's part of the tangent): elsewhere it fails at once. On failure `x` is left
-    /// modified, as [`Newton::step`] leaves it.
+    /// modified, as [`Newton::step`] leaves it. A one-way scene's heat is solved by Newton:
+    /// it is linear in θ, one update converges it, where the shifted solves creep down its
+    /// slowest modes (the sphere dragged with friction and heat stopped where its mechanics
+    /// had been taken by continuation and its heat was not, at a residual of 1.5e-3 after
+    /// 160 iterations).
     pub fn continuation(
         &mut self,
         model: &Model,
@@ -46,6 +50,9 @@ impl Newton {
         step: &StepContext,
         part: Part,
     ) -> Result<StepReport, StepFailure> {
+        if part == Part::Heat {
+            return self.step(model, asm, solver, x, step, part);
+        }
         let equations = self.equations(part);
         let diagonal: Vec<usize> = (equations.iter())
             .filter_map(|&e| asm.pattern.find(e, e))
