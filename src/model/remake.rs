@@ -1115,7 +1115,11 @@ impl Medium {
                 NewCell { b, c, p, mid, F }
             })
             .collect();
-        let layers = Layers::of(&r.mesh, &body, &cells);
+        let mut layers = Layers::of(&r.mesh, &body, &cells);
+        if dim == 3 {
+            let normals = solid_normals(&r.mesh, &r.medium, &body, here)?;
+            layers.unface(&r.mesh, &body, &cells, &normals);
+        }
         if !layers.closed() {
             (cells.par_iter_mut())
                 .filter(|cell| !across(cell.b, cell.c))
@@ -1552,6 +1556,51 @@ fn squeezed(find: &Locator, p: &[[f64; 3]], mid: [f64; 3]) -> Matrix3<f64> {
     .unwrap_or_else(Matrix3::identity)
 }
 
+/// A sliver across a closed layer squeezed more than this many times (thinner than its
+/// layer's thickness of reference over this) is asked whether its faces face each other
+/// ([`Layers::unface`]). The square pad in 3D slid without friction met the plate's rows with
+/// slivers squeezed 30 to 900 times along the slide. Asked from 8, the hemisphere dragged three
+/// radii (the wedge around its contact holds slivers squeezed a few times across it) met
+/// 0.0304 where it met 0.0300; from 20, 0.0299.
+const UNFACED: f64 = 20.0;
+
+/// Whether the way across a cell, `n`, runs between faces that face each other: within 60° of
+/// the normal of each body's faces at the cell (`sides`, the sum of its nodes' normals).
+fn facing(n: Vector3<f64>, mut sides: impl Iterator<Item = Vector3<f64>>) -> bool {
+    let half = std::f64::consts::FRAC_PI_3.cos();
+    sides.all(|m| {
+        m.try_normalize(0.0)
+            .is_some_and(|m| m.dot(&n).abs() >= half)
+    })
+}
+
+/// Per node of `mesh`, the unit normal of the solids' faces that border the medium `medium`
+/// there (the sum of their areas' normals at the places `here`; zero off them): each face of
+/// one body (`body`), so not a symmetry plane's medium triangle between two bodies.
+fn solid_normals(
+    mesh: &Mesh,
+    medium: &[usize],
+    body: &[usize],
+    here: impl Fn(usize) -> [f64; 3],
+) -> Result<Vec<Vector3<f64>>, RemeshError> {
+    let faces = crate::mesh::faces::outer_triangles(mesh, medium)?;
+    let mut normals = vec![Vector3::zeros(); mesh.coords.len()];
+    for f in faces {
+        if f.iter()
+            .any(|&n| body[n] == usize::MAX || body[n] != body[f[0]])
+        {
+            continue;
+        }
+        let v = f.map(|n| Vector3::from(here(n)));
+        let a = (v[1] - v[0]).cross(&(v[2] - v[0]));
+        f.iter().for_each(|&n| normals[n] += a);
+    }
+    Ok(normals
+        .into_iter()
+        .map(|n| n.try_normalize(0.0).unwrap_or_else(Vector3::zeros))
+        .collect())
+}
+
 /// The new medium's layers one cell across: triangles whose three nodes are on solids, so
 /// that each spans the gap between two faces. Those that touch one another make a layer (a
 /// contact and its sides), and a layer that was closed somewhere (an old J below [`CLOSED`]
@@ -1567,6 +1616,9 @@ struct Layers {
     across: Vec<Option<(f64, Vector3<f64>, usize)>>,
     /// Per layer, its thickness of reference (none where it was nowhere closed).
     thickness: Vec<Option<f64>>,
+    /// Per new cell, whether it is a sliver between faces that do not face each other across
+    /// it (see [`Layers::unface`]), which starts as the open medium does.
+    unfaced: Vec<bool>,
     dim: usize,
 }
 
@@ -1628,7 +1680,34 @@ impl Layers {
         Layers {
             across,
             thickness,
+            unfaced: vec![false; cells.len()],
             dim,
+        }
+    }
+
+    /// Marks the slivers across a closed layer (squeezed more than [`UNFACED`] times from its thickness of
+    /// reference) whose way across runs along a body's faces rather than between faces that
+    /// face each other (`normals`, per solid node, see [`solid_normals`]; [`facing`]). A
+    /// sliver between a pad's leading face and the plate's nodes just ahead of it, thin along
+    /// the slide, would otherwise start squeezed to the layer's thickness along the slide,
+    /// by up to 900 times, and push the pad back as it comes over each row of the plate's
+    /// nodes (docs/notes/2026-12-06-a-sliver-squeezed-along-the-slide.md).
+    fn unface(&mut self, mesh: &Mesh, body: &[usize], cells: &[NewCell], normals: &[Vector3<f64>]) {
+        for (k, cell) in cells.iter().enumerate() {
+            let Some((t, n, l)) = self.across[k] else {
+                continue;
+            };
+            if self.thickness[l].is_none_or(|g| t * UNFACED >= g) {
+                continue;
+            }
+            let mut sides: Vec<(usize, Vector3<f64>)> = Vec::new();
+            for &m in mesh.cells[cell.b].cell(cell.c) {
+                match sides.iter_mut().find(|(b, _)| *b == body[m]) {
+                    Some((_, v)) => *v += normals[m],
+                    None => sides.push((body[m], normals[m])),
+                }
+            }
+            self.unfaced[k] = !facing(n, sides.into_iter().map(|(_, v)| v));
         }
     }
 
@@ -1643,6 +1722,9 @@ impl Layers {
     fn carried(&self, k: usize, p: &[[f64; 3]]) -> Option<Matrix3<f64>> {
         let (t, n, l) = self.across[k]?;
         let g = self.thickness[l]?;
+        if self.unfaced[k] {
+            return Some(opened(p, self.dim));
+        }
         Some(match t > 0.0 && t < g {
             true if self.dim == 2 => {
                 let n = Vector2::new(n[0], n[1]);
@@ -2064,6 +2146,32 @@ mod tests {
         assert!((len(r[0], r[1]) - 1.0).abs() < 1e-12);
         let fine = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.5, 0.8, 0.0]];
         assert_eq!(opened(&fine, 2), Matrix3::identity());
+    }
+
+    #[test]
+    fn a_sliver_along_a_body_s_face_is_no_layer_and_one_between_facing_faces_is() {
+        let v = |x: f64, y: f64, z: f64| Vector3::new(x, y, z);
+        // under a pad: the way across is the plate's normal and the pad's
+        assert!(facing(
+            v(0.0, 0.0, 1.0),
+            [v(0.0, 0.0, 1.0), v(0.0, 0.0, -1.0)].into_iter()
+        ));
+        // between a pad's leading face (and its bottom edge) and the plate's node ahead of
+        // it, thin along the slide: across the plate's normal
+        let edge = v(1.0, 0.0, -1.0) + v(2.0, 0.0, 0.0);
+        assert!(!facing(
+            v(1.0, 0.0, 0.0),
+            [edge, v(0.0, 0.0, 1.0)].into_iter()
+        ));
+        // the wedge beside a sphere's contact: its face 50° over, the way across 25° over
+        let (a, b) = (50f64.to_radians(), 25f64.to_radians());
+        let sphere = v(-a.sin(), 0.0, -a.cos());
+        assert!(facing(
+            v(b.sin(), 0.0, b.cos()),
+            [sphere, v(0.0, 0.0, 1.0)].into_iter()
+        ));
+        // a body with no face there says no
+        assert!(!facing(v(0.0, 0.0, 1.0), [Vector3::zeros()].into_iter()));
     }
 
     #[test]
