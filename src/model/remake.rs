@@ -1685,13 +1685,13 @@ impl Layers {
         }
     }
 
-    /// Marks the slivers across a closed layer (squeezed more than [`UNFACED`] times from its thickness of
-    /// reference) whose way across runs along a body's faces rather than between faces that
-    /// face each other (`normals`, per solid node, see [`solid_normals`]; [`facing`]). A
-    /// sliver between a pad's leading face and the plate's nodes just ahead of it, thin along
-    /// the slide, would otherwise start squeezed to the layer's thickness along the slide,
-    /// by up to 900 times, and push the pad back as it comes over each row of the plate's
-    /// nodes (docs/notes/2026-12-06-a-sliver-squeezed-along-the-slide.md).
+    /// Marks the slivers across a closed layer (squeezed more than [`UNFACED`] times from its
+    /// thickness of reference) whose way across runs along a body's faces rather than between
+    /// faces that face each other (`normals`, per solid node, see [`solid_normals`];
+    /// [`facing`]). A sliver between a pad's leading face and the plate's nodes just ahead of
+    /// it, thin along the slide, would otherwise start squeezed to the layer's thickness along
+    /// the slide, by up to 900 times, and push the pad back as it comes over each row of the
+    /// plate's nodes (docs/notes/2026-12-06-a-sliver-squeezed-along-the-slide.md).
     fn unface(&mut self, mesh: &Mesh, body: &[usize], cells: &[NewCell], normals: &[Vector3<f64>]) {
         for (k, cell) in cells.iter().enumerate() {
             let Some((t, n, l)) = self.across[k] else {
