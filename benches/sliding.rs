@@ -14,8 +14,8 @@
 //! The second: friction (item 4), each scene as a user draws it, with no special key, the
 //! medium made again as the body moves: the pad in a box of `cases/pad-box-slide.toml`
 //! (triangles and quadrilaterals, h = 0.1 and 0.05) dragged five pad widths; the square pad in
-//! 3D (`geo/pad-box-3d.geo`: a half pad 1 × 0.5 × 0.5 over a plate, the medium a box of
-//! tetrahedra around it, h = 0.2, the pad at 0.2 and at 0.15) dragged its width; the hemisphere
+//! 3D of `cases/pad-box-slide-3d.toml` (a half pad 1 × 0.5 × 0.5 over a plate, the medium a box
+//! of tetrahedra around it, h = 0.2, the pad at 0.2 and at 0.15) dragged its width; the hemisphere
 //! of `cases/sphere-drag.toml` dragged three radii; the block as wide as its base
 //! (`geo/block.geo`, n = 16 and 32) pressed 0.35 into its 0.25 layer and dragged 0.5. Each
 //! row: how far it was dragged of the drag asked, where full slip begins (the first step at
@@ -145,12 +145,18 @@ impl Scene {
                 );
             }
             Scene::Pad3d { hp, mu } => {
-                let geo = root().join("geo/pad-box-3d.geo");
-                let text = format!(
-                    "mesh = \"{}\"\n\n[mesh_options]\nparams = {{ h = 0.2, hp = {hp} }}\n{}",
-                    geo.display(),
-                    PAD_3D.replace("MU", &mu.to_string())
-                );
+                let text = edit(
+                    &case_text("pad-box-slide-3d"),
+                    &[
+                        ("hp = 0.15 }", &format!("hp = {hp} }}")),
+                        (
+                            "remake = true\n",
+                            &format!(
+                                "remake = true\nfriction = {{ mu = {mu}, normal = \"auto\" }}\n"
+                            ),
+                        ),
+                    ],
+                ) + ENDS;
                 let dir = format!("pad-3d-{hp}-{mu}");
                 friction_row(
                     "square pad, 3D",
@@ -261,57 +267,6 @@ path = [0.0, 0.0, 1.0]
 path = [0.0, 1.0, 1.0]
 initial = 0.025
 max = 0.025
-
-[output]
-every = 1000000
-"#;
-
-/// The 3D pad of the friction table: a half pad on the plane of symmetry y = 0, pressed over
-/// t ∈ [0, 1] and dragged its width over t ∈ [1, 2].
-const PAD_3D: &str = r#"
-[[region]]
-group = "plate"
-kind = "solid"
-K = 20.0
-mu = 10.0
-
-[[region]]
-group = "pad"
-kind = "solid"
-K = 20.0
-mu = 10.0
-
-[[region]]
-group = "medium"
-kind = "medium"
-gamma = 1e-4
-remake = true
-friction = { mu = MU, normal = "auto" }
-
-[[bc]]
-group = "bottom"
-ux = 0.0
-uy = 0.0
-uz = 0.0
-
-[[bc]]
-group = "y0"
-uy = 0.0
-
-[[bc]]
-group = "top"
-uz = -0.12
-path = [0.0, 1.0, 1.0]
-
-[[bc]]
-group = "top"
-ux = 1.0
-path = [0.0, 0.0, 1.0]
-
-[steps]
-path = [0.0, 1.0, 1.0]
-initial = 0.05
-max = 0.05
 
 [output]
 every = 1000000

@@ -621,68 +621,27 @@ fn a_sphere_dragged_with_friction_passes_the_nodes_of_its_symmetry_plane() {
     assert!((0.29..0.34).contains(&mean), "F_t/F_n {mean} on average");
 }
 
-/// The square pad in 3D (`geo/pad-box-3d.geo`, the pad meshed at hp = 0.15 on a plate at
-/// h = 0.2, the medium a box of default tetrahedra), pressed 0.12 and slid 0.45 without
-/// friction. Its leading face comes over a row of the plate's nodes every 0.1 of slide; the
-/// slivers between that face and the row ahead, thin along the slide, started squeezed to the
-/// closed layer's thickness along it, and pushed the pad back: 0.078 of the normal force at a
+/// The square pad in 3D of `cases/pad-box-slide-3d.toml` (the pad meshed at hp = 0.15 on a
+/// plate at h = 0.2, the medium a box of default tetrahedra), pressed 0.12 and slid 0.45
+/// without friction. Its leading face comes over a row of the plate's nodes every 0.1 of slide;
+/// the slivers between that face and the row ahead, thin along the slide, started squeezed to
+/// the closed layer's thickness along it, and pushed the pad back: 0.078 of the normal force at a
 /// slide of 0.405, F_n up to 1.8 % over the press's. Such a sliver now starts as the open
 /// medium does; measured: 0.023 at most, 0.006 on average, F_n within 0.5 %.
 #[test]
 fn a_square_pad_is_not_pushed_back_as_it_slides_over_the_rows_of_the_plate_s_nodes() {
-    let text = r#"
-[[region]]
-group = "plate"
-kind = "solid"
-K = 20.0
-mu = 10.0
-
-[[region]]
-group = "pad"
-kind = "solid"
-K = 20.0
-mu = 10.0
-
-[[region]]
-group = "medium"
-kind = "medium"
-gamma = 1e-4
-remake = true
-
-[[bc]]
-group = "bottom"
-ux = 0.0
-uy = 0.0
-uz = 0.0
-
-[[bc]]
-group = "y0"
-uy = 0.0
-
-[[bc]]
-group = "top"
-uz = -0.12
-path = [0.0, 1.0, 1.0]
-
-[[bc]]
-group = "top"
-ux = 1.0
-path = [0.0, 0.0, 1.0]
-
-[time]
-end = 1.45
-dt = 0.05
-lambda = [[0.0, 0.0], [1.0, 1.0], [2.0, 1.0]]
-
-[steps]
-initial = 0.05
-max = 0.05
-"#;
+    // slid 0.45 of its width: the run ends at t = 1.45
+    let steps = "[steps]\npath = [0.0, 1.0, 1.0]\n";
+    let time =
+        "[time]\nend = 1.45\ndt = 0.05\nlambda = [[0.0, 0.0], [1.0, 1.0], [2.0, 1.0]]\n\n[steps]\n";
+    let body = case_body("pad-box-slide-3d");
+    assert_eq!(body.matches(steps).count(), 1);
+    let text = body.replace(steps, time);
     let case = case_file(
         "pad-3d-rows",
         "pad-box-3d.geo",
         "params = { h = 0.2, hp = 0.15 }",
-        &(text.to_string() + common::ENDS_ONLY),
+        &(text + common::ENDS_ONLY),
     );
     let out = case.with_file_name("out");
     let o = solve_cli(&case, &out, &[]);
