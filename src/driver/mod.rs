@@ -502,7 +502,7 @@ fn restart_setup(
             let mut mesh = remade.mesh;
             mesh.source = dir.join(checkpoint::MEDIUM_FILES[0]);
             let (mut model, probes) = model_on_extent(case, mesh, remade.d, true)?;
-            model.cell_reference = remade.reference;
+            model.made_again(remade.reference);
             (model, probes)
         }
         _ => model_on(case, mesh, opts.quiet)?,
@@ -861,7 +861,7 @@ fn remade(
     let mut mesh = made.mesh.clone();
     mesh.warnings.clear();
     let (mut new, probes) = model_on_extent(case, mesh, model.d, true)?;
-    new.cell_reference = made.reference.clone();
+    new.made_again(made.reference.clone());
     let from = made.old_dofs(model, &new);
     let old_state = std::mem::take(&mut cp.state.x);
     // the old cells as the run left them; the new ones start from the remake's references

@@ -224,6 +224,15 @@ pub fn remesh(
         .map(|(_, blk)| remap(blk))
         .collect();
     let mut new_medium = Vec::new();
+    // in 3D the cells beside a body (a node on one) apart from the rest: they weigh the
+    // rotation penalty less (`Model::made_again`)
+    let on_bodies = (mesh.dim == 3).then(|| {
+        let mut on = vec![false; coords.len()];
+        for &n in cells.iter().flat_map(|b| &b.conn) {
+            on[n] = true;
+        }
+        on
+    });
     for (r, (groups, _)) in regions.iter().enumerate() {
         let name = format!("medium{r}");
         let g = made
@@ -246,12 +255,18 @@ pub fn remesh(
         if let Some(faces) = given.get(r) {
             same_boundary(faces, &conn, &new_of).map_err(RemeshError::mesher)?;
         }
-        new_medium.push(cells.len());
-        cells.push(Block {
-            kind,
-            groups: groups.clone(),
-            conn,
-        });
+        let parts = match &on_bodies {
+            Some(on) => beside_and_apart(conn, kind.n_nodes(), on),
+            None => [conn, Vec::new()],
+        };
+        for conn in parts.into_iter().filter(|c| !c.is_empty()) {
+            new_medium.push(cells.len());
+            cells.push(Block {
+                kind,
+                groups: groups.clone(),
+                conn,
+            });
+        }
     }
     let facets = facets.iter().map(remap).collect();
     let new = Mesh {
@@ -268,6 +283,19 @@ pub fn remesh(
         old_of,
         medium: new_medium,
     })
+}
+
+/// The cells of `conn` (`n` nodes each) apart from those beside a body (a node `on` one), and
+/// those beside one, each in the order they had.
+fn beside_and_apart(conn: Vec<usize>, n: usize, on: &[bool]) -> [Vec<usize>; 2] {
+    let (mut apart, mut beside) = (Vec::new(), Vec::new());
+    for cell in conn.chunks(n) {
+        match cell.iter().any(|&v| on[v]) {
+            true => beside.extend_from_slice(cell),
+            false => apart.extend_from_slice(cell),
+        }
+    }
+    [apart, beside]
 }
 
 /// The medium blocks `medium` grouped by their physical groups: (groups, blocks) per region.
@@ -1288,13 +1316,24 @@ mod tests3 {
         mesher: Mesher,
     ) -> Vec<[[i64; 3]; 4]> {
         let r = remesh(mesh, x, &[0], mesher).unwrap();
-        assert_eq!(r.medium.len(), 1);
+        // the cells apart from the block, and those beside it (a node on it)
+        assert_eq!(r.medium.len(), 2);
+        let [apart, beside] = [0, 1].map(|k| &r.mesh.cells[r.medium[k]]);
+        let on_solid = r.mesh.nodes_in(|b| !r.medium.contains(&b));
+        for (blk, near) in [(apart, false), (beside, true)] {
+            assert!(blk.n_cells() > 0 && blk.groups == vec![0]);
+            let nears = (0..blk.n_cells()).map(|c| blk.cell(c).iter().any(|&n| on_solid[n]));
+            assert!(nears.into_iter().all(|b| b == near));
+        }
         let here = |n: usize| match r.old_of[n] {
             Some(o) => x[o],
             None => r.mesh.coords[n],
         };
         let placed: Vec<[f64; 3]> = (0..r.mesh.coords.len()).map(here).collect();
-        let new = &r.mesh.cells[r.medium[0]];
+        let new = Block {
+            conn: [&apart.conn[..], &beside.conn[..]].concat(),
+            ..apart.clone()
+        };
         assert_eq!(new.kind, CellKind::Tet4);
         let vols: Vec<f64> = (0..new.n_cells())
             .map(|c| volume(&placed, new.cell(c)))

@@ -283,6 +283,11 @@ pub(crate) mod tests {
     /// The model of the shipped case `name`, its `.geo` meshed as the case says (with `params`
     /// over its own) into `target/unit-scratch/model/`.
     pub(crate) fn model_of(name: &str, params: &[(&str, f64)]) -> Model {
+        case_and_model_of(name, params).1
+    }
+
+    /// [`model_of`] with its case.
+    pub(crate) fn case_and_model_of(name: &str, params: &[(&str, f64)]) -> (Case, Model) {
         let root = Path::new(env!("CARGO_MANIFEST_DIR"));
         let case = Case::read(&root.join(format!("cases/{name}.toml"))).unwrap();
         let mut set: std::collections::BTreeMap<String, f64> =
@@ -297,7 +302,8 @@ pub(crate) mod tests {
         };
         let mesh = mesh_geo(&case.mesh_path(), &out, &opts).unwrap().mesh;
         validate::validate(&case, &mesh).unwrap();
-        build::build(&case, mesh).unwrap()
+        let model = build::build(&case, mesh).unwrap();
+        (case, model)
     }
 
     /// (bulk, flux, capacity, friction, inertia) terms of a model.

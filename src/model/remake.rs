@@ -56,6 +56,15 @@ pub const SETTLED: f64 = 1e-6;
 /// The J below which a medium cell is a closed layer, whose compression a new cell carries.
 pub const CLOSED: f64 = 0.5;
 
+/// In 3D, the weight of the rotation penalty's β1 on a remade medium's cells beside a body (a
+/// node on one). A body's face along its slide shears the cells beside it by the slide since
+/// the last remake, and their penalty, 1e4 times the medium's own stiffness at γ = 1e-4, held
+/// the square pad in a box at 0.005 of its normal force without friction, the floor under its
+/// spikes (0.0011 at a tenth; 0.0007 at a hundredth, where the sphere's box folds). Not in
+/// 2D, which has no such faces and whose pads need the penalty at their corners
+/// (docs/notes/2026-12-06-the-penalty-beside-a-sliding-face.md).
+pub const BESIDE: f64 = 0.1;
+
 /// Per mesh block, its cells' own reference node coordinates (N per cell, in cell order), or
 /// `None` for a block measured from the mesh: a model's as made ([`Model::cell_reference`]),
 /// or a run's, whose closed layers have taken their slide into them since.
@@ -455,6 +464,27 @@ impl Model {
             rebase(&mut s, &r[c * N..(c + 1) * N]);
         }
         s
+    }
+
+    /// The medium made again: its cells' own references (per block), and in 3D the rotation
+    /// penalty of the blocks made beside a body weighed by [`BESIDE`].
+    pub fn made_again(&mut self, reference: Vec<Option<Vec<[f64; 3]>>>) {
+        self.cell_reference = reference;
+        if self.mesh.dim != 3 {
+            return;
+        }
+        let on = self.on_solids();
+        for info in &mut self.blocks {
+            let blk = &self.mesh.cells[info.block];
+            let made = self.cell_reference[info.block].is_some();
+            let beside = blk
+                .conn
+                .chunks(blk.kind.n_nodes())
+                .all(|c| c.iter().any(|&n| on[n]));
+            if let (true, true, Some(reg)) = (made, beside, info.mat.reg.as_mut()) {
+                reg.beta1 *= BESIDE;
+            }
+        }
     }
 
     /// Per node, whether it is a node of a solid's cell (not of the medium's alone).
@@ -1942,10 +1972,12 @@ mod tests {
                 .filter(|(refs, _)| refs.is_some())
                 .map(|(_, b)| b)
                 .collect();
-            assert_eq!(medium.len(), 1);
-            let mut tets: Vec<[usize; 4]> = (0..medium[0].n_cells())
-                .map(|c| {
-                    let mut t: [usize; 4] = std::array::from_fn(|i| medium[0].cell(c)[i]);
+            // apart from the bodies and beside them
+            assert_eq!(medium.len(), 2);
+            let mut tets: Vec<[usize; 4]> = (medium.iter())
+                .flat_map(|b| (0..b.n_cells()).map(|c| b.cell(c)))
+                .map(|cell| {
+                    let mut t: [usize; 4] = std::array::from_fn(|i| cell[i]);
                     t.sort_unstable();
                     t
                 })
@@ -1965,6 +1997,43 @@ mod tests {
         assert_eq!(made.mesher(), Mesher::Delaunay);
         let kept = serde_json::to_value(&m).unwrap();
         assert!(kept.get("mesher").is_none(), "{kept}");
+    }
+
+    #[test]
+    fn a_3d_medium_made_again_weighs_its_penalty_less_beside_a_body_and_a_2d_one_does_not() {
+        for (name, h, weighed) in [("sphere-drag", 0.3, BESIDE), ("cylinder-slide", 0.2, 1.0)] {
+            let (case, model) = super::super::tests::case_and_model_of(name, &[("h", h)]);
+            let m = Medium::find(&model, Some("medium")).unwrap().unwrap();
+            let x = model.initial_state();
+            let r = m.remake(&model, &model.cell_reference, &x).unwrap();
+            let mut new = super::super::build::build_with_extent(&case, r.mesh, model.d).unwrap();
+            let before: Vec<Option<f64>> = new
+                .blocks
+                .iter()
+                .map(|i| i.mat.reg.map(|r| r.beta1))
+                .collect();
+            new.made_again(r.reference);
+            let on = new.on_solids();
+            let mut seen = [false; 2];
+            for (info, was) in new.blocks.iter().zip(before) {
+                let blk = &new.mesh.cells[info.block];
+                let Some(reg) = info.mat.reg else {
+                    assert!(was.is_none(), "{name}: a solid's block");
+                    continue;
+                };
+                let near = (0..blk.n_cells()).map(|c| blk.cell(c).iter().any(|&n| on[n]));
+                let near: Vec<bool> = near.collect();
+                let beside = near.iter().all(|&b| b);
+                assert!(
+                    beside || weighed == 1.0 || near.iter().all(|&b| !b),
+                    "{name}"
+                );
+                seen[beside as usize] = true;
+                let expected = if beside { weighed } else { 1.0 };
+                assert_eq!(reg.beta1, was.unwrap() * expected, "{name}");
+            }
+            assert!(seen[1] || weighed == 1.0, "{name}: no cell beside a body");
+        }
     }
 
     /// A triangle's height over its longest edge, and that edge's normal: its thinnest way.

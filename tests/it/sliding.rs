@@ -558,8 +558,9 @@ fn the_sphere_slides_on_a_medium_of_tetrahedra_made_again_with_no_drag() {
     let ratio: Vec<f64> = slide.iter().map(|r| r[fx] / -r[fz]).collect();
     let mean = ratio.iter().sum::<f64>() / ratio.len() as f64;
     let most = ratio.iter().fold(0.0f64, |m, r| m.max(r.abs()));
-    // measured: F_t/F_n 0.004 on average, 0.028 at most; F_n 1.3 % below to 0.3 % above
-    // the press's, 51 remakes (0.005 and 0.025, 50, before the symmetry plane's nodes near a
+    // measured: F_t/F_n 0.0017 on average, 0.019 at most; F_n 0.7 % below to 1.0 % above
+    // the press's, 50 remakes (0.004 and 0.028, 51, before the penalty beside a body was
+    // weighed a tenth; 0.005 and 0.025, 50, before the symmetry plane's nodes near a
     // body were dropped; 0.003 and 0.024, 0.7 % and 0.8 %, 149 remakes, with each
     // thin tetrahedron asking at each step and the box's nodes beside a body kept where the
     // run left them); issue 68 asks at most 0.03
@@ -581,8 +582,8 @@ fn the_sphere_slides_on_a_medium_of_tetrahedra_made_again_with_no_drag() {
 /// time to t = 1.4 (a drag of 0.48). The contact's leading edge sweeps over its symmetry
 /// plane's medium nodes; kept there, one was held in the closed layer between the bodies and
 /// the run stopped at t = 1.3045 with Newton's residual largest at it. Dropped from the plane
-/// as a body comes near, measured: the whole way, 177 slide steps, F_t/F_n 0.312 on average,
-/// 0.373 at most (the plate's dent and the nodes' passes), F_n 0.96–1.01 of the press's.
+/// as a body comes near, measured: the whole way, 181 slide steps, F_t/F_n 0.3006 on average,
+/// 0.325 at most (the plate's dent and the nodes' passes), F_n 0.96–0.99 of the press's.
 #[test]
 fn a_sphere_dragged_with_friction_passes_the_nodes_of_its_symmetry_plane() {
     let body = (case_body("sphere-drag"))
@@ -618,7 +619,8 @@ fn a_sphere_dragged_with_friction_passes_the_nodes_of_its_symmetry_plane() {
         .map(|r| r[fx] / -r[fz])
         .collect();
     let mean = ratio.iter().sum::<f64>() / ratio.len() as f64;
-    assert!((0.29..0.34).contains(&mean), "F_t/F_n {mean} on average");
+    // measured: 0.3006 (0.312 before the penalty beside a body was weighed a tenth)
+    assert!((mean / 0.3 - 1.0).abs() < 0.03, "F_t/F_n {mean} on average");
 }
 
 /// The square pad in 3D of `cases/pad-box-slide-3d.toml` (the pad meshed at hp = 0.15 on a
@@ -627,7 +629,10 @@ fn a_sphere_dragged_with_friction_passes_the_nodes_of_its_symmetry_plane() {
 /// the slivers between that face and the row ahead, thin along the slide, started squeezed to
 /// the closed layer's thickness along it, and pushed the pad back: 0.078 of the normal force at a
 /// slide of 0.405, F_n up to 1.8 % over the press's. Such a sliver now starts as the open
-/// medium does; measured: 0.023 at most, 0.006 on average, F_n within 0.5 %.
+/// medium does. Between the rows the pad's side face shears the medium beside it by the slide
+/// since the last remake, and the rotation penalty there held it at 0.005 (the median); a
+/// tenth of it on the cells beside a body (`remake::BESIDE`). Measured: 0.020 at most, 0.0022
+/// on average, 0.0011 the median; F_n within 0.5 % (0.023, 0.006 and about 0.005 before).
 #[test]
 fn a_square_pad_is_not_pushed_back_as_it_slides_over_the_rows_of_the_plate_s_nodes() {
     // slid 0.45 of its width: the run ends at t = 1.45
@@ -654,9 +659,12 @@ fn a_square_pad_is_not_pushed_back_as_it_slides_over_the_rows_of_the_plate_s_nod
     assert_eq!(slide.last().unwrap()[t], 1.45, "the whole slide");
     let most = slide.iter().fold(0.0f64, |m, r| m.max(r[ratio].abs()));
     let mean = slide.iter().map(|r| r[ratio]).sum::<f64>() / slide.len() as f64;
+    let mut sizes: Vec<f64> = slide.iter().map(|r| r[ratio].abs()).collect();
+    sizes.sort_by(f64::total_cmp);
+    let median = sizes[sizes.len() / 2];
     assert!(
-        most < 0.04 && mean < 0.01,
-        "F_t/F_n {most} at most, {mean} on average"
+        most < 0.04 && mean < 0.004 && median < 0.002,
+        "F_t/F_n {most} at most, {mean} on average, {median} the median"
     );
     for r in &slide {
         assert!(
