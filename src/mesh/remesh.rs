@@ -160,11 +160,14 @@ pub fn boundary_loops(mesh: &Mesh, blocks: &[usize]) -> Result<Vec<Vec<usize>>, 
 /// places `x`: the blocks of each set of physical groups meshed together as one region,
 /// between their boundary nodes; triangles in 2D (spade, in this process), tetrahedra in 3D
 /// (gmsh, between the region's boundary triangles, `mesher` first). Linear cells only (a
-/// caller checks first with [`supported`]).
+/// caller checks first with [`supported`]). In 3D each region's new cells come in two
+/// blocks: those apart from the solids and those beside one (a node `on_solid`, per node of
+/// `mesh`), as `Model::made_again` weighs them.
 pub fn remesh(
     mesh: &Mesh,
     x: &[[f64; 3]],
     medium: &[usize],
+    on_solid: &[bool],
     mesher: Mesher,
 ) -> Result<Remeshed, RemeshError> {
     let regions = regions_of(mesh, medium);
@@ -224,12 +227,14 @@ pub fn remesh(
         .map(|(_, blk)| remap(blk))
         .collect();
     let mut new_medium = Vec::new();
-    // in 3D the cells beside a body (a node on one) apart from the rest: they weigh the
-    // rotation penalty less (`Model::made_again`)
+    // in 3D the cells beside a solid (a node on one) apart from the rest: they weigh the
+    // rotation penalty less (`Model::made_again`); a medium not made again is no solid
     let on_bodies = (mesh.dim == 3).then(|| {
         let mut on = vec![false; coords.len()];
-        for &n in cells.iter().flat_map(|b| &b.conn) {
-            on[n] = true;
+        for (n, _) in on_solid.iter().enumerate().filter(|(_, s)| **s) {
+            if let Some(v) = on.get_mut(new_of[n]) {
+                *v = true;
+            }
         }
         on
     });
@@ -967,7 +972,8 @@ mod tests {
         let x: Vec<[f64; 3]> = (mesh.coords.iter())
             .map(|p| [p[0] + 0.3 * p[1], p[1], 0.0])
             .collect();
-        let r = remesh(&mesh, &x, &[0], Mesher::Delaunay).unwrap();
+        let on_solid = mesh.nodes_in(|b| b != 0);
+        let r = remesh(&mesh, &x, &[0], &on_solid, Mesher::Delaunay).unwrap();
         // the 20 boundary nodes kept, the 5 inside the medium made again
         let kept = r.old_of.iter().filter(|o| o.is_some()).count();
         assert_eq!(kept, 20);
@@ -1196,6 +1202,11 @@ mod tests {
 mod tests3 {
     use super::*;
 
+    /// The nodes of every block but the medium's (block 0).
+    fn solid_nodes(mesh: &Mesh) -> Vec<bool> {
+        mesh.nodes_in(|b| b != 0)
+    }
+
     /// A cube [0, 4]³ of 4³ cubes cut into six tetrahedra each ([`crate::mesh::kuhn_tetrahedra`]):
     /// the medium, with a solid of the middle 2³ cubes, its own block.
     fn box_around_a_block() -> Mesh {
@@ -1315,7 +1326,7 @@ mod tests3 {
         x: &[[f64; 3]],
         mesher: Mesher,
     ) -> Vec<[[i64; 3]; 4]> {
-        let r = remesh(mesh, x, &[0], mesher).unwrap();
+        let r = remesh(mesh, x, &[0], &solid_nodes(mesh), mesher).unwrap();
         // the cells apart from the block, and those beside it (a node on it)
         assert_eq!(r.medium.len(), 2);
         let [apart, beside] = [0, 1].map(|k| &r.mesh.cells[r.medium[k]]);
@@ -1364,6 +1375,68 @@ mod tests3 {
             .collect();
         cells.sort_unstable();
         cells
+    }
+
+    /// A second medium region that is not made again is no body: the new cells beside it
+    /// alone are apart, as `Model::made_again` weighs them (it looks at the solids' nodes).
+    #[test]
+    fn a_3d_medium_made_again_beside_another_medium_counts_only_the_solid_as_a_body() {
+        let mut mesh = box_around_a_block();
+        // the cubes of the last layer along x, a medium of their own (block 2) not made again
+        let (coords, tets) = crate::mesh::kuhn_tetrahedra(4);
+        let layer: Vec<usize> = (tets.into_iter())
+            .filter(|(cube, _)| cube[0] == 3)
+            .flat_map(|(_, t)| t)
+            .collect();
+        assert_eq!(coords, mesh.coords);
+        let own: std::collections::HashSet<Vec<usize>> = (layer.chunks(4))
+            .map(|t| {
+                let mut t = t.to_vec();
+                t.sort_unstable();
+                t
+            })
+            .collect();
+        let blk = &mesh.cells[0];
+        let (kept, cut): (Vec<usize>, Vec<usize>) = (0..blk.n_cells()).partition(|&c| {
+            let mut t = blk.cell(c).to_vec();
+            t.sort_unstable();
+            !own.contains(&t)
+        });
+        assert_eq!(cut.len(), 16 * 6);
+        let conn = |cells: &[usize]| -> Vec<usize> {
+            cells.iter().flat_map(|&c| blk.cell(c).to_vec()).collect()
+        };
+        let other = Block {
+            kind: CellKind::Tet4,
+            groups: vec![2],
+            conn: conn(&cut),
+        };
+        mesh.cells[0].conn = conn(&kept);
+        mesh.cells.push(other);
+        mesh.groups.push(crate::mesh::PhysicalGroup {
+            name: "medium2".into(),
+            dim: 3,
+            tag: 3,
+        });
+        let x = mesh.coords.clone();
+        let on_solid = mesh.nodes_in(|b| b == 1);
+        let r = remesh(&mesh, &x, &[0], &on_solid, Mesher::Delaunay).unwrap();
+        assert_eq!(r.medium.len(), 2);
+        let solid = (r.mesh.cells.iter())
+            .position(|b| b.groups == vec![1])
+            .unwrap();
+        let on = r.mesh.nodes_in(|b| b == solid);
+        let second = r.mesh.nodes_in(|b| r.mesh.cells[b].groups == vec![2]);
+        let [apart, beside] = [0, 1].map(|k| &r.mesh.cells[r.medium[k]]);
+        for (blk, near) in [(apart, false), (beside, true)] {
+            let nears = (0..blk.n_cells()).map(|c| blk.cell(c).iter().any(|&n| on[n]));
+            assert!(nears.into_iter().all(|b| b == near));
+        }
+        // and some cells apart from the solid touch the medium not made again
+        assert!(
+            (0..apart.n_cells()).any(|c| apart.cell(c).iter().any(|&n| second[n])),
+            "no new cell beside the other medium"
+        );
     }
 
     #[test]

@@ -1117,7 +1117,8 @@ impl Medium {
         let placed: Vec<[f64; 3]> = (0..model.mesh.coords.len())
             .map(|n| own[n].unwrap_or_else(|| model.placed(n, x)))
             .collect();
-        let r = remesh(&model.mesh, &placed, &self.blocks, self.mesher)?;
+        let on_solid = model.on_solids();
+        let r = remesh(&model.mesh, &placed, &self.blocks, &on_solid, self.mesher)?;
         let find = Locator::new(model, reference, &self.blocks, x);
         let here = |n: usize| match r.old_of[n] {
             Some(o) => placed[o],
