@@ -817,8 +817,13 @@ impl Medium {
     /// 6.1, its cells needles); placed all, the sphere turned a cell inside out behind it, by
     /// its symmetry plane; placed but there, the faces between the two folded over, and gmsh
     /// refused them (docs/notes/2026-12-06-a-3d-press-made-again-step-after-step.md).
-    fn own_places(&self, model: &Model, x: &[f64]) -> Result<Vec<Option<[f64; 3]>>, String> {
-        let on_solid = model.on_solids();
+    /// `on_solid`: per node, whether it is a solid's.
+    fn own_places(
+        &self,
+        model: &Model,
+        x: &[f64],
+        on_solid: &[bool],
+    ) -> Result<Vec<Option<[f64; 3]>>, String> {
         let mesh = &model.mesh;
         let outer = match mesh.dim {
             3 => crate::mesh::faces::outer_triangles(mesh, &self.blocks)?,
@@ -868,7 +873,7 @@ impl Medium {
             .collect();
         let hinges = hinges(&outer);
         loop {
-            let places = place_own(model, x, &next, &own, &on_solid, &kept)?;
+            let places = place_own(model, x, &next, &own, on_solid, &kept)?;
             let at = |n: usize| places[n].unwrap_or_else(|| model.placed(n, x));
             let now = |n: usize| model.placed(n, x);
             // the nodes of triangles turned over, the far corners of two on an edge closed
@@ -1097,28 +1102,28 @@ impl Medium {
     ) -> Result<Remade, RemeshError> {
         failing_by_request()?;
         let here = vec![None; model.mesh.coords.len()];
-        match self.own_places(model, x) {
-            Ok(own) => self
-                .remake_at(model, reference, x, &own)
-                .or_else(|_| self.remake_at(model, reference, x, &here)),
-            Err(_) => self.remake_at(model, reference, x, &here),
+        let on_solid = model.on_solids();
+        let at = |own: &[Option<[f64; 3]>]| self.remake_at(model, reference, x, own, &on_solid);
+        match self.own_places(model, x, &on_solid) {
+            Ok(own) => at(&own).or_else(|_| at(&here)),
+            Err(_) => at(&here),
         }
     }
 
     /// The medium made again at the accepted state `x` of `model`, its own outer nodes at
-    /// `own`'s places where given.
+    /// `own`'s places where given (`on_solid`: per node, whether it is a solid's).
     fn remake_at(
         &self,
         model: &Model,
         reference: &CellReferences,
         x: &[f64],
         own: &[Option<[f64; 3]>],
+        on_solid: &[bool],
     ) -> Result<Remade, RemeshError> {
         let placed: Vec<[f64; 3]> = (0..model.mesh.coords.len())
             .map(|n| own[n].unwrap_or_else(|| model.placed(n, x)))
             .collect();
-        let on_solid = model.on_solids();
-        let r = remesh(&model.mesh, &placed, &self.blocks, &on_solid, self.mesher)?;
+        let r = remesh(&model.mesh, &placed, &self.blocks, on_solid, self.mesher)?;
         let find = Locator::new(model, reference, &self.blocks, x);
         let here = |n: usize| match r.old_of[n] {
             Some(o) => placed[o],
