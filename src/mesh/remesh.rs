@@ -229,7 +229,7 @@ pub fn remesh(
     let mut new_medium = Vec::new();
     // in 3D the cells beside a solid (a node on one) apart from the rest: they weigh the
     // rotation penalty less (`Model::made_again`); a medium not made again is no solid
-    let on_bodies = (mesh.dim == 3).then(|| {
+    let new_on_solid = (mesh.dim == 3).then(|| {
         let mut on = vec![false; coords.len()];
         for (n, _) in on_solid.iter().enumerate().filter(|(_, s)| **s) {
             if let Some(v) = on.get_mut(new_of[n]) {
@@ -260,7 +260,7 @@ pub fn remesh(
         if let Some(faces) = given.get(r) {
             same_boundary(faces, &conn, &new_of).map_err(RemeshError::mesher)?;
         }
-        let parts = match &on_bodies {
+        let parts = match &new_on_solid {
             Some(on) => beside_and_apart(conn, kind.n_nodes(), on),
             None => [conn, Vec::new()],
         };

@@ -475,13 +475,19 @@ impl Model {
         }
         let on = self.on_solids();
         for info in &mut self.blocks {
+            // a block made again (a solid's is not) that carries the penalty
+            let (true, Some(reg)) = (
+                self.cell_reference[info.block].is_some(),
+                info.mat.reg.as_mut(),
+            ) else {
+                continue;
+            };
             let blk = &self.mesh.cells[info.block];
-            let made = self.cell_reference[info.block].is_some();
             let beside = blk
                 .conn
                 .chunks(blk.kind.n_nodes())
                 .all(|c| c.iter().any(|&n| on[n]));
-            if let (true, true, Some(reg)) = (made, beside, info.mat.reg.as_mut()) {
+            if beside {
                 reg.beta1 *= BESIDE;
             }
         }
