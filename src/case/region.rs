@@ -488,7 +488,43 @@ impl Case {
                 RegionKind::Medium => keys.medium()?,
             });
         }
+        self.alike_on_every_medium()?;
         Ok(materials)
+    }
+
+    /// `remake` and `settle` given alike on every medium region: a remake makes every medium
+    /// region again and settles them all, so either given on one region acts on the others
+    /// too (a medium not asking for it was made again, its `rho` with it, and the run then
+    /// failed with words about a restart).
+    fn alike_on_every_medium(&self) -> Result<(), CaseError> {
+        let media: Vec<(usize, &Region)> = (self.file.region.iter().enumerate())
+            .filter(|(_, r)| r.kind == RegionKind::Medium)
+            .collect();
+        type Asks = fn(&Region) -> bool;
+        let keys: [(&str, Asks); 2] = [("remake", Region::remakes), ("settle", Region::settles)];
+        for (key, asks) in keys {
+            let (Some((i, first)), Some((j, other))) = (
+                media.iter().find(|(_, r)| asks(r)),
+                media.iter().find(|(_, r)| !asks(r)),
+            ) else {
+                continue;
+            };
+            let keys = RegionKeys {
+                case: self,
+                i: *j,
+                r: other,
+            };
+            return keys.fail(
+                other.group.span(),
+                format!(
+                    "has no `{key} = true` while region[{i}] (\"{}\") has it: `{key}` acts on \
+                     the whole medium (a remake makes every medium region again), so give it on \
+                     every medium region or on none",
+                    first.group.get_ref()
+                ),
+            );
+        }
+        Ok(())
     }
 }
 
@@ -748,6 +784,35 @@ mod tests {
             panic!("mooney-rivlin asked for")
         };
         assert_eq!((l.C10, l.C01, l.K), (3.0, 1.0, 20.0));
+    }
+
+    #[test]
+    fn remake_and_settle_are_given_on_every_medium_region_or_on_none() {
+        let second = "[[region]]\ngroup = \"far\"\nkind = \"medium\"\ngamma = 1e-4\n";
+        let e = refused(&format!("{MEDIUM}remake = true\n\n{second}"));
+        assert_eq!(
+            e,
+            "t.toml:9: region[1] (\"far\"): has no `remake = true` while region[0] (\"m\") has \
+             it: `remake` acts on the whole medium (a remake makes every medium region again), \
+             so give it on every medium region or on none"
+        );
+        // the other way round, and `settle` alike
+        let e = refused(&format!("{MEDIUM}\n{second}remake = true\n"));
+        assert!(
+            e.starts_with("t.toml:3: region[0] (\"m\"): has no `remake"),
+            "{e}"
+        );
+        let e = refused(&format!(
+            "{MEDIUM}remake = true\nsettle = true\n\n{second}remake = true\n"
+        ));
+        assert!(e.contains("(\"far\"): has no `settle = true` while"), "{e}");
+        // alike on both, or a solid beside them, is read
+        for body in [
+            format!("{MEDIUM}remake = true\n\n{second}remake = true\n\n{SOLID}K = 1.0\nmu = 1.0\n"),
+            format!("{MEDIUM}\n{second}"),
+        ] {
+            parsed(&body).unwrap();
+        }
     }
 
     #[test]
