@@ -75,8 +75,10 @@ pub fn unheld_body(model: &Model) -> Option<String> {
 /// motion free, which only the third medium around them resists: by its small stiffness, so
 /// they slide or turn under any force that way. A body held in part (pressed down, free to slide
 /// sideways: the usual slip) gives a warning; one held nowhere (floating or wedged in the
-/// medium, as the paper's discs) a note.
-pub fn held_by_medium_alone(model: &Model) -> Vec<String> {
+/// medium, as the paper's discs) a note, or a warning where the medium is made again
+/// (`remade`): a remake sets its open cells' stress back to nil, and with it what holds such a
+/// body until it touches another.
+pub fn held_by_medium_alone(model: &Model, remade: bool) -> Vec<String> {
     let mesh = &model.mesh;
     let has_medium = model.regions.iter().any(|r| r.1 == RegionKind::Medium);
     if !has_medium || !model.physics.mechanics || !model.dofs.has(Field::U) {
@@ -115,17 +117,30 @@ pub fn held_by_medium_alone(model: &Model) -> Vec<String> {
             nodes.len(),
             point_text(&centroid(&mesh.coords, &nodes), d)
         );
-        out.push(if held.is_empty() {
-            format!(
+        // measured: docs/notes/2026-12-06-a-floating-body-and-a-medium-made-again.md
+        let remake = "the medium is made again (`remake`): each remake sets its open cells' \
+                      stress back to nil, and with it what holds the body until it touches \
+                      another, so a remake before then may leave it without an equilibrium \
+                      (`cases/discs-ellipse.toml` with `remake` stops at λ = 0.33)";
+        out.push(match (held.is_empty(), remade) {
+            (true, false) => format!(
                 "note: {body} has no prescribed displacement: the third medium alone holds it \
                  (as it should a body floating or wedged in it)"
-            )
-        } else {
-            format!(
+            ),
+            (true, true) => format!(
+                "warning: {body} has no prescribed displacement: the third medium alone holds \
+                 it, and {remake}; prescribe displacements on it, or leave out `remake` where \
+                 nothing slides far"
+            ),
+            (false, _) => format!(
                 "warning: {body} is held in part: it can {mode} but for the third medium, \
                  whose small stiffness lets it slip; prescribe displacements on its boundary \
-                 that stop it"
-            )
+                 that stop it{}",
+                match remade {
+                    true => format!(" ({remake})"),
+                    false => String::new(),
+                }
+            ),
         });
     }
     out

@@ -356,6 +356,28 @@ fn a_solid_only_the_medium_holds_is_reported() {
     // held in full, as shipped: neither
     let out = check("held.toml", &text);
     assert!(!out.contains("warning") && !out.contains("note"), "{out}");
+    // with the medium made again, a remake takes what holds it: a warning, either way
+    let medium = "kind = \"medium\"\n";
+    assert_eq!(text.matches(medium).count(), 1);
+    let remade = text.replace(medium, &format!("{medium}remake = true\n"));
+    let out = check("floats-remade.toml", &remade.replace(pushed, ""));
+    assert!(
+        out.contains("warning: the solid body of \"cylinder\"")
+            && out.contains("alone holds it, and the medium is made again (`remake`)")
+            && !out.contains("note"),
+        "{out}"
+    );
+    let out = check(
+        "slides-remade.toml",
+        &remade.replace(pushed, "uy = -0.15\n"),
+    );
+    assert!(
+        out.contains("it can move freely in x but for the third medium")
+            && out.contains("(the medium is made again (`remake`): each remake sets"),
+        "{out}"
+    );
+    let out = check("held-remade.toml", &remade);
+    assert!(!out.contains("warning") && !out.contains("note"), "{out}");
 }
 
 #[test]
