@@ -501,8 +501,8 @@ impl Case {
             .filter(|(_, r)| r.kind == RegionKind::Medium)
             .collect();
         type Asks = fn(&Region) -> bool;
-        let keys: [(&str, Asks); 2] = [("remake", Region::remakes), ("settle", Region::settles)];
-        for (key, asks) in keys {
+        let asked: [(&str, Asks); 2] = [("remake", Region::remakes), ("settle", Region::settles)];
+        for (key, asks) in asked {
             let (Some((i, first)), Some((j, other))) = (
                 media.iter().find(|(_, r)| asks(r)),
                 media.iter().find(|(_, r)| !asks(r)),

@@ -1136,11 +1136,11 @@ impl Medium {
             None => r.mesh.coords[n],
         };
         let dim = r.mesh.dim;
-        // the old squeeze is looked up where it is used: over the cells across a gap (all
-        // their corners on solids), whose squeeze gives a layer its thickness, and over the
-        // rest only where no layer was closed (a sliding run's medium is mostly the rest)
-        // the blocks not made again are the solids' (a case gives `remake` on every medium
-        // region or on none)
+        // the bodies: the blocks not made again, the solids' (a case gives `remake` on every
+        // medium region or on none). The old squeeze is looked up where it is used: over the
+        // cells across a gap (all their corners on solids), whose squeeze gives a layer its
+        // thickness, and over the rest only where no layer was closed (a sliding run's medium
+        // is mostly the rest)
         let body = r.mesh.components(|b| !r.medium.contains(&b));
         let across = |b: usize, c: usize| spans_gap(r.mesh.cells[b].cell(c), &body, dim);
         // each new cell's old state looked up on its own: over the threads the run has
