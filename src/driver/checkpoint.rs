@@ -268,6 +268,15 @@ impl Checkpoint {
     /// blocks hold `history` values each, and its run time is a duration: the file may say the
     /// right version, case and mesh and still be damaged.
     pub fn fits(&self, dir: &Path, unknowns: usize, history: &[usize]) -> Result<(), SolveError> {
+        match self.misfit(unknowns, history) {
+            Some(what) => Err(refusal(&Checkpoint::path(dir), &what)),
+            None => Ok(()),
+        }
+    }
+
+    /// How the checkpoint does not fit a run with `unknowns` and `history` values per block of
+    /// points, if it does not.
+    pub fn misfit(&self, unknowns: usize, history: &[usize]) -> Option<String> {
         let state = &self.state;
         let read: Vec<usize> = state.point_history.iter().map(Vec::len).collect();
         let what = if state.x.len() != unknowns {
@@ -283,9 +292,9 @@ impl Checkpoint {
         } else if std::time::Duration::try_from_secs_f64(state.wall).is_err() {
             format!("its run time, {} s, is no duration", state.wall)
         } else {
-            return Ok(());
+            return None;
         };
-        Err(refusal(&Checkpoint::path(dir), &what))
+        Some(what)
     }
 }
 

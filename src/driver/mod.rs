@@ -461,7 +461,7 @@ fn run_ranks(
     let mut run = Run::new(case, &model, &probes, folder, out_dir, opts, start)?;
     run.announce();
     match from {
-        Some(cp) => run.resume(cp)?,
+        Some(cp) => run.resume(cp, false)?,
         None => run.record_initial()?,
     }
     step_to_end(run)
@@ -559,7 +559,8 @@ fn solve_model(
         }
         let here = from.as_ref().map_or(0, |cp| cp.state.totals.medium_remakes);
         match from.take() {
-            Some(cp) => run.resume(cp)?,
+            // after a change the checkpoint is the one the run carried itself
+            Some(cp) => run.resume(cp, changed)?,
             None => run.record_initial()?,
         }
         let accepted = run.accepted();
