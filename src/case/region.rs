@@ -492,6 +492,14 @@ impl Case {
         Ok(materials)
     }
 
+    /// The medium region that asks to be made again as the bodies move (`remake`), if any
+    /// (then every medium region asks, as `alike_on_every_medium` checks).
+    pub fn remade_medium(&self) -> Option<&str> {
+        (self.file.region.iter())
+            .find(|r| r.remakes())
+            .map(|r| r.group.get_ref().as_str())
+    }
+
     /// `remake` and `settle` given alike on every medium region: a remake makes every medium
     /// region again and settles them all, so either given on one region acts on the others
     /// too (a medium not asking for it was made again, its `rho` with it, and the run then

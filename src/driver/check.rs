@@ -103,7 +103,7 @@ pub fn check(case_path: &Path, opts: &SolveOptions) -> Result<CheckReport, Solve
         model.warnings.push(layer.describe());
     }
     // so does a medium asked to be made again that cannot be
-    if let Some(medium) = crate::model::remake::Medium::find(&model, super::remaking(&case))? {
+    if let Some(medium) = crate::model::remake::Medium::find(&model, case.remade_medium())? {
         let next = if super::settling(&case) {
             "the mechanics settled at the same load after each, what it changed measured"
         } else {

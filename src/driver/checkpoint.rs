@@ -266,17 +266,16 @@ impl Checkpoint {
 
     /// Whether the checkpoint in `dir` fits a run of `unknowns` unknowns whose point history
     /// blocks hold `history` values each, and its run time is a duration: the file may say the
-    /// right version, case and mesh and still be damaged.
-    pub fn fits(&self, dir: &Path, unknowns: usize, history: &[usize]) -> Result<(), SolveError> {
-        match self.misfit(unknowns, history) {
-            Some(what) => Err(refusal(&Checkpoint::path(dir), &what)),
-            None => Ok(()),
-        }
-    }
-
-    /// How the checkpoint does not fit a run with `unknowns` and `history` values per block of
-    /// points, if it does not.
-    pub fn misfit(&self, unknowns: usize, history: &[usize]) -> Option<String> {
+    /// right version, case and mesh and still be damaged. `carried`: the checkpoint is the
+    /// one the run made itself to go on on a changed mesh (a layer joined, the medium made
+    /// again), not a restart's; one that does not fit is tmc's fault, and said so.
+    pub fn fits(
+        &self,
+        dir: &Path,
+        unknowns: usize,
+        history: &[usize],
+        carried: bool,
+    ) -> Result<(), SolveError> {
         let state = &self.state;
         let read: Vec<usize> = state.point_history.iter().map(Vec::len).collect();
         let what = if state.x.len() != unknowns {
@@ -292,9 +291,17 @@ impl Checkpoint {
         } else if std::time::Duration::try_from_secs_f64(state.wall).is_err() {
             format!("its run time, {} s, is no duration", state.wall)
         } else {
-            return None;
+            return Ok(());
         };
-        Some(what)
+        Err(match carried {
+            true => SolveError::Setup(format!(
+                "the run could not go on on its changed mesh at t = {}: the state it carried \
+                 does not fit it ({what}); this is a fault of tmc, not of the case: please \
+                 report it with the case file",
+                state.clock.t
+            )),
+            false => refusal(&Checkpoint::path(dir), &what),
+        })
     }
 }
 

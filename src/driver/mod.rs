@@ -334,13 +334,6 @@ pub fn run(case_path: &Path, opts: &SolveOptions) -> Result<Summary, SolveError>
     solve_model(&case, model, &probes, folder, opts, start, None)
 }
 
-/// The medium region that asks to be made again as the bodies move (`remake`), if any.
-pub(crate) fn remaking(case: &Case) -> Option<&str> {
-    (case.file.region.iter())
-        .find(|r| r.remakes())
-        .map(|r| r.group.get_ref().as_str())
-}
-
 /// Whether the medium made again is settled after each remake, what it changed measured there
 /// (`settle`).
 pub(crate) fn settling(case: &Case) -> bool {
@@ -353,7 +346,7 @@ pub(crate) fn refuse_on_ranks(case: &Case, model: &Model, ranks: Ranks) -> Resul
     if ranks.is_serial() {
         return Ok(());
     }
-    let what = match (model.reconnects(), remaking(case)) {
+    let what = match (model.reconnects(), case.remade_medium()) {
         (true, _) => "a friction layer that is reconnected (`friction.reconnect`)",
         (false, Some(_)) => "a medium made again as the bodies move (`remake`)",
         (false, None) => return Ok(()),
@@ -497,7 +490,7 @@ fn restart_setup(
     // a medium made again: the mesh of the remake the checkpoint continues
     let cp = checkpoint::Checkpoint::of_case(&dir, case)?;
     let (model, probes) = match cp.state.totals.medium_remakes {
-        n if n > 0 && remaking(case).is_some() => {
+        n if n > 0 && case.remade_medium().is_some() => {
             let remade = checkpoint::RemadeMedium::read(&dir, n)?;
             let mut mesh = remade.mesh;
             mesh.source = dir.join(checkpoint::MEDIUM_FILES[0]);
@@ -529,7 +522,7 @@ fn solve_model(
 ) -> Result<Summary, SolveError> {
     let out_dir = folder.dir().to_owned();
     let mut layer = Layer::find(&model)?;
-    let mut medium = remake::Medium::find(&model, remaking(case))?;
+    let mut medium = remake::Medium::find(&model, case.remade_medium())?;
     let settles = settling(case);
     let mut check_first = medium
         .as_mut()
@@ -715,7 +708,7 @@ fn medium_again(
     let Some((rate, made_for_pass)) = medium.as_ref().map(|m| (m.rate, m.made_for_pass)) else {
         return Ok(());
     };
-    *medium = remake::Medium::find(model, remaking(case))?;
+    *medium = remake::Medium::find(model, case.remade_medium())?;
     if let Some(m) = medium.as_mut() {
         m.made_for_pass = made_for_pass;
         restart_medium(case, model, m, cp, rate);

@@ -426,25 +426,13 @@ impl<'a> Run<'a> {
 
     /// Continue from a checkpoint instead of recording the initial state: the run goes on as
     /// if it had never stopped. `carried`: the state the run itself carried onto a changed
-    /// mesh (a layer joined, the medium made again), not a restart's: one that does not fit is
-    /// tmc's fault, and said so.
+    /// mesh, not a restart's ([`Checkpoint::fits`]).
     pub(super) fn resume(&mut self, cp: Checkpoint, carried: bool) -> Result<(), SolveError> {
         let st = &mut self.st;
         let history: Vec<usize> = (st.asm.history.slabs.iter())
             .map(|s| s.committed.len())
             .collect();
-        match (carried, cp.misfit(st.x.len(), &history)) {
-            (true, Some(what)) => {
-                return Err(SolveError::Setup(format!(
-                    "the run could not go on on its changed mesh at t = {}: the state it \
-                     carried does not fit it ({what}); this is a fault of tmc, not of the case: \
-                     please report it with the case file",
-                    cp.state.clock.t
-                )));
-            }
-            (false, _) => cp.fits(self.rec.out_dir(), st.x.len(), &history)?,
-            (true, None) => {}
-        }
+        cp.fits(self.rec.out_dir(), st.x.len(), &history, carried)?;
         let state = cp.state;
         st.ctl.t = state.clock.t;
         if st.ctl.done() {

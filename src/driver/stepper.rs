@@ -360,7 +360,7 @@ fn controller(case: &Case, model: &Model) -> Controller {
 /// most of a remake and minimum degree fills more, and in any other run, METIS's nested
 /// dissection.
 fn ordering(case: &Case, model: &Model) -> Ordering {
-    if super::remaking(case).is_some() && model.mesh.dim == 2 {
+    if case.remade_medium().is_some() && model.mesh.dim == 2 {
         Ordering::MinimumDegree
     } else {
         Ordering::NestedDissection

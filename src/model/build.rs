@@ -84,7 +84,7 @@ pub fn build_with_extent(case: &Case, mesh: Mesh, d: f64) -> Result<Model, CaseE
     if let Some(msg) = super::held::unheld_body(&model) {
         return case.error(case.file.mesh.span(), msg);
     }
-    let remade = case.file.region.iter().any(|r| r.remakes());
+    let remade = case.remade_medium().is_some();
     model.warnings = super::held::held_by_medium_alone(&model, remade);
     model.warnings.extend(unused_keys(case, &model));
     model.warnings.extend(massless_friction(case, &model));
