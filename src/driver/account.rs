@@ -1,8 +1,8 @@
 //! The accounts of an accepted step: the reactions at the converged state, the work of the
 //! forces on the displacements, the heat balance of a transient scene, what the points'
 //! history holds (friction's work and heat, the kinetic energy), and the watches on the state
-//! (medium cells a solid's corner passed into, a node that ran away). They add to the run's
-//! [`Totals`]; the recorder writes them.
+//! (medium cells a solid's corner passed into, a node that ran away, a body come up against
+//! the medium's edge). They add to the run's [`Totals`]; the recorder writes them.
 
 use super::SolveError;
 use super::records::BEYOND;
@@ -13,6 +13,7 @@ use crate::case::RegionKind;
 use crate::dofs::{Field, NONE};
 use crate::mesh::point_text;
 use crate::model::{Model, StepContext};
+use crate::post::edge::MediumEdge;
 use crate::post::{corners_through_medium, friction_work, heat_stored, kinetic_energy};
 use crate::solver::newton::StepReport;
 use std::time::Instant;
@@ -31,6 +32,8 @@ pub(super) struct PointTotals {
 pub(super) struct Accounts {
     pub totals: Totals,
     u_dofs: Vec<usize>,
+    /// The medium's free edge, watched for a body that comes up against it.
+    edge: MediumEdge,
 }
 
 /// A converged state that cannot be assembled again (it was, to converge).
@@ -45,6 +48,7 @@ impl Accounts {
             u_dofs: (0..model.dofs.n_dofs)
                 .filter(|&d| model.dofs.field[d] == Field::U)
                 .collect(),
+            edge: MediumEdge::of(model),
         }
     }
 
@@ -108,7 +112,12 @@ impl Accounts {
         tot.f_last = f_now;
         let through = corners_through_medium(model, &st.asm.reference, &st.x);
         tot.corners_through = tot.corners_through.max(through);
-        Ok(self.watch_displacement(st, step.t))
+        let warnings = [
+            self.watch_displacement(st, step.t),
+            self.watch_edge(st, step.t),
+        ];
+        let said: Vec<String> = warnings.into_iter().flatten().collect();
+        Ok((!said.is_empty()).then(|| said.join("\n")))
     }
 
     /// Heat balance of a transient scene after the accepted `step` (of length Δt): the heat
@@ -221,11 +230,7 @@ impl Accounts {
             let (name, kind) = &model.regions[b.region];
             (name.as_str(), *kind == RegionKind::Medium)
         });
-        let when = if st.show_t() {
-            format!("t = {}", st.t_text(t))
-        } else {
-            format!("λ = {:.4}", model.path.lambda(t))
-        };
+        let when = when(st, t);
         let what = if medium {
             "a node of the medium that barely resists (a free corner of an open medium, most \
              likely) runs away. The forces where the solids are held may still hold; that \
@@ -240,6 +245,42 @@ impl Accounts {
             st.ctl.accepted,
             largest / model.d
         ))
+    }
+
+    /// The first accepted state (at `t`) where a body has come up against the edge of the
+    /// medium drawn around it ([`MediumEdge::watch`]): kept for a stop's words, and a warning.
+    /// Past the edge nothing is in contact, and the medium there is pushed ahead of the body
+    /// until the run stops.
+    fn watch_edge(&mut self, st: &Stepper, t: f64) -> Option<String> {
+        if self.totals.edge_reached.is_some() {
+            return None;
+        }
+        let model = st.model;
+        let (step, when) = (st.ctl.accepted, when(st, t));
+        let near = self.edge.watch(model, &st.x)?;
+        let came = format!(
+            "the solid \"{}\" came up against the edge of the medium drawn around it",
+            model.regions[near.region].0
+        );
+        let what = format!(
+            "a node of the medium's free edge stands {:.1e} from its face, at {}",
+            near.distance,
+            point_text(&near.at, model.mesh.dim)
+        );
+        self.totals.edge_reached = Some(format!("{came} at step {step} ({when})"));
+        Some(format!(
+            "warning: step {step} ({when}): {came}: {what}. Past that edge nothing is in \
+             contact, and the medium there is pushed ahead of the solid; draw the medium past \
+             where the solid goes."
+        ))
+    }
+}
+
+/// Where the accepted state at `t` stands, for a warning: "t = 1.25" or "λ = 0.5000".
+fn when(st: &Stepper, t: f64) -> String {
+    match st.show_t() {
+        true => format!("t = {}", st.t_text(t)),
+        false => format!("λ = {:.4}", st.model.path.lambda(t)),
     }
 }
 

@@ -60,7 +60,7 @@ pub enum SolveError {
         reason: String,
         steps: usize,
         left: Left,
-        hint: &'static str,
+        hint: Box<str>,
     },
     #[error("interrupted at {at} after {steps} converged steps; {left}")]
     Interrupted {

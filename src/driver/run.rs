@@ -507,7 +507,16 @@ impl<'a> Run<'a> {
             };
             let remade = self.accounts.totals.medium.is_some();
             let drag = !pressing(st.model, st.ctl.t, target);
-            let hint = stall_hint(&st.model.physics, remade, drag);
+            // where a body came up against the medium's edge, that first: past it nothing
+            // is in contact, whatever else the physics suggests
+            let edge = (self.accounts.totals.edge_reached.as_ref()).map(|reached| {
+                format!(
+                    "; {reached}, where the medium ends and is pushed ahead of it (the warning \
+                     then): draw the medium past where the solid goes"
+                )
+            });
+            let hint = (edge.unwrap_or_default() + stall_hint(&st.model.physics, remade, drag))
+                .into_boxed_str();
             let err = SolveError::StepTooSmall {
                 at: st.position(),
                 step,

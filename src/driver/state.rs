@@ -64,6 +64,10 @@ pub struct Totals {
     /// (a checkpoint without it had none).
     #[serde(default)]
     pub overhang: Option<String>,
+    /// Where a solid first came up against the edge of the medium drawn around it, in words
+    /// (a checkpoint without it had none).
+    #[serde(default)]
+    pub edge_reached: Option<String>,
     /// How many times a reconnected friction layer was joined again.
     #[serde(default)]
     pub layer_joins: usize,

@@ -1,8 +1,11 @@
 //! What an accepted state holds besides its unknowns, for the records: the heat stored and
 //! the heat convected in, the work friction dissipated and each friction cell's slip, the
-//! kinetic energy, and the medium cells a solid's corner has passed into. Read from the
-//! state, the model and the assembler's committed history per point; nothing here assembles.
+//! kinetic energy, the medium cells a solid's corner has passed into, and where a body has
+//! come up against the medium's edge ([`edge`]). Read from the state, the model and the
+//! assembler's committed history per point; nothing here assembles.
 #![allow(non_snake_case)]
+
+pub mod edge;
 
 use crate::assembly::{Assembler, AssemblyError, MIN_PART_CELLS, References, facet_error};
 use crate::kernel::Active;

@@ -1150,6 +1150,63 @@ fn pad_box_stall(name: &str, (from, to): (&str, &str)) -> (std::path::PathBuf, S
     (case, e)
 }
 
+/// The pad in a box dragged past the end of the box of medium drawn around it
+/// (`geo/pad-box.geo` with its plate and box 3 long, on h = 0.2, frictionless, dragged two of
+/// its widths): its face comes up against the box's free side, where the medium ends. The run
+/// says so when it happens, and its stop names it. Measured: said at a drag of 1.45 (the
+/// face 0.05 before the box's end, the side 0.07 from it), the stop at 1.52, its corner past
+/// the plate's end. Before, the side was pushed ahead of the pad (3.5 past where it was drawn
+/// at μ = 0.3 on the shipped box dragged six widths) and the stop told of friction, or of
+/// nothing. The same drag on the box as shipped (7 long) is told nothing.
+#[test]
+fn a_pad_dragged_past_the_end_of_its_box_is_told_where_the_medium_ends() {
+    let body =
+        case_body("pad-box-slide").replace("friction = { mu = 0.3, normal = \"auto\" }\n", "");
+    assert!(!body.contains("friction") && body.contains("ux = 1.0\n"));
+    let body = body.replace("ux = 1.0\n", "ux = 2.0\n");
+    let solve = |name: &str, length: f64| {
+        let params = format!("params = {{ h = 0.2, L = {length} }}");
+        let case = case_file(name, "pad-box.geo", &params, &body);
+        let out = case.with_file_name("out");
+        let o = tmc(&["solve", case.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+        // the warnings go to the standard error, as the error does
+        (o.status.success(), stderr(&o))
+    };
+    let (done, said) = solve("pad-past-its-box", 3.0);
+    assert!(!done, "{said}");
+    let told = "the solid \"pad\" came up against the edge of the medium drawn around it";
+    let line = (said.lines())
+        .find(|l| l.contains(told))
+        .unwrap_or_else(|| panic!("{said}"));
+    assert!(
+        line.starts_with("warning: step") && line.contains("draw the medium past where"),
+        "{line}"
+    );
+    // when: the pad's leading face (drawn at x = 1.5, dragged 2 over t from 1 to 2) within a
+    // cell (0.2) of the box's end at x = 3
+    let t: f64 = (line.split("(t = ").nth(1))
+        .and_then(|r| r.split(')').next())
+        .unwrap()
+        .parse()
+        .unwrap();
+    let face = 1.5 + 2.0 * (t - 1.0);
+    assert!(
+        (2.8..3.05).contains(&face),
+        "told with the pad's face at x = {face}: {line}"
+    );
+    let e = (said.lines())
+        .find(|l| l.starts_with("error:"))
+        .unwrap_or_else(|| panic!("{said}"));
+    assert!(
+        e.contains("came up against the edge of the medium drawn around it at step")
+            && e.contains("draw the medium past where the solid goes")
+            && !e.contains("friction"),
+        "{e}"
+    );
+    let (done, said) = solve("pad-inside-its-box", 7.0);
+    assert!(done && !said.contains("warning"), "{said}");
+}
+
 /// The pad in a box on quadrilaterals (`quads = 1`, h = 0.1), at μ = 0.3. Its medium is made
 /// again, into triangles, as soon as a quadrilateral has closed thin: before, the pad's
 /// leading corner went through the plate's face inside the one quadrilateral across the gap
