@@ -256,8 +256,8 @@ impl Accounts {
             return None;
         }
         let model = st.model;
-        let (step, when) = (st.ctl.accepted, when(st, t));
         let near = self.edge.watch(model, &st.x)?;
+        let (step, when) = (st.ctl.accepted, when(st, t));
         let came = format!(
             "the solid \"{}\" came up against the edge of the medium drawn around it",
             model.regions[near.region].0
