@@ -249,6 +249,17 @@ impl Model {
         x
     }
 
+    /// Whether a condition prescribes node `n`'s displacement along `i`.
+    pub fn held_along(&self, n: usize, i: usize) -> bool {
+        let u = self.dofs.u.get(n * self.dofs.dim + i);
+        u.is_some_and(|&u| {
+            self.cons
+                .prescribed
+                .get(u as usize)
+                .is_some_and(Option::is_some)
+        })
+    }
+
     /// Whether a friction layer is joined again as it slides (`reconnect`): the run's mesh
     /// changes as it goes.
     pub fn reconnects(&self) -> bool {

@@ -867,7 +867,7 @@ impl Medium {
                 if cell.iter().any(|&n| on_solid[n]) {
                     for &n in cell
                         .iter()
-                        .filter(|&&n| (0..d).any(|i| held_along(model, n, i)))
+                        .filter(|&&n| (0..d).any(|i| model.held_along(n, i)))
                     {
                         kept[n] = true;
                     }
@@ -1368,12 +1368,6 @@ fn triangles_cross(a: [Vector3<f64>; 3], b: [Vector3<f64>; 3]) -> bool {
     (0..3).any(|i| through(&b, a[i], a[(i + 1) % 3]) || through(&a, b[i], b[(i + 1) % 3]))
 }
 
-/// Whether a condition prescribes node `n`'s displacement along `i` in `model`.
-fn held_along(model: &Model, n: usize, i: usize) -> bool {
-    let u = model.dofs.u.get(n * model.dofs.dim + i);
-    u.is_some_and(|&u| model.cons.prescribed[u as usize].is_some())
-}
-
 /// The places of the medium's `own` boundary nodes (see `Medium::own_places`) at the state
 /// `x`, `next` each node's neighbours along the boundary: per component, the solids' nodes
 /// (`on_solid`), the `kept` and what is prescribed hold; the rest is the mean of its
@@ -1392,7 +1386,7 @@ fn place_own(
     let u_of = |n: usize, i: usize| model.dofs.u.get(n * d + i).map(|&u| u as usize);
     let mut places = vec![None; mesh.coords.len()];
     for i in 0..d {
-        let held = |n: usize| on_solid[n] || kept[n] || held_along(model, n, i);
+        let held = |n: usize| on_solid[n] || kept[n] || model.held_along(n, i);
         let value = |n: usize| u_of(n, i).map_or(0.0, |u| x[u]);
         let free: Vec<usize> = own.iter().copied().filter(|&n| !held(n)).collect();
         let mut at = vec![usize::MAX; mesh.coords.len()];

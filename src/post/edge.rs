@@ -215,13 +215,7 @@ fn normal_of(ends: &[usize], at: impl Fn(usize) -> Vector3<f64>) -> Vector3<f64>
 /// its neighbours along the sides.
 fn free_nodes(model: &Model, sides: &[(Vec<usize>, Vector3<f64>)]) -> Vec<FreeNode> {
     let on_solid = model.nodes_of(RegionKind::Solid);
-    let d = model.dofs.dim;
-    let held = |n: usize| {
-        (0..d).any(|i| {
-            let u = model.dofs.u[n * d + i] as usize;
-            model.cons.prescribed.get(u).is_some_and(|p| p.is_some())
-        })
-    };
+    let held = |n: usize| (0..model.dofs.dim).any(|i| model.held_along(n, i));
     let mut by_node: HashMap<usize, (Vec<usize>, Vector3<f64>)> = HashMap::new();
     for (ends, normal) in sides {
         let k = ends.len();
