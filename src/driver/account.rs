@@ -5,7 +5,7 @@
 //! the medium's edge). They add to the run's [`Totals`]; the recorder writes them.
 
 use super::SolveError;
-use super::records::BEYOND;
+use super::records::{BEYOND, EdgeReached};
 use super::state::Totals;
 use super::stepper::Stepper;
 use crate::assembly::AssemblyError;
@@ -268,6 +268,13 @@ impl Accounts {
             point_text(&near.at, model.mesh.dim)
         );
         self.totals.edge_reached = Some(format!("{came} at step {step} ({when})"));
+        self.totals.edge_reached_at = Some(EdgeReached {
+            solid: model.regions[near.region].0.clone(),
+            step,
+            time: t,
+            at: near.at,
+            distance: near.distance,
+        });
         Some(format!(
             "warning: step {step} ({when}): {came}: {what}. Past that edge nothing is in \
              contact, and the medium there is pushed ahead of the solid; draw the medium past \

@@ -556,6 +556,7 @@ impl<'a> Recorder<'a> {
             s.medium_remade_seconds = Some(tot.remake_seconds);
             s.medium_remade_unsettled = measured.then_some(tot.remake_unsettled);
         }
+        s.medium_edge_reached = tot.edge_reached_at.clone();
         // 0 until the first join
         s.heat_joined = (self.layout.joined).then(|| tot.heat_joined.unwrap_or(0.0));
         s.largest_displacement = tot.largest_displacement;

@@ -13,6 +13,18 @@ use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::Path;
 
+/// Where a solid first came up against the edge of the medium drawn around it: at the
+/// accepted `step` at `time` (the clock of `history.csv`), a node of the medium's free edge
+/// `distance` from the face of `solid`, the node at `at` (deformed).
+#[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
+pub struct EdgeReached {
+    pub solid: String,
+    pub step: usize,
+    pub time: f64,
+    pub at: [f64; 3],
+    pub distance: f64,
+}
+
 /// What `summary.json` holds (extend, never rename: users' scripts rely on it).
 #[derive(Clone, Debug, Serialize)]
 pub struct Summary {
@@ -131,6 +143,9 @@ pub struct Summary {
     /// did not converge, the next step started from the state as remade, and the changes
     /// above were read there (`null` where the medium was never made again, or not settled).
     pub medium_remade_unsettled: Option<usize>,
+    /// Where a solid first came up against the edge of the medium drawn around it (`null`
+    /// where none did): the run says so as a warning at that step.
+    pub medium_edge_reached: Option<EdgeReached>,
     /// Transient scenes with a friction layer with `reconnect`: what its joins changed the
     /// heat stored by, so far; with it, `heat_stored` = `heat_in` + `friction_heat` +
     /// `heat_joined` (`null` otherwise).
@@ -283,6 +298,7 @@ impl Summary {
             medium_remade_heat_change: None,
             medium_remade_seconds: None,
             medium_remade_unsettled: None,
+            medium_edge_reached: None,
             heat_joined: None,
             balances: Balances::default(),
             output: out_dir.display().to_string(),

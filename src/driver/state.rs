@@ -2,7 +2,7 @@
 //! A checkpoint is this value written whole, and a restart reads it back whole; what is not
 //! here (the model, the solvers, the controller's limits) comes again from the case.
 
-use super::records::Reactions;
+use super::records::{EdgeReached, Reactions};
 use crate::output::history::Mark;
 use crate::solver::newton::Tally;
 use crate::solver::stepping::Clock;
@@ -68,6 +68,10 @@ pub struct Totals {
     /// (a checkpoint without it had none).
     #[serde(default)]
     pub edge_reached: Option<String>,
+    /// The same, for `summary.json` (a checkpoint without it had none, or was written before
+    /// tmc kept it).
+    #[serde(default)]
+    pub edge_reached_at: Option<EdgeReached>,
     /// How many times a reconnected friction layer was joined again.
     #[serde(default)]
     pub layer_joins: usize,

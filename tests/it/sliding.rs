@@ -1169,10 +1169,15 @@ fn a_pad_dragged_past_the_end_of_its_box_is_told_where_the_medium_ends() {
         let case = case_file(name, "pad-box.geo", &params, &body);
         let out = case.with_file_name("out");
         let o = tmc(&["solve", case.to_str().unwrap(), "-o", out.to_str().unwrap()]);
-        // the warnings go to the standard error, as the error does
-        (o.status.success(), stderr(&o))
+        // the warnings go to the standard error, as the error does; summary.json keeps it
+        let summary = common::summary(&out);
+        (
+            o.status.success(),
+            stderr(&o),
+            summary["medium_edge_reached"].clone(),
+        )
     };
-    let (done, said) = solve("pad-past-its-box", 3.0);
+    let (done, said, reached) = solve("pad-past-its-box", 3.0);
     assert!(!done, "{said}");
     let told = "the solid \"pad\" came up against the edge of the medium drawn around it";
     let line = (said.lines())
@@ -1194,6 +1199,25 @@ fn a_pad_dragged_past_the_end_of_its_box_is_told_where_the_medium_ends() {
         (2.8..3.05).contains(&face),
         "told with the pad's face at x = {face}: {line}"
     );
+    // the same step and time in summary.json, a node of the box's end within a cell of the
+    // pad's face
+    let step = (line.split("step ").nth(1))
+        .and_then(|r| r.split(' ').next())
+        .unwrap();
+    assert_eq!(reached["solid"], "pad", "{reached}");
+    assert_eq!(reached["step"].to_string(), step, "{reached}");
+    assert!(
+        (reached["time"].as_f64().unwrap() - t).abs() < 1e-5,
+        "{reached}"
+    );
+    let (x, distance) = (
+        reached["at"][0].as_f64().unwrap(),
+        reached["distance"].as_f64().unwrap(),
+    );
+    assert!(
+        (2.8..3.2).contains(&x) && distance > 0.0 && distance < 0.2,
+        "{reached}"
+    );
     let e = (said.lines())
         .find(|l| l.starts_with("error:"))
         .unwrap_or_else(|| panic!("{said}"));
@@ -1203,8 +1227,9 @@ fn a_pad_dragged_past_the_end_of_its_box_is_told_where_the_medium_ends() {
             && !e.contains("friction"),
         "{e}"
     );
-    let (done, said) = solve("pad-inside-its-box", 7.0);
+    let (done, said, reached) = solve("pad-inside-its-box", 7.0);
     assert!(done && !said.contains("warning"), "{said}");
+    assert!(reached.is_null(), "{reached}");
 }
 
 /// The pad in a box on quadrilaterals (`quads = 1`, h = 0.1), at μ = 0.3. Its medium is made
