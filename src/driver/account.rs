@@ -252,39 +252,38 @@ impl Accounts {
     /// Past the edge nothing is in contact, and the medium there is pushed ahead of the body
     /// until the run stops.
     fn watch_edge(&mut self, st: &Stepper, t: f64) -> Option<String> {
-        if self.totals.edge_reached.is_some() {
+        if self.totals.edge_reached_at.is_some() {
             return None;
         }
         let model = st.model;
         let near = self.edge.watch(model, &st.x)?;
-        let (step, when) = (st.ctl.accepted, when(st, t));
-        let came = format!(
-            "the solid \"{}\" came up against the edge of the medium drawn around it",
-            model.regions[near.region].0
-        );
+        let reached = EdgeReached {
+            solid: model.regions[near.region].0.clone(),
+            step: st.ctl.accepted,
+            time: t,
+            at: near.at,
+            distance: near.distance,
+        };
         let what = format!(
             "a node of the medium's free edge stands {:.1e} from its face, at {}",
             near.distance,
             point_text(&near.at, model.mesh.dim)
         );
-        self.totals.edge_reached = Some(format!("{came} at step {step} ({when})"));
-        self.totals.edge_reached_at = Some(EdgeReached {
-            solid: model.regions[near.region].0.clone(),
-            step,
-            time: t,
-            at: near.at,
-            distance: near.distance,
-        });
-        Some(format!(
-            "warning: step {step} ({when}): {came}: {what}. Past that edge nothing is in \
-             contact, and the medium there is pushed ahead of the solid; draw the medium past \
-             where the solid goes."
-        ))
+        let said = format!(
+            "warning: step {} ({}): {}: {what}. Past that edge nothing is in contact, and the \
+             medium there is pushed ahead of the solid; draw the medium past where the solid \
+             goes.",
+            reached.step,
+            when(st, t),
+            reached.came()
+        );
+        self.totals.edge_reached_at = Some(reached);
+        Some(said)
     }
 }
 
 /// Where the accepted state at `t` stands, for a warning: "t = 1.25" or "λ = 0.5000".
-fn when(st: &Stepper, t: f64) -> String {
+pub(super) fn when(st: &Stepper, t: f64) -> String {
     match st.show_t() {
         true => format!("t = {}", st.t_text(t)),
         false => format!("λ = {:.4}", st.model.path.lambda(t)),

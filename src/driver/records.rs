@@ -25,6 +25,16 @@ pub struct EdgeReached {
     pub distance: f64,
 }
 
+impl EdgeReached {
+    /// What happened, in words.
+    pub fn came(&self) -> String {
+        format!(
+            "the solid \"{}\" came up against the edge of the medium drawn around it",
+            self.solid
+        )
+    }
+}
+
 /// What `summary.json` holds (extend, never rename: users' scripts rely on it).
 #[derive(Clone, Debug, Serialize)]
 pub struct Summary {

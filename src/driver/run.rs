@@ -509,10 +509,13 @@ impl<'a> Run<'a> {
             let drag = !pressing(st.model, st.ctl.t, target);
             // where a body came up against the medium's edge, that first: past it nothing
             // is in contact, whatever else the physics suggests
-            let edge = (self.accounts.totals.edge_reached.as_ref()).map(|reached| {
+            let edge = (self.accounts.totals.edge_reached_at.as_ref()).map(|reached| {
                 format!(
-                    "; {reached}, where the medium ends and is pushed ahead of it (the warning \
-                     then): draw the medium past where the solid goes"
+                    "; {} at step {} ({}), where the medium ends and is pushed ahead of it (the \
+                     warning then): draw the medium past where the solid goes",
+                    reached.came(),
+                    reached.step,
+                    super::account::when(st, reached.time)
                 )
             });
             let hint = (edge.unwrap_or_default() + stall_hint(&st.model.physics, remade, drag))

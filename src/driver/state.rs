@@ -64,12 +64,8 @@ pub struct Totals {
     /// (a checkpoint without it had none).
     #[serde(default)]
     pub overhang: Option<String>,
-    /// Where a solid first came up against the edge of the medium drawn around it, in words
-    /// (a checkpoint without it had none).
-    #[serde(default)]
-    pub edge_reached: Option<String>,
-    /// The same, for `summary.json` (a checkpoint without it had none, or was written before
-    /// tmc kept it).
+    /// Where a solid first came up against the edge of the medium drawn around it (a
+    /// checkpoint without it had none, or kept it in words, which a restart leaves).
     #[serde(default)]
     pub edge_reached_at: Option<EdgeReached>,
     /// How many times a reconnected friction layer was joined again.
