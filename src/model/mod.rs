@@ -292,8 +292,9 @@ pub(crate) mod tests {
     use std::path::Path;
 
     /// The model of the shipped case `name`, its `.geo` meshed as the case says (with `params`
-    /// over its own) into `target/unit-scratch/model/`, a file per call: tests that mesh the
-    /// same case run at once, and one's mesh was moved into place from under the other.
+    /// over its own) into `target/unit-scratch/model/`, a file per test (its thread's name):
+    /// tests that mesh the same case run at once, and one's mesh was moved into place from
+    /// under the other.
     pub(crate) fn model_of(name: &str, params: &[(&str, f64)]) -> Model {
         case_and_model_of(name, params).1
     }
@@ -305,9 +306,11 @@ pub(crate) mod tests {
         let mut set: std::collections::BTreeMap<String, f64> =
             case.file.mesh_options.params.clone();
         set.extend(params.iter().map(|(k, v)| (k.to_string(), *v)));
-        static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
-        let call = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        let out = root.join(format!("target/unit-scratch/model/{name}-{call}.msh"));
+        let test = std::thread::current()
+            .name()
+            .unwrap_or("main")
+            .replace("::", "-");
+        let out = root.join(format!("target/unit-scratch/model/{test}-{name}.msh"));
         let opts = MeshOptions {
             order: case.file.mesh_options.order.unwrap_or(1),
             incomplete: false,
