@@ -210,7 +210,7 @@ fn normal_of(ends: &[usize], at: impl Fn(usize) -> Vector3<f64>) -> Vector3<f64>
     }
 }
 
-/// The nodes of the medium's free `sides` (as [`free_sides`] gives them) that are no solid's
+/// The nodes of the medium's free `sides` (as [`sides_of`] gives them) that are no solid's
 /// and that no condition holds in any direction (a plane of symmetry's are held), each with
 /// its neighbours along the sides.
 fn free_nodes(model: &Model, sides: &[(Vec<usize>, Vector3<f64>)]) -> Vec<FreeNode> {
