@@ -13,7 +13,8 @@
 //!
 //! The second: friction (item 4), each scene as a user draws it, with no special key, the
 //! medium made again as the body moves: the pad in a box of `cases/pad-box-slide.toml`
-//! (triangles and quadrilaterals, h = 0.1 and 0.05) dragged five pad widths; the square pad in
+//! (triangles and quadrilaterals, h = 0.1 and 0.05) dragged five pad widths in steps of 0.01, and
+//! last at μ = 0.1 on h = 0.1 in steps of 0.002 (a step's slide adds to F_t/F_n); the square pad in
 //! 3D of `cases/pad-box-slide-3d.toml` (a half pad 1 × 0.5 × 0.5 over a plate, the medium a box
 //! of tetrahedra around it, h = 0.2, the pad at 0.2 and at 0.15) dragged its width; the hemisphere
 //! of `cases/sphere-drag.toml` dragged three radii; the block as wide as its base
@@ -80,7 +81,12 @@ fn friction_scenes() -> Vec<Scene> {
     for quads in [false, true] {
         for h in [0.1, 0.05] {
             for mu in [0.1, 0.3, 0.5, 1.0] {
-                all.push(Scene::Pad { quads, h, mu });
+                all.push(Scene::Pad {
+                    quads,
+                    h,
+                    mu,
+                    step: 0.01,
+                });
             }
         }
     }
@@ -101,13 +107,28 @@ fn friction_scenes() -> Vec<Scene> {
             all.push(Scene::Block { n, mu });
         }
     }
+    // last, so that the rows above keep their numbers: at μ = 0.1 the excess over μ grows with
+    // the slide per step (docs/notes/2026-12-07-a-face-that-runs-onto-the-medium-and-the-2d-pad-s-drag.md)
+    for quads in [false, true] {
+        all.push(Scene::Pad {
+            quads,
+            h: 0.1,
+            mu: 0.1,
+            step: 0.002,
+        });
+    }
     all
 }
 
 /// One row of the friction table.
 enum Scene {
-    /// `cases/pad-box-slide.toml` dragged five pad widths.
-    Pad { quads: bool, h: f64, mu: f64 },
+    /// `cases/pad-box-slide.toml` dragged five pad widths in steps of `step`.
+    Pad {
+        quads: bool,
+        h: f64,
+        mu: f64,
+        step: f64,
+    },
     /// The square pad in 3D, meshed at `hp`, dragged its width.
     Pad3d { hp: f64, mu: f64 },
     /// `cases/sphere-drag.toml` on a plate reaching x = 2.2, dragged three radii.
@@ -119,7 +140,7 @@ enum Scene {
 impl Scene {
     fn run(&self) {
         match *self {
-            Scene::Pad { quads, h, mu } => {
+            Scene::Pad { quads, h, mu, step } => {
                 let text = edit(
                     &case_text("pad-box-slide"),
                     &[
@@ -129,20 +150,22 @@ impl Scene {
                         ),
                         ("mu = 0.3, normal", &format!("mu = {mu}, normal")),
                         ("ux = 1.0\n", "ux = 5.0\n"),
-                        ("initial = 0.05\nmax = 0.05", "initial = 0.01\nmax = 0.01"),
+                        (
+                            "initial = 0.05\nmax = 0.05",
+                            &format!("initial = {step}\nmax = {step}"),
+                        ),
                     ],
                 ) + ENDS;
                 let cells = if quads { "quadrilaterals" } else { "triangles" };
-                let dir = format!("pad-{cells}-{h}-{mu}");
-                friction_row(
-                    "pad in a box",
-                    &format!("{cells}, h = {h}"),
-                    mu,
-                    5.0,
-                    &dir,
-                    &text,
-                    ("top", "y"),
-                );
+                let (dir, mesh) = if step == 0.01 {
+                    (format!("pad-{cells}-{h}-{mu}"), format!("{cells}, h = {h}"))
+                } else {
+                    (
+                        format!("pad-{cells}-{h}-{mu}-{step}"),
+                        format!("{cells}, h = {h}, steps of {step}"),
+                    )
+                };
+                friction_row("pad in a box", &mesh, mu, 5.0, &dir, &text, ("top", "y"));
             }
             Scene::Pad3d { hp, mu } => {
                 let text = edit(
