@@ -1019,10 +1019,8 @@ impl Medium {
     fn crushed(&self, model: &Model, reference: &CellReferences, x: &[f64]) -> bool {
         let now = self.open_cells(model, reference, x);
         // a checkpoint from before the cells' J was kept: from J = 1
-        let made = |k: usize| match now.len() == self.made_j.len() {
-            true => self.made_j[k],
-            false => 1.0,
-        };
+        let kept = now.len() == self.made_j.len();
+        let made = |k: usize| if kept { self.made_j[k] } else { 1.0 };
         (now.iter().enumerate()).any(|(k, &J)| J < CLOSED * made(k))
     }
 
