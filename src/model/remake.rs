@@ -315,6 +315,28 @@ fn cell_F<const N: usize, const D: usize, E: RefElement<N, D>>(
     Some(F)
 }
 
+/// Each cell `c` of mesh block `b` that `keep(c)` lets through, given to `visit` with its
+/// reference corners and its deformation gradient at its centre at the state `x` (measured
+/// from `reference`; none where the cell is degenerate): what the medium's watch measures its
+/// cells by.
+fn at_centres(
+    model: &Model,
+    reference: &CellReferences,
+    x: &[f64],
+    b: usize,
+    keep: impl Fn(usize) -> bool,
+    mut visit: impl FnMut(&[[f64; 3]], Option<Matrix3<f64>>),
+) {
+    let blk = &model.mesh.cells[b];
+    crate::with_cell!(blk.kind, |N, D, E| {
+        let xi = centre::<N, D, E>();
+        for c in (0..blk.n_cells()).filter(|&c| keep(c)) {
+            let s = model.cell_state_in::<N>(reference, b, c, x);
+            visit(&s.X, cell_F::<N, D, E>(&s, &xi));
+        }
+    });
+}
+
 /// A 2D cell's height over its length, (area / longest edge²), times 2 for a triangle: √3/2
 /// for an equilateral one, small for a sliver.
 fn slenderness(X: &[[f64; 3]], simplex: bool) -> f64 {
@@ -783,23 +805,23 @@ impl Medium {
         // in 2D, per cell: its slide γ H and its length L
         let mut slides: Vec<(f64, f64)> = Vec::new();
         for &b in &self.blocks {
-            let blk = &model.mesh.cells[b];
-            crate::with_cell!(blk.kind, |N, D, E| {
-                let xi = centre::<N, D, E>();
-                let corners = if E::SIMPLEX { 3 } else { 4 };
-                for c in 0..blk.n_cells() {
-                    let s = model.cell_state_in::<N>(reference, b, c, x);
-                    let Some(F) = cell_F::<N, D, E>(&s, &xi) else {
-                        continue;
-                    };
-                    if D == 2 {
-                        let L = longest_edge(&s.X, corners).1.sqrt();
-                        slides.push((shear(&plane(&F)) * slenderness(&s.X, E::SIMPLEX) * L, L));
+            let corners = model.mesh.cells[b].kind.corners();
+            at_centres(
+                model,
+                reference,
+                x,
+                b,
+                |_| true,
+                |X, F| {
+                    let Some(F) = F else { return };
+                    if model.mesh.dim == 2 {
+                        let L = longest_edge(X, corners).1.sqrt();
+                        slides.push((shear(&plane(&F)) * slenderness(X, corners == 3) * L, L));
                     } else {
-                        most = most.max(shear3(&F) * slenderness3(&s.X));
+                        most = most.max(shear3(&F) * slenderness3(X));
                     }
-                }
-            });
+                },
+            );
         }
         let mut lengths: Vec<f64> = slides.iter().map(|&(_, L)| L).collect();
         lengths.sort_by(f64::total_cmp);
@@ -1017,7 +1039,7 @@ impl Medium {
     /// 3D, whose square pad is made again at nearly every step for its passes; there this asked
     /// for 20 more remakes (219 in 244 steps against 199 in 229) and mended no stop.
     fn crushed(&self, model: &Model, reference: &CellReferences, x: &[f64]) -> bool {
-        let now = self.open_cells(model, reference, x);
+        let now = self.open_cells(model, reference, x, &model.on_solids());
         // a checkpoint from before the cells' J was kept: from J = 1
         let kept = now.len() == self.made_j.len();
         let made = |k: usize| if kept { self.made_j[k] } else { 1.0 };
@@ -1025,24 +1047,24 @@ impl Medium {
     }
 
     /// In 2D, the J at the state `x` at the centre of each cell of the medium as made again
-    /// with a corner on no solid, block by block (none in 3D, or before a remake).
-    fn open_cells(&self, model: &Model, reference: &CellReferences, x: &[f64]) -> Vec<f64> {
+    /// with a corner on no solid (`on_solid`: per node, whether it is a solid's), block by
+    /// block (none in 3D, or before a remake).
+    fn open_cells(
+        &self,
+        model: &Model,
+        reference: &CellReferences,
+        x: &[f64],
+        on_solid: &[bool],
+    ) -> Vec<f64> {
         let mut J = Vec::new();
         if model.mesh.dim != 2 {
             return J;
         }
-        let on_solid = model.on_solids();
         for &b in (self.blocks.iter()).filter(|&&b| model.cell_reference[b].is_some()) {
             let blk = &model.mesh.cells[b];
-            crate::with_cell!(blk.kind, |N, D, E| {
-                let xi = centre::<N, D, E>();
-                for c in 0..blk.n_cells() {
-                    if blk.cell(c).iter().all(|&n| on_solid[n]) {
-                        continue;
-                    }
-                    let s = model.cell_state_in::<N>(reference, b, c, x);
-                    J.push(cell_F::<N, D, E>(&s, &xi).map_or(1.0, |F| volume_ratio(&F, D)));
-                }
+            let open = |c: usize| blk.cell(c).iter().any(|&n| !on_solid[n]);
+            at_centres(model, reference, x, b, open, |_, F| {
+                J.push(F.map_or(1.0, |F| volume_ratio(&F, 2)));
             });
         }
         J
@@ -1088,11 +1110,11 @@ impl Medium {
     pub fn start(&mut self, model: &Model, x: &[f64], t: f64, rate: f64) -> f64 {
         self.slivers.clear();
         self.thin.clear();
-        self.made_j = self.open_cells(model, &model.cell_reference, x);
+        let on_solid = model.on_solids();
+        self.made_j = self.open_cells(model, &model.cell_reference, x, &on_solid);
         self.t = t;
         self.rate = rate;
         let mut room = f64::INFINITY;
-        let on_solid = model.on_solids();
         for &b in &self.blocks {
             let blk = &model.mesh.cells[b];
             if blk.kind == crate::mesh::CellKind::Tet4 {
