@@ -797,12 +797,16 @@ fn a_run_whose_medium_is_made_again_restarts_as_if_never_stopped() {
 /// A run that stops where its medium was made again twice with no step between (a step that
 /// fails on the new medium has it made again at once) restarts from its checkpoint: the mesh
 /// the checkpoint continues is kept beside the newest. The pad in a box on quadrilaterals at
-/// μ = 1 stalls so at a drag of 0.32 (h = 0.1), the medium made 20 times, its checkpoint on
-/// the 18th; the restart met "it continues the mesh of the medium's remake 18, and
-/// medium.json holds remake 20, medium-previous.json holds remake 19" before.
+/// μ = 1 in steps of 0.1 stalls so at a drag of 0.28 (h = 0.1), the medium made 17 times, its
+/// checkpoint on the 15th (in steps of 0.05 it stopped so too, at 0.38, until a closed
+/// layer's crushed cells asked for remakes of their own); the restart met "it continues the
+/// mesh of the medium's remake 18, and medium.json holds remake 20, medium-previous.json holds
+/// remake 19" before.
 #[test]
 fn a_run_stopped_after_remakes_that_no_step_followed_restarts_from_its_checkpoint() {
-    let body = case_body("pad-box-slide").replace("mu = 0.3, normal", "mu = 1.0, normal");
+    let body = (case_body("pad-box-slide").replace("mu = 0.3, normal", "mu = 1.0, normal"))
+        .replace("initial = 0.05\nmax = 0.05", "initial = 0.1\nmax = 0.1");
+    assert!(body.contains("mu = 1.0, normal") && body.contains("max = 0.1\n"));
     let case = case_file(
         "pad-box-quads-stall-restart",
         "pad-box.geo",
