@@ -1057,16 +1057,10 @@ impl Medium {
             return J;
         }
         for &b in (self.blocks.iter()).filter(|&&b| model.cell_reference[b].is_some()) {
-            at_centres(
-                model,
-                reference,
-                x,
-                b,
-                |_| true,
-                |_, F| {
-                    J.push(F.map_or(1.0, |F| volume_ratio(&F, 2)));
-                },
-            );
+            let at = |_: &[[f64; 3]], F: Option<Matrix3<f64>>| {
+                J.push(F.map_or(1.0, |F| volume_ratio(&F, 2)))
+            };
+            at_centres(model, reference, x, b, |_| true, at);
         }
         J
     }
