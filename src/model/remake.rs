@@ -1040,8 +1040,9 @@ impl Medium {
     /// μ = 1 its leading corner pressed the closed layer's cell under it from J = 3.4e-3 to
     /// 1.0e-3 over a slide of 0.11 with no remake, and the drag stopped at 0.152 of its width
     /// (docs/notes/2026-12-07-the-pad-at-mu-1-and-a-residual-that-stays-met.md). Not in 3D,
-    /// whose square pad is made again at nearly every step for its passes; there this asked
-    /// for 20 more remakes (219 in 244 steps against 199 in 229) and mended no stop.
+    /// whose square pad is made again at nearly every step for its passes; there the watch of
+    /// the cells with a corner on no solid asked for 20 more remakes (219 in 244 steps against
+    /// 199 in 229) and mended no stop.
     fn crushed(&self, model: &Model, reference: &CellReferences, x: &[f64]) -> bool {
         let now = self.made_cells(model, reference, x);
         // a checkpoint from before each cell's J was kept: measured from the next remake
