@@ -316,22 +316,20 @@ fn cell_F<const N: usize, const D: usize, E: RefElement<N, D>>(
     Some(F)
 }
 
-/// Each cell `c` of mesh block `b` that `keep(c)` lets through, given to `visit` with its
-/// reference corners and its deformation gradient at its centre at the state `x` (measured
-/// from `reference`; none where the cell is degenerate): what the medium's watch measures its
-/// cells by.
+/// Each cell of mesh block `b`, given to `visit` with its reference corners and its
+/// deformation gradient at its centre at the state `x` (measured from `reference`; none where
+/// the cell is degenerate): what the medium's watch measures its cells by.
 fn at_centres(
     model: &Model,
     reference: &CellReferences,
     x: &[f64],
     b: usize,
-    keep: impl Fn(usize) -> bool,
     mut visit: impl FnMut(&[[f64; 3]], Option<Matrix3<f64>>),
 ) {
     let blk = &model.mesh.cells[b];
     crate::with_cell!(blk.kind, |N, D, E| {
         let xi = centre::<N, D, E>();
-        for c in (0..blk.n_cells()).filter(|&c| keep(c)) {
+        for c in 0..blk.n_cells() {
             let s = model.cell_state_in::<N>(reference, b, c, x);
             visit(&s.X, cell_F::<N, D, E>(&s, &xi));
         }
@@ -807,22 +805,15 @@ impl Medium {
         let mut slides: Vec<(f64, f64)> = Vec::new();
         for &b in &self.blocks {
             let corners = model.mesh.cells[b].kind.corners();
-            at_centres(
-                model,
-                reference,
-                x,
-                b,
-                |_| true,
-                |X, F| {
-                    let Some(F) = F else { return };
-                    if model.mesh.dim == 2 {
-                        let L = longest_edge(X, corners).1.sqrt();
-                        slides.push((shear(&plane(&F)) * slenderness(X, corners == 3) * L, L));
-                    } else {
-                        most = most.max(shear3(&F) * slenderness3(X));
-                    }
-                },
-            );
+            at_centres(model, reference, x, b, |X, F| {
+                let Some(F) = F else { return };
+                if model.mesh.dim == 2 {
+                    let L = longest_edge(X, corners).1.sqrt();
+                    slides.push((shear(&plane(&F)) * slenderness(X, corners == 3) * L, L));
+                } else {
+                    most = most.max(shear3(&F) * slenderness3(X));
+                }
+            });
         }
         let mut lengths: Vec<f64> = slides.iter().map(|&(_, L)| L).collect();
         lengths.sort_by(f64::total_cmp);
@@ -1058,10 +1049,9 @@ impl Medium {
             return J;
         }
         for &b in (self.blocks.iter()).filter(|&&b| model.cell_reference[b].is_some()) {
-            let at = |_: &[[f64; 3]], F: Option<Matrix3<f64>>| {
+            at_centres(model, reference, x, b, |_, F| {
                 J.push(F.map_or(1.0, |F| volume_ratio(&F, 2)))
-            };
-            at_centres(model, reference, x, b, |_| true, at);
+            });
         }
         J
     }
