@@ -438,10 +438,14 @@ impl Assembler {
     /// the whole slide since the last: its friction stress, P = F (N⊗τ + τ⊗N), then pushes
     /// along the layer by the shear times τ and the layer's ends push the bodies (the pad in
     /// a box at μ = 0.3 met 0.3133 on average, up to 0.3686), and the rotation penalty reads
-    /// the shear as a rotation.
+    /// the shear as a rotation. A 3D medium made again without friction lets its open cells
+    /// beside a body go of their shear instead ([`References::release_beside`]).
     pub fn absorb_closed_layers(&mut self, model: &Model, x: &[f64]) {
         let closed = crate::model::remake::CLOSED;
         self.absorb_where(model, x, closed, |fb| absorbing(model, fb));
+        if releases_beside(model) {
+            self.reference.release_beside(model, x, closed);
+        }
     }
 
     /// The friction blocks `which` picks take the slide at `x` into the references of their
@@ -467,7 +471,7 @@ impl Assembler {
     /// Whether a friction block's closed layers take their slide into their references
     /// ([`Assembler::absorb_closed_layers`]), so that the references are part of the state.
     pub fn absorbs(&self, model: &Model) -> bool {
-        model.friction_blocks.iter().any(|fb| absorbing(model, fb))
+        model.friction_blocks.iter().any(|fb| absorbing(model, fb)) || releases_beside(model)
     }
 
     /// After the reconnected layers were joined again (on this assembler's model) at the
@@ -635,6 +639,13 @@ impl Assembler {
 /// into their references.
 fn absorbing(model: &Model, fb: &FrictionBlock) -> bool {
     !fb.reconnect && model.cell_reference[fb.block].is_some()
+}
+
+/// Whether a 3D medium made again without friction has its open cells beside a body let go
+/// of their shear at each accepted step ([`References::release_beside`]).
+fn releases_beside(model: &Model) -> bool {
+    let made = model.cell_reference.iter().any(Option::is_some);
+    model.mesh.dim == 3 && model.friction_blocks.is_empty() && made
 }
 
 /// Statistics of two parts together.

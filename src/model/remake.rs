@@ -114,12 +114,16 @@ pub struct Medium {
     /// two, so it keeps none.
     #[serde(skip)]
     mesher: Mesher,
-    /// In 2D, the J each cell of the medium as made again had when it was made
+    /// The J each cell of the medium as made again had when it was made
     /// ([`Medium::made_cells`]' order), from which [`Medium::crushed`] measures its squeeze: a
     /// closed layer's cell starts from its compression, a sliver from a reference opened
     /// across it.
     #[serde(default)]
     made_j: Vec<f64>,
+    /// In 3D, per cell in the same order, whether it has a node on a body's edge (see
+    /// [`body_edges`]); none from a checkpoint from before it was kept.
+    #[serde(default)]
+    at_edge: Vec<bool>,
 }
 
 /// How far (in lengths of its edge) a sliver's node may have gone along the edge across it
@@ -223,6 +227,12 @@ struct ThinTet {
     /// What it gave when the medium was made (a checkpoint's from before it was kept: none).
     #[serde(default)]
     from: Vec<f64>,
+    /// Its volume at the last accepted state, and when the medium was made (a checkpoint's
+    /// from before they were kept: zero).
+    #[serde(default)]
+    volume: f64,
+    #[serde(default)]
+    made_volume: f64,
 }
 
 impl ThinTet {
@@ -240,7 +250,30 @@ impl ThinTet {
             first,
             room: Vec::new(),
             from: Vec::new(),
+            volume: 0.0,
+            made_volume: 0.0,
         })
+    }
+
+    /// Its volume at the state `x` (signed, its corners in the order it keeps them).
+    fn volume(&self, model: &Model, x: &[f64]) -> f64 {
+        let nodes = model.mesh.cells[self.block].cell(self.cell);
+        let q = self
+            .corners
+            .map(|i| Vector3::from(model.placed(nodes[i], x)));
+        (q[1] - q[0]).cross(&(q[2] - q[0])).dot(&(q[3] - q[0])) / 6.0
+    }
+
+    /// Whether, at the speed of the last step (`dt` long), it would be squeezed below
+    /// [`CLOSED`] of the volume it was made with by the end of the next (`ahead` long), from
+    /// its volume `now` at the accepted state (with no volume kept: yes).
+    fn squeezed_by(&self, now: f64, dt: f64, ahead: f64) -> bool {
+        let speed = if dt > 0.0 {
+            (now - self.volume) / dt
+        } else {
+            0.0
+        };
+        self.made_volume == 0.0 || (now + speed * ahead) / self.made_volume < CLOSED
     }
 
     /// Where its corners stand on each other at the state `x`: for one corner across three,
@@ -788,6 +821,7 @@ impl Medium {
             made_for_pass: false,
             mesher: Mesher::default(),
             made_j: Vec::new(),
+            at_edge: Vec::new(),
         }))
     }
 
@@ -972,6 +1006,7 @@ impl Medium {
             s.at = at;
         }
         let (mut passed, passes) = passing(&along, t, target);
+        let rubs = !model.friction_blocks.is_empty();
         let mut thin_passed = false;
         for s in &mut self.thin {
             let (now, length) = s.standing(model, x);
@@ -979,21 +1014,29 @@ impl Medium {
                 // a checkpoint's watch from before it was kept: from where it stood then
                 s.from = s.room.clone();
             }
+            let mut passing = false;
             for ((v, before), made) in now.iter().zip(&s.room).zip(&s.from) {
                 let speed = if dt > 0.0 { (v - before) / dt } else { 0.0 };
                 // made again before the pass: in 3D a corner taken past it, as after it,
                 // stopped the sphere of `sphere-drag` dragged three radii
-                thin_passed |= *v < 0.0 || v + speed * (target - t) < 0.0;
+                passing |= *v < 0.0 || v + speed * (target - t) < 0.0;
                 rate = rate.max(speed.abs() * length);
                 travel = travel.max((v - made).abs());
             }
+            // without friction a pass asks only where it squeezes the tetrahedron: a corner
+            // that passes an edge between faces that stay parallel leaves its volume as it
+            // is, and in the closed layer under the square pad such passes asked at nearly
+            // every step (199 remakes in 229 steps)
+            let volume = s.volume(model, x);
+            passing &= rubs || s.squeezed_by(volume, dt, target - t);
+            thin_passed |= passing;
+            s.volume = volume;
             s.room = now;
         }
         // without friction a thin tetrahedron's pass asks once one has gone [`FRESH`] since
         // the medium was made: a corner gmsh made beside an edge across, crawling past it,
         // asked at each step of a press and got the same tetrahedron back. With friction at
         // once: so gated, the 3D square pad at μ = 0.3 stalled at a drag of 0.43 of 1.
-        let rubs = !model.friction_blocks.is_empty();
         passed |= thin_passed && (travel >= FRESH || rubs);
         self.t = t;
         self.rate = rate;
@@ -1006,7 +1049,7 @@ impl Medium {
         let remake = stale
             || passed
             || self.slid_cells(model, reference, x) >= SLID
-            || self.crushed(model, reference, x)
+            || self.crushed(model, reference, x, travel >= FRESH)
             || self.thin_quadrilateral(model, x);
         if remake {
             // made while a pass is coming, before it: fresh for it, whatever asked
@@ -1030,30 +1073,53 @@ impl Medium {
     /// (docs/notes/2026-12-07-a-face-that-runs-onto-the-medium-and-the-2d-pad-s-drag.md). At
     /// μ = 1 its leading corner pressed the closed layer's cell under it from J = 3.4e-3 to
     /// 1.0e-3 over a slide of 0.11 with no remake, and the drag stopped at 0.152 of its width
-    /// (docs/notes/2026-12-07-the-pad-at-mu-1-and-a-residual-that-stays-met.md). Not in 3D,
-    /// whose square pad is made again at nearly every step for its passes; there the watch of
-    /// the cells with a corner on no solid asked for 20 more remakes (219 in 244 steps against
-    /// 199 in 229) and mended no stop.
-    fn crushed(&self, model: &Model, reference: &CellReferences, x: &[f64]) -> bool {
+    /// (docs/notes/2026-12-07-the-pad-at-mu-1-and-a-residual-that-stays-met.md).
+    ///
+    /// In 3D without friction too, since its thin tetrahedra's passes ask only where they
+    /// squeeze them: a cell with a node on a body's edge ([`Medium::at_edge`]) at once (the
+    /// square pad's leading face runs onto the plate's nodes ahead of it), any other once the
+    /// bodies have slid (`slid`: a thin tetrahedron has gone [`FRESH`] since the medium was
+    /// made). Asked at once, a hemisphere's press, whose gap closes over the plate's nodes,
+    /// was made again 12 times in 80 load steps (2 in 49 without).
+    fn crushed(&self, model: &Model, reference: &CellReferences, x: &[f64], slid: bool) -> bool {
         let now = self.made_cells(model, reference, x);
         // a checkpoint from before each cell's J was kept: measured from the next remake
+        let watched = |i: usize| model.mesh.dim == 2 || slid || self.at_edge.get(i) == Some(&true);
         now.len() == self.made_j.len()
-            && (now.iter().zip(&self.made_j)).any(|(&J, &made)| J < CLOSED * made)
+            && (now.iter().zip(&self.made_j).enumerate())
+                .any(|(i, (&J, &made))| J < CLOSED * made && watched(i))
     }
 
-    /// In 2D, the J at the state `x` at the centre of each cell of the medium as made again,
-    /// block by block (none in 3D, or before a remake).
+    /// The J at the state `x` at the centre of each cell of the medium as made again, block by
+    /// block (none before a remake, nor in 3D with friction, whose thin tetrahedra's passes
+    /// all ask).
     fn made_cells(&self, model: &Model, reference: &CellReferences, x: &[f64]) -> Vec<f64> {
         let mut J = Vec::new();
-        if model.mesh.dim != 2 {
+        let dim = model.mesh.dim;
+        if dim == 3 && !model.friction_blocks.is_empty() {
             return J;
         }
         for &b in (self.blocks.iter()).filter(|&&b| model.cell_reference[b].is_some()) {
             at_centres(model, reference, x, b, |_, F| {
-                J.push(F.map_or(1.0, |F| volume_ratio(&F, 2)))
+                J.push(F.map_or(1.0, |F| volume_ratio(&F, dim)))
             });
         }
         J
+    }
+
+    /// Per cell in [`Medium::made_cells`]' order, whether it has a node on a body's edge at the
+    /// state `x` (in 3D; none in 2D).
+    fn cells_at_edges(&self, model: &Model, x: &[f64]) -> Vec<bool> {
+        if model.mesh.dim != 3 || !model.friction_blocks.is_empty() {
+            return Vec::new();
+        }
+        let edge = body_edges(model, &self.blocks, x);
+        let mut at = Vec::new();
+        for &b in (self.blocks.iter()).filter(|&&b| model.cell_reference[b].is_some()) {
+            let blk = &model.mesh.cells[b];
+            at.extend((0..blk.n_cells()).map(|c| blk.cell(c).iter().any(|&n| edge[n])));
+        }
+        at
     }
 
     /// Whether one of the medium's quadrilaterals has become thin at the state `x` (its
@@ -1098,6 +1164,7 @@ impl Medium {
         self.thin.clear();
         let on_solid = model.on_solids();
         self.made_j = self.made_cells(model, &model.cell_reference, x);
+        self.at_edge = self.cells_at_edges(model, x);
         self.t = t;
         self.rate = rate;
         let mut room = f64::INFINITY;
@@ -1117,6 +1184,8 @@ impl Medium {
                     let (now, length) = s.standing(model, x);
                     let least = now.iter().fold(f64::INFINITY, |a, &v| a.min(v));
                     if least > 0.0 {
+                        s.volume = s.volume(model, x);
+                        s.made_volume = s.volume;
                         room = room.min(least * length);
                         s.from = now.clone();
                         s.room = now;
@@ -1671,6 +1740,43 @@ fn facing(n: Vector3<f64>, mut sides: impl Iterator<Item = Vector3<f64>>) -> boo
     })
 }
 
+/// Where two faces of one body meet at an angle past this, a node between them is on the
+/// body's edge: a pad's corners and edges are; a hemisphere's facets on a coarse mesh are not.
+const EDGE_ANGLE: f64 = std::f64::consts::FRAC_PI_6;
+
+/// Per node of `model`'s mesh, whether it is on a body's edge at the state `x`: a node where
+/// two faces of one body that border the `medium` blocks meet at more than [`EDGE_ANGLE`]. The
+/// medium's own faces on a symmetry plane with their three nodes on solids (across a gap) are
+/// not a body's. Faces that cannot be told (a medium the remake made could not be walked):
+/// none.
+fn body_edges(model: &Model, medium: &[usize], x: &[f64]) -> Vec<bool> {
+    let mesh = &model.mesh;
+    let body = mesh.components(|b| !medium.contains(&b));
+    let faces = bodies_faces(mesh, medium, &body).unwrap_or_default();
+    let mut normals: Vec<Vec<Vector3<f64>>> = vec![Vec::new(); mesh.coords.len()];
+    for f in faces {
+        let v = f.map(|n| Vector3::from(model.placed(n, x)));
+        if let Some(a) = (v[1] - v[0]).cross(&(v[2] - v[0])).try_normalize(0.0) {
+            f.iter().for_each(|&n| normals[n].push(a));
+        }
+    }
+    let cos = EDGE_ANGLE.cos();
+    let bent = |ns: &Vec<Vector3<f64>>| ns.iter().any(|a| ns.iter().any(|b| a.dot(b) < cos));
+    normals.iter().map(bent).collect()
+}
+
+/// The faces of the `medium` blocks that are faces of one body (`body`, per node, as
+/// [`Mesh::components`] gives it): not the medium's own outer faces, nor a symmetry plane's
+/// medium triangle between two bodies.
+fn bodies_faces(mesh: &Mesh, medium: &[usize], body: &[usize]) -> Result<Vec<[usize; 3]>, String> {
+    let mut faces = crate::mesh::faces::outer_triangles(mesh, medium)?;
+    faces.retain(|f| {
+        f.iter()
+            .all(|&n| body[n] != usize::MAX && body[n] == body[f[0]])
+    });
+    Ok(faces)
+}
+
 /// Per node of `mesh`, the unit normal of the solids' faces that border the medium `medium`
 /// there (the sum of their areas' normals at the places `here`; zero off them): each face of
 /// one body (`body`), so not a symmetry plane's medium triangle between two bodies.
@@ -1680,14 +1786,8 @@ fn solid_normals(
     body: &[usize],
     here: impl Fn(usize) -> [f64; 3],
 ) -> Result<Vec<Vector3<f64>>, RemeshError> {
-    let faces = crate::mesh::faces::outer_triangles(mesh, medium)?;
     let mut normals = vec![Vector3::zeros(); mesh.coords.len()];
-    for f in faces {
-        if f.iter()
-            .any(|&n| body[n] == usize::MAX || body[n] != body[f[0]])
-        {
-            continue;
-        }
+    for f in bodies_faces(mesh, medium, body)? {
         let v = f.map(|n| Vector3::from(here(n)));
         let a = (v[1] - v[0]).cross(&(v[2] - v[0]));
         f.iter().for_each(|&n| normals[n] += a);
@@ -2046,7 +2146,7 @@ mod tests {
             x[model.dofs.u[open * d + i] as usize] = 0.6 * (mid - model.mesh.coords[open][i]);
         }
         // the drawn medium closes its gaps this way in a press: not asked
-        assert!(!m.crushed(&model, &model.cell_reference, &x));
+        assert!(!m.crushed(&model, &model.cell_reference, &x, false));
         // made again (each cell its own reference as it stands): asked once crushed
         let reference = (0..model.mesh.cells.len())
             .map(|k| {
@@ -2059,21 +2159,21 @@ mod tests {
         model.made_again(reference);
         // before its watch starts on it, a medium made again has no J at making to measure
         // from (a checkpoint from before they were kept): not asked
-        assert!(!m.crushed(&model, &model.cell_reference, &x));
+        assert!(!m.crushed(&model, &model.cell_reference, &x, false));
         m.start(&model, &x0, 1.0, 0.0);
-        assert!(!m.crushed(&model, &model.cell_reference, &x0));
-        assert!(m.crushed(&model, &model.cell_reference, &x));
+        assert!(!m.crushed(&model, &model.cell_reference, &x0, false));
+        assert!(m.crushed(&model, &model.cell_reference, &x, false));
         // a quarter of the way: 0.75 of its area, not crushed
         let mut quarter = x.clone();
         for i in 0..2 {
             let k = model.dofs.u[open * d + i] as usize;
             quarter[k] *= 0.25 / 0.6;
         }
-        assert!(!m.crushed(&model, &model.cell_reference, &quarter));
+        assert!(!m.crushed(&model, &model.cell_reference, &quarter, false));
         // a cell made as squeezed (a sliver's opened reference) is measured from how it was
         // made: the medium made at `x` is not due again at once
         m.start(&model, &x, 1.0, 0.0);
-        assert!(!m.crushed(&model, &model.cell_reference, &x));
+        assert!(!m.crushed(&model, &model.cell_reference, &x, false));
     }
 
     #[test]
@@ -2499,5 +2599,105 @@ mod tests {
             crossing(&faces, |f| f[0] == 6, at).is_empty(),
             "only moved ones"
         );
+    }
+    #[test]
+    fn a_3d_watch_knows_a_body_s_edges_and_a_pass_that_squeezes() {
+        // the square pad in its box: x in [0.5, 1.5], y in [0, 0.5] (y = 0 a symmetry plane,
+        // not the medium's), z in [0.6, 1.1] on a plate whose top (z = 0.5) is its one face
+        // in the medium
+        let model = super::super::tests::model_of("pad-box-slide-3d", &[("h", 0.3)]);
+        let m = Medium::find(&model, Some("medium")).unwrap().unwrap();
+        let x = model.initial_state();
+        let edge = body_edges(&model, &m.blocks, &x);
+        let on = model.on_solids();
+        let at = |v: f64, w: f64| (v - w).abs() < 1e-9;
+        let mut seen = [0; 2];
+        for (n, p) in model.mesh.coords.iter().enumerate().filter(|&(n, _)| on[n]) {
+            let pad = p[2] > 0.55;
+            let faces = [
+                at(p[0], 0.5),
+                at(p[0], 1.5),
+                at(p[1], 0.5),
+                at(p[2], 0.6),
+                at(p[2], 1.1),
+            ];
+            let on_edge = pad && faces.iter().filter(|&&f| f).count() >= 2;
+            assert_eq!(edge[n], on_edge, "node {n} at {p:?}");
+            seen[on_edge as usize] += 1;
+        }
+        assert!(seen[0] > 0 && seen[1] > 0, "{seen:?}");
+
+        // a thin tetrahedron made with volume 1: a pass that keeps it asks nothing, one that
+        // squeezes it below half by the next step's end does, and one kept from before its
+        // volume was does
+        let mut thin = ThinTet::of(
+            0,
+            0,
+            &[[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.2, 0.3, 0.05]],
+        )
+        .expect("thin");
+        (thin.volume, thin.made_volume) = (1.0, 1.0);
+        assert!(!thin.squeezed_by(1.0, 0.1, 0.1));
+        assert!(!thin.squeezed_by(0.8, 0.1, 0.1));
+        assert!(thin.squeezed_by(0.8, 0.1, 0.2));
+        (thin.volume, thin.made_volume) = (-1.0, -1.0);
+        assert!(thin.squeezed_by(-0.8, 0.1, 0.2) && !thin.squeezed_by(-1.0, 0.1, 0.2));
+        thin.made_volume = 0.0;
+        assert!(thin.squeezed_by(1.0, 0.1, 0.1));
+    }
+
+    #[test]
+    fn a_3d_medium_made_again_lets_its_open_cells_beside_a_body_go_of_their_shear() {
+        let (case, model) =
+            super::super::tests::case_and_model_of("pad-box-slide-3d", &[("h", 0.3)]);
+        let m = Medium::find(&model, Some("medium")).unwrap().unwrap();
+        let r = m
+            .remake(&model, &model.cell_reference, &model.initial_state())
+            .unwrap();
+        let mut new = super::super::build::build_with_extent(&case, r.mesh, model.d).unwrap();
+        new.made_again(r.reference);
+        // every node sheared by g along x over its height: J = 1 in every cell
+        let g = 0.3;
+        let mut x = new.initial_state();
+        for (n, p) in new.mesh.coords.iter().enumerate() {
+            x[new.dofs.u[n * 3] as usize] = g * p[2];
+        }
+        let mut refs = crate::assembly::References::new(&new);
+        let on = new.on_solids();
+        let gradients = |refs: &crate::assembly::References| {
+            let mut all = Vec::new();
+            for b in (0..new.mesh.cells.len()).filter(|&b| new.cell_reference[b].is_some()) {
+                let blk = &new.mesh.cells[b];
+                let mut c = 0;
+                at_centres(&new, refs.blocks(), &x, b, |_, F| {
+                    all.push((blk.cell(c).iter().any(|&n| on[n]), F.unwrap()));
+                    c += 1;
+                });
+            }
+            all
+        };
+        let before = gradients(&refs);
+        refs.release_beside(&new, &x, CLOSED);
+        // beside a body and open: no shear left, its J kept; elsewhere as it was, sheared
+        let mut seen = [0; 2];
+        for (c, ((beside, F), (_, was))) in gradients(&refs).into_iter().zip(before).enumerate() {
+            let J = was.determinant();
+            let released = beside && J >= CLOSED;
+            let expected = if released {
+                Matrix3::identity() * J.cbrt()
+            } else {
+                was
+            };
+            assert!(
+                (F - expected).norm() < 1e-9,
+                "cell {c} beside {beside}: {F}"
+            );
+            assert!(
+                beside || (was - Matrix3::identity()).norm() > 0.1 * g,
+                "cell {c}"
+            );
+            seen[beside as usize] += 1;
+        }
+        assert!(seen[0] > 0 && seen[1] > 0, "{seen:?}");
     }
 }
