@@ -18,7 +18,7 @@ use crate::dofs::{CellState, gather, rebase};
 use crate::element::RefElement;
 use crate::kernel::friction::{HISTORY_PER_POINT, plane_shear, shift_slip, volume_ratio};
 use crate::material::friction::along_plane;
-use crate::mesh::{Block, CellKind};
+use crate::mesh::{Block, CellKind, tet_volume};
 use crate::model::{FrictionBlock, Model};
 use nalgebra::Vector3;
 
@@ -97,7 +97,8 @@ impl References {
     /// J^(1/3). Its J is kept (the watch measures a cell's squeeze by it); the rest is let go.
     /// A body's face along the slide shears these cells by the slide since the last remake,
     /// and their rotation penalty holds the body back: with fewer remakes the square pad's
-    /// median F_t/F_n was 0.0023 against 0.0011 (docs/notes/2026-12-07-a-3d-pass-that-squeezes-and-the-cells-beside-a-body.md).
+    /// median F_t/F_n was 0.0023 against 0.0011
+    /// (docs/notes/2026-12-07-a-3d-pass-that-squeezes-and-the-cells-beside-a-body.md).
     pub fn release_beside(&mut self, model: &Model, x: &[f64], closed: f64) {
         let on_solid = model.on_solids();
         for (b, blk) in model.mesh.cells.iter().enumerate() {
@@ -112,13 +113,12 @@ impl References {
                 if !nodes.iter().any(|&n| on_solid[n]) {
                     continue;
                 }
-                let p: [Vector3<f64>; 4] =
-                    std::array::from_fn(|i| model.placed(nodes[i], x).into());
-                let before: [Vector3<f64>; 4] = std::array::from_fn(|i| r[i].into());
-                let J = tet_volume(&p) / tet_volume(&before);
+                let p: [[f64; 3]; 4] = std::array::from_fn(|i| model.placed(nodes[i], x));
+                let J = tet_volume(p) / tet_volume(std::array::from_fn(|i| r[i]));
                 if !(J >= closed) {
                     continue;
                 }
+                let p = p.map(Vector3::from);
                 let (centre, k) = (p.iter().sum::<Vector3<f64>>() / 4.0, J.cbrt());
                 for (q, p) in r.iter_mut().zip(&p) {
                     *q = (centre + (p - centre) / k).into();
@@ -150,11 +150,6 @@ impl References {
             ));
         }
     }
-}
-
-/// The volume of a tetrahedron with corners `q` (signed).
-fn tet_volume(q: &[Vector3<f64>; 4]) -> f64 {
-    (q[1] - q[0]).cross(&(q[2] - q[0])).dot(&(q[3] - q[0])) / 6.0
 }
 
 /// The state of the cell `c` with nodes `nodes` at `x`, measured from `reference` (its

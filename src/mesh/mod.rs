@@ -430,6 +430,19 @@ impl Mesh {
     }
 }
 
+/// The signed volume of the tetrahedron with corners `q`: positive where the fourth stands on
+/// the side the first three face by the right hand.
+pub fn tet_volume(q: [[f64; 3]; 4]) -> f64 {
+    let d = |k: usize| [0, 1, 2].map(|i| q[k][i] - q[0][i]);
+    let (a, b, c) = (d(1), d(2), d(3));
+    let cross = [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ];
+    (cross[0] * c[0] + cross[1] * c[1] + cross[2] * c[2]) / 6.0
+}
+
 /// The mean of the nodes' coordinates (a cell's centre, a body's centre).
 pub fn centroid(coords: &[[f64; 3]], nodes: &[usize]) -> [f64; 3] {
     let mut m = [0.0; 3];
