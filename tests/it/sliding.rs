@@ -560,8 +560,8 @@ fn the_sphere_slides_on_a_medium_of_tetrahedra_made_again_with_no_drag() {
     let most = ratio.iter().fold(0.0f64, |m, r| m.max(r.abs()));
     // measured: F_t/F_n 0.0024 on average, 0.017 at most; F_n 0.2 % below to 1.4 % above
     // the press's, 34 remakes (0.0017, 0.019, 0.7 % and 1.0 %, 50 remakes, before a thin
-    // tetrahedron's pass asked only where it squeezed it; 0.004 and 0.028, 51, before the penalty beside a body was
-    // weighed a tenth; 0.005 and 0.025, 50, before the symmetry plane's nodes near a
+    // tetrahedron's pass asked only where it squeezed it; 0.004 and 0.028, 51, before the
+    // penalty beside a body was weighed a tenth; 0.005 and 0.025, 50, before the symmetry plane's nodes near a
     // body were dropped; 0.003 and 0.024, 0.7 % and 0.8 %, 149 remakes, with each
     // thin tetrahedron asking at each step and the box's nodes beside a body kept where the
     // run left them); issue 68 asks at most 0.03
