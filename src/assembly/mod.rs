@@ -645,7 +645,7 @@ fn absorbing(model: &Model, fb: &FrictionBlock) -> bool {
 /// of their shear at each accepted step ([`References::release_beside`]).
 fn releases_beside(model: &Model) -> bool {
     let made = model.cell_reference.iter().any(Option::is_some);
-    model.mesh.dim == 3 && model.friction_blocks.is_empty() && made
+    model.slides_freely_in_3d() && made
 }
 
 /// Statistics of two parts together.

@@ -498,6 +498,15 @@ fn longest_edge3(p: &[[f64; 3]]) -> f64 {
 }
 
 impl Model {
+    /// Whether this is a 3D medium that slides without friction: its thin tetrahedra's passes
+    /// ask for a remake only where they squeeze them, its crushed cells ask, and its open
+    /// cells beside a body let go of their shear (the assembler's `References::release_beside`).
+    /// With friction every pass asks, and nothing else does: tried with friction, these rules
+    /// held μ no closer (docs/notes/2026-12-07-friction-in-3d-and-a-drag-at-each-row-of-nodes.md).
+    pub fn slides_freely_in_3d(&self) -> bool {
+        self.mesh.dim == 3 && self.friction_blocks.is_empty()
+    }
+
     /// Cell `c` of mesh block `block` at the state `x`, measured from its own reference where
     /// it has one.
     pub fn cell_state<const N: usize>(&self, block: usize, c: usize, x: &[f64]) -> CellState<N> {
@@ -1003,7 +1012,7 @@ impl Medium {
             s.at = at;
         }
         let (mut passed, passes) = passing(&along, t, target);
-        let rubs = !model.friction_blocks.is_empty();
+        let rubs = !model.slides_freely_in_3d();
         let mut thin_passed = false;
         for s in &mut self.thin {
             let (now, length) = s.standing(model, x);
@@ -1094,7 +1103,7 @@ impl Medium {
     fn made_cells(&self, model: &Model, reference: &CellReferences, x: &[f64]) -> Vec<f64> {
         let mut J = Vec::new();
         let dim = model.mesh.dim;
-        if dim == 3 && !model.friction_blocks.is_empty() {
+        if dim == 3 && !model.slides_freely_in_3d() {
             return J;
         }
         for &b in (self.blocks.iter()).filter(|&&b| model.cell_reference[b].is_some()) {
@@ -1108,7 +1117,7 @@ impl Medium {
     /// Per cell in [`Medium::made_cells`]' order, whether it has a node on a body's edge at the
     /// state `x` (in 3D; none in 2D).
     fn cells_at_edges(&self, model: &Model, x: &[f64]) -> Vec<bool> {
-        if model.mesh.dim != 3 || !model.friction_blocks.is_empty() {
+        if !model.slides_freely_in_3d() {
             return Vec::new();
         }
         let edge = body_edges(model, &self.blocks, x);
