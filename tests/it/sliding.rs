@@ -633,10 +633,12 @@ fn a_sphere_dragged_with_friction_passes_the_nodes_of_its_symmetry_plane() {
 /// medium does. Between the rows the pad's side face shears the medium beside it by the slide
 /// since the last remake, and the rotation penalty there held it at 0.005 (the median); a
 /// tenth of it on the cells beside a body (`remake::BESIDE`), and the open cells beside a body
-/// let go of their shear at each step (`References::release_beside`). Measured: 0.020 at most,
-/// 0.0031 on average, 0.0018 the median, F_n within 0.5 %, 44 remakes in 105 steps (0.020,
-/// 0.0022, 0.0011 with a remake at nearly every step; 0.023, 0.006 and about 0.005 before the
-/// tenth).
+/// let go of their shear at each step (`References::release_beside`). The first step after a
+/// remake took the leading face over a row against 0.020 of F_n; it is now at least a twentieth
+/// of the largest step, not a tenth. Measured: 0.0074 at most, 0.0021 on average, 0.0016 the
+/// median, F_n within 0.4 %, 39 remakes in 131 steps (0.020, 0.0031, 0.0018, 44 in 105 at a
+/// tenth; 0.020, 0.0022, 0.0011 with a remake at nearly every step; 0.023, 0.006 and about 0.005
+/// before the penalty's tenth).
 #[test]
 fn a_square_pad_is_not_pushed_back_as_it_slides_over_the_rows_of_the_plate_s_nodes() {
     let case = square_pad_slid("pad-3d-rows", common::ENDS_ONLY);
@@ -655,7 +657,7 @@ fn a_square_pad_is_not_pushed_back_as_it_slides_over_the_rows_of_the_plate_s_nod
     sizes.sort_by(f64::total_cmp);
     let median = sizes[sizes.len() / 2];
     assert!(
-        most < 0.04 && mean < 0.004 && median < 0.002,
+        most < 0.012 && mean < 0.004 && median < 0.002,
         "F_t/F_n {most} at most, {mean} on average, {median} the median"
     );
     for r in &slide {
@@ -694,9 +696,9 @@ fn a_3d_medium_made_again_without_friction_restarts_as_if_never_stopped() {
     let (full, stopped) = (case.with_file_name("full"), case.with_file_name("stopped"));
     let o = solve_cli(&case, &full, &[]);
     assert!(o.status.success(), "{}", stderr(&o));
-    // steps 62 and 63 are followed by no remake: the checkpoint holds cells that have let go
+    // steps 57 and 58 are followed by no remake: the checkpoint holds cells that have let go
     // of their shear since their medium was made (a checkpoint just made again holds none)
-    let remakes = interrupted_after(&case, &stopped, 62);
+    let remakes = interrupted_after(&case, &stopped, 58);
     assert!(remakes > 0, "stopped after {remakes} remakes");
     let o = solve_cli(&case, &stopped, &["--restart"]);
     assert!(o.status.success(), "{}", stderr(&o));
