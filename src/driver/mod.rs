@@ -842,11 +842,11 @@ fn restart_medium(
 /// again), and the first step of a new segment of the path.
 const PAST: f64 = 0.1;
 
-/// A share of the largest step: the shortest first step after a remake without friction. The
-/// medium as made resists the slide since, and the first step takes a body's leading face over
-/// the plate's nodes ahead of it: at a tenth the frictionless square pad in 3D met F_t/F_n
-/// 0.0259 at most (0.0034 on average), at a twentieth 0.0106 (0.0020) in 15 % more Newton
-/// iterations and the same wall
+/// A share of the largest step: the shortest first step after a remake without friction. A
+/// new medium resists the slide from the state it was made at, and a first step of a tenth
+/// took the square pad's leading face over a row of the plate's nodes in one go: F_t/F_n
+/// 0.0259 at most (0.0034 on average) in 3D; at a twentieth 0.0106 (0.0020), in 15 % more
+/// Newton iterations and the same wall
 /// (docs/notes/2026-12-07-friction-in-3d-and-a-drag-at-each-row-of-nodes.md).
 const FIRST: f64 = 0.05;
 
