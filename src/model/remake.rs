@@ -2607,6 +2607,7 @@ mod tests {
             "only moved ones"
         );
     }
+
     #[test]
     fn a_3d_watch_knows_a_body_s_edges_and_a_pass_that_squeezes() {
         // the square pad in its box: x in [0.5, 1.5], y in [0, 0.5] (y = 0 a symmetry plane,
