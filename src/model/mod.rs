@@ -260,6 +260,12 @@ impl Model {
         })
     }
 
+    /// Whether bodies rub: the case has a friction layer. A medium made again without friction
+    /// takes shorter first steps and, in 3D, asks for a remake by other rules.
+    pub fn rubs(&self) -> bool {
+        !self.friction_blocks.is_empty()
+    }
+
     /// Whether a friction layer is joined again as it slides (`reconnect`): the run's mesh
     /// changes as it goes.
     pub fn reconnects(&self) -> bool {

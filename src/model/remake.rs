@@ -504,7 +504,7 @@ impl Model {
     /// With friction every pass asks, and nothing else does: tried with friction, these rules
     /// held μ no closer (docs/notes/2026-12-07-friction-in-3d-and-a-drag-at-each-row-of-nodes.md).
     pub fn slides_freely_in_3d(&self) -> bool {
-        self.mesh.dim == 3 && self.friction_blocks.is_empty()
+        self.mesh.dim == 3 && !self.rubs()
     }
 
     /// Cell `c` of mesh block `block` at the state `x`, measured from its own reference where
