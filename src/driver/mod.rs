@@ -573,6 +573,10 @@ fn solve_model(
         if let Some((before, since)) = before_remake.take() {
             run.remade_from(before.as_ref(), since)?;
         }
+        if changed && medium.is_some() {
+            // a medium made at a vertex: the watch is not asked before the first step
+            segment_starts(&mut run, &model, case);
+        }
         stuck.rejected = run.rejected();
         let due = |run: &mut Run| match (&layer, medium.as_mut()) {
             (Some(layer), _) => {
@@ -589,14 +593,7 @@ fn solve_model(
                 if let remake::Watch::Until(passes) = watch {
                     run.cap_step(passes + PAST * largest_step(case));
                 }
-                // a new segment of the path: the watch has no speed of the bodies to foresee
-                // the first step's passes by, and without friction a closed layer's shear since
-                // its medium was made is all drag (the sphere's first step of its slide, taken
-                // at the step of its press, met F_t/F_n 0.079 where the steps after it met at
-                // most 0.03); a friction layer takes its slide into its cells at every step
-                if run.at_vertex() && model.friction_blocks.is_empty() {
-                    run.cap_step(t + PAST * largest_step(case));
-                }
+                segment_starts(run, &model, case);
                 let due = watch == remake::Watch::Remake;
                 let stuck_here = stuck.after(run.rejected(), t);
                 if stuck_here && medium.stuck(&model) && opts.verbose {
@@ -829,11 +826,7 @@ fn restart_medium(
     let clock = &mut cp.state.clock;
     // with friction a thin tetrahedron's pass asks at once, and a shorter first step doubled
     // the remakes of a 3D drag
-    let first = if model.friction_blocks.is_empty() {
-        FIRST
-    } else {
-        PAST
-    };
+    let first = if model.rubs() { PAST } else { FIRST };
     clock.dt = clock.dt.min(room.max(first * largest));
 }
 
@@ -849,6 +842,19 @@ const PAST: f64 = 0.1;
 /// Newton iterations and the same wall
 /// (docs/notes/2026-12-07-friction-in-3d-and-a-drag-at-each-row-of-nodes.md).
 const FIRST: f64 = 0.05;
+
+/// Cut the next step of a medium made again to [`PAST`] of the largest step where it starts a
+/// new segment of the path and there is no friction: the watch has no speed of the bodies to
+/// foresee the first step's passes by, and without friction a closed layer's shear since its
+/// medium was made is all drag (the sphere's first step of its slide, taken at the step of its
+/// press, met F_t/F_n 0.079 where the steps after it met at most 0.03); a friction layer takes
+/// its slide into its cells at every step.
+fn segment_starts(run: &mut Run, model: &Model, case: &Case) {
+    if run.at_vertex() && !model.rubs() {
+        let (t, _) = run.next_step();
+        run.cap_step(t + PAST * largest_step(case));
+    }
+}
 
 /// The case's largest step.
 fn largest_step(case: &Case) -> f64 {
@@ -901,9 +907,9 @@ fn remade(
     let old_friction: Vec<&[f64]> = (0..model.friction_blocks.len())
         .map(|f| &old_history[of(Term::Friction(f)).expect("a friction slab")][..])
         .collect();
-    let mut friction = match new.friction_blocks.is_empty() {
-        true => Vec::new(),
-        false => remake::carried_friction(
+    let mut friction = match new.rubs() {
+        false => Vec::new(),
+        true => remake::carried_friction(
             model,
             old_reference.as_deref().unwrap_or(&model.cell_reference),
             &old_state,

@@ -269,10 +269,12 @@ fn slid_half(name: &str, params: &str, settle: bool) -> std::path::PathBuf {
 
 #[test]
 fn the_cylinder_slides_its_whole_way_on_two_meshes() {
-    // (h, F_n's band about the press's, largest |F_t/F_n|); measured: h = 0.1 F_n 0.901 to
-    // 1.000 of the press's, F_t/F_n 0.112 at most (0.171 on gmsh's triangles), −0.004 on
-    // average; h = 0.05 0.979 to 1.006, 0.075 at most, 0.002 on average
-    for (h, band, most_allowed) in [(0.1, 0.12, 0.2), (0.05, 0.03, 0.09)] {
+    // (h, F_n's band about the press's, largest |F_t/F_n|); measured: h = 0.1 F_n 0.900 to
+    // 1.000 of the press's, F_t/F_n 0.113 at most (0.171 on gmsh's triangles), −0.010 on
+    // average; h = 0.05 0.982 to 1.008, 0.040 at most (exact contact on its polygon: 0.061),
+    // −0.003 on average. On h = 0.05 the medium is made again at the press's end, and the
+    // slide's first step, not cut as other steps starting a segment are, met 0.075
+    for (h, band, most_allowed) in [(0.1, 0.12, 0.2), (0.05, 0.03, 0.05)] {
         let out = slid_half(
             &format!("cylinder-slide-far-{h}"),
             &format!("params = {{ h = {h} }}"),
