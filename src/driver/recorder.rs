@@ -512,6 +512,7 @@ impl<'a> Recorder<'a> {
         s.load_steps = ctl.accepted;
         s.rejected_steps = ctl.rejected;
         s.continued_steps = tot.continued;
+        s.balanced_steps = tot.balanced_only;
         s.newton_iterations = tot.iterations;
         s.rejected_iterations = spent.iterations - tot.iterations;
         s.linear_solves = spent.updates;

@@ -61,6 +61,10 @@ pub struct Summary {
     /// continuation at the shortest step.
     #[serde(default)]
     pub continued_steps: usize,
+    /// Accepted steps that ended at the first state whose residual met the tolerance against
+    /// its own reactions, where Newton's (or continuation's) updates after it did not shrink.
+    #[serde(default)]
+    pub balanced_steps: usize,
     /// Newton iterations of the accepted steps.
     pub newton_iterations: usize,
     /// Newton iterations of the rejected attempts (their time is in the seconds below).
@@ -271,6 +275,7 @@ impl Summary {
             load_steps: 0,
             rejected_steps: 0,
             continued_steps: 0,
+            balanced_steps: 0,
             newton_iterations: 0,
             rejected_iterations: 0,
             linear_solves: 0,

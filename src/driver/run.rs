@@ -219,6 +219,9 @@ impl<'a> Run<'a> {
         let model = self.st.model;
         let dlambda = model.path.lambda(target) - model.path.lambda(self.st.ctl.t);
         self.unsettled = false;
+        if rep.balanced_only {
+            self.balanced_only(target, rep.iterations);
+        }
         let (step, x_last) = self.st.advance(target, trial, rep.iterations);
         let warning = self.accounts.step(&mut self.st, &step, &x_last, &rep)?;
         // what the next step starts from, written to the checkpoint below
@@ -335,6 +338,7 @@ impl<'a> Run<'a> {
         let why = match self.st.settle_mechanics(to) {
             Ok((rep, continued)) => {
                 self.accounts.totals.continued += usize::from(continued);
+                self.accounts.totals.balanced_only += usize::from(rep.balanced_only);
                 return self.accounts.count(&rep);
             }
             Err(why) => why,
@@ -573,9 +577,7 @@ impl<'a> Run<'a> {
         };
         let tot = &mut self.accounts.totals;
         tot.continued += 1;
-        let say = self.opts.verbose || !(tot.continued_told || self.opts.quiet);
-        tot.continued_told |= say;
-        if say {
+        if first_or_verbose(&mut tot.continued_told, self.opts) {
             self.rec.say(&format!(
                 "  step to {} taken by continuation in {} iterations: Newton did not converge \
                  however short the step (docs/THEORY.md, \"Steps Newton cannot take\"; \
@@ -586,6 +588,22 @@ impl<'a> Run<'a> {
         }
         self.accept(target, trial, rep)?;
         Ok(true)
+    }
+
+    /// Count a step that ended in balance where Newton's updates did not shrink, and say it:
+    /// the first time (unless quiet), or each time with `-v`.
+    fn balanced_only(&mut self, target: f64, iterations: usize) {
+        let tot = &mut self.accounts.totals;
+        tot.balanced_only += 1;
+        if first_or_verbose(&mut tot.balanced_only_told, self.opts) {
+            self.rec.say(&format!(
+                "  step to {} ended at its iteration {iterations}, in balance (its residual below \
+                 tolerance against its own reactions), where the updates after it did not shrink \
+                 (docs/THEORY.md, \"Steps Newton cannot take\"; summary.json counts them, \
+                 `balanced_steps`)",
+                self.target_text(target),
+            ));
+        }
     }
 
     /// A failure no smaller step can mend (the engine's): the run ends at once, its summary
@@ -733,4 +751,12 @@ fn pressing(model: &Model, from: f64, to: f64) -> bool {
     let (step, press) = (moved(from, to), moved(0.0, first));
     let norms = step.norm() * press.norm();
     norms > 0.0 && step.dot(&press) >= 0.5 * norms
+}
+
+/// Whether to say something said once unless quiet, or every time with `-v` (`told`: whether
+/// it has been said; set when it is).
+fn first_or_verbose(told: &mut bool, opts: &SolveOptions) -> bool {
+    let say = opts.verbose || !(*told || opts.quiet);
+    *told |= say;
+    say
 }

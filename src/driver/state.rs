@@ -96,6 +96,12 @@ pub struct Totals {
     /// Whether a step taken by continuation has been said (the first is, without `-v`).
     #[serde(default)]
     pub continued_told: bool,
+    /// How many steps ended at a state in balance whose Newton updates did not shrink.
+    #[serde(default)]
+    pub balanced_only: usize,
+    /// Whether such a step has been said (the first is, without `-v`).
+    #[serde(default)]
+    pub balanced_only_told: bool,
     /// A medium made again as the bodies move: its watch of the slivers at the last accepted
     /// state before this one (the state a restart decides from, as the run would have).
     #[serde(default)]

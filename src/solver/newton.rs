@@ -5,7 +5,10 @@
 //! forces on prescribed dofs), and the largest such reference seen earlier in the run. A step is
 //! converged only when every field's residual is below `tol` times its reference *and* the
 //! update that residual implies (solved with the last factorisation, no new one) is below
-//! `sqrt(tol)` times the step's largest update of that field.
+//! `sqrt(tol)` times the step's largest update of that field. Where the iterations run out with
+//! updates that do not shrink (the tangent singular along them), the step ends at the first
+//! state after its start whose residual met the tolerance against its own reactions, if one
+//! did ([`Newton::end_at_met`]).
 //!
 //! The regularization fields p_i are lengths (p_i ≈ d f_i), so their residuals are forces like
 //! those of u: p is measured against the larger of the u and p references. Without that, a
@@ -56,6 +59,9 @@ pub struct StepReport {
     /// Tangents not assembled: a step about to converge reuses its factorisation for the
     /// last update, so its last assembly is the residual only (1, or 0 if mispredicted).
     pub tangents_skipped: usize,
+    /// Whether the step ended at the first state whose residual met the tolerance in balance
+    /// with its own reactions, the updates after it not shrinking (`Newton::end_at_met`).
+    pub balanced_only: bool,
 }
 
 #[derive(Debug)]
@@ -161,6 +167,7 @@ impl StepReport {
             },
             krylov: self.krylov + next.krylov,
             tangents_skipped: self.tangents_skipped + next.tangents_skipped,
+            balanced_only: self.balanced_only || next.balanced_only,
         }
     }
 }
@@ -433,10 +440,16 @@ impl Newton {
         // the last update was small: the step most likely ends at the next residual
         let mut expect_converged = false;
         let mut prev_rel = f64::INFINITY;
+        // the first state after the step's start whose residual met the tolerance, the loads
+        // all applied: the step's end where the updates then do not shrink
+        let mut met: Option<(Vec<f64>, Residual, usize)> = None;
         loop {
             let first = it == 0;
             let r = self.damped_residual(&mut st, model, asm, x, step, first, expect_converged)?;
             st.history.push(r.rel);
+            if r.converged && !r.pending && !first && met.is_none() && part != Part::Heat {
+                met = self.balanced(&st, model, asm).then(|| (x.to_vec(), r, it));
+            }
             if r.converged && self.settling {
                 return Ok(st.report(r, it, solver));
             }
@@ -447,6 +460,9 @@ impl Newton {
                 self.max_iter
             };
             if it >= limit && !r.converged {
+                if let Some(met) = met.take() {
+                    return self.end_at_met(st, model, asm, solver, x, step, met);
+                }
                 return Err(StepFailure::NotConverged {
                     iterations: it,
                     last: r.rel,
@@ -480,6 +496,9 @@ impl Newton {
                 return Ok(st.report(r, iterations, solver));
             }
             if it >= limit {
+                if let Some(met) = met.take() {
+                    return self.end_at_met(st, model, asm, solver, x, step, met);
+                }
                 return Err(StepFailure::NotConverged {
                     iterations: it,
                     last: r.rel,
@@ -490,6 +509,47 @@ impl Newton {
             it += 1;
             self.spent.iterations += 1;
         }
+    }
+
+    /// Whether the residual in `st.rhs` (no increment pending) is below tolerance against the
+    /// reactions of the state assembled last alone, or round-off: a state in balance whatever
+    /// the step's and the run's largest references, which may be many times its own loads
+    /// (a pad on one crushed cell met 5e-10 of them with its forces open by 2e-3).
+    fn balanced(&self, st: &StepState, model: &Model, asm: &Assembler) -> bool {
+        let res = self.norms(&st.rhs);
+        let reac = Self::reaction_norms(model, &asm.r_full);
+        (0..3)
+            .filter(|&f| st.active[f])
+            .all(|f| res[f] <= self.tol * same_units(f, |g| reac[g]) || res[f] <= self.floor[f])
+    }
+
+    /// The step's end at `met` (a state, its residual and the iterations to it: the first after
+    /// the step's start whose residual met the tolerance), where the iterations after it did not
+    /// converge: `x` put back there and assembled there again, so that what the assembler holds
+    /// (the reactions, friction's trial slip) is that state's.
+    #[allow(clippy::too_many_arguments)]
+    fn end_at_met(
+        &mut self,
+        mut st: StepState,
+        model: &Model,
+        asm: &mut Assembler,
+        solver: &mut LinearSolver,
+        x: &mut [f64],
+        step: &StepContext,
+        met: (Vec<f64>, Residual, usize),
+    ) -> Result<StepReport, StepFailure> {
+        let (at, r, iterations) = met;
+        x.copy_from_slice(&at);
+        let (stats, _) = self.assemble_admissible(&mut st, model, asm, x, step, false, false)?;
+        let r = Residual {
+            stats,
+            tangent: false,
+            ..r
+        };
+        Ok(StepReport {
+            balanced_only: true,
+            ..st.report(r, iterations, solver)
+        })
     }
 
     /// An iteration's residual at `x`, and its tangent unless the step is `expect_converged`
@@ -779,6 +839,7 @@ struct StepState {
 /// An iteration's residual: the assembly's statistics, whether prescribed increments are
 /// still to apply, the relative residual per field and whether it is converged, and whether
 /// the tangent was assembled with it.
+#[derive(Clone, Copy)]
 struct Residual {
     stats: AssemblyStats,
     pending: bool,
@@ -797,6 +858,7 @@ impl StepState {
             stats: r.stats,
             krylov: solver.take_krylov(),
             tangents_skipped: usize::from(!r.tangent),
+            balanced_only: false,
         }
     }
 

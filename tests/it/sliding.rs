@@ -1070,6 +1070,40 @@ fn a_pad_in_a_box_of_medium_slides_its_width_frictionless_and_at_mu() {
     );
 }
 
+/// The pad in a box at μ = 1 on triangles of h = 0.1 dragged its width in steps of 0.005, the
+/// press too. At a slide of 0.013 neither Newton nor continuation converges: continuation's
+/// residual met the tolerance against the state's own reactions at its iteration 153, and its
+/// updates after it kept their size along a direction the forces hardly see. That step now
+/// ends at that state, in balance, and the drag goes on (it stopped there before:
+/// docs/notes/2026-12-07-a-segment-s-first-step-and-a-step-ended-in-balance.md).
+#[test]
+fn the_pad_at_mu_1_in_short_steps_drags_its_width_through_a_step_that_ends_in_balance() {
+    let (drag, _, s) = pad_in_a_box_run("pad-box-mu-1-short", "params = { h = 0.1 }", |b| {
+        let b = b
+            .replace("mu = 0.3, normal", "mu = 1.0, normal")
+            .replace("initial = 0.05\nmax = 0.05", "initial = 0.005\nmax = 0.005");
+        assert!(b.contains("mu = 1.0") && b.contains("max = 0.005"));
+        b
+    });
+    assert!(
+        (drag.last().unwrap()[0] - 1.0).abs() < 1e-12,
+        "the whole drag"
+    );
+    assert!(s["balanced_steps"].as_u64().unwrap() >= 1, "{s}");
+    let open = s["balances"]["force"].as_f64().unwrap();
+    assert!(open < 1e-6, "the forces open by {open}");
+    // from full slip (the first step at 97 % of μ): measured 0.9585 to 1.0979, 0.9845 on
+    // average, 303 of 523 steps outside 3 % of μ
+    let from = drag.iter().position(|d| d[1] >= 0.97).expect("full slip");
+    let ratios: Vec<f64> = drag[from..].iter().map(|d| d[1]).collect();
+    let mean = ratios.iter().sum::<f64>() / ratios.len() as f64;
+    let (lo, hi) = (ratios.iter()).fold((f64::MAX, 0.0f64), |(l, h), r| (l.min(*r), h.max(*r)));
+    assert!(
+        (0.97..1.0).contains(&mean) && lo > 0.95 && hi < 1.11,
+        "F_t/F_n {mean} on average, {lo} to {hi}"
+    );
+}
+
 /// The pad in a box at μ = 1 on triangles of h = 0.1, without continuation, stalls at a slide
 /// of 0.15: its leading corner digs a dent in the plate it cannot climb out of
 /// (docs/notes/2026-12-03-mu-1-and-mu-0.1-on-the-pad-in-a-box.md). The run says what carries

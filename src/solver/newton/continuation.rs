@@ -73,6 +73,8 @@ impl Newton {
         // the last iterate assembled, and the refusals in a row since
         let mut before = x.to_vec();
         let mut refused = 0;
+        // the first iterate whose residual met the tolerance, as in `Newton::step`
+        let mut met: Option<(Vec<f64>, Residual, usize)> = None;
         for it in 0..=limit {
             let first = it == 0;
             let (stats, pending) =
@@ -95,7 +97,20 @@ impl Newton {
             st.history.push(rel);
             let converged = rel.iter().all(|&r| r <= self.tol);
             let now = worst(&rel);
+            let r = Residual {
+                stats,
+                pending,
+                rel,
+                converged,
+                tangent: true,
+            };
+            if converged && !pending && !first && met.is_none() {
+                met = self.balanced(&st, model, asm).then(|| (x.to_vec(), r, it));
+            }
             if it == limit {
+                if let Some(met) = met.take() {
+                    return self.end_at_met(st, model, asm, solver, x, step, met);
+                }
                 let largest = self.largest(model, &st.rhs, &rel);
                 return Err(StepFailure::NotConverged {
                     iterations: it,
@@ -124,18 +139,14 @@ impl Newton {
             }
             let (done, _) = self.converged(&st, model, x, &update, converged, first);
             if done {
-                let r = Residual {
-                    stats,
-                    pending,
-                    rel,
-                    converged,
-                    tangent: true,
-                };
                 return Ok(st.report(r, it, solver));
             }
             self.spent.iterations += 1;
         }
         // the limit reached taking back updates that left the admissible set
+        if let Some(met) = met {
+            return self.end_at_met(st, model, asm, solver, x, step, met);
+        }
         Err(StepFailure::NotConverged {
             iterations: limit,
             last: st.history.last().copied().unwrap_or([f64::NAN; 3]),
