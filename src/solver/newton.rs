@@ -526,7 +526,7 @@ impl Newton {
     /// The step's end at `met` (a state, its residual and the iterations to it: the first after
     /// the step's start whose residual met the tolerance), where the iterations after it did not
     /// converge: `x` put back there and assembled there again, so that what the assembler holds
-    /// (the reactions, friction's trial slip) is that state's.
+    /// (the reactions, friction's trial slip) is that state's, and its residual the step's last.
     #[allow(clippy::too_many_arguments)]
     fn end_at_met(
         &mut self,
@@ -541,6 +541,7 @@ impl Newton {
         let (at, r, iterations) = met;
         x.copy_from_slice(&at);
         let (stats, _) = self.assemble_admissible(&mut st, model, asm, x, step, false, false)?;
+        st.history.push(r.rel);
         let r = Residual {
             stats,
             tangent: false,
