@@ -1099,6 +1099,66 @@ mod tests {
     }
 
     #[test]
+    fn a_step_out_of_iterations_ends_at_a_state_in_balance_with_its_own_reactions() {
+        let model = block("balanced");
+        let (mut asm, mut solver, mut newton) = solving(&model, 30);
+        let mut x = model.initial_state();
+        let to = model.path.step(0.0, 0.05);
+        newton
+            .step(&model, &mut asm, &mut solver, &mut x, &to, Part::All)
+            .unwrap();
+        // the residual at `y`, measured as a step measures it, and whether it is in balance
+        let at = |newton: &mut Newton, asm: &mut Assembler, y: &mut Vec<f64>| {
+            let mut st = StepState::new(newton, &model, y.len(), to.t, Part::All);
+            let (stats, pending) =
+                (newton.assemble_admissible(&mut st, &model, asm, y, &to, false, false)).unwrap();
+            let rel = newton.relative_residual(&mut st, &model, asm, pending, false);
+            let balanced = newton.balanced(&st, &model, asm);
+            (
+                st,
+                stats,
+                rel,
+                !pending && rel.iter().all(|&r| r <= newton.tol),
+                balanced,
+            )
+        };
+        let (_, at_x, _, met, balanced) = at(&mut newton, &mut asm, &mut x);
+        assert!(met && balanced);
+        // the free displacements 1e-4 short: out of balance with its own reactions, though its
+        // residual meets the tolerance against a run's reference a billion times larger
+        let mut y = x.clone();
+        for (d, &e) in model.cons.eq.iter().enumerate() {
+            if e != NONE {
+                y[d] *= 1.0 - 1e-4;
+            }
+        }
+        let (_, _, _, met, balanced) = at(&mut newton, &mut asm, &mut y);
+        assert!(!met && !balanced);
+        let large = newton.run_ref;
+        newton.run_ref = large.map(|r| 1e9 * r);
+        let (st, _, rel, met, balanced) = at(&mut newton, &mut asm, &mut y);
+        assert!(met && !balanced, "{rel:?}");
+        newton.run_ref = large;
+        // a step ending at x from y: x again, its own statistics, and the assembler holding
+        // x's residual (in balance)
+        let r = Residual {
+            stats: at_x,
+            pending: false,
+            rel,
+            converged: true,
+            tangent: true,
+        };
+        let met = (x.clone(), r, 3);
+        let rep = (newton.end_at_met(st, &model, &mut asm, &mut solver, &mut y, &to, met)).unwrap();
+        assert_eq!(y, x);
+        assert!(rep.balanced_only && rep.iterations == 3);
+        assert_eq!(rep.stats.energy, at_x.energy);
+        let mut st = StepState::new(&newton, &model, x.len(), to.t, Part::All);
+        newton.relative_residual(&mut st, &model, &asm, false, false);
+        assert!(newton.balanced(&st, &model, &asm));
+    }
+
+    #[test]
     fn an_update_that_would_invert_the_medium_is_damped_and_the_step_still_converges() {
         let model = block("damped");
         // the whole press at once: full updates overshoot where the medium closes

@@ -272,8 +272,8 @@ fn the_cylinder_slides_its_whole_way_on_two_meshes() {
     // (h, F_n's band about the press's, largest |F_t/F_n|); measured: h = 0.1 F_n 0.900 to
     // 1.000 of the press's, F_t/F_n 0.113 at most (0.171 on gmsh's triangles), −0.010 on
     // average; h = 0.05 0.982 to 1.008, 0.040 at most (exact contact on its polygon: 0.061),
-    // −0.003 on average. On h = 0.05 the medium is made again at the press's end, and the
-    // slide's first step, not cut as other steps starting a segment are, met 0.075
+    // −0.003 on average. On h = 0.05 the medium is made again at the press's end; the slide's
+    // first step is cut there as at any segment's start (it was not, and met 0.075)
     for (h, band, most_allowed) in [(0.1, 0.12, 0.2), (0.05, 0.03, 0.05)] {
         let out = slid_half(
             &format!("cylinder-slide-far-{h}"),
@@ -1123,42 +1123,31 @@ fn a_stalled_drag_over_a_medium_made_again_names_a_mass_density_on_the_solids() 
     );
 }
 
-/// The pad in a box at μ = 1 on triangles of h = 0.1 dragged its width in steps of 0.005, the
-/// press too. Where Newton stalls (the test above) the step is taken by pseudo-transient
-/// continuation. At a slide of 0.013 neither converges: continuation's residual met the
-/// tolerance against the state's own reactions at its iteration 153, and its updates after it
-/// kept their size along a direction the forces hardly see; the step ends at that state, in
-/// balance (the run stopped there before:
-/// docs/notes/2026-12-07-a-segment-s-first-step-and-a-step-ended-in-balance.md). Measured: 764
-/// steps, 10 taken by continuation and 1 ended so; from full slip F_t/F_n 0.9585 to 1.0979
-/// (the leading corner passing the plate's nodes, 0.1 apart), 0.9845 on average, 303 of 523
-/// steps outside 3 % of μ; F_n up to 1.18 of the press's as the pad tips onto its leading
-/// corner. (Dragged 0.4 in the shipped steps of 0.05, as this test did before: 0.980 on
-/// average from a slide of 0.12, 0.956 to 1.097, 3 steps or settlings by continuation.)
+/// The pad in a box at μ = 1 on triangles of h = 0.1, dragged 0.4: where Newton stalls (the
+/// test above) the step is taken by pseudo-transient continuation, and once the pad slips
+/// (a slide of 0.12 on) F_t/F_n is μ on average within 3 %. Measured: 0.980 on average,
+/// 0.956 to 1.097 (the leading corner passing the plate's nodes, 0.1 apart), 3 steps or
+/// settlings taken by continuation and one settling neither took, 121 steps in all; F_n up to
+/// 1.18 of the press's as the pad tips onto its leading corner.
 #[test]
-fn a_pad_in_a_box_at_mu_1_slides_its_width_past_its_stalls() {
+fn a_pad_in_a_box_at_mu_1_slides_past_its_stall_by_continuation() {
     let (drag, pressed, s) = pad_in_a_box_run("pad-box-mu-1", "params = { h = 0.1 }", |b| {
-        let b = b
-            .replace("mu = 0.3, normal", "mu = 1.0, normal")
-            .replace("initial = 0.05\nmax = 0.05", "initial = 0.005\nmax = 0.005");
-        assert!(b.contains("mu = 1.0") && b.contains("max = 0.005"));
-        b
+        let b = b.replace("mu = 0.3, normal", "mu = 1.0, normal");
+        assert_eq!(b.matches("ux = 1.0\n").count(), 1);
+        b.replace("ux = 1.0\n", "ux = 0.4\n")
     });
+    assert!(s["continued_steps"].as_u64().unwrap() >= 1, "{s}");
     assert!(
-        (drag.last().unwrap()[0] - 1.0).abs() < 1e-12,
+        (drag.last().unwrap()[0] - 0.4).abs() < 1e-12,
         "the whole drag"
     );
-    assert!(s["continued_steps"].as_u64().unwrap() >= 1, "{s}");
-    assert!(s["balanced_steps"].as_u64().unwrap() >= 1, "{s}");
-    let open = s["balances"]["force"].as_f64().unwrap();
-    assert!(open < 1e-6, "the forces open by {open}");
-    // from full slip (the first step at 97 % of μ)
-    let from = drag.iter().position(|d| d[1] >= 0.97).expect("full slip");
-    let ratios: Vec<f64> = drag[from..].iter().map(|d| d[1]).collect();
-    let mean = ratios.iter().sum::<f64>() / ratios.len() as f64;
-    let (lo, hi) = (ratios.iter()).fold((f64::MAX, 0.0f64), |(l, h), r| (l.min(*r), h.max(*r)));
+    let slipping: Vec<f64> = (drag.iter().filter(|d| d[0] > 0.12))
+        .map(|d| d[1])
+        .collect();
+    let mean = slipping.iter().sum::<f64>() / slipping.len() as f64;
+    let (lo, hi) = (slipping.iter()).fold((f64::MAX, 0.0f64), |(l, h), r| (l.min(*r), h.max(*r)));
     assert!(
-        (0.97..1.0).contains(&mean) && lo > 0.95 && hi < 1.11,
+        (mean - 1.0).abs() < 0.03 && lo > 0.94 && hi < 1.12,
         "F_t/F_n {mean} on average, {lo} to {hi}"
     );
     assert!(drag.iter().all(|d| d[2] > 0.95 * pressed), "F_n {pressed}");
@@ -1166,8 +1155,7 @@ fn a_pad_in_a_box_at_mu_1_slides_its_width_past_its_stalls() {
 
 /// A press that cannot step, with friction in the medium, is not told what carries a drag:
 /// the pad in a box pressed in one step of two Newton iterations, with no room to cut it. The
-/// same scene stalled in its drag is told
-/// (`a_stalled_drag_over_a_medium_made_again_names_a_mass_density_on_the_solids`).
+/// same scene stalled in its drag is told (the test above).
 #[test]
 fn a_stalled_press_is_not_told_what_carries_a_drag() {
     let (_, e) = pad_box_stall(
