@@ -960,6 +960,35 @@ mod tests {
         newton.step(model, &mut asm, &mut solver, &mut x, &context, Part::All)
     }
 
+    /// The coarse block's model (a mesh file `name` as in [`block`]), its assembler, solver
+    /// and Newton, and the state one step converged to t = 0.05 from the initial one.
+    struct Converged {
+        model: Model,
+        asm: Assembler,
+        solver: LinearSolver,
+        newton: Newton,
+        x: Vec<f64>,
+        to: StepContext,
+    }
+
+    fn converged(name: &str) -> Converged {
+        let model = block(name);
+        let (mut asm, mut solver, mut newton) = solving(&model, 30);
+        let mut x = model.initial_state();
+        let to = model.path.step(0.0, 0.05);
+        newton
+            .step(&model, &mut asm, &mut solver, &mut x, &to, Part::All)
+            .unwrap();
+        Converged {
+            model,
+            asm,
+            solver,
+            newton,
+            x,
+            to,
+        }
+    }
+
     /// The worst field's relative residual at each iteration.
     fn worst_history(rep: &StepReport) -> Vec<f64> {
         rep.history.iter().map(worst).collect()
@@ -1044,13 +1073,14 @@ mod tests {
 
     #[test]
     fn a_settling_ends_at_its_own_tolerance_and_updates_nothing_where_the_state_is_in_balance() {
-        let model = block("settling");
-        let (mut asm, mut solver, mut newton) = solving(&model, 30);
-        let mut x = model.initial_state();
-        let to = model.path.step(0.0, 0.05);
-        newton
-            .step(&model, &mut asm, &mut solver, &mut x, &to, Part::All)
-            .unwrap();
+        let Converged {
+            model,
+            mut asm,
+            mut solver,
+            mut newton,
+            x,
+            ..
+        } = converged("settling");
         asm.commit();
         let at_rest = model.path.step(0.05, 0.05);
         let mut settle = |x: &mut Vec<f64>, to: Option<f64>| {
@@ -1100,13 +1130,14 @@ mod tests {
 
     #[test]
     fn a_step_out_of_iterations_ends_at_a_state_in_balance_with_its_own_reactions() {
-        let model = block("balanced");
-        let (mut asm, mut solver, mut newton) = solving(&model, 30);
-        let mut x = model.initial_state();
-        let to = model.path.step(0.0, 0.05);
-        newton
-            .step(&model, &mut asm, &mut solver, &mut x, &to, Part::All)
-            .unwrap();
+        let Converged {
+            model,
+            mut asm,
+            mut solver,
+            mut newton,
+            mut x,
+            to,
+        } = converged("balanced");
         // the residual at `y`, measured as a step measures it, and whether it is in balance
         let at = |newton: &mut Newton, asm: &mut Assembler, y: &mut Vec<f64>| {
             let mut st = StepState::new(newton, &model, y.len(), to.t, Part::All);
