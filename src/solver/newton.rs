@@ -440,16 +440,12 @@ impl Newton {
         // the last update was small: the step most likely ends at the next residual
         let mut expect_converged = false;
         let mut prev_rel = f64::INFINITY;
-        // the first state after the step's start whose residual met the tolerance, the loads
-        // all applied: the step's end where the updates then do not shrink
-        let mut met: Option<(Vec<f64>, Residual, usize)> = None;
+        let mut met: Option<Met> = None;
         loop {
             let first = it == 0;
             let r = self.damped_residual(&mut st, model, asm, x, step, first, expect_converged)?;
             st.history.push(r.rel);
-            if r.converged && !r.pending && !first && met.is_none() && part != Part::Heat {
-                met = self.balanced(&st, model, asm).then(|| (x.to_vec(), r, it));
-            }
+            self.keep_met(&mut met, &st, model, asm, x, r, it);
             if r.converged && self.settling {
                 return Ok(st.report(r, it, solver));
             }
@@ -511,6 +507,26 @@ impl Newton {
         }
     }
 
+    /// Keep in `met` the state `x` at iteration `it` with its residual `r` if it is the first
+    /// after the step's start whose residual met the tolerance, every load applied, in balance
+    /// with its own reactions ([`Newton::balanced`]).
+    #[allow(clippy::too_many_arguments)]
+    fn keep_met(
+        &self,
+        met: &mut Option<Met>,
+        st: &StepState,
+        model: &Model,
+        asm: &Assembler,
+        x: &[f64],
+        r: Residual,
+        it: usize,
+    ) {
+        let candidate = met.is_none() && r.converged && !r.pending && it > 0;
+        if candidate && st.part != Part::Heat && self.balanced(st, model, asm) {
+            *met = Some((x.to_vec(), r, it));
+        }
+    }
+
     /// Whether the residual in `st.rhs` (no increment pending) is below tolerance against the
     /// reactions of the state assembled last alone, or round-off: a state in balance whatever
     /// the step's and the run's largest references, which may be many times its own loads
@@ -536,7 +552,7 @@ impl Newton {
         solver: &mut LinearSolver,
         x: &mut [f64],
         step: &StepContext,
-        met: (Vec<f64>, Residual, usize),
+        met: Met,
     ) -> Result<StepReport, StepFailure> {
         let (at, r, iterations) = met;
         x.copy_from_slice(&at);
@@ -836,6 +852,11 @@ struct StepState {
     /// Halvings over the step.
     cuts: usize,
 }
+
+/// The first state after a step's start whose residual met the tolerance in balance with its
+/// own reactions, that residual, and the iterations to it: where the step ends if its
+/// iterations run out with updates that do not shrink ([`Newton::end_at_met`]).
+type Met = (Vec<f64>, Residual, usize);
 
 /// An iteration's residual: the assembly's statistics, whether prescribed increments are
 /// still to apply, the relative residual per field and whether it is converged, and whether

@@ -15,7 +15,7 @@
 //! halved is taken back, and the pseudo time step shortened tenfold. Kelley and Keyes,
 //! "Convergence analysis of pseudo-transient continuation", SIAM J. Numer. Anal. 35 (1998).
 
-use super::{LinearSolver, Newton, Part, Residual, StepFailure, StepReport, StepState, worst};
+use super::{LinearSolver, Met, Newton, Part, Residual, StepFailure, StepReport, StepState, worst};
 use crate::assembly::Assembler;
 use crate::model::{Model, StepContext};
 
@@ -73,8 +73,7 @@ impl Newton {
         // the last iterate assembled, and the refusals in a row since
         let mut before = x.to_vec();
         let mut refused = 0;
-        // the first iterate whose residual met the tolerance, as in `Newton::step`
-        let mut met: Option<(Vec<f64>, Residual, usize)> = None;
+        let mut met: Option<Met> = None;
         for it in 0..=limit {
             let first = it == 0;
             let (stats, pending) =
@@ -104,9 +103,7 @@ impl Newton {
                 converged,
                 tangent: true,
             };
-            if converged && !pending && !first && met.is_none() {
-                met = self.balanced(&st, model, asm).then(|| (x.to_vec(), r, it));
-            }
+            self.keep_met(&mut met, &st, model, asm, x, r, it);
             if it == limit {
                 if let Some(met) = met.take() {
                     return self.end_at_met(st, model, asm, solver, x, step, met);
