@@ -14,7 +14,8 @@
 //! The second: friction (item 4), each scene as a user draws it, with no special key, the
 //! medium made again as the body moves: the pad in a box of `cases/pad-box-slide.toml`
 //! (triangles and quadrilaterals, h = 0.1 and 0.05) dragged five pad widths in steps of 0.01, and
-//! last at μ = 0.1 on h = 0.1 in steps of 0.002 (a step's slide adds to F_t/F_n); the square pad in
+//! last at μ = 0.1 on h = 0.1 in steps of 0.002 (a step's slide adds to F_t/F_n) and at μ = 0.3 on
+//! triangles in steps of 0.002 (the drawn medium stalls its first steps); the square pad in
 //! 3D of `cases/pad-box-slide-3d.toml` (a half pad 1 × 0.5 × 0.5 over a plate, the medium a box
 //! of tetrahedra around it, h = 0.2, the pad at 0.2 and at 0.15) dragged its width; the hemisphere
 //! of `cases/sphere-drag.toml` dragged three radii; the block as wide as its base
@@ -117,6 +118,15 @@ fn friction_scenes() -> Vec<Scene> {
             step: 0.002,
         });
     }
+    // the drawn medium's closed layer, several cells across, stalls the drag's first steps: the
+    // medium made again where the run would stop carries it on
+    // (docs/notes/2026-12-07-a-medium-made-again-before-a-run-stops.md)
+    all.push(Scene::Pad {
+        quads: false,
+        h: 0.1,
+        mu: 0.3,
+        step: 0.002,
+    });
     all
 }
 

@@ -535,6 +535,8 @@ fn solve_model(
     // when a remake was due, and the groups' flows before it where it is measured
     let mut before_remake: Option<(Option<records::Reactions>, Instant)> = None;
     let mut stuck = Stuck::default();
+    // when the medium was last made again where a step would have stopped the run
+    let mut remade_to_go_on = f64::NAN;
     // the remakes in a row the mesher failed
     let mut mesher_failed = 0;
     loop {
@@ -562,6 +564,7 @@ fn solve_model(
         }
         if let Some(m) = &medium {
             run.keep_medium(m);
+            run.remake_before_stopping(remade_to_go_on);
         }
         if changed {
             run.rejoined(match &medium {
@@ -595,6 +598,10 @@ fn solve_model(
                 }
                 segment_starts(run, &model, case);
                 let due = watch == remake::Watch::Remake;
+                if run.wants_remake() {
+                    remade_to_go_on = t;
+                    return Some(Change::Remake);
+                }
                 let stuck_here = stuck.after(run.rejected(), t);
                 if stuck_here && medium.stuck(&model) && opts.verbose {
                     crate::note!(
@@ -1205,6 +1212,49 @@ mod tests {
         assert_eq!(s["load_steps"].as_u64().unwrap() as usize, steps);
         assert!(s["rejected_steps"].as_u64().unwrap() > 3);
         assert_eq!(history_rows(&dir), steps + 1);
+    }
+
+    /// Where a step would stop the run and its medium may be made again there, the run asks
+    /// for that instead, at the state it stands at, and will try the failed step again at its
+    /// length; asked not to at that state, it stops.
+    #[test]
+    fn a_step_that_would_stop_the_run_asks_for_its_medium_made_again_once() {
+        let (stopped, _) = with_scripted_run(
+            "remake-to-go-on",
+            |k| {
+                (k >= 10).then_some(LinearError::Krylov {
+                    iterations: 300,
+                    residual: 0.5,
+                })
+            },
+            |mut run| {
+                run.record_initial().unwrap();
+                run.remake_before_stopping(f64::NAN);
+                // the last attempt's start and length, as the controller measures it
+                let (mut t, mut length) = (0.0, 0.0);
+                while !run.wants_remake() {
+                    assert!(!run.done(), "the run asked for no remake");
+                    let (start, target) = run.next_step();
+                    (t, length) = (start, run.st.ctl.dt.min(target - start));
+                    run.step().unwrap();
+                }
+                assert!(run.accepted() > 0 && run.next_step().0 == t);
+                assert_eq!(run.st.ctl.dt, length);
+                // asked once: the question cleared it
+                assert!(!run.wants_remake());
+                run.remake_before_stopping(t);
+                loop {
+                    if let Err(e) = run.step() {
+                        break e;
+                    }
+                    assert!(!run.wants_remake());
+                }
+            },
+        );
+        assert!(
+            matches!(stopped, SolveError::StepTooSmall { .. }),
+            "{stopped}"
+        );
     }
 
     /// A step taken by continuation solves a one-way scene's mechanics by continuation and

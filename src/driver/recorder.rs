@@ -556,6 +556,7 @@ impl<'a> Recorder<'a> {
             s.medium_remade_heat_change = tot.remake_heat_change;
             s.medium_remade_seconds = Some(tot.remake_seconds);
             s.medium_remade_unsettled = measured.then_some(tot.remake_unsettled);
+            s.medium_remade_to_go_on = Some(tot.remade_to_go_on);
         }
         s.medium_edge_reached = tot.edge_reached_at.clone();
         // 0 until the first join

@@ -157,6 +157,10 @@ pub struct Summary {
     /// did not converge, the next step started from the state as remade, and the changes
     /// above were read there (`null` where the medium was never made again, or not settled).
     pub medium_remade_unsettled: Option<usize>,
+    /// How many of those remakes were made where a step would have stopped the run, Newton
+    /// and continuation failing at the shortest step (`null` where the medium was never made
+    /// again).
+    pub medium_remade_to_go_on: Option<usize>,
     /// Where a solid first came up against the edge of the medium drawn around it (`null`
     /// where none did): the run says so as a warning at that step.
     pub medium_edge_reached: Option<EdgeReached>,
@@ -313,6 +317,7 @@ impl Summary {
             medium_remade_heat_change: None,
             medium_remade_seconds: None,
             medium_remade_unsettled: None,
+            medium_remade_to_go_on: None,
             medium_edge_reached: None,
             heat_joined: None,
             balances: Balances::default(),

@@ -35,6 +35,12 @@ pub(super) struct Run<'a> {
     /// The medium was made again and its mechanics not settled, and no step has been taken
     /// from it yet ([`Settle::Deferred`]).
     unsettled: bool,
+    /// Where a step would stop the run, the medium may be made again at its last accepted
+    /// state instead, except at this time (where it was made so last): see
+    /// [`Run::remake_before_stopping`].
+    remake_before_stopping: Option<f64>,
+    /// A step that would have stopped the run asked for the medium to be made again.
+    wants_remake: bool,
 }
 
 /// How the mechanics are brought to balance after the mesh changed under the state
@@ -85,6 +91,8 @@ impl<'a> Run<'a> {
                 .collect(),
             plan_said,
             unsettled: false,
+            remake_before_stopping: None,
+            wants_remake: false,
         })
     }
 
@@ -192,6 +200,20 @@ impl<'a> Run<'a> {
     /// The steps accepted so far, those before a restart or a change of mesh included.
     pub(super) fn accepted(&self) -> usize {
         self.st.ctl.accepted
+    }
+
+    /// Where a step would stop the run (Newton and continuation fail at the shortest step),
+    /// end it instead to make its medium again at the last accepted state and try that step
+    /// again on the new one ([`Run::wants_remake`]), unless the medium was made so at time
+    /// `except` (once per state). A stall on the medium as it is may not be one on a new one.
+    pub(super) fn remake_before_stopping(&mut self, except: f64) {
+        self.remake_before_stopping = Some(except);
+    }
+
+    /// Whether a step that would have stopped the run asked for the medium to be made again
+    /// (asked once: the question clears it).
+    pub(super) fn wants_remake(&mut self) -> bool {
+        std::mem::take(&mut self.wants_remake)
     }
 
     /// The attempts rejected so far.
@@ -501,6 +523,9 @@ impl<'a> Run<'a> {
             if self.continued(target)? {
                 return Ok(());
             }
+            if self.remake_instead(target, dl) {
+                return Ok(());
+            }
             self.rec.clear_bar();
             let st = &self.st;
             let reason = self.accounts.totals.last_failure.clone();
@@ -542,6 +567,32 @@ impl<'a> Run<'a> {
             return Err(err);
         }
         Ok(())
+    }
+
+    /// The step to `target`, of length `dl`, would stop the run: whether it asks for the
+    /// medium to be made again instead (see [`Run::remake_before_stopping`]); the step is
+    /// then tried again at that length on the new medium.
+    fn remake_instead(&mut self, target: f64, dl: f64) -> bool {
+        let t = self.st.ctl.t;
+        if self.remake_before_stopping.is_none_or(|except| except == t) {
+            return false;
+        }
+        self.remake_before_stopping = None;
+        self.wants_remake = true;
+        self.st.ctl.dt = dl;
+        let tot = &mut self.accounts.totals;
+        tot.remade_to_go_on += 1;
+        if first_or_verbose(&mut tot.remade_to_go_on_told, self.opts) {
+            self.rec.say(&format!(
+                "  step to {} failed at the shortest step ({}); the medium made again at {} to \
+                 go on (docs/THEORY.md, \"Steps Newton cannot take\"; summary.json counts them, \
+                 `medium_remade_to_go_on`)",
+                self.target_text(target),
+                self.accounts.totals.last_failure,
+                self.st.position()
+            ));
+        }
+        true
     }
 
     /// Where a step to `target` ends, for a line: "t 1.02 (λ 1.0000)" or "λ 0.5000".

@@ -102,6 +102,12 @@ pub struct Totals {
     /// Whether such a step has been said (the first is, without `-v`).
     #[serde(default)]
     pub balanced_only_told: bool,
+    /// How many times the medium was made again where a step would have stopped the run.
+    #[serde(default)]
+    pub remade_to_go_on: usize,
+    /// Whether such a remake has been said (the first is, without `-v`).
+    #[serde(default)]
+    pub remade_to_go_on_told: bool,
     /// A medium made again as the bodies move: its watch of the slivers at the last accepted
     /// state before this one (the state a restart decides from, as the run would have).
     #[serde(default)]

@@ -1072,7 +1072,8 @@ fn a_pad_in_a_box_of_medium_slides_its_width_frictionless_and_at_mu() {
 
 /// The pad in a box at μ = 1 on triangles of h = 0.1, without continuation, stalls at a slide
 /// of 0.15: its leading corner digs a dent in the plate it cannot climb out of
-/// (docs/notes/2026-12-03-mu-1-and-mu-0.1-on-the-pad-in-a-box.md). The run says what carries
+/// (docs/notes/2026-12-03-mu-1-and-mu-0.1-on-the-pad-in-a-box.md), on the medium made again
+/// there too, which the run tries before it stops. The run says what carries
 /// it through, and what it says is taken: a mass density on the solids (measured with `rho = 1e-4` on both: the whole drag,
 /// 346 steps; the 3D pad at μ = 0.1 likewise, docs/notes/2026-12-04-a-sigterm-in-metis-and-
 /// a-hint-taken.md), not on every region, since a medium made again takes none (before, the
@@ -1101,6 +1102,12 @@ fn a_stalled_drag_over_a_medium_made_again_names_a_mass_density_on_the_solids() 
     );
     let s = summary(&case.with_file_name("out"));
     assert!(s["medium_remade_unsettled"].as_u64().unwrap() >= 1, "{s}");
+    // where the step would have stopped it, the run made the medium again first, once
+    assert_eq!(s["medium_remade_to_go_on"], 1, "{s}");
+    assert!(
+        e.contains("failed at the shortest step") && e.contains("to go on"),
+        "{e}"
+    );
     // as the hint says: taken on the solids, refused on the medium too
     let with_rho = |groups: &[&str]| {
         let mut text = std::fs::read_to_string(&case).unwrap();
