@@ -571,7 +571,8 @@ impl<'a> Run<'a> {
 
     /// The step to `target`, of length `dl`, would stop the run: whether it asks for the
     /// medium to be made again instead (see [`Run::remake_before_stopping`]); the step is
-    /// then tried again at that length on the new medium.
+    /// then tried again on the new medium at that length, or shorter where the new medium's
+    /// first step must be.
     fn remake_instead(&mut self, target: f64, dl: f64) -> bool {
         let t = self.st.ctl.t;
         if self.remake_before_stopping.is_none_or(|except| except == t) {
