@@ -157,9 +157,9 @@ pub struct Summary {
     /// did not converge, the next step started from the state as remade, and the changes
     /// above were read there (`null` where the medium was never made again, or not settled).
     pub medium_remade_unsettled: Option<usize>,
-    /// How many of those remakes were made where a step would have stopped the run, Newton
-    /// and continuation failing at the shortest step (`null` where the medium was never made
-    /// again).
+    /// How many times a step that would have stopped the run (Newton and continuation failing
+    /// at the shortest step) asked for the medium to be made again first, made or not (`null`
+    /// where the medium was never made again).
     pub medium_remade_to_go_on: Option<usize>,
     /// Where a solid first came up against the edge of the medium drawn around it (`null`
     /// where none did): the run says so as a warning at that step.

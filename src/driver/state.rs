@@ -102,7 +102,8 @@ pub struct Totals {
     /// Whether such a step has been said (the first is, without `-v`).
     #[serde(default)]
     pub balanced_only_told: bool,
-    /// How many times the medium was made again where a step would have stopped the run.
+    /// How many times a step that would have stopped the run asked for the medium to be made
+    /// again first.
     #[serde(default)]
     pub remade_to_go_on: usize,
     /// Whether such a remake has been said (the first is, without `-v`).
