@@ -547,8 +547,15 @@ impl<'a> Run<'a> {
                     super::account::when(st, reached.time)
                 )
             });
-            let hint = (edge.unwrap_or_default() + stall_hint(&st.model.physics, remade, drag))
-                .into_boxed_str();
+            // the medium was made again at this state to go on (or kept, where gmsh failed)
+            let again = if self.remake_before_stopping == Some(st.ctl.t) {
+                "; it failed so on the medium made again at this state too"
+            } else {
+                ""
+            };
+            let hint =
+                (edge.unwrap_or_default() + again + stall_hint(&st.model.physics, remade, drag))
+                    .into_boxed_str();
             let err = SolveError::StepTooSmall {
                 at: st.position(),
                 step,

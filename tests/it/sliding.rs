@@ -1105,7 +1105,9 @@ fn a_stalled_drag_over_a_medium_made_again_names_a_mass_density_on_the_solids() 
     // where the step would have stopped it, the run made the medium again first, once
     assert_eq!(s["medium_remade_to_go_on"], 1, "{s}");
     assert!(
-        e.contains("failed at the shortest step") && e.contains("to go on"),
+        e.contains("failed at the shortest step")
+            && e.contains("to go on")
+            && e.contains("it failed so on the medium made again at this state too"),
         "{e}"
     );
     // as the hint says: taken on the solids, refused on the medium too
