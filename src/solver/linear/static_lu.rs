@@ -134,28 +134,27 @@ impl<T: Real> StaticLu<T> {
         for (new, &old) in perm.iter().enumerate() {
             inv[old] = new;
         }
-        // P A Pᵀ column by column, rows sorted
+        // P A Pᵀ column by column, rows sorted: row i of it is A's column perm[i] (the pattern
+        // is symmetric), so appending i to each of its columns, i in order, sorts every column
         let (cp, ri) = (pattern.col_ptr(), pattern.row_idx());
-        let mut a_ptr = vec![0];
-        let mut a_row = Vec::with_capacity(ri.len());
-        let mut a_src = Vec::with_capacity(ri.len());
-        let mut column: Vec<(usize, usize)> = Vec::new();
-        for &old in perm {
-            column.clear();
-            column.extend((cp[old]..cp[old + 1]).map(|k| (inv[ri[k]], k)));
-            column.sort_unstable();
-            a_row.extend(column.iter().map(|c| c.0));
-            a_src.extend(column.iter().map(|c| c.1));
-            a_ptr.push(a_row.len());
+        let a_mirrored = mirrors(cp, ri);
+        let mut a_ptr = vec![0; n + 1];
+        for (new, &old) in perm.iter().enumerate() {
+            a_ptr[new + 1] = a_ptr[new] + (cp[old + 1] - cp[old]);
         }
-        let (ap, ar) = (&a_ptr, &a_row);
-        let a_mirror = (0..n)
-            .flat_map(|k| (ap[k]..ap[k + 1]).map(move |p| (ar[p], k)))
-            .map(|(i, k)| {
-                let (a, b) = (a_ptr[i], a_ptr[i + 1]);
-                a + a_row[a..b].binary_search(&k).expect("symmetric pattern")
-            })
-            .collect();
+        let mut next = a_ptr[..n].to_vec();
+        let mut a_row = vec![0; ri.len()];
+        let mut a_src = vec![0; ri.len()];
+        for (i, &old) in perm.iter().enumerate() {
+            for k in cp[old]..cp[old + 1] {
+                // A's entry (ri[k], old) is P A Pᵀ's (j, i); its mirror is (i, j)
+                let j = inv[ri[k]];
+                a_row[next[j]] = i;
+                a_src[next[j]] = a_mirrored[k];
+                next[j] += 1;
+            }
+        }
+        let a_mirror = mirrors(&a_ptr, &a_row);
         let parent = elimination_tree(n, &a_ptr, &a_row);
         // row k of L has its nonzeros at the row subtree of k: count them per column
         let mut count = vec![0; n];
@@ -555,6 +554,24 @@ fn elimination_tree(n: usize, ptr: &[usize], row: &[usize]) -> Vec<usize> {
     parent
 }
 
+/// The slot of each entry's mirror image in a pattern that is symmetric, its rows sorted in
+/// each column (CSC `ptr`/`row`): the entries of column i are met in the order of their rows
+/// where its mirrors are met column by column.
+fn mirrors(ptr: &[usize], row: &[usize]) -> Vec<usize> {
+    let mut next = ptr[..ptr.len() - 1].to_vec();
+    let mut mirror = vec![0; row.len()];
+    for k in 0..ptr.len() - 1 {
+        for (p, &i) in mirror[ptr[k]..ptr[k + 1]]
+            .iter_mut()
+            .zip(&row[ptr[k]..ptr[k + 1]])
+        {
+            *p = next[i];
+            next[i] += 1;
+        }
+    }
+    mirror
+}
+
 /// The nonzeros of row k of L (columns j < k), into `reach` in reverse topological order
 /// (each column after the descendants it depends on, when read backwards). `mark` holds, for
 /// each node, the last row that visited it.
@@ -652,6 +669,19 @@ mod tests {
             .zip(x)
             .map(|(a, c)| (a - c).abs())
             .fold(0.0, f64::max)
+    }
+
+    #[test]
+    fn each_entrys_mirror_is_the_entry_across_the_diagonal() {
+        let (p, _) = grid(7, 3);
+        let (ptr, row) = (p.col_ptr(), p.row_idx());
+        let mirror = mirrors(ptr, row);
+        let col_of = |k: usize| ptr.partition_point(|&q| q <= k) - 1;
+        for k in 0..row.len() {
+            let m = mirror[k];
+            assert_eq!((row[m], col_of(m)), (col_of(k), row[k]), "entry {k}");
+            assert_eq!(mirror[m], k);
+        }
     }
 
     #[test]

@@ -73,8 +73,10 @@ impl SubMatrix {
             local[g] = l;
         }
         let mut col_ptr = Vec::with_capacity(cols.len() + 1);
-        let mut row_idx = Vec::new();
-        let mut source = Vec::new();
+        // at most the columns' entries (all of them for the whole system)
+        let most = cols.iter().map(|&c| p.col_ptr[c + 1] - p.col_ptr[c]).sum();
+        let mut row_idx = Vec::with_capacity(most);
+        let mut source = Vec::with_capacity(most);
         col_ptr.push(0);
         for &c in cols {
             for k in p.col_ptr[c]..p.col_ptr[c + 1] {
