@@ -1638,12 +1638,15 @@ pub fn carried_friction(
             let points = E::quadrature().len();
             let mut slab = vec![0.0; blk.n_cells() * points * HISTORY_PER_POINT];
             let mut dV = vec![0.0; blk.n_cells() * points];
-            let cells = slab.chunks_mut(points * HISTORY_PER_POINT);
-            for (c, (h, v)) in cells.zip(dV.chunks_mut(points)).enumerate() {
-                let s = new.cell_state::<N>(fb.block, c, x);
-                carried_cell::<N, D, E>(&fb.mat, fb.normals.of(c), &fb.layout, &s, at, h, v)
-                    .map_err(|e| format!("cell {c} of the new medium: {e:?}"))?;
-            }
+            // each cell looked up on its own: over the threads the run has
+            (slab.par_chunks_mut(points * HISTORY_PER_POINT))
+                .zip(dV.par_chunks_mut(points))
+                .enumerate()
+                .try_for_each(|(c, (h, v))| {
+                    let s = new.cell_state::<N>(fb.block, c, x);
+                    carried_cell::<N, D, E>(&fb.mat, fb.normals.of(c), &fb.layout, &s, at, h, v)
+                        .map_err(|e| format!("cell {c} of the new medium: {e:?}"))
+                })?;
             Ok::<_, String>((slab, dV))
         })?;
         slabs.push(slab);
