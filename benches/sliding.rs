@@ -15,12 +15,13 @@
 //! medium made again as the body moves: the pad in a box of `cases/pad-box-slide.toml`
 //! (triangles and quadrilaterals, h = 0.1 and 0.05) dragged five pad widths in steps of 0.01, and
 //! last at μ = 0.1 on h = 0.1 in steps of 0.002 (a step's slide adds to F_t/F_n) and at μ = 0.3 on
-//! triangles in steps of 0.002 (the drawn medium stalls its first steps); the square pad in
-//! 3D of `cases/pad-box-slide-3d.toml` (a half pad 1 × 0.5 × 0.5 over a plate, the medium a box
-//! of tetrahedra around it, h = 0.2, the pad at 0.2 and at 0.15) dragged its width; the hemisphere
-//! of `cases/sphere-drag.toml` dragged three radii; the block as wide as its base
-//! (`geo/block.geo`, n = 16 and 32) pressed 0.35 into its 0.25 layer and dragged 0.5. Each
-//! row: how far it was dragged of the drag asked, where full slip begins (the first step at
+//! triangles in steps of 0.002 (the drawn medium stalls its first steps), and after them
+//! dragged one width at μ = 0.3 and 1 on a plate 1000 times stiffer (its face stays flat); the
+//! square pad in 3D of `cases/pad-box-slide-3d.toml` (a half pad 1 × 0.5 × 0.5 over a plate,
+//! the medium a box of tetrahedra around it, h = 0.2, the pad at 0.2 and at 0.15) dragged its
+//! width; the hemisphere of `cases/sphere-drag.toml` dragged three radii; the block as wide as
+//! its base (`geo/block.geo`, n = 16 and 32) pressed 0.35 into its 0.25 layer and dragged 0.5.
+//! Each row: how far it was dragged of the drag asked, where full slip begins (the first step at
 //! 97 % of μ), F_t/F_n from there to the end (mean, range, the steps outside 3 % of μ), the
 //! steps, remakes and their share of the wall time.
 //!
@@ -127,6 +128,12 @@ fn friction_scenes() -> Vec<Scene> {
         mu: 0.3,
         step: 0.002,
     });
+    // a plate whose face stays flat, where a contact that slides everywhere meets μ exactly: at
+    // μ = 1 the pad's leading part sticks and its face rolls onto it
+    // (docs/notes/2026-12-07-a-remake-s-fixed-costs-and-the-pad-at-mu-1-on-a-stiff-plate.md)
+    for mu in [0.3, 1.0] {
+        all.push(Scene::StiffPlate { mu });
+    }
     all
 }
 
@@ -145,6 +152,9 @@ enum Scene {
     Sphere { h: f64, mu: f64 },
     /// The block as wide as its base, n cells along it.
     Block { n: usize, mu: f64 },
+    /// `cases/pad-box-slide.toml` on a plate 1000 times stiffer than the pad, dragged one
+    /// width in steps of 0.005.
+    StiffPlate { mu: f64 },
 }
 
 impl Scene {
@@ -226,6 +236,22 @@ impl Scene {
                     &text,
                     ("slider_top", "z"),
                 );
+            }
+            Scene::StiffPlate { mu } => {
+                let text = edit(
+                    &case_text("pad-box-slide"),
+                    &[
+                        (
+                            "group = \"plate\"\nkind = \"solid\"\nK = 20.0\nmu = 10.0",
+                            "group = \"plate\"\nkind = \"solid\"\nK = 20000.0\nmu = 10000.0",
+                        ),
+                        ("mu = 0.3, normal", &format!("mu = {mu}, normal")),
+                        ("initial = 0.05\nmax = 0.05", "initial = 0.005\nmax = 0.005"),
+                    ],
+                ) + ENDS;
+                let dir = format!("pad-stiff-plate-{mu}");
+                let mesh = "triangles, h = 0.1, steps of 0.005, the plate 1000 times stiffer";
+                friction_row("pad in a box", mesh, mu, 1.0, &dir, &text, ("top", "y"));
             }
             Scene::Block { n, mu } => {
                 let geo = root().join("geo/block.geo");
