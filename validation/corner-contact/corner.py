@@ -2,6 +2,7 @@
 """The one-cell block's drag without a third medium: an independent reference.
 
     /usr/bin/python3 corner.py NX NY DELTA MU R [--base-end E] [--drag D] [--steps S]
+                               [--width W] [--height H] [--sides]
 
 FEniCSx (Debian's python3-dolfinx 0.5.2) solves tmc's block alone: 2 wide, 1 high, the
 Neo-Hooke energy of eq. 12 (K = 20, G = 10, plane strain with 3D invariants), P1 on NX x NY
@@ -17,6 +18,9 @@ shears before it slides) and at full value from there. It has no history, so eac
 the equilibrium of its loads; that the slide is everywhere forward is checked after each step
 (the `back` column: the share of the normal force where the last step's slip went backward,
 which must be 0 once the friction is whole). A drag that sticks anywhere is not this model's.
+
+`--width`, `--height`: another block (2 × 1 by default; 1 × 0.5 is the pad of
+`cases/pad-box-slide.toml`). `--sides`: its sides meet the base too (a face that rolls onto it).
 
 Prints per step: drag, F_t (against the drag), F_n, F_t/F_n and `back`, the forces the base
 puts on the block (the contact tractions integrated over its bottom).
@@ -43,10 +47,13 @@ for name in ["delta", "mu", "r"]:
 args.add_argument("--base-end", type=float, default=2.0)
 args.add_argument("--drag", type=float, default=0.5)
 args.add_argument("--steps", type=int, default=40)
+args.add_argument("--width", type=float, default=2.0)
+args.add_argument("--height", type=float, default=1.0)
+args.add_argument("--sides", action="store_true")
 a = args.parse_args()
 
 K, G = 20.0, 10.0
-msh = mesh.create_rectangle(MPI.COMM_WORLD, [np.array([0.0, 0.0]), np.array([2.0, 1.0])],
+msh = mesh.create_rectangle(MPI.COMM_WORLD, [np.array([0.0, 0.0]), np.array([a.width, a.height])],
                             [a.nx, a.ny], mesh.CellType.triangle,
                             diagonal=mesh.DiagonalType.right)
 V = fem.VectorFunctionSpace(msh, ("Lagrange", 1))
@@ -57,8 +64,16 @@ v = ufl.TestFunction(V)
 P = first_piola(u, K, G)
 
 fdim = 1
-bottom = mesh.locate_entities_boundary(msh, fdim, lambda X: np.isclose(X[1], 0.0))
-top = mesh.locate_entities_boundary(msh, fdim, lambda X: np.isclose(X[1], 1.0))
+
+
+def touching(X):
+    """The facets that may meet the base: the bottom, and with --sides both sides."""
+    sides = np.isclose(X[0], 0.0) | np.isclose(X[0], a.width)
+    return np.isclose(X[1], 0.0) | (a.sides & sides)
+
+
+bottom = mesh.locate_entities_boundary(msh, fdim, touching)
+top = mesh.locate_entities_boundary(msh, fdim, lambda X: np.isclose(X[1], a.height))
 tags = mesh.meshtags(msh, fdim, bottom, np.full(len(bottom), 1, dtype=np.int32))
 ds = ufl.Measure("ds", domain=msh, subdomain_data=tags, metadata={"quadrature_degree": 4})
 
@@ -71,7 +86,7 @@ on_top = ufl.le(x[0], a.base_end - a.r)
 gap = ufl.conditional(on_top, x[1], dist - a.r)
 n = ufl.conditional(on_top, ufl.as_vector([0.0, 1.0]), d / dist)
 t = ufl.as_vector([n[1], -n[0]])
-h = 2.0 / a.nx
+h = a.width / a.nx
 p_n = 100 * G / h * ufl.max_value(-gap, 0.0)
 sliding = fem.Constant(msh, 0.0)
 traction = p_n * n - a.mu * sliding * p_n * t
