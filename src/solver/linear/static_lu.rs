@@ -558,9 +558,11 @@ fn elimination_tree(n: usize, ptr: &[usize], row: &[usize]) -> Vec<usize> {
 /// each column (CSC `ptr`/`row`): the entries of column i are met in the order of their rows
 /// where its mirrors are met column by column.
 fn mirrors(ptr: &[usize], row: &[usize]) -> Vec<usize> {
-    let mut next = ptr[..ptr.len() - 1].to_vec();
+    let n = ptr.len() - 1;
+    let mut next = ptr[..n].to_vec();
     let mut mirror = vec![0; row.len()];
-    for k in 0..ptr.len() - 1 {
+    for k in 0..n {
+        debug_assert!(row[ptr[k]..ptr[k + 1]].is_sorted(), "column {k} unsorted");
         for (p, &i) in mirror[ptr[k]..ptr[k + 1]]
             .iter_mut()
             .zip(&row[ptr[k]..ptr[k + 1]])
@@ -569,6 +571,12 @@ fn mirrors(ptr: &[usize], row: &[usize]) -> Vec<usize> {
             next[i] += 1;
         }
     }
+    // a pattern that is not symmetric leaves some column's entries unmet, or met out of place
+    debug_assert!(
+        (0..n).all(|i| next[i] == ptr[i + 1]),
+        "pattern not symmetric"
+    );
+    debug_assert!((0..n).all(|k| (ptr[k]..ptr[k + 1]).all(|p| row[mirror[p]] == k)));
     mirror
 }
 
@@ -682,6 +690,14 @@ mod tests {
             assert_eq!((row[m], col_of(m)), (col_of(k), row[k]), "entry {k}");
             assert_eq!(mirror[m], k);
         }
+    }
+
+    #[test]
+    #[cfg(debug_assertions)]
+    #[should_panic(expected = "pattern not symmetric")]
+    fn a_pattern_that_is_not_symmetric_is_refused_in_a_debug_build() {
+        // column 0 holds rows 0 and 1; column 1 holds row 1 only
+        let _ = mirrors(&[0, 2, 3], &[0, 1, 1]);
     }
 
     #[test]
