@@ -9,8 +9,9 @@
 //! (what an accepted state holds: heat, works, slips) → [`solver`] (linear, Newton, stepping) →
 //! [`output`] (VTU, history, probes) → [`driver`] (`tmc solve`) → [`study`] and [`plot`]. Under
 //! them all, [`files`]: writing a file under a temporary name, [`console`]: lines on the
-//! terminal that a closed pipe silences, [`threads`]: how many threads tmc computes with, and
-//! [`dynamic`]: gmsh and PETSc opened when a run first needs them.
+//! terminal that a closed pipe silences, [`threads`]: how many threads tmc computes with,
+//! [`memory`]: freed memory kept for a run that builds its structures again, and [`dynamic`]:
+//! gmsh and PETSc opened when a run first needs them.
 //! See docs/ARCHITECTURE.md.
 
 #![allow(non_snake_case)]
@@ -28,6 +29,7 @@ pub mod element;
 pub mod files;
 pub mod kernel;
 pub mod material;
+pub mod memory;
 pub mod mesh;
 pub mod model;
 pub mod output;

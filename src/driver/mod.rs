@@ -523,6 +523,11 @@ fn solve_model(
     let out_dir = folder.dir().to_owned();
     let mut layer = Layer::find(&model)?;
     let mut medium = remake::Medium::find(&model, case.remade_medium())?;
+    if medium.is_some() {
+        // each remake drops the run's structures and builds them again: the pages it frees
+        // are kept for the next
+        crate::memory::keep_freed_for_reuse();
+    }
     let settles = settling(case);
     let mut check_first = medium
         .as_mut()
