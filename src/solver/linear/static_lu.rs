@@ -156,34 +156,14 @@ impl<T: Real> StaticLu<T> {
         }
         let a_mirror = mirrors(&a_ptr, &a_row);
         let parent = elimination_tree(n, &a_ptr, &a_row);
-        // row k of L has its nonzeros at the row subtree of k: count them per column
-        let mut count = vec![0; n];
-        let mut mark = vec![NONE; n];
-        let mut reach = Vec::new();
-        for k in 0..n {
-            row_subtree(k, &a_ptr, &a_row, &parent, &mut mark, &mut reach);
-            for &j in &reach {
-                count[j] += 1;
-            }
-        }
-        // fundamental supernodes: j + 1 joins j's when it is j's parent and j's pattern is
-        // its own plus j + 1 (then every column of the supernode has the last one's rows below)
+        let [bounds, rows_ptr, rows] = supernodes(&a_ptr, &a_row, &parent);
         let mut node_of = vec![0; n];
-        let mut bounds = vec![0];
-        for j in 1..n {
-            if !(parent[j - 1] == j && count[j - 1] == count[j] + 1) {
-                bounds.push(j);
-            }
-            node_of[j] = bounds.len() - 1;
-        }
-        if n > 0 {
-            bounds.push(n);
-        }
-        let mut nodes = Vec::with_capacity(bounds.len());
+        let mut nodes = Vec::with_capacity(bounds.len() - 1);
         let (mut rows_at, mut l_at, mut u_at) = (0, 0, 0);
-        for w in bounds.windows(2) {
+        for (s, (w, r)) in bounds.windows(2).zip(rows_ptr.windows(2)).enumerate() {
             let (begin, end) = (w[0], w[1]);
-            let (width, n_rows) = (end - begin, count[end - 1]);
+            let (width, n_rows) = (end - begin, r[1] - r[0]);
+            node_of[begin..end].fill(s);
             nodes.push(Supernode {
                 begin,
                 end,
@@ -195,20 +175,6 @@ impl<T: Real> StaticLu<T> {
             rows_at += n_rows;
             l_at += (width + n_rows) * width;
             u_at += n_rows * width;
-        }
-        // the rows below each supernode: those of its last column, in increasing k
-        let mut rows = vec![0; rows_at];
-        let mut next: Vec<usize> = nodes.iter().map(|s| s.rows_at).collect();
-        mark.fill(NONE);
-        for k in 0..n {
-            row_subtree(k, &a_ptr, &a_row, &parent, &mut mark, &mut reach);
-            for &j in &reach {
-                let s = node_of[j];
-                if j + 1 == nodes[s].end {
-                    rows[next[s]] = k;
-                    next[s] += 1;
-                }
-            }
         }
         StaticLu {
             layout: Arc::new(Layout {
@@ -554,6 +520,100 @@ fn elimination_tree(n: usize, ptr: &[usize], row: &[usize]) -> Vec<usize> {
     parent
 }
 
+/// The supernodes of the factor of a matrix with a symmetric pattern (CSC `ptr`/`row`, both
+/// triangles, rows sorted) and elimination tree `parent`, and the rows of L below each:
+/// column j joins j − 1's supernode when it is j − 1's parent and its pattern is j − 1's less
+/// j (then every column of a supernode has the last one's rows below it). Returns each
+/// supernode's first column and then n, and the rows below each, increasing, as
+/// `rows[rows_ptr[s]..rows_ptr[s + 1]]`.
+///
+/// A column's pattern is A's rows below it merged with its children's patterns less itself.
+/// The open supernode's pattern is kept, its rows marked; a column that would join is only
+/// checked against the marks, so the work is A's entries and each supernode's rows a few
+/// times, where walking each row's subtree visits every entry of L.
+fn supernodes(ptr: &[usize], row: &[usize], parent: &[usize]) -> [Vec<usize>; 3] {
+    let n = parent.len();
+    // the children of each column, increasing
+    let mut first = vec![0; n + 1];
+    for &p in parent.iter().filter(|&&p| p != NONE) {
+        first[p + 1] += 1;
+    }
+    for j in 0..n {
+        first[j + 1] += first[j];
+    }
+    let mut child = vec![0; first[n]];
+    let mut next = first[..n].to_vec();
+    for (c, &p) in parent.iter().enumerate().filter(|(_, p)| **p != NONE) {
+        child[next[p]] = c;
+        next[p] += 1;
+    }
+    let (mut bounds, mut rows_ptr, mut rows) = (vec![0], vec![0], Vec::new());
+    // the supernode whose last column each closed column is
+    let mut closed_at = vec![NONE; n];
+    // the open supernode's rows below its last column, `open[at..]`; `mark[k]` its number
+    // for each of them, `seen[k]` the column whose pattern was gathered with k last
+    let (mut open, mut at, mut opened) = (Vec::<usize>::new(), 0, 0);
+    let (mut mark, mut seen) = (vec![NONE; n], vec![NONE; n]);
+    for j in 0..n {
+        let a_below = || {
+            row[ptr[j]..ptr[j + 1]]
+                .iter()
+                .copied()
+                .filter(move |&k| k > j)
+        };
+        let kids = &child[first[j]..first[j + 1]];
+        let extends = j > 0 && parent[j - 1] == j;
+        if extends {
+            debug_assert_eq!(open.get(at), Some(&j));
+            let inside = |k: usize| k == j || mark[k] == opened;
+            let others = kids.iter().filter(|&&c| c != j - 1);
+            let mut theirs = others.flat_map(|&c| below(&rows, &rows_ptr, closed_at[c]));
+            if a_below().all(inside) && theirs.all(|&k| inside(k)) {
+                at += 1;
+                continue;
+            }
+        }
+        if j > 0 {
+            rows.extend_from_slice(&open[at..]);
+            rows_ptr.push(rows.len());
+            bounds.push(j);
+            closed_at[j - 1] = bounds.len() - 2;
+        }
+        // column j's pattern: A's rows below it and its children's less j
+        let mut pattern = Vec::new();
+        let mut gather = |k: usize| {
+            if k != j && seen[k] != j {
+                seen[k] = j;
+                pattern.push(k);
+            }
+        };
+        if extends {
+            open[at..].iter().for_each(|&k| gather(k));
+        }
+        a_below().for_each(&mut gather);
+        for &c in kids.iter().filter(|&&c| !(extends && c == j - 1)) {
+            below(&rows, &rows_ptr, closed_at[c])
+                .iter()
+                .for_each(|&k| gather(k));
+        }
+        pattern.sort_unstable();
+        opened += 1;
+        pattern.iter().for_each(|&k| mark[k] = opened);
+        (open, at) = (pattern, 0);
+    }
+    if n > 0 {
+        rows.extend_from_slice(&open[at..]);
+        rows_ptr.push(rows.len());
+        bounds.push(n);
+    }
+    [bounds, rows_ptr, rows]
+}
+
+/// The rows below supernode `s`.
+fn below<'a>(rows: &'a [usize], rows_ptr: &[usize], s: usize) -> &'a [usize] {
+    &rows[rows_ptr[s]..rows_ptr[s + 1]]
+}
+
 /// The slot of each entry's mirror image in a pattern that is symmetric, its rows sorted in
 /// each column (CSC `ptr`/`row`): the entries of column i are met in the order of their rows
 /// where its mirrors are met column by column.
@@ -578,36 +638,6 @@ fn mirrors(ptr: &[usize], row: &[usize]) -> Vec<usize> {
     );
     debug_assert!((0..n).all(|k| (ptr[k]..ptr[k + 1]).all(|p| row[mirror[p]] == k)));
     mirror
-}
-
-/// The nonzeros of row k of L (columns j < k), into `reach` in reverse topological order
-/// (each column after the descendants it depends on, when read backwards). `mark` holds, for
-/// each node, the last row that visited it.
-fn row_subtree(
-    k: usize,
-    ptr: &[usize],
-    row: &[usize],
-    parent: &[usize],
-    mark: &mut [usize],
-    reach: &mut Vec<usize>,
-) {
-    reach.clear();
-    mark[k] = k;
-    for &i0 in &row[ptr[k]..ptr[k + 1]] {
-        if i0 >= k {
-            continue;
-        }
-        // climb from i0 to the first node already visited in this row, then turn the path
-        // so that, read backwards, the deepest comes first
-        let start = reach.len();
-        let mut i = i0;
-        while mark[i] != k {
-            reach.push(i);
-            mark[i] = k;
-            i = parent[i];
-        }
-        reach[start..].reverse();
-    }
 }
 
 #[cfg(test)]
@@ -677,6 +707,96 @@ mod tests {
             .zip(x)
             .map(|(a, c)| (a - c).abs())
             .fold(0.0, f64::max)
+    }
+
+    /// The nonzeros of row k of L (columns j < k), into `reach` in reverse topological order
+    /// (each column after the descendants it depends on, when read backwards). `mark` holds, for
+    /// each node, the last row that visited it.
+    fn row_subtree(
+        k: usize,
+        ptr: &[usize],
+        row: &[usize],
+        parent: &[usize],
+        mark: &mut [usize],
+        reach: &mut Vec<usize>,
+    ) {
+        reach.clear();
+        mark[k] = k;
+        for &i0 in &row[ptr[k]..ptr[k + 1]] {
+            if i0 >= k {
+                continue;
+            }
+            // climb from i0 to the first node already visited in this row, then turn the path
+            // so that, read backwards, the deepest comes first
+            let start = reach.len();
+            let mut i = i0;
+            while mark[i] != k {
+                reach.push(i);
+                mark[i] = k;
+                i = parent[i];
+            }
+            reach[start..].reverse();
+        }
+    }
+
+    /// The supernodes and their rows as the layout found them before `supernodes`: each
+    /// row's subtree walked twice, once to count each column's entries, once for the rows.
+    fn by_walks(ptr: &[usize], row: &[usize], parent: &[usize]) -> [Vec<usize>; 3] {
+        let n = parent.len();
+        let (mut count, mut mark, mut reach) = (vec![0; n], vec![NONE; n], Vec::new());
+        for k in 0..n {
+            row_subtree(k, ptr, row, parent, &mut mark, &mut reach);
+            reach.iter().for_each(|&j| count[j] += 1);
+        }
+        let mut bounds = vec![0];
+        for j in 1..n {
+            if !(parent[j - 1] == j && count[j - 1] == count[j] + 1) {
+                bounds.push(j);
+            }
+        }
+        bounds.push(n);
+        let mut rows_ptr = vec![0];
+        for w in bounds.windows(2) {
+            rows_ptr.push(rows_ptr.last().unwrap() + count[w[1] - 1]);
+        }
+        let mut rows = vec![0; *rows_ptr.last().unwrap()];
+        let mut next = rows_ptr.clone();
+        mark.fill(NONE);
+        for k in 0..n {
+            row_subtree(k, ptr, row, parent, &mut mark, &mut reach);
+            for &j in &reach {
+                let s = bounds.partition_point(|&b| b <= j) - 1;
+                if j + 1 == bounds[s + 1] {
+                    rows[next[s]] = k;
+                    next[s] += 1;
+                }
+            }
+        }
+        [bounds, rows_ptr, rows]
+    }
+
+    #[test]
+    fn supernodes_and_their_rows_are_those_each_row_s_subtree_gives() {
+        for (m, seed) in [(1, 1), (6, 2), (9, 7), (17, 5)] {
+            let (p, _) = grid(m, seed);
+            let n = p.nrows();
+            let reversed: Vec<usize> = (0..n).rev().collect();
+            let shuffled: Vec<usize> = (0..n).map(|i| (i * 7 + 3) % n).collect();
+            for perm in [(0..n).collect::<Vec<_>>(), reversed, shuffled] {
+                let lu = StaticLu::<f64>::new(&p, &perm);
+                let l = &lu.layout;
+                let parent = elimination_tree(n, &l.a_ptr, &l.a_row);
+                let [bounds, rows_ptr, rows] = supernodes(&l.a_ptr, &l.a_row, &parent);
+                assert_eq!(
+                    [&bounds, &rows_ptr, &rows],
+                    by_walks(&l.a_ptr, &l.a_row, &parent).each_ref()
+                );
+                assert!(
+                    bounds.len() < n + 1 || n < 2,
+                    "no column joined a supernode"
+                );
+            }
+        }
     }
 
     #[test]
