@@ -159,7 +159,7 @@ impl<T: Real> StaticLu<T> {
         let [bounds, rows_ptr, rows] = supernodes(&a_ptr, &a_row, &parent);
         let mut node_of = vec![0; n];
         let mut nodes = Vec::with_capacity(bounds.len() - 1);
-        let (mut rows_at, mut l_at, mut u_at) = (0, 0, 0);
+        let (mut l_at, mut u_at) = (0, 0);
         for (s, (w, r)) in bounds.windows(2).zip(rows_ptr.windows(2)).enumerate() {
             let (begin, end) = (w[0], w[1]);
             let (width, n_rows) = (end - begin, r[1] - r[0]);
@@ -167,12 +167,11 @@ impl<T: Real> StaticLu<T> {
             nodes.push(Supernode {
                 begin,
                 end,
-                rows_at,
+                rows_at: r[0],
                 n_rows,
                 l_at,
                 u_at,
             });
-            rows_at += n_rows;
             l_at += (width + n_rows) * width;
             u_at += n_rows * width;
         }
