@@ -708,9 +708,8 @@ mod tests {
             .fold(0.0, f64::max)
     }
 
-    /// The nonzeros of row k of L (columns j < k), into `reach` in reverse topological order
-    /// (each column after the descendants it depends on, when read backwards). `mark` holds, for
-    /// each node, the last row that visited it.
+    /// The nonzeros of row k of L (columns j < k), into `reach`. `mark` holds, for each node,
+    /// the last row that visited it.
     fn row_subtree(
         k: usize,
         ptr: &[usize],
@@ -725,16 +724,13 @@ mod tests {
             if i0 >= k {
                 continue;
             }
-            // climb from i0 to the first node already visited in this row, then turn the path
-            // so that, read backwards, the deepest comes first
-            let start = reach.len();
+            // climb from i0 to the first node already visited in this row
             let mut i = i0;
             while mark[i] != k {
                 reach.push(i);
                 mark[i] = k;
                 i = parent[i];
             }
-            reach[start..].reverse();
         }
     }
 
