@@ -532,20 +532,7 @@ fn elimination_tree(n: usize, ptr: &[usize], row: &[usize]) -> Vec<usize> {
 /// times, where walking each row's subtree visits every entry of L.
 fn supernodes(ptr: &[usize], row: &[usize], parent: &[usize]) -> [Vec<usize>; 3] {
     let n = parent.len();
-    // the children of each column, increasing
-    let mut first = vec![0; n + 1];
-    for &p in parent.iter().filter(|&&p| p != NONE) {
-        first[p + 1] += 1;
-    }
-    for j in 0..n {
-        first[j + 1] += first[j];
-    }
-    let mut child = vec![0; first[n]];
-    let mut next = first[..n].to_vec();
-    for (c, &p) in parent.iter().enumerate().filter(|(_, p)| **p != NONE) {
-        child[next[p]] = c;
-        next[p] += 1;
-    }
+    let (first, child) = super::tree::children_of(parent);
     let (mut bounds, mut rows_ptr, mut rows) = (vec![0], vec![0], Vec::new());
     // the supernode whose last column each closed column is
     let mut closed_at = vec![NONE; n];

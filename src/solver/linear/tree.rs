@@ -191,8 +191,6 @@ impl TreeLdlt {
 
         // who updates whom, and the tree (a supernode's parent holds its first row below it)
         let mut upd_of: Vec<Vec<usize>> = vec![Vec::new(); ns];
-        let mut children_of: Vec<Vec<usize>> = vec![Vec::new(); ns];
-        let mut roots = Vec::new();
         for d in 0..ns {
             let mut last = usize::MAX;
             for &r in pattern_of(d) {
@@ -202,13 +200,13 @@ impl TreeLdlt {
                     last = s;
                 }
             }
-            match pattern_of(d).first() {
-                Some(&r) => children_of[node_of[r]].push(d),
-                None => roots.push(d),
-            }
         }
+        let parent: Vec<usize> = (0..ns)
+            .map(|d| pattern_of(d).first().map_or(usize::MAX, |&r| node_of[r]))
+            .collect();
+        let roots = (0..ns).filter(|&d| parent[d] == usize::MAX).collect();
         let (upd_at, upd) = flatten(upd_of);
-        let (child_at, children) = flatten(children_of);
+        let (child_at, children) = children_of(&parent);
         // d's update of s: its rows from s's first column down, times its rows in s, times
         // its width
         let mut gather = vec![0.0; ns];
@@ -922,6 +920,26 @@ fn grow<T: Real>(v: &mut Vec<T>, len: usize) {
     if v.len() < len {
         v.resize(len, T::of(0.0));
     }
+}
+
+/// The children of each node of a forest whose nodes have the parents `parent` (`usize::MAX`
+/// for a root), increasing, as `children[at[p]..at[p + 1]]`: `(at, children)`.
+pub(super) fn children_of(parent: &[usize]) -> (Vec<usize>, Vec<usize>) {
+    let n = parent.len();
+    let mut at = vec![0; n + 1];
+    for &p in parent.iter().filter(|&&p| p != usize::MAX) {
+        at[p + 1] += 1;
+    }
+    for j in 0..n {
+        at[j + 1] += at[j];
+    }
+    let mut children = vec![0; at[n]];
+    let mut next = at[..n].to_vec();
+    for (c, &p) in parent.iter().enumerate().filter(|(_, p)| **p != usize::MAX) {
+        children[next[p]] = c;
+        next[p] += 1;
+    }
+    (at, children)
 }
 
 /// Lists as one array and where each starts.
