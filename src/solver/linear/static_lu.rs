@@ -519,6 +519,26 @@ fn elimination_tree(n: usize, ptr: &[usize], row: &[usize]) -> Vec<usize> {
     parent
 }
 
+/// The children of each node of a forest whose nodes have the parents `parent` (`usize::MAX`
+/// for a root), increasing, as `children[at[p]..at[p + 1]]`: `(at, children)`.
+pub(super) fn children_of(parent: &[usize]) -> (Vec<usize>, Vec<usize>) {
+    let n = parent.len();
+    let mut at = vec![0; n + 1];
+    for &p in parent.iter().filter(|&&p| p != NONE) {
+        at[p + 1] += 1;
+    }
+    for j in 0..n {
+        at[j + 1] += at[j];
+    }
+    let mut children = vec![0; at[n]];
+    let mut next = at[..n].to_vec();
+    for (c, &p) in parent.iter().enumerate().filter(|(_, p)| **p != NONE) {
+        children[next[p]] = c;
+        next[p] += 1;
+    }
+    (at, children)
+}
+
 /// The supernodes of the factor of a matrix with a symmetric pattern (CSC `ptr`/`row`, both
 /// triangles, rows sorted) and elimination tree `parent`, and the rows of L below each:
 /// column j joins j − 1's supernode when it is j − 1's parent and its pattern is j − 1's less
@@ -532,7 +552,7 @@ fn elimination_tree(n: usize, ptr: &[usize], row: &[usize]) -> Vec<usize> {
 /// times, where walking each row's subtree visits every entry of L.
 fn supernodes(ptr: &[usize], row: &[usize], parent: &[usize]) -> [Vec<usize>; 3] {
     let n = parent.len();
-    let (first, child) = super::tree::children_of(parent);
+    let (first, child) = children_of(parent);
     let (mut bounds, mut rows_ptr, mut rows) = (vec![0], vec![0], Vec::new());
     // the supernode whose last column each closed column is
     let mut closed_at = vec![NONE; n];

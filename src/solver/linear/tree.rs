@@ -13,7 +13,7 @@
 //! computes does not depend on where or when it runs: the factor is the same at every thread
 //! count.
 
-use super::static_lu::Real;
+use super::static_lu::{Real, children_of};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::ldlt::factor::{
     LdltError, cholesky_in_place, cholesky_in_place_scratch,
@@ -920,26 +920,6 @@ fn grow<T: Real>(v: &mut Vec<T>, len: usize) {
     if v.len() < len {
         v.resize(len, T::of(0.0));
     }
-}
-
-/// The children of each node of a forest whose nodes have the parents `parent` (`usize::MAX`
-/// for a root), increasing, as `children[at[p]..at[p + 1]]`: `(at, children)`.
-pub(super) fn children_of(parent: &[usize]) -> (Vec<usize>, Vec<usize>) {
-    let n = parent.len();
-    let mut at = vec![0; n + 1];
-    for &p in parent.iter().filter(|&&p| p != usize::MAX) {
-        at[p + 1] += 1;
-    }
-    for j in 0..n {
-        at[j + 1] += at[j];
-    }
-    let mut children = vec![0; at[n]];
-    let mut next = at[..n].to_vec();
-    for (c, &p) in parent.iter().enumerate().filter(|(_, p)| **p != usize::MAX) {
-        children[next[p]] = c;
-        next[p] += 1;
-    }
-    (at, children)
 }
 
 /// Lists as one array and where each starts.
